@@ -1,0 +1,17 @@
+# Per-target flags: warnings, sanitizers. Never global.
+function(brittle_target_flags target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local)
+  if(BRITTLE_SANITIZE)
+    target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer
+      -fno-sanitize-recover=undefined)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+  endif()
+endfunction()
+
+# Link options a final executable needs when the sanitizers are on.
+function(brittle_executable_flags target)
+  brittle_target_flags(${target})
+  if(BRITTLE_SANITIZE)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+  endif()
+endfunction()

@@ -1,0 +1,41 @@
+// Pack.h — the brittle pack: one HDF5 file holding materials and baked objects.
+//
+// The schema (groups, datasets, attributes, units) is documented in database/PACK_SCHEMA.md, next
+// to the code that writes it. Writing is atomic: the pack goes to a temporary file in the target
+// directory, which is renamed over the target only once it is complete, so a pack on disk is
+// always whole. Reading validates the format name, the version, every dataset's shape, every
+// checksum (HDF5 Fletcher-32 filter) and that every floating-point value is finite.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "brittle/database/Material.h"
+#include "brittle/database/ObjectAsset.h"
+#include "brittle/descriptors/Result.h"
+
+namespace brittle {
+
+inline constexpr const char* kPackFormatName = "brittle-pack";
+inline constexpr int kPackVersion = 1;
+
+struct Pack {
+  std::vector<Material> materials;
+  std::vector<ObjectAsset> objects;  ///< each objects[i].materialName names one of materials
+};
+
+/// Writes pack to path atomically (temporary file + rename). On any error no file is left at
+/// path (an existing pack there is untouched) and no temporary file remains.
+/// Errors: InvalidArgument (object names a missing material, inconsistent array sizes),
+/// PackIoError (cannot create, write or rename).
+Status writePack(const Pack& pack, const std::filesystem::path& path);
+
+/// Reads and validates a whole pack.
+/// Errors: FileNotFound, PackIoError (not HDF5, unreadable), PackFormatMismatch (format attribute
+/// is not "brittle-pack"), PackVersionMismatch, PackShapeMismatch (a dataset's size disagrees with
+/// its offsets or counts, a missing group or dataset), PackCorrupt (checksum failure, non-finite
+/// value, index out of range).
+Result<Pack> readPack(const std::filesystem::path& path);
+
+}  // namespace brittle

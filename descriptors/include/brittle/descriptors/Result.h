@@ -1,0 +1,99 @@
+// Result.h — the error vocabulary shared by every brittle module.
+//
+// Bad data never throws across a module boundary: functions return Result<T>, which holds either
+// a value or an Error with a typed code and a message that names the file, element or field.
+// Broken invariants are asserts; exceptions may exist inside offline code but are caught at the
+// module boundary. descriptors/ is the lowest module, so this header lives here.
+#pragma once
+
+#include <cassert>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <variant>
+
+namespace brittle {
+
+/// Every typed failure brittle reports. The snake_case name (errorCodeName) is stable and is what
+/// JSON output and tests use.
+enum class ErrorCode {
+  // Input files.
+  FileNotFound,
+  UnknownFormat,
+  ParseError,
+  EmptyMesh,
+  NonFiniteValue,
+  // Surface mesh validity.
+  OpenMesh,
+  NonManifold,
+  InconsistentOrientation,
+  InwardFacing,
+  DegenerateFace,
+  SelfIntersection,
+  RepairFailed,
+  // Meshing, FEM, modal analysis.
+  MeshingFailed,
+  DegenerateElement,
+  FactorizationFailed,
+  EigenNotConverged,
+  RigidModeMismatch,
+  // Materials.
+  UnknownMaterial,
+  InvalidMaterial,
+  // Packs.
+  PackIoError,
+  PackFormatMismatch,
+  PackVersionMismatch,
+  PackCorrupt,
+  PackShapeMismatch,
+  // Generic.
+  InvalidArgument,
+  Cancelled,
+};
+
+/// Stable snake_case identifier of a code, e.g. "open_mesh".
+std::string_view errorCodeName(ErrorCode code);
+
+struct Error {
+  ErrorCode code;
+  std::string message;  ///< Human-readable: what is wrong and where.
+};
+
+/// Value-or-error. Access value() only after checking ok().
+template <typename T>
+class [[nodiscard]] Result {
+ public:
+  Result(T value) : mData(std::move(value)) {}  // NOLINT: implicit by design
+  Result(Error error) : mData(std::move(error)) {}  // NOLINT: implicit by design
+
+  bool ok() const { return mData.index() == 0; }
+  explicit operator bool() const { return ok(); }
+
+  T& value() & {
+    assert(ok());
+    return std::get<0>(mData);
+  }
+  const T& value() const& {
+    assert(ok());
+    return std::get<0>(mData);
+  }
+  T&& value() && {
+    assert(ok());
+    return std::get<0>(std::move(mData));
+  }
+  const Error& error() const {
+    assert(!ok());
+    return std::get<1>(mData);
+  }
+
+ private:
+  std::variant<T, Error> mData;
+};
+
+/// Result of an operation with no value.
+struct Ok {};
+using Status = Result<Ok>;
+
+inline Error makeError(ErrorCode code, std::string message) { return Error{code, std::move(message)}; }
+
+}  // namespace brittle

@@ -1,0 +1,60 @@
+// BakePipeline.h — surface mesh + material → checked modal asset, and a manifest of objects →
+// pack. Stages: read → (repair) → validate → tetrahedralise → assemble K, M → modal basis →
+// stress modes → mass properties. Every stage's failure is a typed error; nothing is written
+// here (writing is writePack's job, which is atomic).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "brittle/database/Pack.h"
+#include "brittle/precompute/FemAssembly.h"
+#include "brittle/precompute/MeshRepair.h"
+#include "brittle/precompute/ModalAnalysis.h"
+#include "brittle/precompute/Progress.h"
+#include "brittle/precompute/TetMesher.h"
+
+namespace brittle {
+
+struct ObjectBakeSettings {
+  std::string name;                  ///< empty means the mesh file's stem
+  std::filesystem::path meshPath;
+  Material material;
+  bool repair = false;               ///< rebuild the surface through an OpenVDB level set first
+  RepairSettings repairSettings;
+  TetMeshSettings tetMesh;
+  FemSettings fem;
+  ModalSettings modal;               ///< shiftRad2PerS2 == 0 means defaultShift()
+};
+
+/// What the bake measured beyond the asset itself.
+struct ObjectBakeReport {
+  RepairReport repair;
+  double surfaceVolumeM3 = 0.0;       ///< exact volume of the validated input surface
+  double tetVolumeRelativeError = 0.0;///< (V_tets − V_surface) / V_surface
+  ModalSolveStats modalStats;
+};
+
+/// Bakes one object. Errors: those of readSurfaceMesh, repairSurfaceMesh, validateSurfaceMesh,
+/// tetrahedralize, assembleFem, computeModes (each says the object's name), InvalidMaterial.
+Result<ObjectAsset> bakeObject(const ObjectBakeSettings& settings, ProgressSink* progress = nullptr,
+                               ObjectBakeReport* report = nullptr);
+
+/// Bakes every object in order into one pack; materials are stored once per name.
+/// Errors: the first object's error; InvalidArgument on duplicate object names, or on two
+/// different materials with the same name.
+Result<Pack> bakePack(const std::vector<ObjectBakeSettings>& objects, ProgressSink* progress = nullptr,
+                      std::vector<ObjectBakeReport>* reports = nullptr);
+
+/// Reads a bake manifest (JSON):
+///   { "objects": [ { "name": "glass-plate", "mesh": "meshes/plate.off", "material": "glass",
+///                    "tets": 6000, "modes": 20, "repair": false, "lumped_mass": false,
+///                    "seed": 1 }, ... ] }
+/// "mesh" and a "material" that names a .json file are relative to the manifest's directory;
+/// "name", "tets", "modes", "repair", "lumped_mass" and "seed" are optional (defaults as in the
+/// settings structs). Errors: FileNotFound, ParseError (naming the key), UnknownMaterial,
+/// InvalidMaterial.
+Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::path& path);
+
+}  // namespace brittle

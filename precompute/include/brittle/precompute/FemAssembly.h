@@ -1,0 +1,49 @@
+// FemAssembly.h — linear (P1) tetrahedral finite elements for isotropic linear elasticity.
+//
+// Degrees of freedom are interleaved per node: dof 3n+i is displacement component i (x, y, z) of
+// node n. Strains and stresses use Voigt order (xx, yy, zz, yz, xz, xy) with engineering shear
+// strains (γ = 2ε). Units: m, Pa, kg; K in N/m, M in kg.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include "brittle/database/Material.h"
+#include "brittle/database/ObjectAsset.h"
+#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/descriptors/Result.h"
+
+namespace brittle {
+
+using SparseMatrixd = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+struct FemSettings {
+  bool lumpedMass = false;  ///< row-sum lumping (ρV/4 per node) instead of the consistent mass
+};
+
+struct FemSystem {
+  SparseMatrixd stiffness;  ///< K, 3N by 3N, symmetric, both triangles stored
+  SparseMatrixd mass;       ///< M, 3N by 3N, symmetric positive definite
+};
+
+/// 6 by 6 isotropic elasticity matrix C (Pa) for engineering shear strains.
+Eigen::Matrix<double, 6, 6> isotropicElasticity(double youngsModulusPa, double poissonRatio);
+
+/// 6 by 12 strain-displacement matrix B of a linear tet (1/m), and its volume (m³, signed).
+Eigen::Matrix<double, 6, 12> tetStrainDisplacement(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                                                   const Eigen::Vector3d& p2, const Eigen::Vector3d& p3,
+                                                   double* volumeM3);
+
+/// Assembles K and M. Error: DegenerateElement (a tet with volume ≤ 1e-12 × bounding-box volume
+/// or inverted, naming the tet), InvalidMaterial.
+Result<FemSystem> assembleFem(const TetMesh& mesh, const Material& material, const FemSettings& settings);
+
+/// Per-element stress modes S_e = C B_e Φ_e: returns a 6T by r matrix whose rows 6e..6e+5 give
+/// the stress (Pa) of element e per unit modal coordinate. modes is 3N by r.
+MatrixXdRow computeStressModes(const TetMesh& mesh, const Material& material, const MatrixXdRow& modes);
+
+/// The six rigid-body modes of the mesh (3 translations, 3 infinitesimal rotations about the
+/// centroid of the nodes), as a 3N by 6 matrix with M-orthonormal columns.
+Eigen::MatrixXd rigidBodyModes(const Points& nodes, const SparseMatrixd& mass);
+
+}  // namespace brittle

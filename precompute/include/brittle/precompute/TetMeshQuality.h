@@ -1,0 +1,20 @@
+// TetMeshQuality.h — quality statistics and boundary extraction for linear tet meshes.
+#pragma once
+
+#include "brittle/database/ObjectAsset.h"
+#include "brittle/descriptors/MeshTypes.h"
+
+namespace brittle {
+
+/// Dihedral angles (degrees), radius-edge ratios and counts of a tet mesh (#T ≥ 1).
+/// surfaceFaceCount is filled from boundaryFaces(mesh).
+MeshQuality computeMeshQuality(const TetMesh& mesh);
+
+/// Faces used by exactly one tet, oriented outward (counter-clockwise seen from outside), in
+/// the order of the tets that own them.
+Triangles boundaryFaces(const TetMesh& mesh);
+
+/// Drops nodes no tet uses and renumbers the rest in their original order.
+TetMesh compactNodes(const TetMesh& mesh);
+
+}  // namespace brittle

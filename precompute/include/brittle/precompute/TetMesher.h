@@ -1,0 +1,51 @@
+// TetMesher.h — tetrahedral meshing of a validated closed surface with CGAL Mesh_3.
+//
+// The domain keeps sharp features (Polyhedral_mesh_domain_with_features_3 + feature detection),
+// so boxes keep their edges and corners exactly. Mesh quality comes from Mesh_3's sliver
+// perturbation and exudation (on by default): without them slivers go down to ~1°.
+// This is the only translation unit that instantiates Mesh_3 (it costs ~4 GiB to compile); its
+// interface is flat arrays only.
+#pragma once
+
+#include <cstdint>
+
+#include "brittle/database/ObjectAsset.h"
+#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/descriptors/Result.h"
+#include "brittle/precompute/Progress.h"
+
+namespace brittle {
+
+struct TetMeshSettings {
+  /// Target number of tetrahedra. When > 0 the cell size is searched (a few Mesh_3 runs, each
+  /// correcting the size by (count/target)^(1/3)) until the count is within ±countTolerance.
+  int64_t targetTets = 5000;
+  double countTolerance = 0.25;
+  int maxAttempts = 4;
+  /// Cell size (m), used when targetTets == 0: upper bound on tetrahedron circumradius, facet
+  /// size and feature edge length.
+  double cellSizeM = 0.0;
+  double facetAngleDeg = 25.0;          ///< lower bound on surface triangle angles
+  double facetDistanceFraction = 0.1;   ///< surface approximation error, as a fraction of cell size
+  double cellRadiusEdgeRatio = 3.0;     ///< upper bound on circumradius / shortest edge
+  bool detectSharpFeatures = true;
+  double featureAngleDeg = 60.0;        ///< dihedral angle that marks an edge as sharp
+  bool optimize = true;                 ///< sliver perturbation + exudation
+  uint64_t seed = 1;                    ///< seeds CGAL's random generator (determinism)
+};
+
+struct TetMeshResult {
+  TetMesh mesh;               ///< positively oriented tets, no unused nodes
+  Triangles surfaceFaces;     ///< boundary faces of mesh, outward
+  MeshQuality quality;
+  double cellSizeM = 0.0;     ///< the cell size that produced mesh
+  int attempts = 0;           ///< Mesh_3 runs made
+};
+
+/// Tetrahedralises the solid bounded by surface (which must pass validateSurfaceMesh).
+/// Errors: InvalidArgument (no target and no cell size), MeshingFailed (Mesh_3 produced no cells
+/// or a mesh that is not one solid), Cancelled.
+Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshSettings& settings,
+                                     ProgressSink* progress = nullptr);
+
+}  // namespace brittle

@@ -1,0 +1,193 @@
+#include "brittle/precompute/BakePipeline.h"
+
+#include <chrono>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "brittle/descriptors/MassProperties.h"
+#include "brittle/precompute/MaterialLibrary.h"
+#include "brittle/precompute/MeshIO.h"
+#include "brittle/precompute/MeshValidation.h"
+
+#ifndef BRITTLE_VERSION
+#define BRITTLE_VERSION "0.1.0"
+#endif
+
+namespace brittle {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+Error inObject(const std::string& name, const Error& e) {
+  return Error{e.code, "object '" + name + "': " + e.message};
+}
+
+// Forwards a stage's progress with the object's name in front, so a multi-object bake shows
+// which object is working.
+class NamedProgress final : public ProgressSink {
+ public:
+  NamedProgress(ProgressSink* inner, std::string name) : mInner(inner), mName(std::move(name)) {}
+  void report(std::string_view stage, double fraction) override {
+    if (mInner) mInner->report(mName + ": " + std::string(stage), fraction);
+  }
+  bool wasInterrupted() override { return mInner && mInner->wasInterrupted(); }
+
+ private:
+  ProgressSink* mInner;
+  std::string mName;
+};
+
+}  // namespace
+
+Result<ObjectAsset> bakeObject(const ObjectBakeSettings& s, ProgressSink* progressIn, ObjectBakeReport* report) {
+  const auto start = Clock::now();
+  const std::string name = s.name.empty() ? s.meshPath.stem().string() : s.name;
+  NamedProgress progress(progressIn, name);
+  ObjectBakeReport localReport;
+  ObjectBakeReport& rep = report ? *report : localReport;
+  if (Status m = validateMaterial(s.material); !m) return inObject(name, m.error());
+
+  progress.report("reading", 0.0);
+  auto surface = readSurfaceMesh(s.meshPath);
+  if (!surface) return inObject(name, surface.error());
+  TriangleMesh mesh = std::move(surface).value();
+  if (s.repair) {
+    auto repaired = repairSurfaceMesh(mesh, s.repairSettings, &rep.repair, &progress);
+    if (!repaired) return inObject(name, repaired.error());
+    mesh = std::move(repaired).value();
+  }
+  progress.report("validating", 0.0);
+  if (Status valid = validateSurfaceMesh(mesh); !valid) return inObject(name, valid.error());
+  rep.surfaceVolumeM3 = computeSurfaceMassProperties(mesh, 1.0).volumeM3;
+
+  ObjectAsset asset;
+  asset.name = name;
+  asset.materialName = s.material.name;
+  BakeRecord& rec = asset.bake;
+  rec.sourceMesh = s.meshPath.filename().string();
+  rec.targetTets = s.tetMesh.targetTets;
+  rec.requestedModes = s.modal.modeCount;
+  rec.lumpedMass = s.fem.lumpedMass;
+  rec.repaired = s.repair;
+  rec.repairVolumeChange = s.repair ? rep.repair.relativeVolumeChange : 0.0;
+  rec.factorization = factorizationName(s.modal.factorization);
+  rec.seed = static_cast<int64_t>(s.modal.seed);
+  rec.generator = std::string("brittle ") + BRITTLE_VERSION;
+
+  auto t = Clock::now();
+  auto tets = tetrahedralize(mesh, s.tetMesh, &progress);
+  if (!tets) return inObject(name, tets.error());
+  rec.meshingS = secondsSince(t);
+  rec.cellSizeM = tets.value().cellSizeM;
+  asset.tetMesh = std::move(tets.value().mesh);
+  asset.surfaceFaces = std::move(tets.value().surfaceFaces);
+  asset.quality = tets.value().quality;
+
+  t = Clock::now();
+  progress.report("assembling K and M", 0.0);
+  auto system = assembleFem(asset.tetMesh, s.material, s.fem);
+  if (!system) return inObject(name, system.error());
+  rec.assemblyS = secondsSince(t);
+
+  t = Clock::now();
+  ModalSettings modal = s.modal;
+  if (modal.shiftRad2PerS2 == 0.0) modal.shiftRad2PerS2 = defaultShift(asset.tetMesh.nodes, s.material);
+  rec.shift = modal.shiftRad2PerS2;
+  auto modes = computeModes(system.value(), asset.tetMesh.nodes, modal, &progress);
+  if (!modes) return inObject(name, modes.error());
+  rec.modalS = secondsSince(t);
+  rep.modalStats = modes.value().stats;
+  asset.modal = std::move(modes.value().basis);
+
+  t = Clock::now();
+  progress.report("stress modes", 0.0);
+  asset.stressModes = computeStressModes(asset.tetMesh, s.material, asset.modal.modes);
+  rec.stressModesS = secondsSince(t);
+
+  asset.massProperties = computeTetMassProperties(asset.tetMesh, s.material.densityKgPerM3);
+  rep.tetVolumeRelativeError = (asset.massProperties.volumeM3 - rep.surfaceVolumeM3) / rep.surfaceVolumeM3;
+  rec.totalS = secondsSince(start);
+  progress.report("done", 1.0);
+  return asset;
+}
+
+Result<Pack> bakePack(const std::vector<ObjectBakeSettings>& objects, ProgressSink* progress,
+                      std::vector<ObjectBakeReport>* reports) {
+  Pack pack;
+  std::set<std::string> names;
+  for (const auto& o : objects) {
+    const std::string name = o.name.empty() ? o.meshPath.stem().string() : o.name;
+    if (!names.insert(name).second) return makeError(ErrorCode::InvalidArgument, "duplicate object name '" + name + "'");
+    const Material* existing = nullptr;
+    for (const auto& m : pack.materials)
+      if (m.name == o.material.name) existing = &m;
+    if (existing && (existing->youngsModulusPa != o.material.youngsModulusPa ||
+                     existing->poissonRatio != o.material.poissonRatio ||
+                     existing->densityKgPerM3 != o.material.densityKgPerM3 ||
+                     existing->tensileStrengthPa != o.material.tensileStrengthPa ||
+                     existing->fractureEnergyJPerM2 != o.material.fractureEnergyJPerM2)) {
+      return makeError(ErrorCode::InvalidArgument, "two different materials are named '" + o.material.name + "'");
+    }
+    if (!existing) pack.materials.push_back(o.material);
+  }
+  for (const auto& o : objects) {
+    ObjectBakeReport report;
+    auto asset = bakeObject(o, progress, &report);
+    if (!asset) return asset.error();
+    pack.objects.push_back(std::move(asset).value());
+    if (reports) reports->push_back(report);
+  }
+  return pack;
+}
+
+Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) return makeError(ErrorCode::FileNotFound, "manifest not found: " + path.string());
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(in);
+  } catch (const std::exception& e) {
+    return makeError(ErrorCode::ParseError, "manifest " + path.filename().string() + ": " + e.what());
+  }
+  const auto dir = path.parent_path();
+  std::vector<ObjectBakeSettings> out;
+  try {
+    if (!doc.is_object() || !doc.contains("objects") || !doc["objects"].is_array()) {
+      return makeError(ErrorCode::ParseError, "manifest " + path.filename().string() + ": needs an \"objects\" array");
+    }
+    static const std::set<std::string> kKeys = {"name", "mesh", "material", "tets", "modes", "repair", "lumped_mass", "seed"};
+    for (size_t i = 0; i < doc["objects"].size(); ++i) {
+      const auto& o = doc["objects"][i];
+      const std::string where = "manifest " + path.filename().string() + ", object " + std::to_string(i);
+      if (!o.is_object()) return makeError(ErrorCode::ParseError, where + ": not an object");
+      for (const auto& [key, value] : o.items()) {
+        if (!kKeys.count(key)) return makeError(ErrorCode::ParseError, where + ": unknown key \"" + key + "\"");
+      }
+      if (!o.contains("mesh") || !o.contains("material")) {
+        return makeError(ErrorCode::ParseError, where + ": \"mesh\" and \"material\" are required");
+      }
+      ObjectBakeSettings s;
+      s.meshPath = dir / o.at("mesh").get<std::string>();
+      s.name = o.value("name", std::string());
+      std::string material = o.at("material").get<std::string>();
+      if (material.ends_with(".json")) material = (dir / material).string();
+      auto m = resolveMaterial(material);
+      if (!m) return Error{m.error().code, where + ": " + m.error().message};
+      s.material = std::move(m).value();
+      s.tetMesh.targetTets = o.value("tets", s.tetMesh.targetTets);
+      s.modal.modeCount = o.value("modes", s.modal.modeCount);
+      s.repair = o.value("repair", false);
+      s.fem.lumpedMass = o.value("lumped_mass", false);
+      const auto seed = o.value("seed", static_cast<uint64_t>(1));
+      s.modal.seed = s.tetMesh.seed = seed;
+      out.push_back(std::move(s));
+    }
+  } catch (const nlohmann::json::exception& e) {
+    return makeError(ErrorCode::ParseError, "manifest " + path.filename().string() + ": " + e.what());
+  }
+  return out;
+}
+
+}  // namespace brittle

@@ -1,0 +1,136 @@
+#include "brittle/precompute/FemAssembly.h"
+
+#include <Eigen/Dense>
+#include <Eigen/Geometry>
+#include <vector>
+
+namespace brittle {
+
+Eigen::Matrix<double, 6, 6> isotropicElasticity(double e, double nu) {
+  const double lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  const double mu = e / (2.0 * (1.0 + nu));
+  Eigen::Matrix<double, 6, 6> c = Eigen::Matrix<double, 6, 6>::Zero();
+  c.topLeftCorner<3, 3>().setConstant(lambda);
+  c.topLeftCorner<3, 3>().diagonal().array() += 2.0 * mu;
+  c.bottomRightCorner<3, 3>().diagonal().setConstant(mu);
+  return c;
+}
+
+Eigen::Matrix<double, 6, 12> tetStrainDisplacement(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                                                   const Eigen::Vector3d& p2, const Eigen::Vector3d& p3,
+                                                   double* volumeM3) {
+  // Shape function gradients: rows of the inverse of the edge matrix give ∇N1..∇N3,
+  // and ∇N0 = −(∇N1 + ∇N2 + ∇N3).
+  Eigen::Matrix3d edges;
+  edges.col(0) = p1 - p0;
+  edges.col(1) = p2 - p0;
+  edges.col(2) = p3 - p0;
+  const double det = edges.determinant();
+  if (volumeM3) *volumeM3 = det / 6.0;
+  const Eigen::Matrix3d inv = edges.inverse();
+  Eigen::Matrix<double, 4, 3> grad;
+  grad.row(1) = inv.row(0);
+  grad.row(2) = inv.row(1);
+  grad.row(3) = inv.row(2);
+  grad.row(0) = -(grad.row(1) + grad.row(2) + grad.row(3));
+  Eigen::Matrix<double, 6, 12> b = Eigen::Matrix<double, 6, 12>::Zero();
+  for (int n = 0; n < 4; ++n) {
+    const double dx = grad(n, 0), dy = grad(n, 1), dz = grad(n, 2);
+    const int c = 3 * n;
+    b(0, c + 0) = dx;
+    b(1, c + 1) = dy;
+    b(2, c + 2) = dz;
+    b(3, c + 1) = dz;  // γ_yz = ∂u_y/∂z + ∂u_z/∂y
+    b(3, c + 2) = dy;
+    b(4, c + 0) = dz;  // γ_xz
+    b(4, c + 2) = dx;
+    b(5, c + 0) = dy;  // γ_xy
+    b(5, c + 1) = dx;
+  }
+  return b;
+}
+
+Result<FemSystem> assembleFem(const TetMesh& mesh, const Material& material, const FemSettings& settings) {
+  if (Status s = validateMaterial(material); !s) return s.error();
+  const Eigen::Index n = mesh.nodes.rows();
+  if (n == 0 || mesh.tets.rows() == 0) return makeError(ErrorCode::DegenerateElement, "tet mesh is empty");
+  const Eigen::Vector3d extent = (mesh.nodes.colwise().maxCoeff() - mesh.nodes.colwise().minCoeff()).transpose();
+  const double minVolume = 1e-12 * extent.prod();
+  const auto c = isotropicElasticity(material.youngsModulusPa, material.poissonRatio);
+  const double rho = material.densityKgPerM3;
+
+  std::vector<Eigen::Triplet<double>> kTriplets, mTriplets;
+  kTriplets.reserve(static_cast<size_t>(mesh.tets.rows()) * 144);
+  mTriplets.reserve(static_cast<size_t>(mesh.tets.rows()) * (settings.lumpedMass ? 12 : 48));
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    std::array<int32_t, 4> v = {mesh.tets(t, 0), mesh.tets(t, 1), mesh.tets(t, 2), mesh.tets(t, 3)};
+    for (int32_t i : v) {
+      if (i < 0 || i >= n) {
+        return makeError(ErrorCode::DegenerateElement, "tet " + std::to_string(t) + " refers to node " + std::to_string(i));
+      }
+    }
+    double volume = 0.0;
+    const auto b = tetStrainDisplacement(mesh.nodes.row(v[0]).transpose(), mesh.nodes.row(v[1]).transpose(),
+                                         mesh.nodes.row(v[2]).transpose(), mesh.nodes.row(v[3]).transpose(), &volume);
+    if (!(volume > minVolume)) {
+      return makeError(ErrorCode::DegenerateElement, "tet " + std::to_string(t) + " has volume " +
+                                                         std::to_string(volume) + " m^3 (degenerate or inverted)");
+    }
+    const Eigen::Matrix<double, 12, 12> ke = volume * b.transpose() * c * b;
+    for (int a = 0; a < 4; ++a)
+      for (int i = 0; i < 3; ++i)
+        for (int bb = 0; bb < 4; ++bb)
+          for (int j = 0; j < 3; ++j) kTriplets.emplace_back(3 * v[a] + i, 3 * v[bb] + j, ke(3 * a + i, 3 * bb + j));
+    if (settings.lumpedMass) {
+      for (int a = 0; a < 4; ++a)
+        for (int i = 0; i < 3; ++i) mTriplets.emplace_back(3 * v[a] + i, 3 * v[a] + i, rho * volume / 4.0);
+    } else {
+      // Consistent P1 mass: ∫ N_a N_b dV = V/20 (1 + δ_ab), per displacement component.
+      for (int a = 0; a < 4; ++a)
+        for (int bb = 0; bb < 4; ++bb)
+          for (int i = 0; i < 3; ++i)
+            mTriplets.emplace_back(3 * v[a] + i, 3 * v[bb] + i, rho * volume / 20.0 * (a == bb ? 2.0 : 1.0));
+    }
+  }
+  FemSystem sys;
+  sys.stiffness.resize(3 * n, 3 * n);
+  sys.mass.resize(3 * n, 3 * n);
+  sys.stiffness.setFromTriplets(kTriplets.begin(), kTriplets.end());
+  sys.mass.setFromTriplets(mTriplets.begin(), mTriplets.end());
+  return sys;
+}
+
+MatrixXdRow computeStressModes(const TetMesh& mesh, const Material& material, const MatrixXdRow& modes) {
+  const auto c = isotropicElasticity(material.youngsModulusPa, material.poissonRatio);
+  const Eigen::Index r = modes.cols();
+  MatrixXdRow s(6 * mesh.tets.rows(), r);
+  Eigen::Matrix<double, 12, Eigen::Dynamic> phiE(12, r);
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    const auto b = tetStrainDisplacement(mesh.nodes.row(mesh.tets(t, 0)).transpose(), mesh.nodes.row(mesh.tets(t, 1)).transpose(),
+                                         mesh.nodes.row(mesh.tets(t, 2)).transpose(), mesh.nodes.row(mesh.tets(t, 3)).transpose(),
+                                         nullptr);
+    for (int a = 0; a < 4; ++a) phiE.middleRows(3 * a, 3) = modes.middleRows(3 * mesh.tets(t, a), 3);
+    s.middleRows(6 * t, 6) = c * b * phiE;
+  }
+  return s;
+}
+
+Eigen::MatrixXd rigidBodyModes(const Points& nodes, const SparseMatrixd& mass) {
+  const Eigen::Index n = nodes.rows();
+  const Eigen::RowVector3d center = nodes.colwise().mean();
+  Eigen::MatrixXd r = Eigen::MatrixXd::Zero(3 * n, 6);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = (nodes.row(i) - center).transpose();
+    for (int k = 0; k < 3; ++k) r(3 * i + k, k) = 1.0;
+    // Rotation about axis a: displacement e_a × p.
+    for (int a = 0; a < 3; ++a) r.block<3, 1>(3 * i, 3 + a) = Eigen::Vector3d::Unit(a).cross(p);
+  }
+  // M-orthonormalise (modified Gram–Schmidt in the M inner product).
+  for (int j = 0; j < 6; ++j) {
+    for (int k = 0; k < j; ++k) r.col(j) -= (r.col(k).dot(mass * r.col(j))) * r.col(k);
+    r.col(j) /= std::sqrt(r.col(j).dot(mass * r.col(j)));
+  }
+  return r;
+}
+
+}  // namespace brittle

@@ -1,0 +1,71 @@
+#include "brittle/precompute/FemAssembly.h"
+
+#include <gtest/gtest.h>
+
+#include "brittle/precompute/MaterialLibrary.h"
+#include "brittle/testing/Fixtures.h"
+
+namespace brittle {
+namespace {
+
+Material glass() { return materialPreset("glass").value(); }
+
+TEST(FemAssembly, StiffnessIsSymmetricAndAnnihilatesRigidMotion) {
+  const auto mesh = testing::makeBoxTetMesh(0.3, 0.2, 0.1, 3, 2, 2);
+  auto sys = assembleFem(mesh, glass(), {});
+  ASSERT_TRUE(sys.ok()) << sys.error().message;
+  const SparseMatrixd& k = sys.value().stiffness;
+  EXPECT_NEAR((SparseMatrixd(k.transpose()) - k).norm(), 0.0, 1e-12 * k.norm());
+  const Eigen::MatrixXd rigid = rigidBodyModes(mesh.nodes, sys.value().mass);
+  EXPECT_LT((k * rigid).norm(), 1e-9 * k.norm() * rigid.norm());
+  // The rigid basis is M-orthonormal.
+  EXPECT_TRUE((rigid.transpose() * sys.value().mass * rigid).isApprox(Eigen::MatrixXd::Identity(6, 6), 1e-12));
+}
+
+TEST(FemAssembly, MassMatricesCarryTheTotalMass) {
+  const auto mesh = testing::makeBoxTetMesh(0.3, 0.2, 0.1, 3, 2, 2);
+  const double expected = glass().densityKgPerM3 * 0.3 * 0.2 * 0.1;
+  for (bool lumped : {false, true}) {
+    auto sys = assembleFem(mesh, glass(), FemSettings{lumped});
+    ASSERT_TRUE(sys.ok());
+    Eigen::VectorXd ux = Eigen::VectorXd::Zero(sys.value().mass.rows());
+    for (Eigen::Index i = 0; i < mesh.nodes.rows(); ++i) ux(3 * i) = 1.0;
+    EXPECT_NEAR(ux.dot(sys.value().mass * ux), expected, 1e-12 * expected) << (lumped ? "lumped" : "consistent");
+  }
+}
+
+TEST(FemAssembly, PatchTestUniformStrainGivesUniformStress) {
+  // Linear displacement u = ε x reproduces a uniform strain exactly on P1 elements.
+  const auto mesh = testing::makeBoxTetMesh(1.0, 1.0, 1.0, 2, 2, 2);
+  const Material m = glass();
+  Eigen::Matrix3d grad;
+  grad << 1e-4, 2e-5, 0, 0, -3e-5, 1e-5, 4e-5, 0, 2e-5;
+  MatrixXdRow u(3 * mesh.nodes.rows(), 1);
+  for (Eigen::Index i = 0; i < mesh.nodes.rows(); ++i) u.middleRows(3 * i, 3) = grad * mesh.nodes.row(i).transpose();
+  const MatrixXdRow s = computeStressModes(mesh, m, u);
+  Eigen::Matrix<double, 6, 1> strain;
+  strain << grad(0, 0), grad(1, 1), grad(2, 2), grad(1, 2) + grad(2, 1), grad(0, 2) + grad(2, 0), grad(0, 1) + grad(1, 0);
+  const Eigen::Matrix<double, 6, 1> expected = isotropicElasticity(m.youngsModulusPa, m.poissonRatio) * strain;
+  for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) {
+    EXPECT_TRUE(s.middleRows(6 * e, 6).isApprox(expected, 1e-10)) << "tet " << e;
+  }
+  // Uniaxial check of C: σ_xx = E(1−ν)/((1+ν)(1−2ν)) ε_xx for ε = ε_xx e_x.
+  const double e = m.youngsModulusPa, nu = m.poissonRatio;
+  EXPECT_NEAR(isotropicElasticity(e, nu)(0, 0), e * (1 - nu) / ((1 + nu) * (1 - 2 * nu)), 1e-6 * e);
+  EXPECT_NEAR(isotropicElasticity(e, nu)(3, 3), e / (2 * (1 + nu)), 1e-6 * e);
+}
+
+TEST(FemAssembly, RejectsDegenerateAndInvertedTets) {
+  auto mesh = testing::makeBoxTetMesh(1.0, 1.0, 1.0, 1, 1, 1);
+  std::swap(mesh.tets(2, 0), mesh.tets(2, 1));
+  auto inverted = assembleFem(mesh, glass(), {});
+  ASSERT_FALSE(inverted.ok());
+  EXPECT_EQ(inverted.error().code, ErrorCode::DegenerateElement);
+  EXPECT_NE(inverted.error().message.find("tet 2"), std::string::npos);
+  Material bad = glass();
+  bad.poissonRatio = 0.5;
+  EXPECT_EQ(assembleFem(testing::makeBoxTetMesh(1, 1, 1, 1, 1, 1), bad, {}).error().code, ErrorCode::InvalidMaterial);
+}
+
+}  // namespace
+}  // namespace brittle

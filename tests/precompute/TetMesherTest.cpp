@@ -1,0 +1,109 @@
+#include "brittle/precompute/TetMesher.h"
+
+#include <gtest/gtest.h>
+
+#include <numbers>
+#include <set>
+
+#include "brittle/descriptors/MassProperties.h"
+#include "brittle/precompute/TetMeshQuality.h"
+#include "brittle/testing/Fixtures.h"
+
+namespace brittle {
+namespace {
+
+TEST(TetMesher, BoxKeepsItsExactVolumeAndHitsTheTarget) {
+  const auto box = testing::makeBoxSurface(0.2, 0.1, 0.05);
+  TetMeshSettings s;
+  s.targetTets = 3000;
+  auto r = tetrahedralize(box, s);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const auto& m = r.value();
+  EXPECT_NEAR(static_cast<double>(m.mesh.tets.rows()) / 3000.0, 1.0, s.countTolerance + 1e-9);
+  const auto mp = computeTetMassProperties(m.mesh, 1.0);
+  EXPECT_NEAR(mp.volumeM3, 0.2 * 0.1 * 0.05, 1e-12);  // sharp features are kept
+  EXPECT_TRUE(mp.centerOfMassM.isApprox(Eigen::Vector3d(0.1, 0.05, 0.025), 1e-9));
+  // Quality: perturbation + exudation leave no slivers.
+  EXPECT_GT(m.quality.minDihedralDeg, 5.0);
+  EXPECT_LT(m.quality.maxDihedralDeg, 170.0);
+  EXPECT_GT(m.quality.minTetVolumeM3, 0.0);
+  EXPECT_EQ(m.quality.tetCount, m.mesh.tets.rows());
+  EXPECT_EQ(m.quality.nodeCount, m.mesh.nodes.rows());
+}
+
+TEST(TetMesher, BoundaryIsClosedOutwardAndBoundsTheTets) {
+  TetMeshSettings s;
+  s.targetTets = 2000;
+  auto r = tetrahedralize(testing::makeIcosphere(0.1, 3), s);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const TriangleMesh boundary{r.value().mesh.nodes, r.value().surfaceFaces};
+  const auto fromSurface = computeSurfaceMassProperties(boundary, 1.0);
+  const auto fromTets = computeTetMassProperties(r.value().mesh, 1.0);
+  EXPECT_NEAR(fromSurface.volumeM3, fromTets.volumeM3, 1e-12 * fromTets.volumeM3 + 1e-18);
+  EXPECT_GT(fromSurface.volumeM3, 0.0);
+  // Euler characteristic of a sphere: V − E + F = 2, with E = 3F/2 on a closed triangle mesh.
+  std::set<int32_t> used(boundary.faces.data(), boundary.faces.data() + boundary.faces.size());
+  EXPECT_EQ(static_cast<int64_t>(used.size()) - boundary.faces.rows() * 3 / 2 + boundary.faces.rows(), 2);
+}
+
+TEST(TetMesher, SphereMassPropertiesMatchAnalyticAndSurfaceValues) {
+  const double radius = 0.1, rho = 2500.0;
+  const auto sphere = testing::makeIcosphere(radius, 4);
+  TetMeshSettings s;
+  s.targetTets = 5000;
+  auto r = tetrahedralize(sphere, s);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const auto tets = computeTetMassProperties(r.value().mesh, rho);
+  const auto exact = computeSurfaceMassProperties(sphere, rho);
+  // Mesh_3 re-samples the curved surface within facet_distance (cell size / 10) of it.
+  EXPECT_NEAR(tets.volumeM3 / exact.volumeM3, 1.0, 0.01);
+  EXPECT_NEAR(tets.massKg / exact.massKg, 1.0, 0.01);
+  EXPECT_LT(tets.centerOfMassM.norm(), 1e-3 * radius);
+  EXPECT_TRUE(tets.inertiaKgM2.isApprox(exact.inertiaKgM2, 0.02));
+  const double analyticMass = rho * 4.0 / 3.0 * std::numbers::pi * std::pow(radius, 3);
+  EXPECT_NEAR(tets.massKg / analyticMass, 1.0, 0.02);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(tets.inertiaKgM2(k, k) / (0.4 * analyticMass * radius * radius), 1.0, 0.03);
+}
+
+TEST(TetMesher, SameSeedSameMesh) {
+  TetMeshSettings s;
+  s.targetTets = 1500;
+  const auto surface = testing::makeIcosphere(0.1, 2);
+  auto a = tetrahedralize(surface, s);
+  auto b = tetrahedralize(surface, s);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_EQ(a.value().mesh.tets, b.value().mesh.tets);
+  EXPECT_EQ(a.value().mesh.nodes, b.value().mesh.nodes);
+}
+
+TEST(TetMesher, CellSizeDrivenAndErrors) {
+  TetMeshSettings s;
+  s.targetTets = 0;
+  EXPECT_EQ(tetrahedralize(testing::makeBoxSurface(1, 1, 1), s).error().code, ErrorCode::InvalidArgument);
+  s.cellSizeM = 0.25;
+  auto r = tetrahedralize(testing::makeBoxSurface(1, 1, 1), s);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r.value().attempts, 1);
+  EXPECT_DOUBLE_EQ(r.value().cellSizeM, 0.25);
+  s.cellSizeM = 0.125;
+  auto finer = tetrahedralize(testing::makeBoxSurface(1, 1, 1), s);
+  ASSERT_TRUE(finer.ok());
+  EXPECT_GT(finer.value().mesh.tets.rows(), 4 * r.value().mesh.tets.rows());
+}
+
+TEST(TetMeshQuality, RegularTetValues) {
+  TetMesh t;
+  t.nodes.resize(4, 3);
+  t.nodes << 1, 1, 1, 1, -1, -1, -1, 1, -1, -1, -1, 1;
+  t.tets.resize(1, 4);
+  t.tets << 0, 1, 2, 3;
+  if (computeTetMassProperties(t, 1.0).volumeM3 < 0) t.tets << 0, 1, 3, 2;
+  const auto q = computeMeshQuality(t);
+  EXPECT_NEAR(q.minDihedralDeg, 70.528779, 1e-5);
+  EXPECT_NEAR(q.maxDihedralDeg, 70.528779, 1e-5);
+  EXPECT_NEAR(q.maxRadiusEdgeRatio, std::sqrt(6.0) / 4.0, 1e-12);
+  EXPECT_EQ(q.surfaceFaceCount, 4);
+}
+
+}  // namespace
+}  // namespace brittle

@@ -1,0 +1,72 @@
+#include "CliSupport.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+
+namespace brittle::cli {
+
+ExitCode exitCodeFor(ErrorCode code) {
+  switch (code) {
+    case ErrorCode::FileNotFound:
+    case ErrorCode::UnknownFormat:
+    case ErrorCode::ParseError:
+    case ErrorCode::EmptyMesh:
+    case ErrorCode::NonFiniteValue:
+    case ErrorCode::OpenMesh:
+    case ErrorCode::NonManifold:
+    case ErrorCode::InconsistentOrientation:
+    case ErrorCode::InwardFacing:
+    case ErrorCode::DegenerateFace:
+    case ErrorCode::SelfIntersection:
+    case ErrorCode::RepairFailed: return kExitBadMesh;
+    case ErrorCode::UnknownMaterial:
+    case ErrorCode::InvalidMaterial: return kExitBadMaterial;
+    case ErrorCode::MeshingFailed:
+    case ErrorCode::DegenerateElement:
+    case ErrorCode::FactorizationFailed:
+    case ErrorCode::EigenNotConverged:
+    case ErrorCode::RigidModeMismatch: return kExitSolve;
+    case ErrorCode::PackIoError:
+    case ErrorCode::PackFormatMismatch:
+    case ErrorCode::PackVersionMismatch:
+    case ErrorCode::PackCorrupt:
+    case ErrorCode::PackShapeMismatch: return kExitPack;
+    case ErrorCode::InvalidArgument: return kExitUsage;
+    case ErrorCode::Cancelled: return kExitInternal;
+  }
+  return kExitInternal;
+}
+
+int reportError(const Error& error) {
+  std::fprintf(stderr, "error [%s]: %s\n", std::string(errorCodeName(error.code)).c_str(), error.message.c_str());
+  return exitCodeFor(error.code);
+}
+
+TerminalProgress::TerminalProgress(bool quiet)
+    : mQuiet(quiet), mTty(::isatty(STDERR_FILENO) != 0), mStart(std::chrono::steady_clock::now()) {}
+
+TerminalProgress::~TerminalProgress() { finish(); }
+
+void TerminalProgress::report(std::string_view stage, double fraction) {
+  if (mQuiet) return;
+  const int percent = static_cast<int>(fraction * 100.0 + 0.5);
+  const bool newStage = stage != mStage;
+  if (!newStage && percent == mPercent) return;
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - mStart).count();
+  if (mTty) {
+    std::fprintf(stderr, "\r\033[K[%7.1fs] %.*s %3d%%", elapsed, static_cast<int>(stage.size()), stage.data(), percent);
+    std::fflush(stderr);
+  } else if (newStage) {
+    std::fprintf(stderr, "[%7.1fs] %.*s\n", elapsed, static_cast<int>(stage.size()), stage.data());
+  }
+  mStage = std::string(stage);
+  mPercent = percent;
+}
+
+void TerminalProgress::finish() {
+  if (mTty && !mQuiet && !mStage.empty()) std::fprintf(stderr, "\n");
+  mStage.clear();
+}
+
+}  // namespace brittle::cli

@@ -1,0 +1,44 @@
+// CliSupport.h — what every brittle subcommand shares: exit codes, error printing, progress.
+#pragma once
+
+#include <chrono>
+#include <string>
+
+#include "brittle/descriptors/Result.h"
+#include "brittle/precompute/Progress.h"
+
+namespace brittle::cli {
+
+/// Exit codes (documented in the README).
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitInternal = 1,
+  kExitUsage = 2,        // CLI11 parse errors
+  kExitBadMesh = 3,      // file, format, mesh validity, repair
+  kExitBadMaterial = 4,
+  kExitSolve = 5,        // meshing, FEM, eigen solve
+  kExitPack = 6,         // pack read/write
+};
+
+ExitCode exitCodeFor(ErrorCode code);
+
+/// Prints "error [code_name]: message" to stderr and returns the exit code.
+int reportError(const Error& error);
+
+/// Progress on stderr: a single rewritten line on a terminal, one line per stage otherwise.
+class TerminalProgress final : public ProgressSink {
+ public:
+  explicit TerminalProgress(bool quiet);
+  ~TerminalProgress() override;
+  void report(std::string_view stage, double fraction) override;
+  void finish();
+
+ private:
+  bool mQuiet;
+  bool mTty;
+  std::string mStage;
+  int mPercent = -1;
+  std::chrono::steady_clock::time_point mStart;
+};
+
+}  // namespace brittle::cli

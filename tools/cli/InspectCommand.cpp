@@ -1,0 +1,152 @@
+#include <iomanip>
+#include <iostream>
+
+#include "CliSupport.h"
+#include "Commands.h"
+
+namespace brittle::cli {
+namespace {
+
+nlohmann::json vec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+nlohmann::json mat3(const Eigen::Matrix3d& m) {
+  return {{m(0, 0), m(0, 1), m(0, 2)}, {m(1, 0), m(1, 1), m(1, 2)}, {m(2, 0), m(2, 1), m(2, 2)}};
+}
+nlohmann::json vecX(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
+
+nlohmann::json materialJson(const Material& m) {
+  return {{"name", m.name},
+          {"youngs_modulus_pa", m.youngsModulusPa},
+          {"poisson_ratio", m.poissonRatio},
+          {"density_kg_per_m3", m.densityKgPerM3},
+          {"tensile_strength_pa", m.tensileStrengthPa},
+          {"fracture_energy_j_per_m2", m.fractureEnergyJPerM2},
+          {"rayleigh_alpha_per_s", m.rayleighAlphaPerS},
+          {"rayleigh_beta_s", m.rayleighBetaS},
+          {"restitution", m.restitution},
+          {"source", m.source}};
+}
+
+const Material* findMaterial(const Pack& pack, const std::string& name) {
+  for (const auto& m : pack.materials)
+    if (m.name == name) return &m;
+  return nullptr;
+}
+
+}  // namespace
+
+nlohmann::json inspectJson(const Pack& pack) {
+  nlohmann::json doc;
+  doc["format"] = kPackFormatName;
+  doc["version"] = kPackVersion;
+  doc["materials"] = nlohmann::json::array();
+  for (const auto& m : pack.materials) doc["materials"].push_back(materialJson(m));
+  doc["objects"] = nlohmann::json::array();
+  for (const auto& o : pack.objects) {
+    const auto& q = o.quality;
+    const auto& mp = o.massProperties;
+    const auto& b = o.bake;
+    nlohmann::json j;
+    j["name"] = o.name;
+    const Material* material = findMaterial(pack, o.materialName);
+    j["material"] = material ? materialJson(*material) : nlohmann::json{{"name", o.materialName}};
+    j["mesh"] = {{"nodes", q.nodeCount},
+                 {"tets", q.tetCount},
+                 {"surface_faces", q.surfaceFaceCount},
+                 {"min_dihedral_deg", q.minDihedralDeg},
+                 {"max_dihedral_deg", q.maxDihedralDeg},
+                 {"max_radius_edge_ratio", q.maxRadiusEdgeRatio},
+                 {"mean_radius_edge_ratio", q.meanRadiusEdgeRatio},
+                 {"min_tet_volume_m3", q.minTetVolumeM3}};
+    j["mass_properties"] = {{"mass_kg", mp.massKg},
+                            {"volume_m3", mp.volumeM3},
+                            {"center_of_mass_m", vec3(mp.centerOfMassM)},
+                            {"inertia_kg_m2", mat3(mp.inertiaKgM2)}};
+    const auto& m = o.modal;
+    j["modes"] = {{"count", m.frequenciesHz.size()},
+                  {"frequencies_hz", vecX(m.frequenciesHz)},
+                  {"eigenvalues_rad2_per_s2", vecX(m.eigenvaluesRad2PerS2)},
+                  {"residuals", vecX(m.residuals)},
+                  {"max_residual", m.residuals.size() ? m.residuals.maxCoeff() : 0.0},
+                  {"orthonormality_error", m.orthonormalityError}};
+    j["bake"] = {{"source_mesh", b.sourceMesh},
+                 {"target_tets", b.targetTets},
+                 {"cell_size_m", b.cellSizeM},
+                 {"requested_modes", b.requestedModes},
+                 {"lumped_mass", b.lumpedMass},
+                 {"repaired", b.repaired},
+                 {"repair_volume_change", b.repairVolumeChange},
+                 {"factorization", b.factorization},
+                 {"shift_rad2_per_s2", b.shift},
+                 {"seed", b.seed},
+                 {"generator", b.generator},
+                 {"timings_s",
+                  {{"meshing", b.meshingS},
+                   {"assembly", b.assemblyS},
+                   {"modal", b.modalS},
+                   {"stress_modes", b.stressModesS},
+                   {"total", b.totalS}}}};
+    doc["objects"].push_back(std::move(j));
+  }
+  return doc;
+}
+
+void printInspection(const Pack& pack, std::ostream& out) {
+  out << std::setprecision(4);
+  out << kPackFormatName << " v" << kPackVersion << ": " << pack.objects.size() << " object(s), "
+      << pack.materials.size() << " material(s)\n";
+  for (const auto& o : pack.objects) {
+    const auto& q = o.quality;
+    const auto& mp = o.massProperties;
+    const auto& m = o.modal;
+    const auto& b = o.bake;
+    out << "\nobject " << o.name << "  (from " << b.sourceMesh << ")\n";
+    if (const Material* mat = findMaterial(pack, o.materialName)) {
+      out << "  material      " << mat->name << ": E " << mat->youngsModulusPa / 1e9 << " GPa, nu "
+          << mat->poissonRatio << ", rho " << mat->densityKgPerM3 << " kg/m3, sigma_t "
+          << mat->tensileStrengthPa / 1e6 << " MPa, G_c " << mat->fractureEnergyJPerM2 << " J/m2, Rayleigh ("
+          << mat->rayleighAlphaPerS << " 1/s, " << mat->rayleighBetaS << " s)\n";
+    }
+    out << "  tet mesh      " << q.nodeCount << " nodes, " << q.tetCount << " tets, " << q.surfaceFaceCount
+        << " surface faces; dihedral " << q.minDihedralDeg << "-" << q.maxDihedralDeg << " deg, radius-edge max "
+        << q.maxRadiusEdgeRatio << " (mean " << q.meanRadiusEdgeRatio << ")\n";
+    out << "  mass          " << mp.massKg << " kg, volume " << mp.volumeM3 << " m3, centre of mass ("
+        << mp.centerOfMassM.x() << ", " << mp.centerOfMassM.y() << ", " << mp.centerOfMassM.z() << ") m\n";
+    out << "  inertia       diag (" << mp.inertiaKgM2(0, 0) << ", " << mp.inertiaKgM2(1, 1) << ", "
+        << mp.inertiaKgM2(2, 2) << "), off-diag (" << mp.inertiaKgM2(1, 2) << ", " << mp.inertiaKgM2(0, 2) << ", "
+        << mp.inertiaKgM2(0, 1) << ") kg m2\n";
+    out << "  modes         " << m.frequenciesHz.size() << ", orthonormality error " << m.orthonormalityError
+        << ", max residual " << (m.residuals.size() ? m.residuals.maxCoeff() : 0.0) << "\n";
+    for (Eigen::Index i = 0; i < m.frequenciesHz.size(); ++i) {
+      out << "    " << std::setw(3) << i << "  " << std::setw(10) << std::fixed << std::setprecision(1)
+          << m.frequenciesHz(i) << " Hz   residual " << std::scientific << std::setprecision(2) << m.residuals(i)
+          << std::defaultfloat << std::setprecision(4) << "\n";
+    }
+    out << "  bake          target " << b.targetTets << " tets, cell size " << b.cellSizeM << " m, "
+        << b.requestedModes << " modes, " << (b.lumpedMass ? "lumped" : "consistent") << " mass, "
+        << b.factorization << ", shift " << b.shift << ", seed " << b.seed
+        << (b.repaired ? ", repaired (volume change " + std::to_string(100.0 * b.repairVolumeChange) + "%)" : "")
+        << "\n";
+    out << "  timings       meshing " << b.meshingS << " s, assembly " << b.assemblyS << " s, modal " << b.modalS
+        << " s, stress modes " << b.stressModesS << " s, total " << b.totalS << " s\n";
+  }
+}
+
+Runner addInspectCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand("inspect", "Print what a pack holds: objects, materials, mesh quality, modes");
+  auto pack = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  cmd->add_option("pack", *pack, "Pack file (.h5)")->required();
+  cmd->add_flag("--json", *json, "Print the stable JSON document instead of text");
+  return [pack, json]() -> int {
+    auto loaded = readPack(*pack);
+    if (!loaded) return reportError(loaded.error());
+    if (*json) {
+      std::cout << inspectJson(loaded.value()).dump(2) << "\n";
+    } else {
+      printInspection(loaded.value(), std::cout);
+    }
+    return kExitOk;
+  };
+}
+
+}  // namespace brittle::cli

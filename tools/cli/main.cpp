@@ -1,0 +1,30 @@
+// brittle — the command-line tool: bake packs and inspect them.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+#include <map>
+
+#include "Commands.h"
+#include "CliSupport.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"brittle: bake breakable objects offline (tet meshes, modal bases, stress modes) into HDF5 packs"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("brittle 0.1.0"));
+  std::map<CLI::App*, brittle::cli::Runner> runners;
+  auto add = [&](const char* name, brittle::cli::Runner runner) { runners[app.get_subcommand(name)] = std::move(runner); };
+  add("bake", brittle::cli::addBakeCommand(app));
+  add("inspect", brittle::cli::addInspectCommand(app));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : brittle::cli::kExitUsage;
+  }
+  try {
+    for (auto* sub : app.get_subcommands()) return runners.at(sub)();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error [internal]: %s\n", e.what());
+    return brittle::cli::kExitInternal;
+  }
+  return brittle::cli::kExitUsage;
+}
