@@ -114,9 +114,12 @@ struct UnitAttribute {
 /// Root attributes that state the units of schema v1. The reader requires these exact values:
 /// a pack in other units would be silently misread.
 inline constexpr UnitAttribute kUnitAttributes[] = {
-    {"length_unit", "m"},          {"mass_unit", "kg"},
-    {"time_unit", "s"},            {"stress_unit", "Pa"},
-    {"energy_per_area_unit", "J/m^2"}, {"frequency_unit", "Hz"},
+    {"length_unit", "m"},
+    {"mass_unit", "kg"},
+    {"time_unit", "s"},
+    {"stress_unit", "Pa"},
+    {"energy_per_area_unit", "J/m^2"},
+    {"frequency_unit", "Hz"},
 };
 
 inline constexpr const char* kVoigtOrder = "xx,yy,zz,yz,xz,xy";

@@ -26,7 +26,7 @@ struct TetMeshSettings {
   /// size and feature edge length.
   double cellSizeM = 0.0;
   double facetAngleDeg = 25.0;          ///< lower bound on surface triangle angles
-  double facetDistanceFraction = 0.1;   ///< surface approximation error, as a fraction of cell size
+  double facetDistanceFraction = 0.02;  ///< surface approximation error, as a fraction of cell size
   double cellRadiusEdgeRatio = 3.0;     ///< upper bound on circumradius / shortest edge
   bool detectSharpFeatures = true;
   double featureAngleDeg = 60.0;        ///< dihedral angle that marks an edge as sharp
