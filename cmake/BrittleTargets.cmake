@@ -1,6 +1,8 @@
 # Per-target flags: warnings, sanitizers. Never global.
 function(brittle_target_flags target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local)
+  # One version for every module and tool (packs record it as "generator").
+  target_compile_definitions(${target} PRIVATE BRITTLE_VERSION="${PROJECT_VERSION}")
   if(BRITTLE_SANITIZE)
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer
       -fno-sanitize-recover=undefined)

@@ -21,9 +21,6 @@
 #include "Hdf5Util.h"
 #include "brittle/database/Pack.h"
 
-#ifndef BRITTLE_VERSION
-#define BRITTLE_VERSION "0.1.0"
-#endif
 
 namespace brittle {
 namespace {

@@ -10,9 +10,6 @@
 #include "brittle/precompute/MeshIO.h"
 #include "brittle/precompute/MeshValidation.h"
 
-#ifndef BRITTLE_VERSION
-#define BRITTLE_VERSION "0.1.0"
-#endif
 
 namespace brittle {
 namespace {

@@ -52,6 +52,14 @@ class EigenLdltFactor final : public ShiftInvertFactor {
   Eigen::SimplicialLDLT<SparseMatrixd, Eigen::Lower, Eigen::AMDOrdering<int>> mSolver;
 };
 
+// A fixed, generic vector: a mode's sign is chosen so that its projection on it is positive.
+// (The largest component is a poor reference: symmetric meshes make ± ties.)
+Eigen::VectorXd signReference(Eigen::Index n) {
+  Eigen::VectorXd w(n);
+  for (Eigen::Index i = 0; i < n; ++i) w(i) = std::sin(0.7548776662466927 * static_cast<double>(i + 1));
+  return w;
+}
+
 // Candidate eigenpairs (any order) → checked basis: sort, M-normalise, drop rigid modes by their
 // projection on the analytic rigid space, keep r, fix signs, compute residuals.
 Result<ModalBasis> finishBasis(const FemSystem& sys, const Points& nodes, Eigen::VectorXd lambda,
@@ -94,9 +102,7 @@ Result<ModalBasis> finishBasis(const FemSystem& sys, const Points& nodes, Eigen:
   basis.residuals.resize(r);
   for (int j = 0; j < r; ++j) {
     Eigen::VectorXd phi = vectors.col(elastic[static_cast<size_t>(j)]);
-    Eigen::Index largest = 0;
-    phi.cwiseAbs().maxCoeff(&largest);
-    if (phi(largest) < 0.0) phi = -phi;
+    if (phi.dot(signReference(n)) < 0.0) phi = -phi;
     const double l = lambda(elastic[static_cast<size_t>(j)]);
     if (!(l > 0.0)) {
       return makeError(ErrorCode::EigenNotConverged, "elastic mode " + std::to_string(j) + " has eigenvalue " +

@@ -104,32 +104,37 @@ Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshS
   }
 
   // Mesh_3 tets at cell size h average about 0.175 h³ (circumradius ~0.7 h, near-regular).
+  // The size search runs refinement only (cheap); optimisation, which changes the count by a
+  // few per cent, runs once at the chosen size.
   double h = s.targetTets > 0 ? std::cbrt(volume / (0.175 * static_cast<double>(s.targetTets))) : s.cellSizeM;
-  const int attemptsAllowed = s.targetTets > 0 ? std::max(1, s.maxAttempts) : 1;
+  const int attemptsAllowed = s.targetTets > 0 ? std::max(1, s.maxAttempts) : 0;
+  TetMeshSettings search = s;
+  search.optimize = false;
   TetMeshResult best;
+  best.cellSizeM = h;
   double bestMiss = std::numeric_limits<double>::infinity();
-  for (int attempt = 0; attempt < attemptsAllowed; ++attempt) {
+  try {
+    for (int attempt = 0; attempt < attemptsAllowed; ++attempt) {
+      if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "tet meshing cancelled");
+      reportProgress(progress, "tet meshing: sizing", static_cast<double>(attempt) / attemptsAllowed);
+      const double count = static_cast<double>(meshOnce(poly, search, h).tets.rows());
+      best.attempts = attempt + 1;
+      if (count == 0) break;
+      const double miss = std::abs(count / static_cast<double>(s.targetTets) - 1.0);
+      if (miss < bestMiss) bestMiss = miss, best.cellSizeM = h;
+      if (miss <= s.countTolerance) break;
+      h *= std::cbrt(count / static_cast<double>(s.targetTets));
+    }
     if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "tet meshing cancelled");
-    reportProgress(progress, "tet meshing", static_cast<double>(attempt) / attemptsAllowed);
-    TetMesh mesh;
-    try {
-      mesh = meshOnce(poly, s, h);
-    } catch (const std::exception& e) {
-      return makeError(ErrorCode::MeshingFailed, std::string("CGAL Mesh_3 failed: ") + e.what());
-    }
-    if (mesh.tets.rows() == 0) {
-      return makeError(ErrorCode::MeshingFailed, "CGAL Mesh_3 produced no tetrahedra at cell size " + std::to_string(h) + " m");
-    }
-    const double count = static_cast<double>(mesh.tets.rows());
-    const double miss = s.targetTets > 0 ? std::abs(count / static_cast<double>(s.targetTets) - 1.0) : 0.0;
-    if (miss < bestMiss) {
-      bestMiss = miss;
-      best.mesh = std::move(mesh);
-      best.cellSizeM = h;
-    }
-    best.attempts = attempt + 1;
-    if (miss <= s.countTolerance) break;
-    h *= std::cbrt(count / static_cast<double>(s.targetTets));
+    reportProgress(progress, s.optimize ? "tet meshing: refine + optimise" : "tet meshing: refine", 0.0);
+    best.mesh = meshOnce(poly, s, best.cellSizeM);
+    ++best.attempts;
+  } catch (const std::exception& e) {
+    return makeError(ErrorCode::MeshingFailed, std::string("CGAL Mesh_3 failed: ") + e.what());
+  }
+  if (best.mesh.tets.rows() == 0) {
+    return makeError(ErrorCode::MeshingFailed,
+                     "CGAL Mesh_3 produced no tetrahedra at cell size " + std::to_string(best.cellSizeM) + " m");
   }
   reportProgress(progress, "tet meshing", 1.0);
 

@@ -74,7 +74,7 @@ TEST(BeamFrequency, FreeFreeBeamMatchesTheoryAndConvergesUnderRefinement) {
                 h, static_cast<long>(f.tets), f.bending0, f.bending1, bendingTheory, 100 * bendingError, f.axial,
                 axialTheory, 100 * axialError);
     // The square section makes the two bending modes a degenerate pair.
-    EXPECT_NEAR(f.bending0 / f.bending1, 1.0, 0.01);
+    EXPECT_NEAR(f.bending0 / f.bending1, 1.0, 0.02);
     EXPECT_LT(bendingError, previousBending) << "bending error must fall under refinement";
     EXPECT_LT(axialError, previousAxial + 1e-3) << "axial error must not grow under refinement";
     previousAxial = axialError;

@@ -32,7 +32,12 @@ CliRun run(const std::string& args) {
 class CliTest : public ::testing::Test {
  protected:
   std::filesystem::path dir = testing::makeTempDir("cli");
-  std::string path(const std::string& name) { return "\"" + (dir / name).string() + "\""; }
+  std::string path(const std::string& name) {
+    std::string quoted = "\"";
+    quoted += (dir / name).string();
+    quoted += '"';
+    return quoted;
+  }
 };
 
 TEST_F(CliTest, BakeThenInspectJson) {

@@ -139,7 +139,11 @@ Runner addInspectCommand(CLI::App& app) {
   cmd->add_flag("--json", *json, "Print the stable JSON document instead of text");
   return [pack, json]() -> int {
     auto loaded = readPack(*pack);
-    if (!loaded) return reportError(loaded.error());
+    if (!loaded) {
+      // A missing pack is a pack problem here, not a mesh one.
+      const int code = reportError(loaded.error());
+      return loaded.error().code == ErrorCode::FileNotFound ? kExitPack : code;
+    }
     if (*json) {
       std::cout << inspectJson(loaded.value()).dump(2) << "\n";
     } else {

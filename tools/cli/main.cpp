@@ -10,7 +10,7 @@
 int main(int argc, char** argv) {
   CLI::App app{"brittle: bake breakable objects offline (tet meshes, modal bases, stress modes) into HDF5 packs"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("brittle 0.1.0"));
+  app.set_version_flag("--version", std::string("brittle ") + BRITTLE_VERSION);
   std::map<CLI::App*, brittle::cli::Runner> runners;
   auto add = [&](const char* name, brittle::cli::Runner runner) { runners[app.get_subcommand(name)] = std::move(runner); };
   add("bake", brittle::cli::addBakeCommand(app));

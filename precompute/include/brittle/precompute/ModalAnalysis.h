@@ -67,7 +67,8 @@ class ShiftInvertFactor {
 };
 
 /// Lowest settings.modeCount elastic modes by ARPACK. Modes are mass-normalised, sorted by
-/// ascending frequency, sign-fixed (largest-magnitude component positive) and checked.
+/// ascending frequency, sign-fixed (positive projection on the fixed vector w_i = sin(0.7549 (i+1)))
+/// and checked.
 /// Errors: InvalidArgument (r < 1 or r + 6 ≥ 3N), FactorizationFailed, EigenNotConverged (says
 /// how many converged and which ncv/iteration limits were tried), RigidModeMismatch (not exactly
 /// six rigid modes: a disconnected or constrained mesh), Cancelled.

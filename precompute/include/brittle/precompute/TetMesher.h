@@ -17,8 +17,10 @@
 namespace brittle {
 
 struct TetMeshSettings {
-  /// Target number of tetrahedra. When > 0 the cell size is searched (a few Mesh_3 runs, each
-  /// correcting the size by (count/target)^(1/3)) until the count is within ±countTolerance.
+  /// Target number of tetrahedra. When > 0 the cell size is searched with refinement-only Mesh_3
+  /// runs, each correcting the size by (count/target)^(1/3), until the count is within
+  /// ±countTolerance; the optimised mesh is then built once at that size (optimisation moves
+  /// the count by a few per cent, so the final count can sit slightly outside the tolerance).
   int64_t targetTets = 5000;
   double countTolerance = 0.25;
   int maxAttempts = 4;
@@ -26,7 +28,7 @@ struct TetMeshSettings {
   /// size and feature edge length.
   double cellSizeM = 0.0;
   double facetAngleDeg = 25.0;          ///< lower bound on surface triangle angles
-  double facetDistanceFraction = 0.02;  ///< surface approximation error, as a fraction of cell size
+  double facetDistanceFraction = 0.05;  ///< surface approximation error, as a fraction of cell size
   double cellRadiusEdgeRatio = 3.0;     ///< upper bound on circumradius / shortest edge
   bool detectSharpFeatures = true;
   double featureAngleDeg = 60.0;        ///< dihedral angle that marks an edge as sharp
@@ -39,7 +41,7 @@ struct TetMeshResult {
   Triangles surfaceFaces;     ///< boundary faces of mesh, outward
   MeshQuality quality;
   double cellSizeM = 0.0;     ///< the cell size that produced mesh
-  int attempts = 0;           ///< Mesh_3 runs made
+  int attempts = 0;           ///< Mesh_3 runs made (sizing runs + the final one)
 };
 
 /// Tetrahedralises the solid bounded by surface (which must pass validateSurfaceMesh).
