@@ -154,7 +154,8 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
     if (!doc.is_object() || !doc.contains("objects") || !doc["objects"].is_array()) {
       return makeError(ErrorCode::ParseError, "manifest " + path.filename().string() + ": needs an \"objects\" array");
     }
-    static const std::set<std::string> kKeys = {"name", "mesh", "material", "tets", "modes", "repair", "lumped_mass", "seed"};
+    static const std::set<std::string> kKeys = {"name", "mesh", "material", "tets", "modes", "repair", "lumped_mass", "seed",
+                                                "sharp_features", "sliver_bound"};
     for (size_t i = 0; i < doc["objects"].size(); ++i) {
       const auto& o = doc["objects"][i];
       const std::string where = "manifest " + path.filename().string() + ", object " + std::to_string(i);
@@ -177,6 +178,8 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
       s.modal.modeCount = o.value("modes", s.modal.modeCount);
       s.repair = o.value("repair", false);
       s.fem.lumpedMass = o.value("lumped_mass", false);
+      s.tetMesh.detectSharpFeatures = o.value("sharp_features", true);
+      s.tetMesh.sliverBoundDeg = o.value("sliver_bound", s.tetMesh.sliverBoundDeg);
       const auto seed = o.value("seed", static_cast<uint64_t>(1));
       s.modal.seed = s.tetMesh.seed = seed;
       out.push_back(std::move(s));

@@ -16,6 +16,9 @@
 namespace brittle {
 namespace {
 
+// Largest accepted relative residual ‖Kφ − λMφ‖/‖Kφ‖ before a solve is redone at machine precision.
+constexpr double kMaxResidual = 1e-8;
+
 using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -250,6 +253,15 @@ Result<ModalResult> computeModes(const FemSystem& sys, const Points& nodes, cons
       result.stats.iterationS = secondsSince(iterStart);
       result.stats.lanczosVectors = ncv;
       auto basis = finishBasis(sys, nodes, d, z, s.modeCount, &result.stats.rigidModes);
+      if (s.tolerance > 0.0 && (!basis || basis.value().residuals.maxCoeff() > kMaxResidual)) {
+        // The Ritz tolerance was too loose for this problem (residuals too large, or rigid and
+        // elastic modes not yet separated): solve again at machine precision.
+        ModalSettings strict = s;
+        strict.tolerance = 0.0;
+        auto refined = computeModes(sys, nodes, strict, progress);
+        if (refined) refined.value().stats.solver += " (refined at machine precision)";
+        return refined;
+      }
       if (!basis) return basis.error();
       result.basis = std::move(basis).value();
       result.stats.totalS = secondsSince(start);

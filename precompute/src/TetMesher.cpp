@@ -55,10 +55,14 @@ TetMesh meshOnce(const Polyhedron& poly, const TetMeshSettings& s, double h) {
                     params::cell_radius_edge_ratio = s.cellRadiusEdgeRatio, params::cell_size = h);
   // Mesh_3 gives perturbation and exudation a wall-clock budget equal to the refinement time
   // unless told otherwise, which makes the mesh depend on machine load. time_limit = 0 means
-  // "run to completion": the result then depends on the input and the seed only.
-  C3t3 c3t3 = s.optimize ? CGAL::make_mesh_3<C3t3>(domain, criteria, params::perturb(params::time_limit = 0.0),
-                                                   params::exude(params::time_limit = 0.0))
-                         : CGAL::make_mesh_3<C3t3>(domain, criteria, params::no_perturb(), params::no_exude());
+  // "no clock"; the perturber then stops once every dihedral angle reaches sliverBoundDeg, so the
+  // result depends on the input, the settings and the seed only.
+  C3t3 c3t3 = s.optimize
+                  ? CGAL::make_mesh_3<C3t3>(
+                        domain, criteria,
+                        params::perturb(params::time_limit = 0.0, params::sliver_bound = s.sliverBoundDeg),
+                        params::exude(params::time_limit = 0.0, params::sliver_bound = s.sliverBoundDeg))
+                  : CGAL::make_mesh_3<C3t3>(domain, criteria, params::no_perturb(), params::no_exude());
 
   std::unordered_map<Tr::Vertex_handle, int32_t> index;
   std::vector<Eigen::Vector3d> nodes;

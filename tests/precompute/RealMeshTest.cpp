@@ -2,6 +2,8 @@
 // fetched at test time (tests/common/fetch_cgal_meshes.sh), never committed.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshIO.h"
@@ -40,22 +42,35 @@ TEST_F(RealMeshTest, ValidatorNamesTheDefectsOfBrokenSamples) {
 }
 
 TEST_F(RealMeshTest, BakesSeveralRealMeshes) {
-  for (const char* file : {"elephant.off", "eight.off", "couplingdown.off", "fandisk.off"}) {
+  struct Case {
+    const char* file;
+    bool sharpFeatures;
+    double minDihedralDeg;  // measured quality floor for this model and settings
+  };
+  // Organic models are meshed without feature protection (their facets are not CAD edges);
+  // CAD parts keep their sharp edges, which leaves a few flatter tets next to them.
+  for (const auto& c : {Case{"elephant.off", false, 4.5}, Case{"eight.off", false, 4.5},
+                        Case{"couplingdown.off", false, 4.5}, Case{"fandisk.off", true, 4.5}}) {
     ObjectBakeSettings s;
-    s.meshPath = dir / file;
+    s.meshPath = dir / c.file;
     s.material = materialPreset("porcelain").value();
     s.tetMesh.targetTets = 3000;
+    s.tetMesh.detectSharpFeatures = c.sharpFeatures;
     s.modal.modeCount = 10;
     ObjectBakeReport report;
     auto asset = bakeObject(s, nullptr, &report);
-    ASSERT_TRUE(asset.ok()) << file << ": " << asset.error().message;
+    ASSERT_TRUE(asset.ok()) << c.file << ": " << asset.error().message;
     const auto& a = asset.value();
-    EXPECT_LE(a.modal.residuals.maxCoeff(), 1e-8) << file;
-    EXPECT_LE(a.modal.orthonormalityError, 1e-8) << file;
-    EXPECT_GT(a.quality.minDihedralDeg, 3.0) << file;
-    // Mesh_3 approximates the surface within facet_distance: the volume moves a little.
-    EXPECT_NEAR(report.tetVolumeRelativeError, 0.0, 0.05) << file;
-    EXPECT_NEAR(static_cast<double>(a.tetMesh.tets.rows()) / 3000.0, 1.0, 0.5) << file;
+    std::printf("%s: %ld tets, dihedral %.2f-%.2f deg, volume vs surface %.3f%%, f1 %.1f Hz, max residual %.1e\n",
+                c.file, static_cast<long>(a.tetMesh.tets.rows()), a.quality.minDihedralDeg, a.quality.maxDihedralDeg,
+                100 * report.tetVolumeRelativeError, a.modal.frequenciesHz(0), a.modal.residuals.maxCoeff());
+    EXPECT_LE(a.modal.residuals.maxCoeff(), 1e-8) << c.file;
+    EXPECT_LE(a.modal.orthonormalityError, 1e-8) << c.file;
+    EXPECT_GT(a.quality.minDihedralDeg, c.minDihedralDeg) << c.file;
+    // Mesh_3 approximates the surface within facet_distance: coarse models lose a few per cent.
+    EXPECT_NEAR(report.tetVolumeRelativeError, 0.0, 0.04) << c.file;
+    // Sizing runs hit ±25 %; the optimised mesh then moves the count (measured: up to +44 %).
+    EXPECT_NEAR(static_cast<double>(a.tetMesh.tets.rows()) / 3000.0, 1.0, 0.5) << c.file;
   }
 }
 

@@ -74,6 +74,7 @@ int main(int argc, char** argv) {
   std::vector<int> modeCounts = {20, 40};
   int denseMaxDof = 2000, repeats = 1;
   bool skipEigen = false;
+  double tolerance = 1e-12;  // the bake's default
   app.add_option("--mesh", meshPath, "Surface mesh to tet-mesh")->capture_default_str();
   app.add_option("--material", materialName, "Material preset")->capture_default_str();
   app.add_option("--tets", sizes, "Target tet counts")->capture_default_str();
@@ -81,6 +82,8 @@ int main(int argc, char** argv) {
   app.add_option("--dense-max-dof", denseMaxDof, "Largest 3N for the dense solver")->capture_default_str();
   app.add_option("--repeats", repeats, "Repeats per measurement (median reported)")->capture_default_str();
   app.add_flag("--skip-eigen-ldlt", skipEigen, "Skip ARPACK+Eigen LDLT above 30k DOF (it is slow)");
+  app.add_option("--tol", tolerance, "Relative tolerance for ARPACK and Spectra (0: machine precision for ARPACK, 1e-15 for Spectra)")
+      ->capture_default_str();
   app.add_option("--out", out, "CSV output")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
@@ -111,6 +114,7 @@ int main(int argc, char** argv) {
       ModalSettings ms;
       ms.modeCount = r;
       ms.shiftRad2PerS2 = shift;
+      ms.tolerance = tolerance;
       ModalResult arpack;
       const double arpackChol = median(repeats, [&] { arpack = computeModes(sys, tets.mesh.nodes, ms).value(); });
       ms.factorization = Factorization::EigenLdlt;
@@ -126,7 +130,7 @@ int main(int argc, char** argv) {
         Spectra::SymGEigsShiftSolver<FactorOp, Spectra::SparseSymMatProd<double>, Spectra::GEigsMode::ShiftInvert> eigs(
             op, bop, nev, std::min<Eigen::Index>(dof, std::max(2 * nev + 1, nev + 20)), shift);
         eigs.init();
-        eigs.compute(Spectra::SortRule::LargestMagn, 1000, 1e-12, Spectra::SortRule::SmallestAlge);
+        eigs.compute(Spectra::SortRule::LargestMagn, 1000, tolerance > 0.0 ? tolerance : 1e-15, Spectra::SortRule::SmallestAlge);
         spectraLambda = eigs.eigenvalues().tail(r);
         spectraSolves = static_cast<long>(eigs.num_operations());
       });

@@ -21,6 +21,8 @@ struct BakeOptions {
   bool repair = false;
   double repairVoxel = 0.0;
   bool lumped = false;
+  bool noFeatures = false;
+  double sliverBound = 5.0;
   std::string factorization = "cholmod";
   uint64_t seed = 1;
   bool quiet = false;
@@ -46,6 +48,11 @@ Runner addBakeCommand(CLI::App& app) {
   cmd->add_option("--modes", o->modes, "Number of elastic modes r")->capture_default_str()->check(CLI::Range(1, 2000));
   cmd->add_flag("--repair", o->repair, "Rebuild a watertight surface through an OpenVDB level set first");
   cmd->add_option("--repair-voxel", o->repairVoxel, "Repair voxel size in m (default: longest side / 128)")->check(CLI::PositiveNumber);
+  cmd->add_flag("--no-sharp-features", o->noFeatures,
+                "Do not protect sharp edges (better element quality on organic or coarse meshes)");
+  cmd->add_option("--sliver-bound", o->sliverBound,
+                  "Smallest dihedral angle (deg) Mesh_3's optimisers aim for; higher is slower, 0 = best effort")
+      ->capture_default_str()->check(CLI::Range(0.0, 30.0));
   cmd->add_flag("--lumped-mass", o->lumped, "Use a lumped (diagonal) mass matrix instead of the consistent one");
   cmd->add_option("--factorization", o->factorization, "Sparse factorisation of K - sigma M")
       ->check(CLI::IsMember({"cholmod", "eigen"}))->capture_default_str();
@@ -74,6 +81,8 @@ Runner addBakeCommand(CLI::App& app) {
       s.tetMesh.targetTets = o->cellSize > 0.0 ? 0 : o->tets;
       s.tetMesh.cellSizeM = o->cellSize;
       s.tetMesh.seed = o->seed;
+      s.tetMesh.detectSharpFeatures = !o->noFeatures;
+      s.tetMesh.sliverBoundDeg = o->sliverBound;
       s.modal.modeCount = o->modes;
       s.modal.seed = o->seed;
       s.repair = o->repair;

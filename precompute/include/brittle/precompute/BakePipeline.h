@@ -50,9 +50,9 @@ Result<Pack> bakePack(const std::vector<ObjectBakeSettings>& objects, ProgressSi
 /// Reads a bake manifest (JSON):
 ///   { "objects": [ { "name": "glass-plate", "mesh": "meshes/plate.off", "material": "glass",
 ///                    "tets": 6000, "modes": 20, "repair": false, "lumped_mass": false,
-///                    "seed": 1 }, ... ] }
+///                    "seed": 1, "sharp_features": true, "sliver_bound": 5 }, ... ] }
 /// "mesh" and a "material" that names a .json file are relative to the manifest's directory;
-/// "name", "tets", "modes", "repair", "lumped_mass" and "seed" are optional (defaults as in the
+/// "name", "tets", "modes", "repair", "lumped_mass", "seed", "sharp_features" and "sliver_bound" are optional (defaults as in the
 /// settings structs). Errors: FileNotFound, ParseError (naming the key), UnknownMaterial,
 /// InvalidMaterial.
 Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::path& path);

@@ -1,0 +1,71 @@
+// VoxelDescriptor.h — shape descriptors sampled on a k³ grid over the canonical frame, through
+// OpenVDB's mesh-to-volume (openvdb/tools/MeshToVolume.h).
+//
+// Grid. The canonical cube [-c, c]³ (c = halfExtent, dimensionless canonical units) is split into
+// k³ cubic voxels of edge h = 2c/k; voxel (i, j, l) has its centre at -c + (i + ½, j + ½, l + ½) h
+// and is stored at index (i·k + j)·k + l (x slowest, as a C array [k][k][k]). The default c = 1.5
+// holds every unit-volume solid whose extent along each canonical axis is ≤ 3: a cube (side 1), a
+// ball (diameter 1.24), a square rod up to about 5:1, a square plate down to about 1/9 thick (27:1).
+// Parts outside the cube are cropped; the descriptor stays defined.
+//
+// Voxel descriptor: occupancy, 1 where the voxel centre is inside or on the solid (signed distance
+// ≤ 0), else 0.
+//
+// Improved voxel descriptor: the signed distance at each voxel centre, clamped to ±w voxels and
+// divided by w·h, so values lie in [-1, 1] (negative inside). Why this instead of occupancy:
+// occupancy is a step function of the pose, so a misalignment δ of the canonical frame (a remesh,
+// a slightly wrong axis of a nearly symmetric shape) flips every voxel whose centre is within δ of
+// the surface and the distance jumps by whole voxels. The signed distance is 1-Lipschitz in the
+// pose, so the descriptor moves by at most δ/(w·h) per voxel and the distance grows smoothly with
+// the misalignment; clamping keeps voxels far from the surface from dominating, and bounded
+// values keep the L2 metric balanced between shapes of different sizes.
+#pragma once
+
+#include "brittle/descriptors/CanonicalFrame.h"
+#include "brittle/descriptors/DescriptorTypes.h"
+#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/descriptors/Result.h"
+
+namespace brittle {
+
+struct VoxelDescriptorSettings {
+  int resolution = 16;      ///< k, voxels per axis, in [2, 256]; the descriptor has k³ values
+  double halfExtent = 1.5;  ///< c, half the edge of the sampled cube (canonical units)
+};
+
+struct ImprovedVoxelDescriptorSettings {
+  int resolution = 16;        ///< k, as above
+  double halfExtent = 1.5;    ///< c, as above
+  double clampVoxels = 2.0;   ///< w, clamp distance in voxels, in [0.5, k]
+};
+
+/// Occupancy (0 or 1 per voxel) of the solid bounded by a closed, outward surface, seen in `frame`.
+/// Inputs: surface (#V by 3 vertices in metres, #F by 3 faces); frame, usually a candidate of
+/// computeCanonicalFrames on the same surface.
+/// Output: k³ values in the grid order above.
+/// Errors: EmptyMesh, NonFiniteValue, InvalidArgument (face index out of range, bad settings or
+/// frame, OpenVDB failure), OpenMesh.
+Result<Descriptor> computeVoxelDescriptor(const TriangleMesh& surface, const CanonicalFrame& frame,
+                                          const VoxelDescriptorSettings& settings = {});
+
+/// Clamped signed distance in [-1, 1] per voxel (see file header). Inputs, output layout and errors
+/// as computeVoxelDescriptor.
+Result<Descriptor> computeImprovedVoxelDescriptor(const TriangleMesh& surface, const CanonicalFrame& frame,
+                                                  const ImprovedVoxelDescriptorSettings& settings = {});
+
+/// One row per candidate frame (#candidates by k³). Errors as above; InvalidArgument if no frame.
+Result<DescriptorMatrix> computeVoxelDescriptors(const TriangleMesh& surface, const CanonicalFrames& frames,
+                                                 const VoxelDescriptorSettings& settings = {});
+Result<DescriptorMatrix> computeImprovedVoxelDescriptors(const TriangleMesh& surface, const CanonicalFrames& frames,
+                                                         const ImprovedVoxelDescriptorSettings& settings = {});
+
+/// Euclidean distance (for occupancy, the square root of the number of differing voxels).
+inline float voxelL2Distance(const Descriptor& a, const Descriptor& b) { return descriptorL2Distance(a, b); }
+
+/// Normalised Hamming distance of two occupancy descriptors: the fraction of voxels that differ,
+/// in [0, 1] (the L1 distance divided by k³).
+inline float voxelHammingDistance(const Descriptor& a, const Descriptor& b) {
+  return a.size() == 0 ? 0.0f : (a - b).cwiseAbs().sum() / static_cast<float>(a.size());
+}
+
+}  // namespace brittle

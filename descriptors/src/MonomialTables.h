@@ -1,0 +1,25 @@
+// MonomialTables.h — index tables for monomials x^p y^q z^r up to kMaxMomentOrder (private).
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "brittle/descriptors/VolumeMoments.h"
+
+namespace brittle::detail {
+
+struct MonomialTables {
+  std::vector<std::array<int, 3>> exponents;  ///< (p, q, r) per graded index
+  std::vector<int> degree;                    ///< p + q + r
+  std::vector<double> factorial;              ///< p! q! r!
+  std::vector<std::array<int, 3>> times;      ///< index of this monomial times x, y, z (−1 at top)
+  std::vector<std::array<int, 3>> lower;      ///< index of this monomial divided by x, y, z (−1 if absent)
+  std::vector<int> parent;                    ///< this monomial divided by parentVar (−1 for 1)
+  std::vector<int> parentVar;
+  int lookup[kMaxMomentOrder + 1][kMaxMomentOrder + 1][kMaxMomentOrder + 1] = {};
+};
+
+/// Built once, thread-safe (function-local static).
+const MonomialTables& monomialTables();
+
+}  // namespace brittle::detail

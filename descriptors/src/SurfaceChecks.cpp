@@ -1,0 +1,57 @@
+#include "SurfaceChecks.h"
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+namespace brittle::detail {
+namespace {
+
+// splitmix64 finaliser: a cheap bijective mix, so distinct vertices get unrelated hashes.
+uint64_t mix(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+}  // namespace
+
+Status checkClosedSurface(const TriangleMesh& surface) {
+  const Eigen::Index nv = surface.vertices.rows(), nf = surface.faces.rows();
+  if (nv == 0 || nf == 0) {
+    return makeError(ErrorCode::EmptyMesh, "surface has " + std::to_string(nv) + " vertices and " +
+                                               std::to_string(nf) + " faces");
+  }
+  for (Eigen::Index v = 0; v < nv; ++v) {
+    if (!surface.vertices.row(v).allFinite()) {
+      return makeError(ErrorCode::NonFiniteValue, "vertex " + std::to_string(v) + " has a non-finite coordinate");
+    }
+  }
+  uint64_t residue = 0;
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    uint64_t h[3], g[3];
+    for (int k = 0; k < 3; ++k) {
+      const int32_t i = surface.faces(f, k);
+      if (i < 0 || i >= nv) {
+        return makeError(ErrorCode::InvalidArgument, "face " + std::to_string(f) + " has vertex index " +
+                                                         std::to_string(i) + " out of range [0, " +
+                                                         std::to_string(nv) + ")");
+      }
+      h[k] = mix(static_cast<uint64_t>(i));
+      g[k] = mix(static_cast<uint64_t>(i) ^ 0x5bd1e9955bd1e995ULL);
+    }
+    for (int k = 0; k < 3; ++k) {
+      const int l = (k + 1) % 3;
+      residue += h[k] * g[l] - h[l] * g[k];
+    }
+  }
+  if (residue != 0) {
+    return makeError(ErrorCode::OpenMesh,
+                     "surface is not closed: some directed edge has no reverse partner (boundary or "
+                     "inconsistently oriented faces)");
+  }
+  return Ok{};
+}
+
+}  // namespace brittle::detail

@@ -1,0 +1,149 @@
+#include "brittle/descriptors/VolumeMoments.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "DescriptorTestShapes.h"
+#include "brittle/descriptors/MassProperties.h"
+#include "brittle/testing/Fixtures.h"
+
+namespace brittle {
+namespace {
+
+double factorial(int n) { return n <= 1 ? 1.0 : n * factorial(n - 1); }
+
+TEST(VolumeMoments, MonomialIndexRoundTrips) {
+  EXPECT_EQ(monomialIndex(0, 0, 0), 0);
+  EXPECT_EQ(monomialIndex(1, 0, 0), 1);
+  EXPECT_EQ(monomialIndex(0, 0, 1), 3);
+  EXPECT_EQ(monomialIndex(2, 0, 0), 4);
+  EXPECT_EQ(monomialIndex(0, 0, 2), 9);
+  for (int i = 0; i < monomialCount(kMaxMomentOrder); ++i) {
+    const auto [p, q, r] = monomialExponents(i);
+    EXPECT_EQ(monomialIndex(p, q, r), i);
+  }
+}
+
+TEST(VolumeMoments, BoxMatchesClosedForm) {
+  // ∫_box x^p y^q z^r = a^(p+1) b^(q+1) c^(r+1) / ((p+1)(q+1)(r+1)) for [0,a]×[0,b]×[0,c].
+  const double a = 2.0, b = 0.7, c = 1.3;
+  const auto m = computeVolumeMoments(testing::makeBoxSurface(a, b, c), 6, Eigen::Vector3d(0.4, -0.2, 0.9));
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  // Moments about a shifted origin, brought back to x: y = x − o ⇒ x = I (y − (−o)).
+  const auto x = transformVolumeMoments(m.value(), Eigen::Matrix3d::Identity(), -Eigen::Vector3d(0.4, -0.2, 0.9));
+  for (int i = 0; i < monomialCount(6); ++i) {
+    const auto [p, q, r] = monomialExponents(i);
+    const double expected = std::pow(a, p + 1) * std::pow(b, q + 1) * std::pow(c, r + 1) / ((p + 1) * (q + 1) * (r + 1));
+    EXPECT_NEAR(x.values[i], expected, 1e-12 * std::abs(expected) + 1e-13) << p << q << r;
+  }
+}
+
+TEST(VolumeMoments, RightTetrahedronMatchesDirichletIntegral) {
+  // T = (0, a e1, b e2, c e3): ∫ x^p y^q z^r = a^(p+1) b^(q+1) c^(r+1) p! q! r! / (p+q+r+3)!.
+  const double a = 1.5, b = 0.8, c = 2.1;
+  const auto tet = testing::makeTetrahedron({0, 0, 0}, {a, 0, 0}, {0, b, 0}, {0, 0, c});
+  const auto m = computeVolumeMoments(tet, 5, Eigen::Vector3d::Zero());
+  ASSERT_TRUE(m.ok());
+  for (int i = 0; i < monomialCount(5); ++i) {
+    const auto [p, q, r] = monomialExponents(i);
+    const double expected = std::pow(a, p + 1) * std::pow(b, q + 1) * std::pow(c, r + 1) * factorial(p) *
+                            factorial(q) * factorial(r) / factorial(p + q + r + 3);
+    EXPECT_NEAR(m.value().values[i], expected, 1e-13 * std::abs(expected)) << p << q << r;
+  }
+}
+
+TEST(VolumeMoments, RightTetrahedronCentralThirdMomentIsHandChecked) {
+  // Central third moment along x of T = (0, a e1, b e2, c e3), with x̄ = a/4:
+  //   μ₃ = m300 − 3x̄ m200 + 3x̄² m100 − x̄³ V = a⁴bc (1/120 − 1/80 + 1/128 − 1/384) = a⁴bc/960 > 0:
+  // the solid is thick at x = 0 and tapers towards the vertex a e1, so it skews towards +x.
+  const double a = 1.5, b = 0.8, c = 2.1;
+  const auto tet = testing::makeTetrahedron({0, 0, 0}, {a, 0, 0}, {0, b, 0}, {0, 0, c});
+  const auto m = computeVolumeMoments(tet, 3, Eigen::Vector3d(a / 4, b / 4, c / 4));
+  ASSERT_TRUE(m.ok());
+  EXPECT_NEAR(m.value()(1, 0, 0), 0.0, 1e-15);
+  EXPECT_NEAR(m.value()(3, 0, 0), std::pow(a, 4) * b * c / 960.0, 1e-15);
+  EXPECT_NEAR(m.value().directional(Eigen::Vector3d::UnitX(), 3), std::pow(a, 4) * b * c / 960.0, 1e-15);
+}
+
+TEST(VolumeMoments, SphereMatchesClosedFormWithinFaceting) {
+  // Ball of radius R: m200 = 4πR⁵/15, m400 = 4πR⁷/35, m220 = 4πR⁷/105; odd moments vanish.
+  const double r = 0.7;
+  const auto m = computeVolumeMoments(testing::makeIcosphere(r, 5), 4, Eigen::Vector3d::Zero());
+  ASSERT_TRUE(m.ok());
+  const double pi = std::numbers::pi;
+  const auto& v = m.value();
+  EXPECT_NEAR(v(0, 0, 0) / (4.0 / 3.0 * pi * std::pow(r, 3)), 1.0, 2e-3);
+  for (auto [p, q, rr] : {std::array{2, 0, 0}, {0, 2, 0}, {0, 0, 2}}) {
+    EXPECT_NEAR(v(p, q, rr) / (4 * pi * std::pow(r, 5) / 15), 1.0, 4e-3);
+  }
+  for (auto [p, q, rr] : {std::array{4, 0, 0}, {0, 4, 0}, {0, 0, 4}}) {
+    EXPECT_NEAR(v(p, q, rr) / (4 * pi * std::pow(r, 7) / 35), 1.0, 6e-3);
+  }
+  EXPECT_NEAR(v(2, 2, 0) / (4 * pi * std::pow(r, 7) / 105), 1.0, 6e-3);
+  for (auto [p, q, rr] : {std::array{3, 0, 0}, {1, 2, 0}, {1, 1, 1}, {2, 1, 0}}) EXPECT_NEAR(v(p, q, rr), 0.0, 1e-12);
+}
+
+TEST(VolumeMoments, AgreesWithMassProperties) {
+  const auto solid = testing::makeIrregularSolid();
+  const auto mp = computeSurfaceMassProperties(solid, 1.0);
+  const auto m = computeVolumeMoments(solid, 2, mp.centerOfMassM);
+  ASSERT_TRUE(m.ok());
+  EXPECT_NEAR(m.value()(0, 0, 0), mp.volumeM3, 1e-14);
+  EXPECT_NEAR(m.value()(1, 0, 0), 0.0, 1e-14);
+  EXPECT_NEAR(m.value()(2, 0, 0), mp.secondMomentM5(0, 0), 1e-14);
+  EXPECT_NEAR(m.value()(1, 1, 0), mp.secondMomentM5(0, 1), 1e-14);
+  EXPECT_NEAR(m.value()(0, 1, 1), mp.secondMomentM5(1, 2), 1e-14);
+}
+
+TEST(VolumeMoments, TransformEqualsMomentsOfTransformedMesh) {
+  const auto solid = testing::makeIrregularSolid();
+  const auto s = testing::randomSimilarity(7);
+  const auto m = computeVolumeMoments(solid, 4, Eigen::Vector3d::Zero());
+  const auto direct = computeVolumeMoments(testing::transformed(solid, s), 4, s.translation);
+  ASSERT_TRUE(m.ok() && direct.ok());
+  const auto mapped = transformVolumeMoments(m.value(), s.scale * s.rotation);
+  for (int i = 0; i < monomialCount(4); ++i) {
+    const double scale = std::pow(s.scale, 3 + monomialExponents(i)[0] + monomialExponents(i)[1] + monomialExponents(i)[2]);
+    EXPECT_NEAR(mapped.values[i], direct.value().values[i], 1e-11 * scale) << i;
+  }
+}
+
+TEST(VolumeMoments, SubdivisionChangesNothing) {
+  const auto solid = testing::makeIrregularSolid();
+  const auto a = computeVolumeMoments(solid, 4, Eigen::Vector3d::Zero());
+  const auto b = computeVolumeMoments(testing::subdivide(testing::subdivide(solid)), 4, Eigen::Vector3d::Zero());
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_LT((a.value().values - b.value().values).cwiseAbs().maxCoeff(), 1e-13);
+}
+
+TEST(VolumeMoments, TypedErrors) {
+  const Eigen::Vector3d o = Eigen::Vector3d::Zero();
+  EXPECT_EQ(computeVolumeMoments(TriangleMesh{}, 4, o).error().code, ErrorCode::EmptyMesh);
+  auto box = testing::makeBoxSurface(1, 1, 1);
+  EXPECT_EQ(computeVolumeMoments(box, kMaxMomentOrder + 1, o).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(computeVolumeMoments(box, -1, o).error().code, ErrorCode::InvalidArgument);
+
+  auto nan = box;
+  nan.vertices(5, 1) = std::nan("");
+  const auto nanResult = computeVolumeMoments(nan, 4, o);
+  ASSERT_FALSE(nanResult.ok());
+  EXPECT_EQ(nanResult.error().code, ErrorCode::NonFiniteValue);
+  EXPECT_NE(nanResult.error().message.find("vertex 5"), std::string::npos);
+
+  auto open = box;
+  open.faces.conservativeResize(11, 3);
+  EXPECT_EQ(computeVolumeMoments(open, 4, o).error().code, ErrorCode::OpenMesh);
+
+  auto flipped = box;  // one face turned over: its edges no longer cancel
+  std::swap(flipped.faces(3, 1), flipped.faces(3, 2));
+  EXPECT_EQ(computeVolumeMoments(flipped, 4, o).error().code, ErrorCode::OpenMesh);
+
+  auto badIndex = box;
+  badIndex.faces(2, 0) = 8;
+  EXPECT_EQ(computeVolumeMoments(badIndex, 4, o).error().code, ErrorCode::InvalidArgument);
+}
+
+}  // namespace
+}  // namespace brittle

@@ -1,0 +1,161 @@
+#include "brittle/descriptors/VoxelDescriptor.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <numbers>
+
+#include "DescriptorTestShapes.h"
+#include "brittle/testing/Fixtures.h"
+
+namespace brittle {
+namespace {
+
+CanonicalFrame primaryFrame(const TriangleMesh& mesh) {
+  const auto frames = computeCanonicalFrames(mesh);
+  EXPECT_TRUE(frames.ok());
+  return frames.value().candidates.front();
+}
+
+Descriptor occupancy(const TriangleMesh& mesh, const VoxelDescriptorSettings& s = {}) {
+  const auto d = computeVoxelDescriptor(mesh, primaryFrame(mesh), s);
+  EXPECT_TRUE(d.ok()) << (d.ok() ? "" : d.error().message);
+  return d.ok() ? d.value() : Descriptor();
+}
+
+Descriptor clampedDistance(const TriangleMesh& mesh, const CanonicalFrame& frame) {
+  const auto d = computeImprovedVoxelDescriptor(mesh, frame);
+  EXPECT_TRUE(d.ok()) << (d.ok() ? "" : d.error().message);
+  return d.ok() ? d.value() : Descriptor();
+}
+
+// Smallest distance between any candidate of `query` and the first frame of `reference`.
+template <typename Compute, typename Distance>
+float bestCandidate(const TriangleMesh& reference, const TriangleMesh& query, Compute compute, Distance distance) {
+  const auto ref = compute(reference, computeCanonicalFrames(reference).value());
+  const auto qry = compute(query, computeCanonicalFrames(query).value());
+  EXPECT_TRUE(ref.ok() && qry.ok());
+  float best = 1e30f;
+  for (Eigen::Index c = 0; c < qry.value().rows(); ++c) {
+    best = std::min(best, distance(qry.value().row(c).transpose(), ref.value().row(0).transpose()));
+  }
+  return best;
+}
+
+TEST(VoxelDescriptor, CubeOccupiesTheExpectedVoxels) {
+  // Unit cube [-½, ½]³ on the default grid (h = 3/16, centres at −1.5 + (i + ½)h): the centres
+  // with |x| ≤ ½ are i = 5..10, so exactly 6³ voxels are occupied.
+  const auto d = occupancy(testing::makeBoxSurface(2.0, 2.0, 2.0));
+  ASSERT_EQ(d.size(), 16 * 16 * 16);
+  EXPECT_EQ(d.sum(), 216.0f);
+  EXPECT_EQ(d[(5 * 16 + 5) * 16 + 5], 1.0f);
+  EXPECT_EQ(d[(4 * 16 + 7) * 16 + 7], 0.0f);
+  EXPECT_EQ(d[(11 * 16 + 7) * 16 + 7], 0.0f);
+}
+
+TEST(VoxelDescriptor, SphereVolumeFromOccupancy) {
+  VoxelDescriptorSettings s;
+  s.resolution = 32;
+  const auto d = occupancy(testing::makeIcosphere(3.0, 4), s);
+  const double h = 3.0 / 32;
+  EXPECT_NEAR(d.sum() * h * h * h, 1.0, 0.05);
+}
+
+TEST(VoxelDescriptor, ImprovedIsAClampedSignedDistance) {
+  const auto cube = testing::makeBoxSurface(1.0, 1.0, 1.0);
+  const auto d = clampedDistance(cube, primaryFrame(cube));
+  EXPECT_GE(d.minCoeff(), -1.0f);
+  EXPECT_LE(d.maxCoeff(), 1.0f);
+  const double wh = 2.0 * 3.0 / 16;  // clamp distance w·h
+  // Centre (0.46875, −0.09375, −0.09375): 0.03125 inside the face x = ½.
+  EXPECT_NEAR(d[(10 * 16 + 7) * 16 + 7], -0.03125 / wh, 1e-5);
+  // Centre (0.65625, …): 0.15625 outside.
+  EXPECT_NEAR(d[(11 * 16 + 7) * 16 + 7], 0.15625 / wh, 1e-5);
+  EXPECT_EQ(d[(7 * 16 + 7) * 16 + 7], -1.0f);  // deep inside: clamped
+  EXPECT_EQ(d[0], 1.0f);                      // far corner: clamped
+}
+
+TEST(VoxelDescriptor, InvariantToSimilarityAndRemeshing) {
+  const auto solid = testing::makeIrregularSolid();
+  const auto occRef = occupancy(solid);
+  const auto sdfRef = clampedDistance(solid, primaryFrame(solid));
+  for (unsigned seed = 1; seed <= 10; ++seed) {
+    const auto moved = testing::transformed(solid, testing::randomSimilarity(seed));
+    EXPECT_EQ(voxelHammingDistance(occupancy(moved), occRef), 0.0f) << seed;
+    EXPECT_LT((clampedDistance(moved, primaryFrame(moved)) - sdfRef).cwiseAbs().maxCoeff(), 1e-4f) << seed;
+  }
+  // Same polyhedron, 16× the triangles. OpenVDB computes narrow-band distances away from the
+  // surface from the triangles its dilation reaches, so they depend slightly on the triangulation
+  // (measured: ≤ 0.023 of the clamp distance, i.e. < 0.05 voxel).
+  const auto fine = testing::subdivide(testing::subdivide(solid));
+  EXPECT_EQ(voxelHammingDistance(occupancy(fine), occRef), 0.0f);
+  const Descriptor fineSdf = clampedDistance(fine, primaryFrame(fine));
+  EXPECT_LT((fineSdf - sdfRef).cwiseAbs().maxCoeff(), 0.05f);
+  EXPECT_LT(voxelL2Distance(fineSdf, sdfRef), 0.1f);
+
+  // Different faceting of the same sphere: a few boundary voxels may flip.
+  const auto coarse = testing::makeIcosphere(1.0, 3), finer = testing::makeIcosphere(1.0, 4);
+  const auto descriptorsOf = [](const TriangleMesh& m, const CanonicalFrames& f) { return computeVoxelDescriptors(m, f); };
+  EXPECT_LT(bestCandidate(coarse, finer, descriptorsOf, voxelHammingDistance), 0.01f);
+  const auto improvedOf = [](const TriangleMesh& m, const CanonicalFrames& f) { return computeImprovedVoxelDescriptors(m, f); };
+  const auto maxAbs = [](const Descriptor& a, const Descriptor& b) { return (a - b).cwiseAbs().maxCoeff(); };
+  EXPECT_LT(bestCandidate(coarse, finer, improvedOf, maxAbs), 0.1f);
+}
+
+TEST(VoxelDescriptor, ImprovedGrowsSmoothlyWithMisalignment) {
+  // Rotating the frame by δ moves the clamped distance by at most δ·|x|/(w·h) per voxel, so the
+  // distance grows gradually from zero; occupancy stays put until a voxel centre crosses the
+  // surface, then jumps by whole voxels.
+  const auto solid = testing::makeIrregularSolid();
+  const CanonicalFrame frame = primaryFrame(solid);
+  const auto reference = clampedDistance(solid, frame);
+  float previous = 0.0f;
+  for (double degrees : {0.1, 0.5, 1.0, 2.0, 4.0}) {
+    CanonicalFrame tilted = frame;
+    tilted.rotation = Eigen::AngleAxisd(degrees * std::numbers::pi / 180, Eigen::Vector3d(1, 2, 3).normalized()) * frame.rotation;
+    const auto d = clampedDistance(solid, tilted);
+    const float change = (d - reference).cwiseAbs().maxCoeff();
+    const double bound = degrees * std::numbers::pi / 180 * 1.5 * std::sqrt(3.0) / (2.0 * 3.0 / 16);
+    EXPECT_GT(change, previous);
+    EXPECT_LT(change, bound + 1e-4);
+    previous = change;
+  }
+}
+
+TEST(VoxelDescriptor, AmbiguousShapesMatchSomeCandidate) {
+  const auto descriptorsOf = [](const TriangleMesh& m, const CanonicalFrames& f) { return computeVoxelDescriptors(m, f); };
+  const auto improvedOf = [](const TriangleMesh& m, const CanonicalFrames& f) { return computeImprovedVoxelDescriptors(m, f); };
+  const auto cube = testing::makeBoxSurface(1.0, 1.0, 1.0);
+  const auto cylinder = testing::makeCylinder(0.5, 1.6, 48);
+  const auto sphere = testing::makeIcosphere(1.0, 3);
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    const auto s = testing::randomSimilarity(seed);
+    EXPECT_EQ(bestCandidate(cube, testing::transformed(cube, s), descriptorsOf, voxelHammingDistance), 0.0f);
+    EXPECT_LT(bestCandidate(cylinder, testing::transformed(cylinder, s), descriptorsOf, voxelHammingDistance), 0.02f);
+    EXPECT_LT(bestCandidate(sphere, testing::transformed(sphere, s), descriptorsOf, voxelHammingDistance), 0.01f);
+    EXPECT_LT(bestCandidate(cylinder, testing::transformed(cylinder, s), improvedOf, voxelL2Distance), 1.0f);
+  }
+}
+
+TEST(VoxelDescriptor, TypedErrors) {
+  const auto box = testing::makeBoxSurface(1, 2, 3);
+  const auto frame = primaryFrame(box);
+  EXPECT_EQ(computeVoxelDescriptor(TriangleMesh{}, frame).error().code, ErrorCode::EmptyMesh);
+  auto nan = box;
+  nan.vertices(1, 1) = std::nan("");
+  EXPECT_EQ(computeVoxelDescriptor(nan, frame).error().code, ErrorCode::NonFiniteValue);
+  auto open = box;
+  open.faces.conservativeResize(11, 3);
+  EXPECT_EQ(computeImprovedVoxelDescriptor(open, frame).error().code, ErrorCode::OpenMesh);
+  VoxelDescriptorSettings bad;
+  bad.resolution = 1;
+  EXPECT_EQ(computeVoxelDescriptor(box, frame, bad).error().code, ErrorCode::InvalidArgument);
+  ImprovedVoxelDescriptorSettings badClamp;
+  badClamp.clampVoxels = 0.0;
+  EXPECT_EQ(computeImprovedVoxelDescriptor(box, frame, badClamp).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(computeVoxelDescriptors(box, CanonicalFrames{}).error().code, ErrorCode::InvalidArgument);
+}
+
+}  // namespace
+}  // namespace brittle
