@@ -118,14 +118,14 @@ std::filesystem::path makeTempDir(const std::string& tag) {
 
 std::filesystem::path sourceDir() {
   const char* dir = std::getenv("BRITTLE_SOURCE_DIR");
-  return dir ? std::filesystem::path(dir) : std::filesystem::current_path();
+  return dir ? std::filesystem::path(dir) : std::filesystem::path(BRITTLE_TEST_SOURCE_DIR);
 }
 
 std::filesystem::path cgalDemoMeshDir() {
   const char* bin = std::getenv("BRITTLE_BINARY_DIR");
-  const std::filesystem::path root = bin ? std::filesystem::path(bin) : std::filesystem::current_path();
+  const std::filesystem::path root = bin ? std::filesystem::path(bin) : std::filesystem::path(BRITTLE_TEST_BINARY_DIR);
   const auto dir = root / "test-data" / "cgal" / "data" / "meshes";
-  if (std::filesystem::exists(dir / "elephant.off")) return dir;
+  if (std::filesystem::exists(dir / ".complete")) return dir;
   const std::string cmd = "bash \"" + (sourceDir() / "tests/common/fetch_cgal_meshes.sh").string() +
                           "\" \"" + (root / "test-data" / "cgal").string() + "\"";
   if (std::system(cmd.c_str()) != 0 || !std::filesystem::exists(dir)) return {};

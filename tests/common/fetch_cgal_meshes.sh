@@ -5,7 +5,10 @@ set -euo pipefail
 dest=${1:?usage: fetch_cgal_meshes.sh DEST_DIR}
 mkdir -p "$dest"
 cd "$dest"
-if [ -f data/meshes/elephant.off ]; then exit 0; fi
+# Tests run in parallel processes: one fetches, the others wait for it.
+exec 9>"$dest/.lock"
+flock 9
+if [ -f data/meshes/.complete ]; then exit 0; fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 (cd "$work" && apt-get download libcgal-demo >/dev/null 2>&1) || {
@@ -13,3 +16,4 @@ trap 'rm -rf "$work"' EXIT
 dpkg-deb -x "$work"/libcgal-demo_*.deb "$work/x"
 tar -xzf "$work/x/usr/share/doc/libcgal-dev/data.tar.gz" -C "$dest" data/meshes
 test -f data/meshes/elephant.off
+touch data/meshes/.complete

@@ -26,7 +26,7 @@ void writeOff(const TriangleMesh& mesh, const std::filesystem::path& path);
 /// A fresh, empty directory under the system temp directory, unique to this test process.
 std::filesystem::path makeTempDir(const std::string& tag);
 
-/// The repository root (from BRITTLE_SOURCE_DIR, set by ctest).
+/// The repository root (BRITTLE_SOURCE_DIR if set, else the configured source directory).
 std::filesystem::path sourceDir();
 
 /// Directory holding the meshes of Debian's libcgal-demo package (data/meshes/*.off), fetched on
