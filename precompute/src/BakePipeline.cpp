@@ -3,7 +3,9 @@
 #include <chrono>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <cmath>
 #include <set>
+#include <tuple>
 
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/MaterialLibrary.h"
@@ -113,6 +115,7 @@ Result<ObjectAsset> bakeObject(const ObjectBakeSettings& s, ProgressSink* progre
 Result<Pack> bakePack(const std::vector<ObjectBakeSettings>& objects, ProgressSink* progress,
                       std::vector<ObjectBakeReport>* reports) {
   Pack pack;
+  if (reports) reports->clear();
   std::set<std::string> names;
   for (const auto& o : objects) {
     const std::string name = o.name.empty() ? o.meshPath.stem().string() : o.name;
@@ -120,11 +123,7 @@ Result<Pack> bakePack(const std::vector<ObjectBakeSettings>& objects, ProgressSi
     const Material* existing = nullptr;
     for (const auto& m : pack.materials)
       if (m.name == o.material.name) existing = &m;
-    if (existing && (existing->youngsModulusPa != o.material.youngsModulusPa ||
-                     existing->poissonRatio != o.material.poissonRatio ||
-                     existing->densityKgPerM3 != o.material.densityKgPerM3 ||
-                     existing->tensileStrengthPa != o.material.tensileStrengthPa ||
-                     existing->fractureEnergyJPerM2 != o.material.fractureEnergyJPerM2)) {
+    if (existing && !(*existing == o.material)) {
       return makeError(ErrorCode::InvalidArgument, "two different materials are named '" + o.material.name + "'");
     }
     if (!existing) pack.materials.push_back(o.material);
@@ -174,6 +173,20 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
       auto m = resolveMaterial(material);
       if (!m) return Error{m.error().code, where + ": " + m.error().message};
       s.material = std::move(m).value();
+      // Range checks, so a typo does not become a 2^64 seed or a million-mode solve.
+      auto checked = [&](const char* key, double lo, double hi) -> bool {
+        if (!o.contains(key)) return true;
+        if (!o[key].is_number()) return false;
+        const double v = o[key].get<double>();
+        return v >= lo && v <= hi && (std::string(key) == "sliver_bound" || v == std::floor(v));
+      };
+      for (const auto& [key, lo, hi] : {std::tuple{"tets", 0.0, 5e6}, std::tuple{"modes", 1.0, 2000.0},
+                                         std::tuple{"seed", 0.0, 9.007199254740992e15}, std::tuple{"sliver_bound", 0.0, 30.0}}) {
+        if (!checked(key, lo, hi)) {
+          return makeError(ErrorCode::ParseError, where + ": \"" + key + "\" must be a number in [" + std::to_string(lo) + ", " +
+                                                      std::to_string(hi) + "]" + (std::string(key) == "sliver_bound" ? "" : ", integer"));
+        }
+      }
       s.tetMesh.targetTets = o.value("tets", s.tetMesh.targetTets);
       s.modal.modeCount = o.value("modes", s.modal.modeCount);
       s.repair = o.value("repair", false);

@@ -2,6 +2,8 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
+#include <array>
+#include <cmath>
 #include <vector>
 
 namespace brittle {

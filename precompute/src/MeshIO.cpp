@@ -40,8 +40,9 @@ size_t findNonFiniteToken(const std::filesystem::path& path) {
       std::string lower = token;
       std::transform(lower.begin(), lower.end(), lower.begin(),
                      [](unsigned char c) { return std::tolower(c); });
-      if (lower.find("nan") != std::string::npos || lower == "inf" || lower == "-inf" ||
-          lower == "+inf" || lower == "infinity" || lower == "-infinity") {
+      if (!lower.empty() && (lower[0] == '-' || lower[0] == '+')) lower.erase(0, 1);
+      // Whole numeric tokens only ("nan", "nan(0x1)", "inf", "infinity"), not names like "banana".
+      if (lower == "nan" || lower.rfind("nan(", 0) == 0 || lower == "inf" || lower == "infinity") {
         return lineNo;
       }
     }

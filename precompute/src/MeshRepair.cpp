@@ -16,6 +16,9 @@ Result<TriangleMesh> repairSurfaceMesh(const TriangleMesh& mesh, const RepairSet
                                        ProgressSink* progress) {
   if (mesh.vertices.rows() == 0 || mesh.faces.rows() == 0) return makeError(ErrorCode::EmptyMesh, "cannot repair an empty mesh");
   if (!mesh.vertices.allFinite()) return makeError(ErrorCode::NonFiniteValue, "cannot repair a mesh with non-finite coordinates");
+  if (mesh.faces.minCoeff() < 0 || mesh.faces.maxCoeff() >= mesh.vertices.rows()) {
+    return makeError(ErrorCode::ParseError, "cannot repair a mesh whose faces refer to missing vertices");
+  }
   static std::once_flag initOnce;
   std::call_once(initOnce, [] { openvdb::initialize(); });
 

@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -63,10 +64,14 @@ Eigen::VectorXd signReference(Eigen::Index n) {
   return w;
 }
 
-// Candidate eigenpairs (any order) → checked basis: sort, M-normalise, drop rigid modes by their
-// projection on the analytic rigid space, keep r, fix signs, compute residuals.
+// Candidate eigenpairs (any order) → checked basis: sort, M-normalise, split off the rigid modes,
+// keep r, fix signs, compute residuals. A mode is rigid when its eigenvalue is zero at the scale
+// of the problem (|λ| ≤ 1e-3·zeroScale, zeroScale = |σ|); there must be exactly six, and together
+// they must span the analytic rigid-body space. Two loose pieces give twelve zero modes, which an
+// eigensolver returns as an arbitrary basis of that space, so counting by projection alone
+// could be fooled; counting by eigenvalue cannot.
 Result<ModalBasis> finishBasis(const FemSystem& sys, const Points& nodes, Eigen::VectorXd lambda,
-                               Eigen::MatrixXd vectors, int r, int* rigidCount) {
+                               Eigen::MatrixXd vectors, int r, double zeroScale, int* rigidCount) {
   std::vector<int> order(static_cast<size_t>(lambda.size()));
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return lambda(a) < lambda(b); });
@@ -75,22 +80,26 @@ Result<ModalBasis> finishBasis(const FemSystem& sys, const Points& nodes, Eigen:
 
   std::vector<int> elastic;
   int rigidFound = 0;
+  double rigidSpan = 0.0;
   for (int idx : order) {
     Eigen::VectorXd phi = vectors.col(idx);
     phi /= std::sqrt(phi.dot(sys.mass * phi));
     vectors.col(idx) = phi;
     const double rigidFraction = (mRigid.transpose() * phi).squaredNorm();
-    if (rigidFraction > 0.5) {
+    if (std::abs(lambda(idx)) <= 1e-3 * zeroScale) {
       ++rigidFound;
+      rigidSpan += rigidFraction;
     } else if (static_cast<int>(elastic.size()) < r) {
       elastic.push_back(idx);
     }
   }
   *rigidCount = rigidFound;
-  if (rigidFound != 6) {
+  if (rigidFound != 6 || rigidSpan < 6.0 - 1e-6) {
     return makeError(ErrorCode::RigidModeMismatch,
-                     "found " + std::to_string(rigidFound) + " rigid-body modes among the " +
-                         std::to_string(lambda.size()) + " lowest, expected 6 (is the mesh one connected, free body?)");
+                     "found " + std::to_string(rigidFound) + " zero-frequency modes among the " +
+                         std::to_string(lambda.size()) + " lowest (spanning " + std::to_string(rigidSpan) +
+                         " of the 6 rigid motions), expected exactly the 6 rigid-body modes (is the mesh one "
+                         "connected, free body?)");
   }
   if (static_cast<int>(elastic.size()) < r) {
     return makeError(ErrorCode::EigenNotConverged, "only " + std::to_string(elastic.size()) + " of " +
@@ -252,7 +261,7 @@ Result<ModalResult> computeModes(const FemSystem& sys, const Points& nodes, cons
       }
       result.stats.iterationS = secondsSince(iterStart);
       result.stats.lanczosVectors = ncv;
-      auto basis = finishBasis(sys, nodes, d, z, s.modeCount, &result.stats.rigidModes);
+      auto basis = finishBasis(sys, nodes, d, z, s.modeCount, -s.shiftRad2PerS2, &result.stats.rigidModes);
       if (s.tolerance > 0.0 && (!basis || basis.value().residuals.maxCoeff() > kMaxResidual)) {
         // The Ritz tolerance was too loose for this problem (residuals too large, or rigid and
         // elastic modes not yet separated): solve again at machine precision.
@@ -286,8 +295,10 @@ Result<ModalResult> computeModesDense(const FemSystem& sys, const Points& nodes,
   const int count = s.modeCount + 6;
   ModalResult result;
   result.stats.solver = "dense";
+  // Without a shift, "zero" is judged against the largest eigenvalue (rounding level ~1e-16 of it).
+  const double zeroScale = s.shiftRad2PerS2 < 0.0 ? -s.shiftRad2PerS2 : 1e-9 * solver.eigenvalues().cwiseAbs().maxCoeff();
   auto basis = finishBasis(sys, nodes, solver.eigenvalues().head(count), solver.eigenvectors().leftCols(count),
-                           s.modeCount, &result.stats.rigidModes);
+                           s.modeCount, zeroScale, &result.stats.rigidModes);
   if (!basis) return basis.error();
   result.basis = std::move(basis).value();
   result.stats.totalS = result.stats.iterationS = secondsSince(start);

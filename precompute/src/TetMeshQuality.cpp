@@ -5,7 +5,10 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <limits>
 #include <numbers>
+#include <numeric>
+#include <vector>
 
 #include "brittle/descriptors/MassProperties.h"
 
@@ -91,6 +94,31 @@ Triangles boundaryFaces(const TetMesh& mesh) {
     result.row(static_cast<Eigen::Index>(i)) << out[i][0], out[i][1], out[i][2];
   }
   return result;
+}
+
+int64_t countFaceConnectedComponents(const TetMesh& mesh) {
+  const auto count = static_cast<size_t>(mesh.tets.rows());
+  std::vector<int64_t> parent(count);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int64_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  std::map<std::array<int32_t, 3>, int64_t> firstTetOfFace;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    for (const auto& f : kTetFaces) {
+      std::array<int32_t, 3> key = {mesh.tets(t, f[0]), mesh.tets(t, f[1]), mesh.tets(t, f[2])};
+      std::sort(key.begin(), key.end());
+      auto [it, inserted] = firstTetOfFace.emplace(key, t);
+      if (!inserted) {
+        const int64_t a = find(it->second), b = find(t);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      }
+    }
+  }
+  int64_t roots = 0;
+  for (size_t t = 0; t < count; ++t) roots += find(static_cast<int64_t>(t)) == static_cast<int64_t>(t);
+  return roots;
 }
 
 TetMesh compactNodes(const TetMesh& mesh) {

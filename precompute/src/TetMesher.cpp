@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 #include <vector>
 
@@ -46,7 +47,8 @@ Polyhedron toPolyhedron(const TriangleMesh& surface) {
 // One Mesh_3 run at cell size h. Nodes are numbered in the order the complex's cells first
 // reach them, which is deterministic for a fixed input and seed (no pointer ordering).
 TetMesh meshOnce(const Polyhedron& poly, const TetMeshSettings& s, double h) {
-  CGAL::get_default_random() = CGAL::Random(static_cast<unsigned int>(s.seed));
+  // CGAL's generator takes 32 bits: fold the high half in so every 64-bit seed counts.
+  CGAL::get_default_random() = CGAL::Random(static_cast<unsigned int>(s.seed ^ (s.seed >> 32)));
   Domain domain(poly);
   if (s.detectSharpFeatures) domain.detect_features(s.featureAngleDeg);
   namespace params = CGAL::parameters;
@@ -143,6 +145,12 @@ Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshS
   reportProgress(progress, "tet meshing", 1.0);
 
   best.mesh = compactNodes(best.mesh);
+  if (const int64_t pieces = countFaceConnectedComponents(best.mesh); pieces != 1) {
+    return makeError(ErrorCode::MeshingFailed,
+                     "Mesh_3 output is not one solid: " + std::to_string(pieces) +
+                         " face-connected pieces at cell size " + std::to_string(best.cellSizeM) +
+                         " m (a part thinner than the cell size? try more tets)");
+  }
   best.surfaceFaces = boundaryFaces(best.mesh);
   best.quality = computeMeshQuality(best.mesh);
   if (!(best.quality.minTetVolumeM3 > 0.0)) {

@@ -134,6 +134,16 @@ TEST_F(BakePipelineTest, ManifestLoadsAndRejectsTypos) {
   auto dup = ok.value();
   dup.push_back(dup[0]);
   EXPECT_EQ(bakePack(dup).error().code, ErrorCode::InvalidArgument);
+  // Two different materials under one name: even a damping difference is refused.
+  auto clash = ok.value();
+  clash.push_back(clash[0]);
+  clash[1].name = "c2";
+  clash[1].material.rayleighBetaS *= 2.0;
+  EXPECT_EQ(bakePack(clash).error().code, ErrorCode::InvalidArgument);
+  std::ofstream(dir / "range.json") << R"({"objects": [{"mesh": "cube.off", "material": "glass", "seed": -1}]})";
+  EXPECT_EQ(loadBakeManifest(dir / "range.json").error().code, ErrorCode::ParseError);
+  std::ofstream(dir / "frac.json") << R"({"objects": [{"mesh": "cube.off", "material": "glass", "modes": 2.5}]})";
+  EXPECT_EQ(loadBakeManifest(dir / "frac.json").error().code, ErrorCode::ParseError);
 }
 
 }  // namespace

@@ -101,6 +101,22 @@ TEST(TetMesher, CellSizeDrivenAndErrors) {
   EXPECT_GT(finer.value().mesh.tets.rows(), 4 * r.value().mesh.tets.rows());
 }
 
+TEST(TetMeshQuality, FaceConnectivityCountsPiecesJoinedOnlyAtAVertex) {
+  const auto block = testing::makeBoxTetMesh(1, 1, 1, 2, 2, 2);
+  EXPECT_EQ(countFaceConnectedComponents(block), 1);
+  // A second block sharing one corner node with the first: one node set, two solids.
+  TetMesh two;
+  two.nodes.resize(2 * block.nodes.rows(), 3);
+  two.nodes << block.nodes, (block.nodes.rowwise() + Eigen::RowVector3d(1, 1, 1));
+  two.tets.resize(2 * block.tets.rows(), 4);
+  Tetrahedra shifted = (block.tets.array() + static_cast<int32_t>(block.nodes.rows())).matrix();
+  const int32_t farCorner = static_cast<int32_t>(block.nodes.rows()) - 1;  // (1,1,1) of the first block
+  for (Eigen::Index i = 0; i < shifted.size(); ++i)
+    if (shifted.data()[i] == static_cast<int32_t>(block.nodes.rows())) shifted.data()[i] = farCorner;
+  two.tets << block.tets, shifted;
+  EXPECT_EQ(countFaceConnectedComponents(compactNodes(two)), 2);
+}
+
 TEST(TetMeshQuality, RegularTetValues) {
   TetMesh t;
   t.nodes.resize(4, 3);

@@ -62,6 +62,25 @@ TEST_F(CliTest, BakeThenInspectJson) {
   }
 }
 
+TEST_F(CliTest, TwoProcessesBakeIdenticalDatasets) {
+  testing::writeOff(testing::makeIcosphere(0.05, 3), dir / "ball.off");
+  for (const char* out : {"a.h5", "b.h5"}) {
+    const CliRun r = run("bake --mesh " + path("ball.off") + " --material stone --tets 1500 --modes 8 --quiet --out " + path(out));
+    ASSERT_EQ(r.exitCode, 0) << r.out;
+  }
+  auto a = readPack(dir / "a.h5");
+  auto b = readPack(dir / "b.h5");
+  ASSERT_TRUE(a.ok() && b.ok());
+  const ObjectAsset& x = a.value().objects.at(0);
+  const ObjectAsset& y = b.value().objects.at(0);
+  EXPECT_EQ(x.tetMesh.nodes, y.tetMesh.nodes);
+  EXPECT_EQ(x.tetMesh.tets, y.tetMesh.tets);
+  EXPECT_EQ(x.modal.modes, y.modal.modes);
+  EXPECT_EQ(x.modal.eigenvaluesRad2PerS2, y.modal.eigenvaluesRad2PerS2);
+  EXPECT_EQ(x.stressModes, y.stressModes);
+  EXPECT_EQ(x.massProperties.inertiaKgM2, y.massProperties.inertiaKgM2);
+}
+
 TEST_F(CliTest, BadInputsExitNonZeroWithTheirCodeAndWriteNoPack) {
   auto open = testing::makeBoxSurface(1, 1, 1);
   open.faces.conservativeResize(11, 3);
@@ -117,7 +136,11 @@ TEST_F(CliTest, BadInputsExitNonZeroWithTheirCodeAndWriteNoPack) {
 
 TEST_F(CliTest, UsageErrorsAndHelp) {
   EXPECT_EQ(run("").exitCode, 2);
-  EXPECT_EQ(run("bake --mesh nowhere.off --material glass --out x.h5").exitCode, 2);
+  const CliRun missingMesh = run("bake --mesh " + path("nowhere.off") + " --material glass --out " + path("x.h5"));
+  EXPECT_EQ(missingMesh.exitCode, 3) << missingMesh.out;
+  EXPECT_NE(missingMesh.out.find("error [file_not_found]"), std::string::npos) << missingMesh.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.h5"));
+  EXPECT_EQ(run("bake --manifest m.json --mesh a.off --out x.h5").exitCode, 2);  // exclusive options
   const CliRun help = run("bake --help");
   EXPECT_EQ(help.exitCode, 0);
   EXPECT_NE(help.out.find("--tets"), std::string::npos);

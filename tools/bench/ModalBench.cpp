@@ -131,6 +131,11 @@ int main(int argc, char** argv) {
             op, bop, nev, std::min<Eigen::Index>(dof, std::max(2 * nev + 1, nev + 20)), shift);
         eigs.init();
         eigs.compute(Spectra::SortRule::LargestMagn, 1000, tolerance > 0.0 ? tolerance : 1e-15, Spectra::SortRule::SmallestAlge);
+        if (eigs.info() != Spectra::CompInfo::Successful) {
+          std::cerr << "warning: Spectra did not converge at " << dof << " DOF, r = " << r << "\n";
+          spectraLambda = Eigen::VectorXd::Constant(r, std::numeric_limits<double>::quiet_NaN());
+          return;
+        }
         spectraLambda = eigs.eigenvalues().tail(r);
         spectraSolves = static_cast<long>(eigs.num_operations());
       });

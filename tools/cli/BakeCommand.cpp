@@ -1,3 +1,4 @@
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -34,8 +35,8 @@ struct BakeOptions {
 Runner addBakeCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("bake", "Bake surface meshes into a pack: validate, tet-mesh, FEM, modal basis, stress modes");
   auto o = std::make_shared<BakeOptions>();
-  auto* mesh = cmd->add_option("--mesh", o->mesh, "Surface mesh (OFF, OBJ, PLY, STL), closed and outward")->check(CLI::ExistingFile);
-  auto* manifest = cmd->add_option("--manifest", o->manifest, "JSON manifest of several objects (see README)")->check(CLI::ExistingFile);
+  auto* mesh = cmd->add_option("--mesh", o->mesh, "Surface mesh (OFF, OBJ, PLY, STL), closed and outward");
+  auto* manifest = cmd->add_option("--manifest", o->manifest, "JSON manifest of several objects (see README)");
   mesh->excludes(manifest);
   cmd->add_option("--material", o->material, "Preset name (" + [] {
     std::string names;
@@ -60,6 +61,12 @@ Runner addBakeCommand(CLI::App& app) {
   cmd->add_option("--out", o->out, "Output pack (.h5), written atomically")->required();
   cmd->add_flag("--quiet", o->quiet, "No progress display");
   cmd->add_flag("--json", o->json, "Print the inspection of the new pack as JSON");
+  cmd->get_option("--cell-size")->excludes(cmd->get_option("--tets"));
+  // A manifest carries its own per-object settings: refuse options it would silently override.
+  for (const char* perObject : {"--material", "--name", "--tets", "--cell-size", "--modes", "--repair", "--repair-voxel",
+                                "--lumped-mass", "--no-sharp-features", "--sliver-bound", "--seed"}) {
+    cmd->get_option(perObject)->excludes(manifest);
+  }
 
   return [o, cmd]() -> int {
     std::vector<ObjectBakeSettings> objects;
@@ -98,10 +105,19 @@ Runner addBakeCommand(CLI::App& app) {
       return bakePack(objects, &progress, &reports);
     }();
     if (!pack) return reportError(pack.error());
-    if (Status written = writePack(pack.value(), o->out); !written) return reportError(written.error());
+    if (Status written = writePack(pack.value(), o->out); !written) {
+      reportError(written.error());
+      return kExitPack;  // includes the writer's own checks (InvalidArgument): a pack problem
+    }
     // Read the pack back: what is printed is what is on disk, and it passed the reader's checks.
+    // A pack the reader rejects must not stay behind.
     auto reread = readPack(o->out);
-    if (!reread) return reportError(reread.error());
+    if (!reread) {
+      std::error_code ignored;
+      std::filesystem::remove(o->out, ignored);
+      reportError(reread.error());
+      return kExitPack;
+    }
     if (o->json) {
       std::cout << inspectJson(reread.value()).dump(2) << "\n";
       return kExitOk;

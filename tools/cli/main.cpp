@@ -25,6 +25,9 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error [internal]: %s\n", e.what());
     return brittle::cli::kExitInternal;
+  } catch (...) {
+    std::fprintf(stderr, "error [internal]: unknown exception\n");
+    return brittle::cli::kExitInternal;
   }
   return brittle::cli::kExitUsage;
 }

@@ -18,6 +18,8 @@ struct Material {
   double rayleighBetaS = 0.0;          ///< stiffness-proportional damping β (s)
   double restitution = 0.0;            ///< coefficient of restitution in [0, 1]
   std::string source;                  ///< citation for the values
+
+  bool operator==(const Material&) const = default;
 };
 
 /// Checks every value is finite and physical: E > 0, −1 < ν < 0.5, ρ > 0, σ_t > 0, G_c > 0,

@@ -13,9 +13,10 @@ namespace brittle {
 ///  3. ParseError — a face index out of range;
 ///  4. DegenerateFace — repeated corner or zero area (relative to the bounding box);
 ///  5. OpenMesh — edges with one incident face;
-///  6. NonManifold — edges with more than two faces, or vertices whose faces form several fans;
+///  6. NonManifold — edges with more than two faces;
 ///  7. InconsistentOrientation — two faces traverse a shared edge in the same direction;
-///  8. NonManifold — more than one connected component (one object is one body);
+///  8. NonManifold — vertices whose faces form several fans (pinched), or more than one
+///     connected component (one object is one body);
 ///  9. SelfIntersection — two non-adjacent faces intersect (CGAL Polygon_mesh_processing);
 /// 10. InwardFacing — the enclosed signed volume is negative.
 Status validateSurfaceMesh(const TriangleMesh& mesh);

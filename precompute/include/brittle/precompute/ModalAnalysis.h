@@ -3,11 +3,13 @@
 // ARPACK (dsaupd/dseupd) in shift-invert mode 3 with a negative shift σ: the operator is
 // (K − σM)⁻¹M, which is well defined for a free body (K is singular, K − σM is positive definite)
 // and maps the lowest eigenvalues to the largest. The six rigid modes come out with the elastic
-// ones and are detected by their projection on the analytic rigid-body space, then excluded.
+// ones (eigenvalue zero at the scale of |σ|), are checked to span the analytic rigid-body space,
+// then excluded.
 // (K − σM) is factorised once, by CHOLMOD's supernodal Cholesky (default; measured 3–6× faster
 // than Eigen's SimplicialLDLT on these matrices, see README) or by Eigen.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -26,7 +28,7 @@ std::string factorizationName(Factorization f);
 
 struct ModalSettings {
   int modeCount = 20;                ///< r, number of elastic modes returned
-  double shiftRad2PerS2 = 0.0;       ///< σ < 0; 0 means defaultShift()
+  double shiftRad2PerS2 = 0.0;       ///< σ < 0, required by computeModes (see defaultShift())
   Factorization factorization = Factorization::Cholmod;
   int maxIterations = 500;           ///< ARPACK restarts (iparam[2])
   int lanczosVectors = 0;            ///< ncv; 0 means max(2·nev + 1, nev + 20)

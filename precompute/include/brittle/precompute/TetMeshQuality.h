@@ -14,6 +14,10 @@ MeshQuality computeMeshQuality(const TetMesh& mesh);
 /// the order of the tets that own them.
 Triangles boundaryFaces(const TetMesh& mesh);
 
+/// Number of groups of tets connected through shared faces (1 for one solid; tets that touch
+/// only at an edge or a vertex count as separate groups).
+int64_t countFaceConnectedComponents(const TetMesh& mesh);
+
 /// Drops nodes no tet uses and renumbers the rest in their original order.
 TetMesh compactNodes(const TetMesh& mesh);
 
