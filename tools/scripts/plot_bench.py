@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Charts for brittle_bench_modal's CSV (bench/modal_solve.csv).
 
 Writes bench/modal_solve.png (modal solve time against DOF, per method and mode count, with
