@@ -124,6 +124,13 @@ TEST(ModalAnalysis, TypedErrors) {
   EXPECT_EQ(computeModes(c.sys, c.mesh.nodes, s).error().code, ErrorCode::InvalidArgument);
   EXPECT_EQ(ShiftInvertFactor::create(c.sys.stiffness, c.sys.mass, 1.0, Factorization::Cholmod).error().code,
             ErrorCode::FactorizationFailed);
+  // An indefinite matrix (−K − σM has negative eigenvalues) must fail in both factorisations.
+  const SparseMatrixd negK = -c.sys.stiffness;
+  for (Factorization f : {Factorization::Cholmod, Factorization::EigenLdlt}) {
+    auto bad = ShiftInvertFactor::create(negK, c.sys.mass, c.settings.shiftRad2PerS2, f);
+    ASSERT_FALSE(bad.ok()) << factorizationName(f);
+    EXPECT_EQ(bad.error().code, ErrorCode::FactorizationFailed) << factorizationName(f);
+  }
   // Starved of iterations and Lanczos vectors, ARPACK cannot converge: a typed error that says
   // what was tried, never a silent bad basis.
   s = c.settings;

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 
 #include "brittle/database/Pack.h"
@@ -129,6 +130,23 @@ TEST_F(CliTest, BadInputsExitNonZeroWithTheirCodeAndWriteNoPack) {
     EXPECT_NE(r.out.find("error [" + c.code + "]"), std::string::npos) << c.mesh << ": " << r.out;
     EXPECT_FALSE(std::filesystem::exists(dir / "out.h5")) << c.mesh;
   }
+  // A failed bake leaves an existing pack byte-for-byte as it was.
+  testing::writeOff(testing::makeBoxSurface(0.1, 0.1, 0.1), dir / "cube.off");
+  ASSERT_EQ(run("bake --mesh " + path("cube.off") + " --material glass --tets 400 --modes 4 --quiet --out " + path("keep.h5")).exitCode, 0);
+  const auto before = std::filesystem::file_size(dir / "keep.h5");
+  std::ifstream keepIn(dir / "keep.h5", std::ios::binary);
+  const std::string original((std::istreambuf_iterator<char>(keepIn)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(run("bake --mesh " + path("open.off") + " --material glass --quiet --out " + path("keep.h5")).exitCode, 3);
+  std::ifstream keepAfter(dir / "keep.h5", std::ios::binary);
+  const std::string after((std::istreambuf_iterator<char>(keepAfter)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(std::filesystem::file_size(dir / "keep.h5"), before);
+  EXPECT_EQ(after, original);
+  // A pack that cannot be written (missing directory) is a pack error and leaves nothing.
+  const CliRun unwritable = run("bake --mesh " + path("cube.off") + " --material glass --tets 400 --modes 4 --quiet --out " +
+                                path("no-such-dir/out.h5"));
+  EXPECT_EQ(unwritable.exitCode, 6) << unwritable.out;
+  EXPECT_NE(unwritable.out.find("error [pack_io_error]"), std::string::npos) << unwritable.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "no-such-dir"));
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << "leftover " << entry.path();
   }
