@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "brittle/precompute/MaterialLibrary.h"
+#include "brittle/testing/AssetChecks.h"
 #include "brittle/testing/Fixtures.h"
 
 namespace brittle {
@@ -61,18 +62,7 @@ TEST_F(BakePipelineTest, SameInputsSameDatasets) {
   ASSERT_TRUE(ra.ok() && rb.ok());
   const ObjectAsset& x = ra.value().objects.at(0);
   const ObjectAsset& y = rb.value().objects.at(0);
-  // Everything but the wall-clock timings is bit-identical.
-  EXPECT_EQ(x.tetMesh.nodes, y.tetMesh.nodes);
-  EXPECT_EQ(x.tetMesh.tets, y.tetMesh.tets);
-  EXPECT_EQ(x.surfaceFaces, y.surfaceFaces);
-  EXPECT_EQ(x.modal.modes, y.modal.modes);
-  EXPECT_EQ(x.modal.eigenvaluesRad2PerS2, y.modal.eigenvaluesRad2PerS2);
-  EXPECT_EQ(x.modal.residuals, y.modal.residuals);
-  EXPECT_EQ(x.stressModes, y.stressModes);
-  EXPECT_EQ(x.massProperties.inertiaKgM2, y.massProperties.inertiaKgM2);
-  EXPECT_EQ(x.quality.minDihedralDeg, y.quality.minDihedralDeg);
-  EXPECT_EQ(x.bake.cellSizeM, y.bake.cellSizeM);
-  EXPECT_EQ(x.bake.shift, y.bake.shift);
+  testing::expectSameBakedData(x, y);  // everything but the wall-clock timings
 }
 
 TEST_F(BakePipelineTest, BadInputsGiveTheirOwnTypedErrors) {

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "brittle/database/Pack.h"
+#include "brittle/testing/AssetChecks.h"
 #include "brittle/testing/Fixtures.h"
 
 namespace brittle {
@@ -74,12 +75,7 @@ TEST_F(CliTest, TwoProcessesBakeIdenticalDatasets) {
   ASSERT_TRUE(a.ok() && b.ok());
   const ObjectAsset& x = a.value().objects.at(0);
   const ObjectAsset& y = b.value().objects.at(0);
-  EXPECT_EQ(x.tetMesh.nodes, y.tetMesh.nodes);
-  EXPECT_EQ(x.tetMesh.tets, y.tetMesh.tets);
-  EXPECT_EQ(x.modal.modes, y.modal.modes);
-  EXPECT_EQ(x.modal.eigenvaluesRad2PerS2, y.modal.eigenvaluesRad2PerS2);
-  EXPECT_EQ(x.stressModes, y.stressModes);
-  EXPECT_EQ(x.massProperties.inertiaKgM2, y.massProperties.inertiaKgM2);
+  testing::expectSameBakedData(x, y);
 }
 
 TEST_F(CliTest, BadInputsExitNonZeroWithTheirCodeAndWriteNoPack) {
