@@ -1,0 +1,259 @@
+// DescriptorIndexTest.cpp — exactness of brute force, recall and self-retrieval of the FLANN
+// kd-forest, determinism, and typed errors. Speed is not asserted here.
+#include "brittle/database/DescriptorIndex.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace brittle {
+namespace {
+
+using Kind = DescriptorIndexSettings::Kind;
+
+std::vector<float> randomMatrix(int64_t rows, int64_t dims, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+  std::vector<float> m(static_cast<size_t>(rows * dims));
+  for (float& x : m) x = uniform(rng);
+  return m;
+}
+
+DescriptorIndexSettings settingsFor(Kind kind, int checks = 64) {
+  DescriptorIndexSettings s;
+  s.kind = kind;
+  s.checks = checks;
+  return s;
+}
+
+DescriptorIndex buildOrDie(const std::vector<float>& data, int64_t dims, const DescriptorIndexSettings& s) {
+  auto built = DescriptorIndex::build(data.data(), static_cast<int64_t>(data.size()) / dims, dims, s);
+  EXPECT_TRUE(built.ok()) << (built.ok() ? "" : built.error().message);
+  return std::move(built).value();
+}
+
+TEST(DescriptorIndex, BruteForceHandExampleTieGoesToLowerId) {
+  // 2-d points; query at the origin. Rows 1 and 3 tie at squared distance 1; row 2 at 4,
+  // row 0 at 9, row 4 at 0.25.
+  const std::vector<float> data = {3, 0, /**/ 0, 1, /**/ 2, 0, /**/ -1, 0, /**/ 0.5f, 0};
+  DescriptorIndex index = buildOrDie(data, 2, settingsFor(Kind::BruteForce));
+  EXPECT_EQ(index.size(), 5);
+  EXPECT_EQ(index.dims(), 2);
+  const float query[2] = {0, 0};
+  int64_t ids[5];
+  float d[5];
+  ASSERT_TRUE(index.query(query, 5, ids, d).ok());
+  const int64_t expectedIds[5] = {4, 1, 3, 2, 0};
+  const float expectedD[5] = {0.25f, 1, 1, 4, 9};
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(ids[i], expectedIds[i]) << "rank " << i;
+    EXPECT_FLOAT_EQ(d[i], expectedD[i]) << "rank " << i;
+  }
+  // k = 2 keeps the lower id of the tie; the higher one is displaced only by a strictly nearer row.
+  ASSERT_TRUE(index.query(query, 2, ids, d).ok());
+  EXPECT_EQ(ids[0], 4);
+  EXPECT_EQ(ids[1], 1);
+}
+
+TEST(DescriptorIndex, KdForestTieOrderedByLowerId) {
+  // Exact duplicates: whichever order FLANN finds them in, results are ordered by id.
+  const std::vector<float> data = {1, 1, /**/ 5, 5, /**/ 1, 1, /**/ 1, 1};
+  DescriptorIndex index = buildOrDie(data, 2, settingsFor(Kind::KdForest));
+  const float query[2] = {1, 1};
+  int64_t ids[3];
+  float d[3];
+  ASSERT_TRUE(index.query(query, 3, ids, d).ok());
+  EXPECT_EQ(ids[0], 0);
+  EXPECT_EQ(ids[1], 2);
+  EXPECT_EQ(ids[2], 3);
+  EXPECT_EQ(d[0], 0.0f);
+}
+
+// Uniform random 28-d points are the hardest case for kd-trees: checks=256 (13% of the 2000
+// points) measured recall@1 0.87-0.95 depending on trees, so 0.99 needs checks=1024 (measured
+// 1.000 with 4, 8 and 16 trees). FLANN's build is not reproducible (see the disabled test below),
+// so the margin must cover build-to-build variation.
+TEST(DescriptorIndex, KdForestRecallAtOneAgainstBruteForce) {
+  const int64_t rows = 2000, dims = 28, queries = 500;
+  const auto data = randomMatrix(rows, dims, 42);
+  const auto q = randomMatrix(queries, dims, 43);
+  DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+  DescriptorIndex forest = buildOrDie(data, dims, settingsFor(Kind::KdForest, 1024));
+  std::vector<int64_t> exactIds(queries), forestIds(queries);
+  std::vector<float> exactD(queries), forestD(queries);
+  ASSERT_TRUE(exact.queryBatch(q.data(), queries, 1, exactIds.data(), exactD.data()).ok());
+  ASSERT_TRUE(forest.queryBatch(q.data(), queries, 1, forestIds.data(), forestD.data()).ok());
+  int hits = 0;
+  for (int64_t i = 0; i < queries; ++i) hits += exactIds[i] == forestIds[i];
+  const double recall = double(hits) / double(queries);
+  RecordProperty("recall_at_1", std::to_string(recall));
+  EXPECT_GE(recall, 0.99);
+}
+
+TEST(DescriptorIndex, SelfRetrievalBothBackends) {
+  const int64_t rows = 1000, dims = 28;
+  const auto data = randomMatrix(rows, dims, 7);
+  for (Kind kind : {Kind::BruteForce, Kind::KdForest}) {
+    DescriptorIndex index = buildOrDie(data, dims, settingsFor(kind));
+    std::vector<int64_t> ids(rows);
+    std::vector<float> d(rows);
+    ASSERT_TRUE(index.queryBatch(data.data(), rows, 1, ids.data(), d.data()).ok());
+    for (int64_t r = 0; r < rows; ++r) {
+      ASSERT_EQ(ids[r], r) << "kind " << int(kind);
+      ASSERT_EQ(d[r], 0.0f) << "kind " << int(kind);
+    }
+  }
+}
+
+TEST(DescriptorIndex, BatchMatchesSingleQueries) {
+  const int64_t rows = 500, dims = 8, queries = 50, k = 5;
+  const auto data = randomMatrix(rows, dims, 11);
+  const auto q = randomMatrix(queries, dims, 12);
+  for (Kind kind : {Kind::BruteForce, Kind::KdForest}) {
+    DescriptorIndex index = buildOrDie(data, dims, settingsFor(kind));
+    std::vector<int64_t> batchIds(queries * k);
+    std::vector<float> batchD(queries * k);
+    ASSERT_TRUE(index.queryBatch(q.data(), queries, k, batchIds.data(), batchD.data()).ok());
+    for (int64_t i = 0; i < queries; ++i) {
+      int64_t ids[k];
+      float d[k];
+      ASSERT_TRUE(index.query(q.data() + i * dims, k, ids, d).ok());
+      for (int j = 0; j < k; ++j) {
+        EXPECT_EQ(ids[j], batchIds[i * k + j]);
+        EXPECT_EQ(d[j], batchD[i * k + j]);
+        if (j > 0) {
+          EXPECT_LE(d[j - 1], d[j]);
+        }
+      }
+    }
+  }
+}
+
+// Runs 200 queries (k = 3) and returns ids and distances, concatenated.
+std::pair<std::vector<int64_t>, std::vector<float>> run200(const DescriptorIndex& index, int64_t dims) {
+  const auto q = randomMatrix(200, dims, 99);
+  std::vector<int64_t> ids(200 * 3);
+  std::vector<float> d(200 * 3);
+  EXPECT_TRUE(index.queryBatch(q.data(), 200, 3, ids.data(), d.data()).ok());
+  return {ids, d};
+}
+
+TEST(DescriptorIndex, DeterministicResults) {
+  const int64_t dims = 28;
+  const auto data = randomMatrix(2000, dims, 5);
+  // Brute force: two builds give identical results.
+  {
+    DescriptorIndex a = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+    DescriptorIndex b = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+    EXPECT_EQ(run200(a, dims), run200(b, dims));
+  }
+  // Kd-forest: one built index answers identically every time, also after a move (the FLANN
+  // index points into the index's own copy of the data, which must survive the move).
+  {
+    DescriptorIndex a = buildOrDie(data, dims, settingsFor(Kind::KdForest, 32));
+    const auto first = run200(a, dims);
+    DescriptorIndex moved = std::move(a);
+    EXPECT_EQ(first, run200(moved, dims));
+  }
+}
+
+// Two kd-forest builds with the same seed SHOULD give identical results, but FLANN 1.9.2 (Debian 12)
+// shuffles points with a std::random_device-seeded generator in KDTreeIndex::buildIndexImpl, which
+// flann::seed_random does not control (measured: 147 of 200 top-1 answers differed at checks=32).
+// Enable this test once the kd-forest build is made reproducible (patched/vendored FLANN, or an
+// index stored in the pack).
+TEST(DescriptorIndex, DISABLED_KdForestSameSeedSameResults) {
+  const int64_t dims = 28;
+  const auto data = randomMatrix(2000, dims, 5);
+  DescriptorIndex a = buildOrDie(data, dims, settingsFor(Kind::KdForest, 32));
+  DescriptorIndex b = buildOrDie(data, dims, settingsFor(Kind::KdForest, 32));
+  EXPECT_EQ(run200(a, dims), run200(b, dims));
+}
+
+TEST(DescriptorIndex, AutotunedBuildsAndFindsItself) {
+  // Small on purpose: autotuning trains many candidate indices.
+  const int64_t rows = 300, dims = 4;
+  const auto data = randomMatrix(rows, dims, 3);
+  DescriptorIndexSettings s = settingsFor(Kind::Autotuned);
+  s.targetPrecision = 0.9f;
+  DescriptorIndex index = buildOrDie(data, dims, s);
+  int64_t id;
+  float d;
+  ASSERT_TRUE(index.query(data.data() + 17 * dims, 1, &id, &d).ok());
+  EXPECT_EQ(id, 17);
+  EXPECT_EQ(d, 0.0f);
+}
+
+void expectInvalid(const Status& status, const char* needle) {
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.error().code, ErrorCode::InvalidArgument);
+  EXPECT_NE(status.error().message.find(needle), std::string::npos) << status.error().message;
+}
+
+template <typename T>
+void expectInvalid(const Result<T>& result, const char* needle) {
+  ASSERT_FALSE(result.ok());
+  EXPECT_EQ(result.error().code, ErrorCode::InvalidArgument);
+  EXPECT_NE(result.error().message.find(needle), std::string::npos) << result.error().message;
+}
+
+TEST(DescriptorIndex, BuildErrors) {
+  const auto data = randomMatrix(10, 3, 1);
+  const auto bf = settingsFor(Kind::BruteForce);
+  const auto kd = settingsFor(Kind::KdForest);
+  expectInvalid(DescriptorIndex::build(nullptr, 10, 3, kd), "data is null");
+  expectInvalid(DescriptorIndex::build(data.data(), 0, 3, kd), "rows");
+  expectInvalid(DescriptorIndex::build(data.data(), 10, 0, bf), "dims");
+  expectInvalid(DescriptorIndex::build(data.data(), -1, 3, bf), "rows");
+
+  auto nan = data;
+  nan[4 * 3 + 2] = std::numeric_limits<float>::quiet_NaN();
+  expectInvalid(DescriptorIndex::build(nan.data(), 10, 3, kd), "row 4, column 2");
+  auto inf = data;
+  inf[7 * 3 + 0] = -std::numeric_limits<float>::infinity();
+  expectInvalid(DescriptorIndex::build(inf.data(), 10, 3, bf), "row 7, column 0");
+
+  auto badTrees = kd;
+  badTrees.trees = 0;
+  expectInvalid(DescriptorIndex::build(data.data(), 10, 3, badTrees), "trees");
+  auto badChecks = kd;
+  badChecks.checks = 0;
+  expectInvalid(DescriptorIndex::build(data.data(), 10, 3, badChecks), "checks");
+  auto badPrecision = settingsFor(Kind::Autotuned);
+  badPrecision.targetPrecision = 1.5f;
+  expectInvalid(DescriptorIndex::build(data.data(), 10, 3, badPrecision), "targetPrecision");
+}
+
+TEST(DescriptorIndex, QueryErrors) {
+  const auto data = randomMatrix(10, 3, 1);
+  for (Kind kind : {Kind::BruteForce, Kind::KdForest}) {
+    DescriptorIndex index = buildOrDie(data, 3, settingsFor(kind));
+    float q[3] = {0.1f, 0.2f, 0.3f};
+    int64_t ids[11];
+    float d[11];
+    expectInvalid(index.query(q, 0, ids, d), "k must be >= 1");
+    expectInvalid(index.query(q, 11, ids, d), "exceeds the 10 entries");
+    expectInvalid(index.query(nullptr, 1, ids, d), "descriptor is null");
+    expectInvalid(index.query(q, 1, nullptr, d), "null");
+    expectInvalid(index.query(q, 1, ids, nullptr), "null");
+    q[1] = std::numeric_limits<float>::quiet_NaN();
+    expectInvalid(index.query(q, 1, ids, d), "column 1");
+
+    // Batch: the bad query row and column are named, and nothing runs.
+    std::vector<float> batch(4 * 3, 0.5f);
+    batch[2 * 3 + 2] = std::numeric_limits<float>::infinity();
+    std::vector<int64_t> batchIds(4, -7);
+    std::vector<float> batchD(4);
+    expectInvalid(index.queryBatch(batch.data(), 4, 1, batchIds.data(), batchD.data()),
+                  "query row 2, column 2");
+    EXPECT_EQ(batchIds[0], -7);
+    expectInvalid(index.queryBatch(batch.data(), 0, 1, batchIds.data(), batchD.data()), "count");
+    expectInvalid(index.queryBatch(nullptr, 1, 1, batchIds.data(), batchD.data()), "null");
+  }
+}
+
+}  // namespace
+}  // namespace brittle
