@@ -50,6 +50,24 @@ DescriptorIndex::DescriptorIndex(DescriptorIndex&&) noexcept = default;
 DescriptorIndex& DescriptorIndex::operator=(DescriptorIndex&&) noexcept = default;
 DescriptorIndex::~DescriptorIndex() = default;
 
+const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind) {
+  switch (kind) {
+    case DescriptorIndexSettings::Kind::BruteForce: return "brute-force";
+    case DescriptorIndexSettings::Kind::KdForest: return "kd-forest";
+    case DescriptorIndexSettings::Kind::Autotuned: return "autotuned";
+  }
+  return "unknown";
+}
+
+Result<DescriptorIndexSettings::Kind> parseDescriptorIndexKind(std::string_view name) {
+  using Kind = DescriptorIndexSettings::Kind;
+  for (Kind kind : {Kind::BruteForce, Kind::KdForest, Kind::Autotuned}) {
+    if (name == descriptorIndexKindName(kind)) return kind;
+  }
+  return makeError(ErrorCode::InvalidArgument,
+                   "unknown index backend '" + std::string(name) + "' (expected brute-force, kd-forest or autotuned)");
+}
+
 Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, int64_t dims,
                                                const DescriptorIndexSettings& settings) {
   using Kind = DescriptorIndexSettings::Kind;

@@ -53,4 +53,15 @@ double rayleighDampingRatio(const Material& m, double omegaRadPerS) {
   return 0.5 * (m.rayleighAlphaPerS / omegaRadPerS + m.rayleighBetaS * omegaRadPerS);
 }
 
+Eigen::Matrix<double, 6, 6> isotropicElasticity(double youngsModulusPa, double poissonRatio) {
+  const double e = youngsModulusPa, nu = poissonRatio;
+  const double lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  const double mu = e / (2.0 * (1.0 + nu));
+  Eigen::Matrix<double, 6, 6> c = Eigen::Matrix<double, 6, 6>::Zero();
+  c.topLeftCorner<3, 3>().setConstant(lambda);
+  c.topLeftCorner<3, 3>().diagonal().array() += 2.0 * mu;
+  c.bottomRightCorner<3, 3>().diagonal().setConstant(mu);
+  return c;
+}
+
 }  // namespace brittle

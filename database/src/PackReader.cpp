@@ -72,6 +72,13 @@ class FileReader {
  public:
   FileReader(hid_t file, uintmax_t fileBytes) : mFile(file), mFileBytes(fileBytes) {}
 
+  /// True when a link named path exists (whatever it points to).
+  bool exists(const std::string& path) {
+    const htri_t found = H5Lexists(mFile, path.c_str(), H5P_DEFAULT);
+    if (found < 0) fail(ErrorCode::PackCorrupt, "cannot look up '" + path + "'" + hdf5::withDetail());
+    return found > 0;
+  }
+
   void requireGroup(const std::string& path) {
     Handle group = openObject(path, "group");
     if (H5Iget_type(group.get()) != H5I_GROUP) fail(ErrorCode::PackShapeMismatch, "'" + path + "' is not a group");
@@ -126,6 +133,15 @@ class FileReader {
       if (!std::isfinite(a.values[i])) {
         fail(ErrorCode::PackCorrupt, "dataset '" + path + "' holds a non-finite value (" + std::to_string(a.values[i]) +
                                          ") at " + indexString(i, a.dims));
+      }
+    }
+    return a;
+  }
+  Array<float> f32(const std::string& path, const std::vector<hsize_t>& shape) {
+    Array<float> a = numeric<float>(path, shape, H5T_FLOAT, H5T_NATIVE_FLOAT, "float32");
+    for (size_t i = 0; i < a.values.size(); ++i) {
+      if (!std::isfinite(a.values[i])) {
+        fail(ErrorCode::PackCorrupt, "dataset '" + path + "' holds a non-finite value at " + indexString(i, a.dims));
       }
     }
     return a;
@@ -345,7 +361,7 @@ void checkIndices(const Indices& indices, const std::string& path, int64_t first
   }
 }
 
-void checkRoot(FileReader& r) {
+int64_t checkRoot(FileReader& r) {
   const std::optional<std::string> format = r.stringAttribute("/", "format");
   if (!format) fail(ErrorCode::PackFormatMismatch, "no 'format' string attribute: not a brittle pack");
   if (*format != kPackFormatName) {
@@ -353,9 +369,10 @@ void checkRoot(FileReader& r) {
   }
   const std::optional<int64_t> version = r.intAttribute("/", "version");
   if (!version) fail(ErrorCode::PackVersionMismatch, "no integer 'version' attribute");
-  if (*version != kPackVersion) {
-    fail(ErrorCode::PackVersionMismatch,
-         "pack version " + std::to_string(*version) + ", this reader reads version " + std::to_string(kPackVersion));
+  if (*version < kOldestReadablePackVersion || *version > kPackVersion) {
+    fail(ErrorCode::PackVersionMismatch, "pack version " + std::to_string(*version) + ", this reader reads versions " +
+                                             std::to_string(kOldestReadablePackVersion) + " to " +
+                                             std::to_string(kPackVersion));
   }
   for (const auto& unit : packschema::kUnitAttributes) {
     const std::optional<std::string> value = r.stringAttribute("/", unit.name);
@@ -365,13 +382,14 @@ void checkRoot(FileReader& r) {
                                               unit.value + "'");
     }
   }
+  return *version;
 }
 
-std::vector<Material> readMaterials(FileReader& r) {
-  r.requireGroup("/materials");
-  const std::vector<std::string> names = r.strings("/materials/name", kAny);
+std::vector<Material> readMaterials(FileReader& r, const std::string& prefix) {
+  r.requireGroup(prefix);
+  const std::vector<std::string> names = r.strings(prefix + "/name", kAny);
   const hsize_t m = names.size();
-  const auto column = [&](const char* name) { return r.f64(std::string("/materials/") + name, {m}).values; };
+  const auto column = [&](const char* name) { return r.f64(prefix + "/" + name, {m}).values; };
   const auto youngs = column("youngs_modulus_pa");
   const auto poisson = column("poisson_ratio");
   const auto density = column("density_kg_per_m3");
@@ -380,7 +398,7 @@ std::vector<Material> readMaterials(FileReader& r) {
   const auto alpha = column("rayleigh_alpha_per_s");
   const auto beta = column("rayleigh_beta_s");
   const auto restitution = column("restitution");
-  const auto sources = r.strings("/materials/source", m);
+  const auto sources = r.strings(prefix + "/source", m);
 
   std::vector<Material> materials(m);
   std::set<std::string> seen;
@@ -397,79 +415,79 @@ std::vector<Material> readMaterials(FileReader& r) {
     mat.restitution = restitution[i];
     mat.source = sources[i];
     if (Status valid = validateMaterial(mat); !valid) {
-      fail(ErrorCode::PackCorrupt, "/materials row " + std::to_string(i) + ": " + valid.error().message);
+      fail(ErrorCode::PackCorrupt, prefix + " row " + std::to_string(i) + ": " + valid.error().message);
     }
     if (!seen.insert(mat.name).second) fail(ErrorCode::PackCorrupt, "two materials are named '" + mat.name + "'");
   }
   return materials;
 }
 
-std::vector<ObjectAsset> readObjects(FileReader& r, const std::vector<Material>& materials) {
-  r.requireGroup("/objects");
-  r.requireGroup("/objects/quality");
-  r.requireGroup("/objects/bake");
-  const std::vector<std::string> names = r.strings("/objects/name", kAny);
+std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, const std::vector<Material>& materials) {
+  r.requireGroup(prefix);
+  r.requireGroup(prefix + "/quality");
+  r.requireGroup(prefix + "/bake");
+  const std::vector<std::string> names = r.strings(prefix + "/name", kAny);
   const hsize_t o = names.size();
-  const std::vector<std::string> materialNames = r.strings("/objects/material_name", o);
+  const std::vector<std::string> materialNames = r.strings(prefix + "/material_name", o);
 
-  const Array<double> nodes = r.f64("/objects/nodes", {kAny, 3});
-  const auto nodeOffsets = readOffsets(r, "/objects/node_offsets", o, nodes.dims[0], "/objects/nodes");
-  const Array<int32_t> tets = r.i32("/objects/tets", {kAny, 4});
-  const auto tetOffsets = readOffsets(r, "/objects/tet_offsets", o, tets.dims[0], "/objects/tets");
-  const Array<int32_t> faces = r.i32("/objects/surface_faces", {kAny, 3});
-  const auto faceOffsets = readOffsets(r, "/objects/face_offsets", o, faces.dims[0], "/objects/surface_faces");
+  const Array<double> nodes = r.f64(prefix + "/nodes", {kAny, 3});
+  const auto nodeOffsets = readOffsets(r, prefix + "/node_offsets", o, nodes.dims[0], prefix + "/nodes");
+  const Array<int32_t> tets = r.i32(prefix + "/tets", {kAny, 4});
+  const auto tetOffsets = readOffsets(r, prefix + "/tet_offsets", o, tets.dims[0], prefix + "/tets");
+  const Array<int32_t> faces = r.i32(prefix + "/surface_faces", {kAny, 3});
+  const auto faceOffsets = readOffsets(r, prefix + "/face_offsets", o, faces.dims[0], prefix + "/surface_faces");
 
-  const auto massKg = r.f64("/objects/mass_kg", {o}).values;
-  const auto volumeM3 = r.f64("/objects/volume_m3", {o}).values;
-  const auto centerOfMass = r.f64("/objects/center_of_mass_m", {o, 3}).values;
-  const auto inertia = r.f64("/objects/inertia_kg_m2", {o, 3, 3}).values;
-  const auto secondMoment = r.f64("/objects/second_moment_m5", {o, 3, 3}).values;
+  const auto massKg = r.f64(prefix + "/mass_kg", {o}).values;
+  const auto volumeM3 = r.f64(prefix + "/volume_m3", {o}).values;
+  const auto centerOfMass = r.f64(prefix + "/center_of_mass_m", {o, 3}).values;
+  const auto inertia = r.f64(prefix + "/inertia_kg_m2", {o, 3, 3}).values;
+  const auto secondMoment = r.f64(prefix + "/second_moment_m5", {o, 3, 3}).values;
 
-  const Array<double> eigenvalues = r.f64("/objects/eigenvalues_rad2_per_s2", {kAny});
+  const Array<double> eigenvalues = r.f64(prefix + "/eigenvalues_rad2_per_s2", {kAny});
   const hsize_t modeTotal = eigenvalues.dims[0];
-  const auto modeOffsets = readOffsets(r, "/objects/mode_offsets", o, modeTotal, "/objects/eigenvalues_rad2_per_s2");
-  const auto frequencies = r.f64("/objects/frequencies_hz", {modeTotal}).values;
-  const auto residuals = r.f64("/objects/residuals", {modeTotal}).values;
-  const auto orthonormality = r.f64("/objects/orthonormality_error", {o}).values;
-  const Array<double> modes = r.f64("/objects/modes", {kAny});
-  const auto modesOffsets = readOffsets(r, "/objects/modes_value_offsets", o, modes.dims[0], "/objects/modes");
-  checkBlockSizes(modesOffsets, "/objects/modes", 3, nodeOffsets, modeOffsets, names);
-  const Array<double> stressModes = r.f64("/objects/stress_modes", {kAny});
+  const auto modeOffsets = readOffsets(r, prefix + "/mode_offsets", o, modeTotal, prefix + "/eigenvalues_rad2_per_s2");
+  const auto frequencies = r.f64(prefix + "/frequencies_hz", {modeTotal}).values;
+  const auto residuals = r.f64(prefix + "/residuals", {modeTotal}).values;
+  const auto orthonormality = r.f64(prefix + "/orthonormality_error", {o}).values;
+  const Array<double> modes = r.f64(prefix + "/modes", {kAny});
+  const auto modesOffsets = readOffsets(r, prefix + "/modes_value_offsets", o, modes.dims[0], prefix + "/modes");
+  checkBlockSizes(modesOffsets, prefix + "/modes", 3, nodeOffsets, modeOffsets, names);
+  const Array<double> stressModes = r.f64(prefix + "/stress_modes", {kAny});
   const auto stressOffsets =
-      readOffsets(r, "/objects/stress_modes_value_offsets", o, stressModes.dims[0], "/objects/stress_modes");
-  checkBlockSizes(stressOffsets, "/objects/stress_modes", 6, tetOffsets, modeOffsets, names);
+      readOffsets(r, prefix + "/stress_modes_value_offsets", o, stressModes.dims[0], prefix + "/stress_modes");
+  checkBlockSizes(stressOffsets, prefix + "/stress_modes", 6, tetOffsets, modeOffsets, names);
 
-  const auto qNodes = r.i64("/objects/quality/node_count", {o}).values;
-  const auto qTets = r.i64("/objects/quality/tet_count", {o}).values;
-  const auto qFaces = r.i64("/objects/quality/surface_face_count", {o}).values;
-  const auto qMinDihedral = r.f64("/objects/quality/min_dihedral_deg", {o}).values;
-  const auto qMaxDihedral = r.f64("/objects/quality/max_dihedral_deg", {o}).values;
-  const auto qMaxRatio = r.f64("/objects/quality/max_radius_edge_ratio", {o}).values;
-  const auto qMeanRatio = r.f64("/objects/quality/mean_radius_edge_ratio", {o}).values;
-  const auto qMinVolume = r.f64("/objects/quality/min_tet_volume_m3", {o}).values;
+  const auto qNodes = r.i64(prefix + "/quality/node_count", {o}).values;
+  const auto qTets = r.i64(prefix + "/quality/tet_count", {o}).values;
+  const auto qFaces = r.i64(prefix + "/quality/surface_face_count", {o}).values;
+  const auto qMinDihedral = r.f64(prefix + "/quality/min_dihedral_deg", {o}).values;
+  const auto qMaxDihedral = r.f64(prefix + "/quality/max_dihedral_deg", {o}).values;
+  const auto qMaxRatio = r.f64(prefix + "/quality/max_radius_edge_ratio", {o}).values;
+  const auto qMeanRatio = r.f64(prefix + "/quality/mean_radius_edge_ratio", {o}).values;
+  const auto qMinVolume = r.f64(prefix + "/quality/min_tet_volume_m3", {o}).values;
 
-  const auto sourceMesh = r.strings("/objects/bake/source_mesh", o);
-  const auto targetTets = r.i64("/objects/bake/target_tets", {o}).values;
-  const auto cellSize = r.f64("/objects/bake/cell_size_m", {o}).values;
-  const auto requestedModes = r.i64("/objects/bake/requested_modes", {o}).values;
-  const auto lumpedMass = r.u8("/objects/bake/lumped_mass", {o}).values;
-  const auto repaired = r.u8("/objects/bake/repaired", {o}).values;
-  const auto repairVolumeChange = r.f64("/objects/bake/repair_volume_change", {o}).values;
-  const auto factorization = r.strings("/objects/bake/factorization", o);
-  const auto shift = r.f64("/objects/bake/shift_rad2_per_s2", {o}).values;
-  const auto seed = r.i64("/objects/bake/seed", {o}).values;
-  const auto meshingS = r.f64("/objects/bake/meshing_s", {o}).values;
-  const auto assemblyS = r.f64("/objects/bake/assembly_s", {o}).values;
-  const auto modalS = r.f64("/objects/bake/modal_s", {o}).values;
-  const auto stressModesS = r.f64("/objects/bake/stress_modes_s", {o}).values;
-  const auto totalS = r.f64("/objects/bake/total_s", {o}).values;
-  const auto generator = r.strings("/objects/bake/generator", o);
+  const auto sourceMesh = r.strings(prefix + "/bake/source_mesh", o);
+  const auto targetTets = r.i64(prefix + "/bake/target_tets", {o}).values;
+  const auto cellSize = r.f64(prefix + "/bake/cell_size_m", {o}).values;
+  const auto requestedModes = r.i64(prefix + "/bake/requested_modes", {o}).values;
+  const auto lumpedMass = r.u8(prefix + "/bake/lumped_mass", {o}).values;
+  const auto repaired = r.u8(prefix + "/bake/repaired", {o}).values;
+  const auto repairVolumeChange = r.f64(prefix + "/bake/repair_volume_change", {o}).values;
+  const auto factorization = r.strings(prefix + "/bake/factorization", o);
+  const auto shift = r.f64(prefix + "/bake/shift_rad2_per_s2", {o}).values;
+  const auto seed = r.i64(prefix + "/bake/seed", {o}).values;
+  const auto meshingS = r.f64(prefix + "/bake/meshing_s", {o}).values;
+  const auto assemblyS = r.f64(prefix + "/bake/assembly_s", {o}).values;
+  const auto modalS = r.f64(prefix + "/bake/modal_s", {o}).values;
+  const auto stressModesS = r.f64(prefix + "/bake/stress_modes_s", {o}).values;
+  const auto totalS = r.f64(prefix + "/bake/total_s", {o}).values;
+  const auto generator = r.strings(prefix + "/bake/generator", o);
 
   std::set<std::string> materialSet, objectSet;
   for (const auto& m : materials) materialSet.insert(m.name);
-  const auto flag = [](const std::vector<uint8_t>& values, size_t i, const char* path) {
+  const auto flag = [](const std::vector<uint8_t>& values, size_t i, const std::string& path) {
     if (values[i] > 1) {
-      fail(ErrorCode::PackCorrupt, "dataset '" + std::string(path) + "' [" + std::to_string(i) +
+      fail(ErrorCode::PackCorrupt, "dataset '" + path + "' [" + std::to_string(i) +
                                        "] = " + std::to_string(values[i]) + " is not a boolean (0 or 1)");
     }
     return values[i] == 1;
@@ -484,7 +502,7 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::vector<Material>&
     if (!objectSet.insert(a.name).second) fail(ErrorCode::PackCorrupt, "two objects are named '" + a.name + "'");
     if (materialSet.count(a.materialName) == 0) {
       fail(ErrorCode::PackCorrupt,
-           "object '" + a.name + "' names material '" + a.materialName + "', which is not in /materials");
+           "object '" + a.name + "' names material '" + a.materialName + "', which is not in the pack's materials");
     }
 
     const int64_t n = nodeOffsets[i + 1] - nodeOffsets[i];
@@ -493,9 +511,9 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::vector<Material>&
     const int64_t m = modeOffsets[i + 1] - modeOffsets[i];
     a.tetMesh.nodes = Eigen::Map<const Points>(nodes.values.data() + 3 * nodeOffsets[i], n, 3);
     a.tetMesh.tets = Eigen::Map<const Tetrahedra>(tets.values.data() + 4 * tetOffsets[i], t, 4);
-    checkIndices(a.tetMesh.tets, "/objects/tets", tetOffsets[i], n, a.name);
+    checkIndices(a.tetMesh.tets, prefix + "/tets", tetOffsets[i], n, a.name);
     a.surfaceFaces = Eigen::Map<const Triangles>(faces.values.data() + 3 * faceOffsets[i], f, 3);
-    checkIndices(a.surfaceFaces, "/objects/surface_faces", faceOffsets[i], n, a.name);
+    checkIndices(a.surfaceFaces, prefix + "/surface_faces", faceOffsets[i], n, a.name);
 
     MassProperties& mp = a.massProperties;
     mp.massKg = massKg[i];
@@ -531,8 +549,8 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::vector<Material>&
     b.targetTets = targetTets[i];
     b.cellSizeM = cellSize[i];
     b.requestedModes = requestedModes[i];
-    b.lumpedMass = flag(lumpedMass, i, "/objects/bake/lumped_mass");
-    b.repaired = flag(repaired, i, "/objects/bake/repaired");
+    b.lumpedMass = flag(lumpedMass, i, prefix + "/bake/lumped_mass");
+    b.repaired = flag(repaired, i, prefix + "/bake/repaired");
     b.repairVolumeChange = repairVolumeChange[i];
     b.factorization = factorization[i];
     b.shift = shift[i];
@@ -545,6 +563,110 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::vector<Material>&
     b.generator = generator[i];
   }
   return objects;
+}
+
+// One value of a [1] dataset.
+template <typename T>
+T scalar(const Array<T>& a) {
+  return a.values.front();
+}
+
+FragmentDatabase readDatabase(FileReader& r) {
+  r.requireGroup("/database");
+  FragmentDatabase db;
+  db.seed = static_cast<uint64_t>(scalar(r.i64("/database/seed", {1})));
+  const std::vector<Material> reference = readMaterials(r, "/database/reference_material");
+  if (reference.size() != 1) {
+    fail(ErrorCode::PackShapeMismatch, "'/database/reference_material' must hold exactly one material");
+  }
+  db.referenceMaterial = reference.front();
+  std::vector<ObjectAsset> assets = readObjects(r, "/database/entries", reference);
+  const hsize_t count = assets.size();
+
+  r.requireGroup("/database/fragments");
+  const auto shapes = r.strings("/database/fragments/base_shape", count);
+  const auto cuts = r.strings("/database/fragments/cut", count);
+  const auto seeds = r.i64("/database/fragments/seed", {count}).values;
+  const auto fractions = r.f64("/database/fragments/base_volume_fraction", {count}).values;
+  const Array<double> vertices = r.f64("/database/fragments/surface_vertices", {kAny, 3});
+  const auto vertexOffsets = readOffsets(r, "/database/fragments/surface_vertex_offsets", count, vertices.dims[0],
+                                         "/database/fragments/surface_vertices");
+  const Array<int32_t> faces = r.i32("/database/fragments/surface_faces", {kAny, 3});
+  const auto faceOffsets = readOffsets(r, "/database/fragments/surface_face_offsets", count, faces.dims[0],
+                                       "/database/fragments/surface_faces");
+
+  const std::string s = "/database/descriptor_settings";
+  r.requireGroup(s);
+  ShapeDescriptorSettings& d = db.descriptorSettings;
+  const auto tolerances = r.f64(s + "/frame_tolerances", {5}).values;
+  d.frame.eigenGapTolerance = tolerances[0];
+  d.frame.skewnessTolerance = tolerances[1];
+  d.frame.shapeTolerance = tolerances[2];
+  d.frame.tieTolerance = tolerances[3];
+  d.frame.duplicateTolerance = tolerances[4];
+  const auto narrow = [&](const std::string& path) {
+    const int64_t v = scalar(r.i64(path, {1}));
+    if (v < 0 || v > 1 << 20) fail(ErrorCode::PackCorrupt, "dataset '" + path + "' = " + std::to_string(v) + " is out of range");
+    return static_cast<int>(v);
+  };
+  d.frame.maxCandidates = narrow(s + "/frame_max_candidates");
+  d.moment.maxOrder = narrow(s + "/moment_max_order");
+  d.moment.orderWeights = r.f64(s + "/moment_order_weights", {kAny}).values;
+  d.voxel.resolution = narrow(s + "/voxel_resolution");
+  d.voxel.halfExtent = scalar(r.f64(s + "/voxel_half_extent", {1}));
+  d.voxelImproved.resolution = narrow(s + "/voxel_improved_resolution");
+  d.voxelImproved.halfExtent = scalar(r.f64(s + "/voxel_improved_half_extent", {1}));
+  d.voxelImproved.clampVoxels = scalar(r.f64(s + "/voxel_improved_clamp_voxels", {1}));
+  if (Status valid = validateShapeDescriptorSettings(d); !valid) fail(ErrorCode::PackCorrupt, s + ": " + valid.error().message);
+
+  r.requireGroup("/database/descriptors");
+  for (DescriptorKind kind : kAllDescriptorKinds) {
+    const std::string path = std::string("/database/descriptors/") + descriptorKindName(kind);
+    const auto width = static_cast<hsize_t>(descriptorSize(kind, d));
+    const Array<float> m = r.f32(path, {count, width});
+    db.descriptors[static_cast<size_t>(kind)] =
+        Eigen::Map<const DescriptorMatrix>(m.values.data(), static_cast<Eigen::Index>(count), static_cast<Eigen::Index>(width));
+  }
+
+  r.requireGroup("/database/index");
+  const hsize_t kinds = kDescriptorKindCount;
+  const auto names = r.strings("/database/index/descriptor", kinds);
+  const auto backends = r.strings("/database/index/backend", kinds);
+  const auto trees = r.i64("/database/index/trees", {kinds}).values;
+  const auto checks = r.i64("/database/index/checks", {kinds}).values;
+  const auto precision = r.f64("/database/index/target_precision", {kinds}).values;
+  const auto indexSeeds = r.i64("/database/index/seed", {kinds}).values;
+  for (size_t k = 0; k < kinds; ++k) {
+    const auto kind = parseDescriptorKind(names[k]);
+    const auto backend = parseDescriptorIndexKind(backends[k]);
+    if (!kind || !backend) fail(ErrorCode::PackCorrupt, "/database/index row " + std::to_string(k) + ": unknown name");
+    if (trees[k] < 1 || trees[k] > 1024 || checks[k] < 1 || checks[k] > INT32_MAX) {
+      fail(ErrorCode::PackCorrupt, "/database/index row " + std::to_string(k) + ": trees or checks out of range");
+    }
+    DescriptorIndexSettings& is = db.indexSettings[static_cast<size_t>(kind.value())];
+    is.kind = backend.value();
+    is.trees = static_cast<int>(trees[k]);
+    is.checks = static_cast<int>(checks[k]);
+    is.targetPrecision = static_cast<float>(precision[k]);
+    is.seed = static_cast<uint64_t>(indexSeeds[k]);
+  }
+
+  db.entries.resize(count);
+  for (size_t i = 0; i < count; ++i) {
+    FragmentEntry& e = db.entries[i];
+    e.asset = std::move(assets[i]);
+    e.baseShape = shapes[i];
+    e.cut = cuts[i];
+    e.seed = static_cast<uint64_t>(seeds[i]);
+    e.baseVolumeFraction = fractions[i];
+    const int64_t nv = vertexOffsets[i + 1] - vertexOffsets[i];
+    const int64_t nf = faceOffsets[i + 1] - faceOffsets[i];
+    e.surface.vertices = Eigen::Map<const Points>(vertices.values.data() + 3 * vertexOffsets[i], nv, 3);
+    e.surface.faces = Eigen::Map<const Triangles>(faces.values.data() + 3 * faceOffsets[i], nf, 3);
+    checkIndices(e.surface.faces, "/database/fragments/surface_faces", faceOffsets[i], nv, e.asset.name);
+  }
+  if (Status valid = validateFragmentDatabase(db); !valid) fail(ErrorCode::PackCorrupt, "/database: " + valid.error().message);
+  return db;
 }
 
 }  // namespace
@@ -574,10 +696,12 @@ Result<Pack> readPack(const fs::path& path) {
   }
   try {
     FileReader reader(file.get(), fileBytes);
-    checkRoot(reader);
+    const int64_t version = checkRoot(reader);
     Pack pack;
-    pack.materials = readMaterials(reader);
-    pack.objects = readObjects(reader, pack.materials);
+    pack.materials = readMaterials(reader, "/materials");
+    pack.objects = readObjects(reader, "/objects", pack.materials);
+    // The database is optional from version 2 on; version 1 packs have none.
+    if (version >= 2 && reader.exists("/database")) pack.database = readDatabase(reader);
     return pack;
   } catch (const ReadFailure& failure) {
     return makeError(failure.error.code, label + ": " + failure.error.message);

@@ -1,4 +1,4 @@
-// PackWriter.cpp — writes a Pack as an HDF5 file in schema v1 (database/PACK_SCHEMA.md).
+// PackWriter.cpp — writes a Pack as an HDF5 file in schema v2 (database/PACK_SCHEMA.md).
 //
 // The whole pack is validated before a byte is written, then written to a temporary file in the
 // target's directory, flushed to disk and renamed over the target. A reader therefore sees either
@@ -176,6 +176,16 @@ Status validatePack(const Pack& pack) {
     }
     if (!objectNames.insert(o.name).second) return invalid("two objects are named '" + o.name + "'");
   }
+  if (!pack.database.empty()) {
+    if (Status st = validateFragmentDatabase(pack.database); !st) return invalid("database: " + st.error().message);
+    const std::set<std::string> reference{pack.database.referenceMaterial.name};
+    for (const FragmentEntry& e : pack.database.entries) {
+      if (Status st = validateObject(e.asset, "database entry '" + e.asset.name + "'", reference); !st) return st;
+      for (const std::string* text : {&e.baseShape, &e.cut}) {
+        if (Status st = checkString("database entry '" + e.asset.name + "'", *text); !st) return st;
+      }
+    }
+  }
   return Ok{};
 }
 
@@ -220,6 +230,9 @@ class FileWriter {
   void f64(const std::string& path, const std::vector<double>& values, const std::vector<hsize_t>& dims,
            const char* unit) {
     dataset(path, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), dims, unit);
+  }
+  void f32(const std::string& path, const float* values, const std::vector<hsize_t>& dims) {
+    dataset(path, H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, values, dims, "1");
   }
   void i64(const std::string& path, const std::vector<int64_t>& values, const std::vector<hsize_t>& dims) {
     dataset(path, H5T_STD_I64LE, H5T_NATIVE_INT64, values.data(), dims, nullptr);
@@ -333,8 +346,8 @@ std::vector<double> gatherMatrix3(const std::vector<ObjectAsset>& objects, Get g
   return out;
 }
 
-void writeMaterials(FileWriter& w, const std::vector<Material>& materials) {
-  Handle group = w.createGroup("/materials");
+void writeMaterials(FileWriter& w, const std::string& prefix, const std::vector<Material>& materials) {
+  Handle group = w.createGroup(prefix);
   const hsize_t m = materials.size();
   auto column = [&](auto get) {
     std::vector<double> out;
@@ -346,54 +359,54 @@ void writeMaterials(FileWriter& w, const std::vector<Material>& materials) {
     names.push_back(mat.name);
     sources.push_back(mat.source);
   }
-  w.strings("/materials/name", names);
-  w.f64("/materials/youngs_modulus_pa", column([](const Material& x) { return x.youngsModulusPa; }), {m}, "Pa");
-  w.f64("/materials/poisson_ratio", column([](const Material& x) { return x.poissonRatio; }), {m}, "1");
-  w.f64("/materials/density_kg_per_m3", column([](const Material& x) { return x.densityKgPerM3; }), {m}, "kg/m^3");
-  w.f64("/materials/tensile_strength_pa", column([](const Material& x) { return x.tensileStrengthPa; }), {m}, "Pa");
-  w.f64("/materials/fracture_energy_j_per_m2", column([](const Material& x) { return x.fractureEnergyJPerM2; }), {m},
+  w.strings(prefix + "/name", names);
+  w.f64(prefix + "/youngs_modulus_pa", column([](const Material& x) { return x.youngsModulusPa; }), {m}, "Pa");
+  w.f64(prefix + "/poisson_ratio", column([](const Material& x) { return x.poissonRatio; }), {m}, "1");
+  w.f64(prefix + "/density_kg_per_m3", column([](const Material& x) { return x.densityKgPerM3; }), {m}, "kg/m^3");
+  w.f64(prefix + "/tensile_strength_pa", column([](const Material& x) { return x.tensileStrengthPa; }), {m}, "Pa");
+  w.f64(prefix + "/fracture_energy_j_per_m2", column([](const Material& x) { return x.fractureEnergyJPerM2; }), {m},
         "J/m^2");
-  w.f64("/materials/rayleigh_alpha_per_s", column([](const Material& x) { return x.rayleighAlphaPerS; }), {m}, "1/s");
-  w.f64("/materials/rayleigh_beta_s", column([](const Material& x) { return x.rayleighBetaS; }), {m}, "s");
-  w.f64("/materials/restitution", column([](const Material& x) { return x.restitution; }), {m}, "1");
-  w.strings("/materials/source", sources);
+  w.f64(prefix + "/rayleigh_alpha_per_s", column([](const Material& x) { return x.rayleighAlphaPerS; }), {m}, "1/s");
+  w.f64(prefix + "/rayleigh_beta_s", column([](const Material& x) { return x.rayleighBetaS; }), {m}, "s");
+  w.f64(prefix + "/restitution", column([](const Material& x) { return x.restitution; }), {m}, "1");
+  w.strings(prefix + "/source", sources);
 }
 
-void writeObjects(FileWriter& w, const std::vector<ObjectAsset>& objects) {
+void writeObjects(FileWriter& w, const std::string& prefix, const std::vector<ObjectAsset>& objects) {
   using O = ObjectAsset;
-  Handle group = w.createGroup("/objects");
+  Handle group = w.createGroup(prefix);
   const hsize_t count = objects.size();
 
-  w.strings("/objects/name", gather<std::string>(objects, [](const O& o) { return o.name; }));
-  w.strings("/objects/material_name", gather<std::string>(objects, [](const O& o) { return o.materialName; }));
+  w.strings(prefix + "/name", gather<std::string>(objects, [](const O& o) { return o.name; }));
+  w.strings(prefix + "/material_name", gather<std::string>(objects, [](const O& o) { return o.materialName; }));
 
   // Meshes.
   const auto nodeOffsets = offsetsOf(objects, [](const O& o) { return o.tetMesh.nodes.rows(); });
   const auto tetOffsets = offsetsOf(objects, [](const O& o) { return o.tetMesh.tets.rows(); });
   const auto faceOffsets = offsetsOf(objects, [](const O& o) { return o.surfaceFaces.rows(); });
-  w.i64("/objects/node_offsets", nodeOffsets, {count + 1});
-  w.f64("/objects/nodes", concat<double>(objects, [](const O& o) -> const Points& { return o.tetMesh.nodes; }),
+  w.i64(prefix + "/node_offsets", nodeOffsets, {count + 1});
+  w.f64(prefix + "/nodes", concat<double>(objects, [](const O& o) -> const Points& { return o.tetMesh.nodes; }),
         {static_cast<hsize_t>(nodeOffsets.back()), 3}, "m");
-  w.i64("/objects/tet_offsets", tetOffsets, {count + 1});
-  w.i32("/objects/tets", concat<int32_t>(objects, [](const O& o) -> const Tetrahedra& { return o.tetMesh.tets; }),
+  w.i64(prefix + "/tet_offsets", tetOffsets, {count + 1});
+  w.i32(prefix + "/tets", concat<int32_t>(objects, [](const O& o) -> const Tetrahedra& { return o.tetMesh.tets; }),
         {static_cast<hsize_t>(tetOffsets.back()), 4});
-  w.i64("/objects/face_offsets", faceOffsets, {count + 1});
-  w.i32("/objects/surface_faces",
+  w.i64(prefix + "/face_offsets", faceOffsets, {count + 1});
+  w.i32(prefix + "/surface_faces",
         concat<int32_t>(objects, [](const O& o) -> const Triangles& { return o.surfaceFaces; }),
         {static_cast<hsize_t>(faceOffsets.back()), 3});
 
   // Mass properties.
-  w.f64("/objects/mass_kg", gather<double>(objects, [](const O& o) { return o.massProperties.massKg; }), {count}, "kg");
-  w.f64("/objects/volume_m3", gather<double>(objects, [](const O& o) { return o.massProperties.volumeM3; }), {count},
+  w.f64(prefix + "/mass_kg", gather<double>(objects, [](const O& o) { return o.massProperties.massKg; }), {count}, "kg");
+  w.f64(prefix + "/volume_m3", gather<double>(objects, [](const O& o) { return o.massProperties.volumeM3; }), {count},
         "m^3");
   std::vector<double> com;
   for (const auto& o : objects)
     com.insert(com.end(), o.massProperties.centerOfMassM.data(), o.massProperties.centerOfMassM.data() + 3);
-  w.f64("/objects/center_of_mass_m", com, {count, 3}, "m");
-  w.f64("/objects/inertia_kg_m2",
+  w.f64(prefix + "/center_of_mass_m", com, {count, 3}, "m");
+  w.f64(prefix + "/inertia_kg_m2",
         gatherMatrix3(objects, [](const O& o) -> const Eigen::Matrix3d& { return o.massProperties.inertiaKgM2; }),
         {count, 3, 3}, "kg*m^2");
-  w.f64("/objects/second_moment_m5",
+  w.f64(prefix + "/second_moment_m5",
         gatherMatrix3(objects, [](const O& o) -> const Eigen::Matrix3d& { return o.massProperties.secondMomentM5; }),
         {count, 3, 3}, "m^5");
 
@@ -403,73 +416,157 @@ void writeObjects(FileWriter& w, const std::vector<ObjectAsset>& objects) {
   const auto modesValueOffsets = offsetsOf(objects, [](const O& o) { return o.modal.modes.size(); });
   const auto stressValueOffsets = offsetsOf(objects, [](const O& o) { return o.stressModes.size(); });
   const hsize_t modeTotal = static_cast<hsize_t>(modeOffsets.back());
-  w.i64("/objects/mode_offsets", modeOffsets, {count + 1});
-  w.f64("/objects/eigenvalues_rad2_per_s2",
+  w.i64(prefix + "/mode_offsets", modeOffsets, {count + 1});
+  w.f64(prefix + "/eigenvalues_rad2_per_s2",
         concat<double>(objects, [](const O& o) -> const Eigen::VectorXd& { return o.modal.eigenvaluesRad2PerS2; }),
         {modeTotal}, "rad^2/s^2");
-  w.f64("/objects/frequencies_hz",
+  w.f64(prefix + "/frequencies_hz",
         concat<double>(objects, [](const O& o) -> const Eigen::VectorXd& { return o.modal.frequenciesHz; }),
         {modeTotal}, "Hz");
-  w.f64("/objects/residuals",
+  w.f64(prefix + "/residuals",
         concat<double>(objects, [](const O& o) -> const Eigen::VectorXd& { return o.modal.residuals; }), {modeTotal},
         "1");
-  w.f64("/objects/orthonormality_error",
+  w.f64(prefix + "/orthonormality_error",
         gather<double>(objects, [](const O& o) { return o.modal.orthonormalityError; }), {count}, "1");
-  w.i64("/objects/modes_value_offsets", modesValueOffsets, {count + 1});
-  w.f64("/objects/modes", concat<double>(objects, [](const O& o) -> const MatrixXdRow& { return o.modal.modes; }),
+  w.i64(prefix + "/modes_value_offsets", modesValueOffsets, {count + 1});
+  w.f64(prefix + "/modes", concat<double>(objects, [](const O& o) -> const MatrixXdRow& { return o.modal.modes; }),
         {static_cast<hsize_t>(modesValueOffsets.back())}, "kg^-1/2");
-  w.i64("/objects/stress_modes_value_offsets", stressValueOffsets, {count + 1});
-  w.f64("/objects/stress_modes",
+  w.i64(prefix + "/stress_modes_value_offsets", stressValueOffsets, {count + 1});
+  w.f64(prefix + "/stress_modes",
         concat<double>(objects, [](const O& o) -> const MatrixXdRow& { return o.stressModes; }),
         {static_cast<hsize_t>(stressValueOffsets.back())}, "Pa/(kg^1/2*m)");
 
   // Mesh quality.
   {
-    Handle quality = w.createGroup("/objects/quality");
-    w.i64("/objects/quality/node_count", gather<int64_t>(objects, [](const O& o) { return o.quality.nodeCount; }),
+    Handle quality = w.createGroup(prefix + "/quality");
+    w.i64(prefix + "/quality/node_count", gather<int64_t>(objects, [](const O& o) { return o.quality.nodeCount; }),
           {count});
-    w.i64("/objects/quality/tet_count", gather<int64_t>(objects, [](const O& o) { return o.quality.tetCount; }),
+    w.i64(prefix + "/quality/tet_count", gather<int64_t>(objects, [](const O& o) { return o.quality.tetCount; }),
           {count});
-    w.i64("/objects/quality/surface_face_count",
+    w.i64(prefix + "/quality/surface_face_count",
           gather<int64_t>(objects, [](const O& o) { return o.quality.surfaceFaceCount; }), {count});
-    w.f64("/objects/quality/min_dihedral_deg",
+    w.f64(prefix + "/quality/min_dihedral_deg",
           gather<double>(objects, [](const O& o) { return o.quality.minDihedralDeg; }), {count}, "deg");
-    w.f64("/objects/quality/max_dihedral_deg",
+    w.f64(prefix + "/quality/max_dihedral_deg",
           gather<double>(objects, [](const O& o) { return o.quality.maxDihedralDeg; }), {count}, "deg");
-    w.f64("/objects/quality/max_radius_edge_ratio",
+    w.f64(prefix + "/quality/max_radius_edge_ratio",
           gather<double>(objects, [](const O& o) { return o.quality.maxRadiusEdgeRatio; }), {count}, "1");
-    w.f64("/objects/quality/mean_radius_edge_ratio",
+    w.f64(prefix + "/quality/mean_radius_edge_ratio",
           gather<double>(objects, [](const O& o) { return o.quality.meanRadiusEdgeRatio; }), {count}, "1");
-    w.f64("/objects/quality/min_tet_volume_m3",
+    w.f64(prefix + "/quality/min_tet_volume_m3",
           gather<double>(objects, [](const O& o) { return o.quality.minTetVolumeM3; }), {count}, "m^3");
   }
 
   // Bake record.
   {
-    Handle bake = w.createGroup("/objects/bake");
-    w.strings("/objects/bake/source_mesh", gather<std::string>(objects, [](const O& o) { return o.bake.sourceMesh; }));
-    w.i64("/objects/bake/target_tets", gather<int64_t>(objects, [](const O& o) { return o.bake.targetTets; }), {count});
-    w.f64("/objects/bake/cell_size_m", gather<double>(objects, [](const O& o) { return o.bake.cellSizeM; }), {count},
+    Handle bake = w.createGroup(prefix + "/bake");
+    w.strings(prefix + "/bake/source_mesh", gather<std::string>(objects, [](const O& o) { return o.bake.sourceMesh; }));
+    w.i64(prefix + "/bake/target_tets", gather<int64_t>(objects, [](const O& o) { return o.bake.targetTets; }), {count});
+    w.f64(prefix + "/bake/cell_size_m", gather<double>(objects, [](const O& o) { return o.bake.cellSizeM; }), {count},
           "m");
-    w.i64("/objects/bake/requested_modes", gather<int64_t>(objects, [](const O& o) { return o.bake.requestedModes; }),
+    w.i64(prefix + "/bake/requested_modes", gather<int64_t>(objects, [](const O& o) { return o.bake.requestedModes; }),
           {count});
-    w.u8("/objects/bake/lumped_mass", gather<uint8_t>(objects, [](const O& o) { return o.bake.lumpedMass ? 1 : 0; }));
-    w.u8("/objects/bake/repaired", gather<uint8_t>(objects, [](const O& o) { return o.bake.repaired ? 1 : 0; }));
-    w.f64("/objects/bake/repair_volume_change",
+    w.u8(prefix + "/bake/lumped_mass", gather<uint8_t>(objects, [](const O& o) { return o.bake.lumpedMass ? 1 : 0; }));
+    w.u8(prefix + "/bake/repaired", gather<uint8_t>(objects, [](const O& o) { return o.bake.repaired ? 1 : 0; }));
+    w.f64(prefix + "/bake/repair_volume_change",
           gather<double>(objects, [](const O& o) { return o.bake.repairVolumeChange; }), {count}, "1");
-    w.strings("/objects/bake/factorization",
+    w.strings(prefix + "/bake/factorization",
               gather<std::string>(objects, [](const O& o) { return o.bake.factorization; }));
-    w.f64("/objects/bake/shift_rad2_per_s2", gather<double>(objects, [](const O& o) { return o.bake.shift; }), {count},
+    w.f64(prefix + "/bake/shift_rad2_per_s2", gather<double>(objects, [](const O& o) { return o.bake.shift; }), {count},
           "rad^2/s^2");
-    w.i64("/objects/bake/seed", gather<int64_t>(objects, [](const O& o) { return o.bake.seed; }), {count});
-    w.f64("/objects/bake/meshing_s", gather<double>(objects, [](const O& o) { return o.bake.meshingS; }), {count}, "s");
-    w.f64("/objects/bake/assembly_s", gather<double>(objects, [](const O& o) { return o.bake.assemblyS; }), {count},
+    w.i64(prefix + "/bake/seed", gather<int64_t>(objects, [](const O& o) { return o.bake.seed; }), {count});
+    w.f64(prefix + "/bake/meshing_s", gather<double>(objects, [](const O& o) { return o.bake.meshingS; }), {count}, "s");
+    w.f64(prefix + "/bake/assembly_s", gather<double>(objects, [](const O& o) { return o.bake.assemblyS; }), {count},
           "s");
-    w.f64("/objects/bake/modal_s", gather<double>(objects, [](const O& o) { return o.bake.modalS; }), {count}, "s");
-    w.f64("/objects/bake/stress_modes_s", gather<double>(objects, [](const O& o) { return o.bake.stressModesS; }),
+    w.f64(prefix + "/bake/modal_s", gather<double>(objects, [](const O& o) { return o.bake.modalS; }), {count}, "s");
+    w.f64(prefix + "/bake/stress_modes_s", gather<double>(objects, [](const O& o) { return o.bake.stressModesS; }),
           {count}, "s");
-    w.f64("/objects/bake/total_s", gather<double>(objects, [](const O& o) { return o.bake.totalS; }), {count}, "s");
-    w.strings("/objects/bake/generator", gather<std::string>(objects, [](const O& o) { return o.bake.generator; }));
+    w.f64(prefix + "/bake/total_s", gather<double>(objects, [](const O& o) { return o.bake.totalS; }), {count}, "s");
+    w.strings(prefix + "/bake/generator", gather<std::string>(objects, [](const O& o) { return o.bake.generator; }));
+  }
+}
+
+// Schema v2: the fragment database (PACK_SCHEMA.md, "/database").
+void writeDatabase(FileWriter& w, const FragmentDatabase& db) {
+  Handle group = w.createGroup("/database");
+  w.i64("/database/seed", {static_cast<int64_t>(db.seed)}, {1});
+  writeMaterials(w, "/database/reference_material", {db.referenceMaterial});
+  std::vector<ObjectAsset> assets;
+  assets.reserve(db.entries.size());
+  for (const FragmentEntry& e : db.entries) assets.push_back(e.asset);
+  writeObjects(w, "/database/entries", assets);
+
+  const hsize_t count = db.entries.size();
+  {
+    Handle fragments = w.createGroup("/database/fragments");
+    std::vector<std::string> shapes, cuts;
+    std::vector<int64_t> seeds, vertexOffsets{0}, faceOffsets{0};
+    std::vector<double> fractions, vertices;
+    std::vector<int32_t> faces;
+    for (const FragmentEntry& e : db.entries) {
+      shapes.push_back(e.baseShape);
+      cuts.push_back(e.cut);
+      seeds.push_back(static_cast<int64_t>(e.seed));
+      fractions.push_back(e.baseVolumeFraction);
+      vertices.insert(vertices.end(), e.surface.vertices.data(), e.surface.vertices.data() + e.surface.vertices.size());
+      faces.insert(faces.end(), e.surface.faces.data(), e.surface.faces.data() + e.surface.faces.size());
+      vertexOffsets.push_back(vertexOffsets.back() + e.surface.vertices.rows());
+      faceOffsets.push_back(faceOffsets.back() + e.surface.faces.rows());
+    }
+    w.strings("/database/fragments/base_shape", shapes);
+    w.strings("/database/fragments/cut", cuts);
+    w.i64("/database/fragments/seed", seeds, {count});
+    w.f64("/database/fragments/base_volume_fraction", fractions, {count}, "1");
+    w.i64("/database/fragments/surface_vertex_offsets", vertexOffsets, {count + 1});
+    w.f64("/database/fragments/surface_vertices", vertices, {static_cast<hsize_t>(vertexOffsets.back()), 3}, "1");
+    w.i64("/database/fragments/surface_face_offsets", faceOffsets, {count + 1});
+    w.i32("/database/fragments/surface_faces", faces, {static_cast<hsize_t>(faceOffsets.back()), 3});
+  }
+  {
+    const ShapeDescriptorSettings& d = db.descriptorSettings;
+    Handle settings = w.createGroup("/database/descriptor_settings");
+    const CanonicalFrameSettings& f = d.frame;
+    w.f64("/database/descriptor_settings/frame_tolerances",
+          {f.eigenGapTolerance, f.skewnessTolerance, f.shapeTolerance, f.tieTolerance, f.duplicateTolerance}, {5}, "1");
+    w.i64("/database/descriptor_settings/frame_max_candidates", {f.maxCandidates}, {1});
+    w.i64("/database/descriptor_settings/moment_max_order", {d.moment.maxOrder}, {1});
+    w.f64("/database/descriptor_settings/moment_order_weights", d.moment.orderWeights, {d.moment.orderWeights.size()},
+          "1");
+    w.i64("/database/descriptor_settings/voxel_resolution", {d.voxel.resolution}, {1});
+    w.f64("/database/descriptor_settings/voxel_half_extent", {d.voxel.halfExtent}, {1}, "1");
+    w.i64("/database/descriptor_settings/voxel_improved_resolution", {d.voxelImproved.resolution}, {1});
+    w.f64("/database/descriptor_settings/voxel_improved_half_extent", {d.voxelImproved.halfExtent}, {1}, "1");
+    w.f64("/database/descriptor_settings/voxel_improved_clamp_voxels", {d.voxelImproved.clampVoxels}, {1}, "1");
+  }
+  {
+    Handle descriptors = w.createGroup("/database/descriptors");
+    for (DescriptorKind kind : kAllDescriptorKinds) {
+      const DescriptorMatrix& m = db.descriptorsOf(kind);
+      w.f32(std::string("/database/descriptors/") + descriptorKindName(kind), m.data(),
+            {static_cast<hsize_t>(m.rows()), static_cast<hsize_t>(m.cols())});
+    }
+  }
+  {
+    Handle index = w.createGroup("/database/index");
+    std::vector<std::string> kinds, backends;
+    std::vector<int64_t> trees, checks, seeds;
+    std::vector<double> precision;
+    for (DescriptorKind kind : kAllDescriptorKinds) {
+      const DescriptorIndexSettings& s = db.indexSettings[static_cast<size_t>(kind)];
+      kinds.push_back(descriptorKindName(kind));
+      backends.push_back(descriptorIndexKindName(s.kind));
+      trees.push_back(s.trees);
+      checks.push_back(s.checks);
+      seeds.push_back(static_cast<int64_t>(s.seed));
+      precision.push_back(s.targetPrecision);
+    }
+    const hsize_t k = kinds.size();
+    w.strings("/database/index/descriptor", kinds);
+    w.strings("/database/index/backend", backends);
+    w.i64("/database/index/trees", trees, {k});
+    w.i64("/database/index/checks", checks, {k});
+    w.f64("/database/index/target_precision", precision, {k}, "1");
+    w.i64("/database/index/seed", seeds, {k});
   }
 }
 
@@ -499,8 +596,9 @@ void writeFile(const Pack& pack, const fs::path& file) {
     w.stringAttribute(root.get(), "/", "voigt_order", packschema::kVoigtOrder);
     w.stringAttribute(root.get(), "/", "generator", std::string("brittle ") + BRITTLE_VERSION);
   }
-  writeMaterials(w, pack.materials);
-  writeObjects(w, pack.objects);
+  writeMaterials(w, "/materials", pack.materials);
+  writeObjects(w, "/objects", pack.objects);
+  if (!pack.database.empty()) writeDatabase(w, pack.database);
   // Closing flushes HDF5's metadata cache; a failure here means the file is incomplete.
   if (!h5.close()) failHdf5("cannot close (flush) '" + file.string() + "'");
 }

@@ -157,7 +157,9 @@ Eigen::Vector3d orthogonalTo(const Eigen::Vector3d& a) {
   return a.cross(Eigen::Vector3d::Unit(k)).normalized();
 }
 
-Status checkSettings(const CanonicalFrameSettings& s) {
+}  // namespace
+
+Status validateCanonicalFrameSettings(const CanonicalFrameSettings& s) {
   auto bad = [](const char* field) {
     return makeError(ErrorCode::InvalidArgument, std::string("CanonicalFrameSettings.") + field +
                                                      " must be finite and non-negative");
@@ -174,8 +176,6 @@ Status checkSettings(const CanonicalFrameSettings& s) {
   return Ok{};
 }
 
-}  // namespace
-
 Points CanonicalFrame::pointsToCanonical(const Points& pointsM) const {
   const Eigen::Matrix3d a = scalePerM * rotation;
   Points out = (pointsM.rowwise() - translationM.transpose()) * a.transpose();
@@ -183,7 +183,7 @@ Points CanonicalFrame::pointsToCanonical(const Points& pointsM) const {
 }
 
 Result<CanonicalFrames> computeCanonicalFrames(const TriangleMesh& surface, const CanonicalFrameSettings& settings) {
-  if (auto status = checkSettings(settings); !status) return status.error();
+  if (auto status = validateCanonicalFrameSettings(settings); !status) return status.error();
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   double diagonal = 0.0;
   if (surface.vertices.rows() > 0 && surface.vertices.allFinite()) {

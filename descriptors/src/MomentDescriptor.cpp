@@ -6,7 +6,16 @@
 namespace brittle {
 namespace {
 
-Status checkSettings(const MomentDescriptorSettings& s) {
+Status checkFrame(const CanonicalFrame& f) {
+  if (!f.rotation.allFinite() || !f.translationM.allFinite() || !std::isfinite(f.scalePerM) || !(f.scalePerM > 0.0)) {
+    return makeError(ErrorCode::InvalidArgument, "canonical frame has a non-finite value or a non-positive scale");
+  }
+  return Ok{};
+}
+
+}  // namespace
+
+Status validateMomentDescriptorSettings(const MomentDescriptorSettings& s) {
   if (s.maxOrder < 2 || s.maxOrder > kMaxMomentOrder) {
     return makeError(ErrorCode::InvalidArgument, "MomentDescriptorSettings.maxOrder " + std::to_string(s.maxOrder) +
                                                      " is outside [2, " + std::to_string(kMaxMomentOrder) + "]");
@@ -27,15 +36,6 @@ Status checkSettings(const MomentDescriptorSettings& s) {
   return Ok{};
 }
 
-Status checkFrame(const CanonicalFrame& f) {
-  if (!f.rotation.allFinite() || !f.translationM.allFinite() || !std::isfinite(f.scalePerM) || !(f.scalePerM > 0.0)) {
-    return makeError(ErrorCode::InvalidArgument, "canonical frame has a non-finite value or a non-positive scale");
-  }
-  return Ok{};
-}
-
-}  // namespace
-
 int momentDescriptorSize(int maxOrder) { return 3 + monomialCount(maxOrder) - monomialCount(2); }
 
 std::vector<std::array<int, 3>> momentDescriptorLayout(int maxOrder) {
@@ -46,7 +46,7 @@ std::vector<std::array<int, 3>> momentDescriptorLayout(int maxOrder) {
 
 Result<Descriptor> momentDescriptorFromMoments(const VolumeMoments& canonicalMoments,
                                                const MomentDescriptorSettings& settings) {
-  if (auto status = checkSettings(settings); !status) return status.error();
+  if (auto status = validateMomentDescriptorSettings(settings); !status) return status.error();
   if (canonicalMoments.maxOrder < settings.maxOrder) {
     return makeError(ErrorCode::InvalidArgument, "moments of order " + std::to_string(canonicalMoments.maxOrder) +
                                                      " cannot give a descriptor of order " +
@@ -71,7 +71,7 @@ Result<Descriptor> momentDescriptorFromMoments(const VolumeMoments& canonicalMom
 
 Result<Descriptor> computeMomentDescriptor(const TriangleMesh& surface, const CanonicalFrame& frame,
                                            const MomentDescriptorSettings& settings) {
-  if (auto status = checkSettings(settings); !status) return status.error();
+  if (auto status = validateMomentDescriptorSettings(settings); !status) return status.error();
   if (auto status = checkFrame(frame); !status) return status.error();
   auto raw = computeVolumeMoments(surface, settings.maxOrder, frame.translationM);
   if (!raw) return raw.error();
@@ -81,7 +81,7 @@ Result<Descriptor> computeMomentDescriptor(const TriangleMesh& surface, const Ca
 
 Result<DescriptorMatrix> computeMomentDescriptors(const TriangleMesh& surface, const CanonicalFrames& frames,
                                                   const MomentDescriptorSettings& settings) {
-  if (auto status = checkSettings(settings); !status) return status.error();
+  if (auto status = validateMomentDescriptorSettings(settings); !status) return status.error();
   if (frames.candidates.empty()) return makeError(ErrorCode::InvalidArgument, "no canonical frame given");
   for (const auto& frame : frames.candidates) {
     if (auto status = checkFrame(frame); !status) return status.error();
@@ -102,7 +102,7 @@ Result<DescriptorMatrix> computeMomentDescriptors(const TriangleMesh& surface, c
 
 Result<DescriptorMatrix> momentDescriptorsFromFrames(const CanonicalFrames& frames,
                                                      const MomentDescriptorSettings& settings) {
-  if (auto status = checkSettings(settings); !status) return status.error();
+  if (auto status = validateMomentDescriptorSettings(settings); !status) return status.error();
   if (frames.candidates.empty()) return makeError(ErrorCode::InvalidArgument, "no canonical frame given");
   if (settings.maxOrder > frames.centralMoments.maxOrder) {
     return makeError(ErrorCode::InvalidArgument, "frames store moments up to order " +

@@ -98,9 +98,21 @@ Result<DescriptorMatrix> forEachFrame(const TriangleMesh& surface, const Canonic
 
 }  // namespace
 
+Status validateVoxelDescriptorSettings(const VoxelDescriptorSettings& settings) {
+  return checkGrid(settings.resolution, settings.halfExtent);
+}
+
+Status validateImprovedVoxelDescriptorSettings(const ImprovedVoxelDescriptorSettings& settings) {
+  if (auto status = checkGrid(settings.resolution, settings.halfExtent); !status) return status;
+  if (!std::isfinite(settings.clampVoxels) || settings.clampVoxels < 0.5 || settings.clampVoxels > settings.resolution) {
+    return makeError(ErrorCode::InvalidArgument, "ImprovedVoxelDescriptorSettings.clampVoxels must be in [0.5, resolution]");
+  }
+  return Ok{};
+}
+
 Result<Descriptor> computeVoxelDescriptor(const TriangleMesh& surface, const CanonicalFrame& frame,
                                           const VoxelDescriptorSettings& settings) {
-  if (auto status = checkGrid(settings.resolution, settings.halfExtent); !status) return status.error();
+  if (auto status = validateVoxelDescriptorSettings(settings); !status) return status.error();
   if (auto status = checkFrame(frame); !status) return status.error();
   if (auto status = detail::checkClosedSurface(surface); !status) return status.error();
   // Occupancy only needs the sign; a narrow band keeps the conversion cheap (the interior outside
@@ -114,10 +126,7 @@ Result<Descriptor> computeVoxelDescriptor(const TriangleMesh& surface, const Can
 
 Result<Descriptor> computeImprovedVoxelDescriptor(const TriangleMesh& surface, const CanonicalFrame& frame,
                                                   const ImprovedVoxelDescriptorSettings& settings) {
-  if (auto status = checkGrid(settings.resolution, settings.halfExtent); !status) return status.error();
-  if (!std::isfinite(settings.clampVoxels) || settings.clampVoxels < 0.5 || settings.clampVoxels > settings.resolution) {
-    return makeError(ErrorCode::InvalidArgument, "ImprovedVoxelDescriptorSettings.clampVoxels must be in [0.5, resolution]");
-  }
+  if (auto status = validateImprovedVoxelDescriptorSettings(settings); !status) return status.error();
   if (auto status = checkFrame(frame); !status) return status.error();
   if (auto status = detail::checkClosedSurface(surface); !status) return status.error();
   // The band reaches one voxel past the clamp so every unclamped value is a true distance.

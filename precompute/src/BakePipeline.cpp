@@ -40,18 +40,36 @@ class NamedProgress final : public ProgressSink {
 
 }  // namespace
 
+static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeSettings& s, ProgressSink* progressIn,
+                                            ObjectBakeReport* report, Clock::time_point start);
+
 Result<ObjectAsset> bakeObject(const ObjectBakeSettings& s, ProgressSink* progressIn, ObjectBakeReport* report) {
   const auto start = Clock::now();
   const std::string name = s.name.empty() ? s.meshPath.stem().string() : s.name;
   NamedProgress progress(progressIn, name);
-  ObjectBakeReport localReport;
-  ObjectBakeReport& rep = report ? *report : localReport;
   if (Status m = validateMaterial(s.material); !m) return inObject(name, m.error());
 
   progress.report("reading", 0.0);
   auto surface = readSurfaceMesh(s.meshPath);
   if (!surface) return inObject(name, surface.error());
-  TriangleMesh mesh = std::move(surface).value();
+  ObjectBakeSettings named = s;
+  named.name = name;
+  return bakeSurfaceSince(std::move(surface).value(), named, progressIn, report, start);
+}
+
+Result<ObjectAsset> bakeSurface(TriangleMesh mesh, const ObjectBakeSettings& s, ProgressSink* progressIn,
+                                ObjectBakeReport* report) {
+  return bakeSurfaceSince(std::move(mesh), s, progressIn, report, Clock::now());
+}
+
+static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeSettings& s, ProgressSink* progressIn,
+                                            ObjectBakeReport* report, Clock::time_point start) {
+  const std::string& name = s.name;
+  NamedProgress progress(progressIn, name);
+  ObjectBakeReport localReport;
+  ObjectBakeReport& rep = report ? *report : localReport;
+  if (name.empty()) return makeError(ErrorCode::InvalidArgument, "an object to bake needs a name");
+  if (Status m = validateMaterial(s.material); !m) return inObject(name, m.error());
   if (s.repair) {
     auto repaired = repairSurfaceMesh(mesh, s.repairSettings, &rep.repair, &progress);
     if (!repaired) return inObject(name, repaired.error());
@@ -65,7 +83,7 @@ Result<ObjectAsset> bakeObject(const ObjectBakeSettings& s, ProgressSink* progre
   asset.name = name;
   asset.materialName = s.material.name;
   BakeRecord& rec = asset.bake;
-  rec.sourceMesh = s.meshPath.filename().string();
+  rec.sourceMesh = s.sourceName.empty() ? s.meshPath.filename().string() : s.sourceName;
   rec.targetTets = s.tetMesh.targetTets;
   rec.requestedModes = s.modal.modeCount;
   rec.lumpedMass = s.fem.lumpedMass;

@@ -8,16 +8,6 @@
 
 namespace brittle {
 
-Eigen::Matrix<double, 6, 6> isotropicElasticity(double e, double nu) {
-  const double lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
-  const double mu = e / (2.0 * (1.0 + nu));
-  Eigen::Matrix<double, 6, 6> c = Eigen::Matrix<double, 6, 6>::Zero();
-  c.topLeftCorner<3, 3>().setConstant(lambda);
-  c.topLeftCorner<3, 3>().diagonal().array() += 2.0 * mu;
-  c.bottomRightCorner<3, 3>().diagonal().setConstant(mu);
-  return c;
-}
-
 Eigen::Matrix<double, 6, 12> tetStrainDisplacement(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
                                                    const Eigen::Vector3d& p2, const Eigen::Vector3d& p3,
                                                    double* volumeM3) {

@@ -9,6 +9,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <numbers>
 #include <numeric>
 #include <random>
@@ -200,6 +201,11 @@ Result<ModalResult> computeModes(const FemSystem& sys, const Points& nodes, cons
   Eigen::VectorXd start0(n);
   for (a_int i = 0; i < n; ++i) start0(i) = static_cast<double>(rng() >> 11) * 0x1.0p-52 - 1.0;
 
+  // ARPACK keeps its reverse-communication state in Fortran SAVE variables, so two solves must
+  // never interleave: parallel bakes (the fragment database) serialise here and run their
+  // meshing, assembly and factorisation concurrently.
+  static std::mutex arpackMutex;
+  const std::lock_guard<std::mutex> arpackLock(arpackMutex);
   const auto iterStart = Clock::now();
   Eigen::VectorXd tmp(n);
   for (int attempt = 0; attempt <= s.retries; ++attempt) {

@@ -523,7 +523,7 @@ TEST_F(PackTest, WrongVersion) {
     EXPECT_GE(H5Awrite(attr, H5T_NATIVE_INT, &version), 0);
     H5Aclose(attr);
   });
-  expectReadError(ErrorCode::PackVersionMismatch, "version 2");
+  expectReadError(ErrorCode::PackVersionMismatch, "pack version 3");
 }
 
 TEST_F(PackTest, MissingDataset) {

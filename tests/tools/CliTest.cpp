@@ -51,7 +51,7 @@ TEST_F(CliTest, BakeThenInspectJson) {
   ASSERT_EQ(inspect.exitCode, 0) << inspect.out;
   const auto doc = nlohmann::json::parse(inspect.out);
   EXPECT_EQ(doc["format"], "brittle-pack");
-  EXPECT_EQ(doc["version"], 1);
+  EXPECT_EQ(doc["version"], 2);
   const auto& o = doc["objects"][0];
   EXPECT_EQ(o["name"], "box");
   EXPECT_EQ(o["material"]["name"], "glass");

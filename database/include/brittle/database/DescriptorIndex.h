@@ -38,6 +38,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string_view>
 #include <vector>
 
 #include "brittle/descriptors/Result.h"
@@ -52,6 +53,11 @@ struct DescriptorIndexSettings {
   float targetPrecision = 0.95f;  ///< Autotuned: wanted fraction of exact neighbours, in (0, 1].
   uint64_t seed = 1;              ///< FLANN random seed (only its low 32 bits are used).
 };
+
+/// "brute-force", "kd-forest" or "autotuned" (the CLI and pack spelling).
+const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind);
+/// Inverse of descriptorIndexKindName. Error: InvalidArgument listing the valid names.
+Result<DescriptorIndexSettings::Kind> parseDescriptorIndexKind(std::string_view name);
 
 class DescriptorIndex {
  public:

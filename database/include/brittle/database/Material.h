@@ -1,6 +1,7 @@
 // Material.h — an isotropic brittle material, in SI units, as stored in a pack.
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 
 #include "brittle/descriptors/Result.h"
@@ -29,6 +30,10 @@ Status validateMaterial(const Material& material);
 /// G_c from a plane-strain fracture toughness K_Ic (Pa·√m): G_c = K_Ic²(1−ν²)/E.
 double fractureEnergyFromToughness(double toughnessPaSqrtM, double youngsModulusPa,
                                    double poissonRatio);
+
+/// 6 by 6 isotropic elasticity matrix C (Pa) in Voigt order (xx, yy, zz, yz, xz, xy) for
+/// engineering shear strains: σ = C ε.
+Eigen::Matrix<double, 6, 6> isotropicElasticity(double youngsModulusPa, double poissonRatio);
 
 /// Modal damping ratio of Rayleigh damping at angular frequency ω: ζ = (α/ω + βω)/2.
 double rayleighDampingRatio(const Material& material, double omegaRadPerS);

@@ -1,4 +1,5 @@
-// Pack.h — the brittle pack: one HDF5 file holding materials and baked objects.
+// Pack.h — the brittle pack: one HDF5 file holding materials, baked objects and, optionally, the
+// fragment shape database (FragmentDatabase.h).
 //
 // The schema (groups, datasets, attributes, units) is documented in database/PACK_SCHEMA.md, next
 // to the code that writes it. Writing is atomic: the pack goes to a temporary file in the target
@@ -11,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "brittle/database/FragmentDatabase.h"
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
 #include "brittle/descriptors/Result.h"
@@ -18,11 +20,15 @@
 namespace brittle {
 
 inline constexpr const char* kPackFormatName = "brittle-pack";
-inline constexpr int kPackVersion = 1;
+/// Version 2 added the fragment database (/database). The reader also reads version 1 packs,
+/// which have none.
+inline constexpr int kPackVersion = 2;
+inline constexpr int kOldestReadablePackVersion = 1;
 
 struct Pack {
   std::vector<Material> materials;
   std::vector<ObjectAsset> objects;  ///< each objects[i].materialName names one of materials
+  FragmentDatabase database;         ///< empty: the pack has no fragment database
 };
 
 /// Writes pack to path atomically (temporary file + rename). On any error no file is left at

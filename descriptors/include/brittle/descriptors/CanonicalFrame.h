@@ -106,6 +106,9 @@ struct CanonicalFrames {
   bool ambiguous() const { return candidates.size() > 1; }
 };
 
+/// Checks the thresholds. Error: InvalidArgument naming the field.
+Status validateCanonicalFrameSettings(const CanonicalFrameSettings& settings);
+
 /// Canonical frame candidates of the solid bounded by a closed, outward triangle mesh.
 ///
 /// Inputs: surface (#V by 3 vertices in metres, #F by 3 faces, closed, counter-clockwise seen from

@@ -34,6 +34,9 @@ struct MomentDescriptorSettings {
   std::vector<double> orderWeights;
 };
 
+/// Checks maxOrder and the weights. Error: InvalidArgument naming the field.
+Status validateMomentDescriptorSettings(const MomentDescriptorSettings& settings);
+
 /// Number of values in a moment descriptor of order maxOrder (≥ 2).
 int momentDescriptorSize(int maxOrder);
 

@@ -39,6 +39,10 @@ struct ImprovedVoxelDescriptorSettings {
   double clampVoxels = 2.0;   ///< w, clamp distance in voxels, in [0.5, k]
 };
 
+/// Check resolution, halfExtent (and clampVoxels). Error: InvalidArgument naming the field.
+Status validateVoxelDescriptorSettings(const VoxelDescriptorSettings& settings);
+Status validateImprovedVoxelDescriptorSettings(const ImprovedVoxelDescriptorSettings& settings);
+
 /// Occupancy (0 or 1 per voxel) of the solid bounded by a closed, outward surface, seen in `frame`.
 /// Inputs: surface (#V by 3 vertices in metres, #F by 3 faces); frame, usually a candidate of
 /// computeCanonicalFrames on the same surface.

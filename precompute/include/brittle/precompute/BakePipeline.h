@@ -20,6 +20,7 @@ namespace brittle {
 struct ObjectBakeSettings {
   std::string name;                  ///< empty means the mesh file's stem
   std::filesystem::path meshPath;
+  std::string sourceName;            ///< recorded as the source; empty means meshPath's file name
   Material material;
   bool repair = false;               ///< rebuild the surface through an OpenVDB level set first
   RepairSettings repairSettings;
@@ -40,6 +41,11 @@ struct ObjectBakeReport {
 /// tetrahedralize, assembleFem, computeModes (each says the object's name), InvalidMaterial.
 Result<ObjectAsset> bakeObject(const ObjectBakeSettings& settings, ProgressSink* progress = nullptr,
                                ObjectBakeReport* report = nullptr);
+
+/// Bakes an in-memory surface (settings.meshPath is ignored; settings.name must be set).
+/// Errors: as bakeObject, without the reading ones; InvalidArgument for an empty name.
+Result<ObjectAsset> bakeSurface(TriangleMesh surface, const ObjectBakeSettings& settings,
+                                ProgressSink* progress = nullptr, ObjectBakeReport* report = nullptr);
 
 /// Bakes every object in order into one pack; materials are stored once per name.
 /// Errors: the first object's error; InvalidArgument on duplicate object names, or on two

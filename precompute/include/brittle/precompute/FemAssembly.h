@@ -26,9 +26,6 @@ struct FemSystem {
   SparseMatrixd mass;       ///< M, 3N by 3N, symmetric positive definite
 };
 
-/// 6 by 6 isotropic elasticity matrix C (Pa) for engineering shear strains.
-Eigen::Matrix<double, 6, 6> isotropicElasticity(double youngsModulusPa, double poissonRatio);
-
 /// 6 by 12 strain-displacement matrix B of a linear tet (1/m), and its volume (m³, signed).
 Eigen::Matrix<double, 6, 12> tetStrainDisplacement(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
                                                    const Eigen::Vector3d& p2, const Eigen::Vector3d& p3,

@@ -1,0 +1,63 @@
+// FragmentDatabase.h — the precomputed fragment shape database a pack carries (schema v2,
+// database/PACK_SCHEMA.md): fragments of base shapes, each with its own tet mesh, modal basis and
+// stress modes, and a descriptor matrix per kind for nearest-neighbour search.
+//
+// Frame and scale of an entry. Every entry is stored in its own primary canonical frame
+// (CanonicalFrame.h): centre of mass at the origin, principal axes along x, y, z, unit volume
+// (1 m³). Its physical data is baked at the database's reference material. A query fragment of
+// any size, pose and material is matched in its canonical frame, and the entry's data is mapped
+// back by the scaling laws of ScalingLaws.h.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "brittle/database/DescriptorIndex.h"
+#include "brittle/database/Material.h"
+#include "brittle/database/ObjectAsset.h"
+#include "brittle/descriptors/DescriptorTypes.h"
+#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/descriptors/ShapeDescriptors.h"
+
+namespace brittle {
+
+struct FragmentEntry {
+  /// Tet mesh, mass properties, modal basis and stress modes in the canonical frame, at unit
+  /// volume and the reference material. asset.name is unique in the database; asset.materialName
+  /// is the reference material's name. An entry baked with descriptors only has no tets (0 rows).
+  ObjectAsset asset;
+  /// The exact fragment surface (closed, outward) in the canonical frame; the descriptors are
+  /// computed from it.
+  TriangleMesh surface;
+  std::string baseShape;             ///< name of the base shape it was cut from
+  std::string cut;                   ///< how: "voronoi", "planes", "runtime"
+  uint64_t seed = 0;                 ///< the seed that reproduces the cut
+  double baseVolumeFraction = 0.0;   ///< fragment volume / base shape volume, before normalising
+};
+
+struct FragmentDatabase {
+  Material referenceMaterial;          ///< the material every entry's physics was baked with
+  ShapeDescriptorSettings descriptorSettings;
+  uint64_t seed = 0;                  ///< the bake seed (entry i's seed derives from it)
+  std::vector<FragmentEntry> entries;
+  /// Per kind (indexed by DescriptorKind): #entries by descriptorSize(kind), row i for entry i in
+  /// its primary frame.
+  std::array<DescriptorMatrix, kDescriptorKindCount> descriptors;
+  /// Per kind: how the runtime builds the search index at load.
+  std::array<DescriptorIndexSettings, kDescriptorKindCount> indexSettings;
+
+  bool empty() const { return entries.empty(); }
+  bool hasPhysics() const;  ///< every entry has a tet mesh and at least one mode
+  const DescriptorMatrix& descriptorsOf(DescriptorKind kind) const {
+    return descriptors[static_cast<size_t>(kind)];
+  }
+};
+
+/// Checks sizes and values: descriptor matrices have one finite row per entry and the width of
+/// their settings, unique entry names, every entry's material is the reference material, and
+/// valid surfaces and settings. Error: InvalidArgument naming the entry or field.
+Status validateFragmentDatabase(const FragmentDatabase& database);
+
+}  // namespace brittle

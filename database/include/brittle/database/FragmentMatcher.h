@@ -1,0 +1,69 @@
+// FragmentMatcher.h — nearest database entries to a query solid, and the transform that places
+// each entry onto it.
+//
+// A query surface is reduced to its canonical frame candidates (CanonicalFrame.h) and one
+// descriptor per candidate. Each candidate is searched in the kind's index; an entry found from
+// several candidates keeps its smallest distance and that candidate's frame. Ties break by the
+// lower entry id, so results are deterministic for a given index.
+//
+// Placement: entry point x̂ (canonical, unit volume) lies at frame.toQuery(x̂) in the query frame,
+// where frame is FragmentMatch::queryFrame. instantiateEntry (ScalingLaws.h) uses the same frame
+// to rescale the entry's physical data to the query's size and material.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <vector>
+
+#include "brittle/database/DescriptorIndex.h"
+#include "brittle/database/FragmentDatabase.h"
+#include "brittle/descriptors/CanonicalFrame.h"
+#include "brittle/descriptors/Result.h"
+
+namespace brittle {
+
+struct FragmentMatch {
+  int64_t entry = -1;          ///< row in FragmentDatabase::entries
+  float distance = 0.0f;       ///< Euclidean descriptor distance (not squared)
+  int candidate = 0;           ///< which of the query's candidate frames matched
+  CanonicalFrame queryFrame;   ///< query → canonical; its inverse places the entry on the query
+};
+
+struct FragmentMatcherSettings {
+  /// Per kind: index settings that override the database's stored ones (nullopt: use stored).
+  std::array<std::optional<DescriptorIndexSettings>, kDescriptorKindCount> indexOverride;
+  /// Kinds to build indices for; the others cannot be queried.
+  std::array<bool, kDescriptorKindCount> enabled = {true, true, true};
+};
+
+class FragmentMatcher {
+ public:
+  /// Builds one index per enabled kind over the database's descriptor matrices. The database is
+  /// referenced, not copied: it must outlive the matcher.
+  /// Errors: InvalidArgument (empty database, bad index settings), those of DescriptorIndex::build.
+  static Result<FragmentMatcher> build(const FragmentDatabase& database, const FragmentMatcherSettings& settings = {});
+
+  /// The k best entries for the solid bounded by `surface` (closed, outward, metres), nearest
+  /// first, k ≤ entry count. Errors: InvalidArgument (k out of range, kind not enabled, zero volume,
+  /// inward surface), EmptyMesh, NonFiniteValue, OpenMesh (as computeCanonicalFrames).
+  Result<std::vector<FragmentMatch>> match(const TriangleMesh& surface, DescriptorKind kind, int k) const;
+
+  /// Same, from frames and descriptors already computed (one descriptor row per candidate frame,
+  /// computed with the database's descriptor settings).
+  Result<std::vector<FragmentMatch>> matchDescriptors(const CanonicalFrames& frames,
+                                                      const DescriptorMatrix& descriptors, DescriptorKind kind,
+                                                      int k) const;
+
+  const FragmentDatabase& database() const { return *mDatabase; }
+  const DescriptorIndex* index(DescriptorKind kind) const {
+    const auto& i = mIndices[static_cast<size_t>(kind)];
+    return i ? &*i : nullptr;
+  }
+
+ private:
+  FragmentMatcher() = default;
+  const FragmentDatabase* mDatabase = nullptr;
+  std::array<std::optional<DescriptorIndex>, kDescriptorKindCount> mIndices;
+};
+
+}  // namespace brittle

@@ -1,0 +1,56 @@
+#include "brittle/database/FragmentDatabase.h"
+
+#include <cmath>
+#include <set>
+#include <string>
+
+namespace brittle {
+
+bool FragmentDatabase::hasPhysics() const {
+  for (const FragmentEntry& e : entries) {
+    if (e.asset.tetMesh.tets.rows() == 0 || e.asset.modal.eigenvaluesRad2PerS2.size() == 0) return false;
+  }
+  return !entries.empty();
+}
+
+Status validateFragmentDatabase(const FragmentDatabase& db) {
+  auto invalid = [](std::string message) { return makeError(ErrorCode::InvalidArgument, std::move(message)); };
+  if (Status st = validateMaterial(db.referenceMaterial); !st) return invalid("reference material: " + st.error().message);
+  if (Status st = validateShapeDescriptorSettings(db.descriptorSettings); !st) return st;
+  const auto rows = static_cast<Eigen::Index>(db.entries.size());
+  std::set<std::string> names;
+  for (size_t i = 0; i < db.entries.size(); ++i) {
+    const FragmentEntry& e = db.entries[i];
+    const std::string label = "entry " + std::to_string(i) + " ('" + e.asset.name + "')";
+    if (!names.insert(e.asset.name).second) return invalid("two entries are named '" + e.asset.name + "'");
+    if (e.asset.materialName != db.referenceMaterial.name) {
+      return invalid(label + " names material '" + e.asset.materialName + "', not the reference material '" +
+                     db.referenceMaterial.name + "'");
+    }
+    const TriangleMesh& s = e.surface;
+    if (s.vertices.rows() < 4 || s.faces.rows() < 4) return invalid(label + " has no closed surface");
+    if (!s.vertices.allFinite()) return invalid(label + " surface has a non-finite vertex");
+    if (s.faces.minCoeff() < 0 || s.faces.maxCoeff() >= s.vertices.rows()) {
+      return invalid(label + " surface has a face index out of range");
+    }
+    if (!std::isfinite(e.baseVolumeFraction) || e.baseVolumeFraction < 0.0) {
+      return invalid(label + " has an invalid baseVolumeFraction");
+    }
+  }
+  for (DescriptorKind kind : kAllDescriptorKinds) {
+    const DescriptorMatrix& m = db.descriptorsOf(kind);
+    const std::string what = std::string(descriptorKindName(kind)) + " descriptor matrix";
+    if (m.rows() != rows || m.cols() != descriptorSize(kind, db.descriptorSettings)) {
+      return invalid(what + " is " + std::to_string(m.rows()) + " x " + std::to_string(m.cols()) + ", expected " +
+                     std::to_string(rows) + " x " + std::to_string(descriptorSize(kind, db.descriptorSettings)));
+    }
+    if (!m.allFinite()) return invalid(what + " holds a non-finite value");
+    const DescriptorIndexSettings& index = db.indexSettings[static_cast<size_t>(kind)];
+    if (index.trees < 1 || index.checks < 1 || !(index.targetPrecision > 0.0f && index.targetPrecision <= 1.0f)) {
+      return invalid("index settings of the " + std::string(descriptorKindName(kind)) + " descriptor are out of range");
+    }
+  }
+  return Ok{};
+}
+
+}  // namespace brittle

@@ -1,0 +1,89 @@
+#include "brittle/database/FragmentMatcher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace brittle {
+
+Result<FragmentMatcher> FragmentMatcher::build(const FragmentDatabase& database, const FragmentMatcherSettings& settings) {
+  if (database.empty()) return makeError(ErrorCode::InvalidArgument, "the pack has no fragment database (0 entries)");
+  FragmentMatcher matcher;
+  matcher.mDatabase = &database;
+  for (DescriptorKind kind : kAllDescriptorKinds) {
+    const auto slot = static_cast<size_t>(kind);
+    if (!settings.enabled[slot]) continue;
+    const DescriptorMatrix& m = database.descriptorsOf(kind);
+    const DescriptorIndexSettings indexSettings = settings.indexOverride[slot].value_or(database.indexSettings[slot]);
+    auto index = DescriptorIndex::build(m.data(), m.rows(), m.cols(), indexSettings);
+    if (!index) {
+      return makeError(index.error().code,
+                       std::string(descriptorKindName(kind)) + " index: " + index.error().message);
+    }
+    matcher.mIndices[slot].emplace(std::move(index).value());
+  }
+  return matcher;
+}
+
+Result<std::vector<FragmentMatch>> FragmentMatcher::match(const TriangleMesh& surface, DescriptorKind kind,
+                                                          int k) const {
+  const ShapeDescriptorSettings& settings = mDatabase->descriptorSettings;
+  auto frames = computeCanonicalFrames(surface, settings.frame);
+  if (!frames) return frames.error();
+  auto descriptors = computeShapeDescriptors(surface, frames.value(), kind, settings);
+  if (!descriptors) return descriptors.error();
+  return matchDescriptors(frames.value(), descriptors.value(), kind, k);
+}
+
+Result<std::vector<FragmentMatch>> FragmentMatcher::matchDescriptors(const CanonicalFrames& frames,
+                                                                     const DescriptorMatrix& descriptors,
+                                                                     DescriptorKind kind, int k) const {
+  const auto& index = mIndices[static_cast<size_t>(kind)];
+  if (!index) {
+    return makeError(ErrorCode::InvalidArgument,
+                     std::string("no index was built for the ") + descriptorKindName(kind) + " descriptor");
+  }
+  if (k < 1 || k > index->size()) {
+    return makeError(ErrorCode::InvalidArgument, "k = " + std::to_string(k) + " is outside [1, " +
+                                                     std::to_string(index->size()) + "] (database entries)");
+  }
+  const auto candidates = static_cast<Eigen::Index>(frames.candidates.size());
+  if (candidates == 0 || descriptors.rows() != candidates || descriptors.cols() != index->dims()) {
+    return makeError(ErrorCode::InvalidArgument,
+                     "expected one " + std::to_string(index->dims()) + "-value descriptor per candidate frame (" +
+                         std::to_string(candidates) + "), got " + std::to_string(descriptors.rows()) + " x " +
+                         std::to_string(descriptors.cols()));
+  }
+  std::vector<int64_t> ids(static_cast<size_t>(candidates * k));
+  std::vector<float> squared(ids.size());
+  if (Status st = index->queryBatch(descriptors.data(), candidates, k, ids.data(), squared.data()); !st) {
+    return st.error();
+  }
+  // Merge: best distance per entry over all candidates; order by (distance, entry id).
+  std::vector<FragmentMatch> all;
+  all.reserve(ids.size());
+  for (Eigen::Index c = 0; c < candidates; ++c) {
+    for (int j = 0; j < k; ++j) {
+      const size_t at = static_cast<size_t>(c * k + j);
+      FragmentMatch m;
+      m.entry = ids[at];
+      m.distance = std::sqrt(std::max(squared[at], 0.0f));
+      m.candidate = static_cast<int>(c);
+      m.queryFrame = frames.candidates[static_cast<size_t>(c)];
+      all.push_back(m);
+    }
+  }
+  std::stable_sort(all.begin(), all.end(), [](const FragmentMatch& a, const FragmentMatch& b) {
+    return a.distance != b.distance ? a.distance < b.distance : a.entry < b.entry;
+  });
+  std::vector<FragmentMatch> out;
+  out.reserve(static_cast<size_t>(k));
+  for (const FragmentMatch& m : all) {
+    if (static_cast<int>(out.size()) == k) break;
+    const bool seen = std::any_of(out.begin(), out.end(), [&](const FragmentMatch& o) { return o.entry == m.entry; });
+    if (!seen) out.push_back(m);
+  }
+  return out;
+}
+
+}  // namespace brittle
