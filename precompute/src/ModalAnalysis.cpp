@@ -204,8 +204,9 @@ Result<ModalResult> computeModes(const FemSystem& sys, const Points& nodes, cons
   // ARPACK keeps its reverse-communication state in Fortran SAVE variables, so two solves must
   // never interleave: parallel bakes (the fragment database) serialise here and run their
   // meshing, assembly and factorisation concurrently.
-  static std::mutex arpackMutex;
-  const std::lock_guard<std::mutex> arpackLock(arpackMutex);
+  // Recursive: the machine-precision fallback calls computeModes again on the same thread.
+  static std::recursive_mutex arpackMutex;
+  const std::lock_guard<std::recursive_mutex> arpackLock(arpackMutex);
   const auto iterStart = Clock::now();
   Eigen::VectorXd tmp(n);
   for (int attempt = 0; attempt <= s.retries; ++attempt) {
