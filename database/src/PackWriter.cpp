@@ -305,29 +305,33 @@ class FileWriter {
   hid_t mFile;
 };
 
+// The objects to write, in order. Pointers, so that database entries (which hold an ObjectAsset
+// each) are written in place without copying their meshes and modes.
+using ObjectList = std::vector<const ObjectAsset*>;
+
 // One value per object, in object order: an [O] dataset.
 template <typename T, typename Get>
-std::vector<T> gather(const std::vector<ObjectAsset>& objects, Get get) {
+std::vector<T> gather(const ObjectList& objects, Get get) {
   std::vector<T> out;
   out.reserve(objects.size());
-  for (const auto& o : objects) out.push_back(static_cast<T>(get(o)));
+  for (const ObjectAsset* o : objects) out.push_back(static_cast<T>(get(*o)));
   return out;
 }
 
 // Ragged arrays: the row offsets of each object's block, O + 1 entries starting at 0.
 template <typename Rows>
-std::vector<int64_t> offsetsOf(const std::vector<ObjectAsset>& objects, Rows rows) {
+std::vector<int64_t> offsetsOf(const ObjectList& objects, Rows rows) {
   std::vector<int64_t> offsets(1, 0);
-  for (const auto& o : objects) offsets.push_back(offsets.back() + static_cast<int64_t>(rows(o)));
+  for (const ObjectAsset* o : objects) offsets.push_back(offsets.back() + static_cast<int64_t>(rows(*o)));
   return offsets;
 }
 
 // Concatenates row-major blocks (Eigen row-major storage is already the file layout).
 template <typename T, typename Block>
-std::vector<T> concat(const std::vector<ObjectAsset>& objects, Block block) {
+std::vector<T> concat(const ObjectList& objects, Block block) {
   std::vector<T> out;
-  for (const auto& o : objects) {
-    const auto& b = block(o);
+  for (const ObjectAsset* o : objects) {
+    const auto& b = block(*o);
     out.insert(out.end(), b.data(), b.data() + b.size());
   }
   return out;
@@ -335,11 +339,11 @@ std::vector<T> concat(const std::vector<ObjectAsset>& objects, Block block) {
 
 // Eigen's Matrix3d is column-major; the file stores [o][row][col].
 template <typename Get>
-std::vector<double> gatherMatrix3(const std::vector<ObjectAsset>& objects, Get get) {
+std::vector<double> gatherMatrix3(const ObjectList& objects, Get get) {
   std::vector<double> out;
   out.reserve(objects.size() * 9);
-  for (const auto& o : objects) {
-    const Eigen::Matrix3d& m = get(o);
+  for (const ObjectAsset* o : objects) {
+    const Eigen::Matrix3d& m = get(*o);
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) out.push_back(m(r, c));
   }
@@ -372,7 +376,7 @@ void writeMaterials(FileWriter& w, const std::string& prefix, const std::vector<
   w.strings(prefix + "/source", sources);
 }
 
-void writeObjects(FileWriter& w, const std::string& prefix, const std::vector<ObjectAsset>& objects) {
+void writeObjects(FileWriter& w, const std::string& prefix, const ObjectList& objects) {
   using O = ObjectAsset;
   Handle group = w.createGroup(prefix);
   const hsize_t count = objects.size();
@@ -400,8 +404,8 @@ void writeObjects(FileWriter& w, const std::string& prefix, const std::vector<Ob
   w.f64(prefix + "/volume_m3", gather<double>(objects, [](const O& o) { return o.massProperties.volumeM3; }), {count},
         "m^3");
   std::vector<double> com;
-  for (const auto& o : objects)
-    com.insert(com.end(), o.massProperties.centerOfMassM.data(), o.massProperties.centerOfMassM.data() + 3);
+  for (const ObjectAsset* o : objects)
+    com.insert(com.end(), o->massProperties.centerOfMassM.data(), o->massProperties.centerOfMassM.data() + 3);
   w.f64(prefix + "/center_of_mass_m", com, {count, 3}, "m");
   w.f64(prefix + "/inertia_kg_m2",
         gatherMatrix3(objects, [](const O& o) -> const Eigen::Matrix3d& { return o.massProperties.inertiaKgM2; }),
@@ -491,9 +495,8 @@ void writeDatabase(FileWriter& w, const FragmentDatabase& db) {
   Handle group = w.createGroup("/database");
   w.i64("/database/seed", {static_cast<int64_t>(db.seed)}, {1});
   writeMaterials(w, "/database/reference_material", {db.referenceMaterial});
-  std::vector<ObjectAsset> assets;
-  assets.reserve(db.entries.size());
-  for (const FragmentEntry& e : db.entries) assets.push_back(e.asset);
+  ObjectList assets;
+  for (const FragmentEntry& e : db.entries) assets.push_back(&e.asset);
   writeObjects(w, "/database/entries", assets);
 
   const hsize_t count = db.entries.size();
@@ -597,7 +600,9 @@ void writeFile(const Pack& pack, const fs::path& file) {
     w.stringAttribute(root.get(), "/", "generator", std::string("brittle ") + BRITTLE_VERSION);
   }
   writeMaterials(w, "/materials", pack.materials);
-  writeObjects(w, "/objects", pack.objects);
+  ObjectList objects;
+  for (const ObjectAsset& o : pack.objects) objects.push_back(&o);
+  writeObjects(w, "/objects", objects);
   if (!pack.database.empty()) writeDatabase(w, pack.database);
   // Closing flushes HDF5's metadata cache; a failure here means the file is incomplete.
   if (!h5.close()) failHdf5("cannot close (flush) '" + file.string() + "'");
