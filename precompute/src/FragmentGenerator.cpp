@@ -1,6 +1,6 @@
 #include "brittle/precompute/FragmentGenerator.h"
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/clip.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
@@ -8,6 +8,7 @@
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -20,10 +21,21 @@
 namespace brittle {
 namespace {
 
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+// Exact constructions: the points a clip creates are exact (lazy rationals), so the next clip of
+// the same fragment decides on exact geometry. With Exact_predicates_inexact_constructions_kernel
+// the rounded points of one clip made the next clip's corefinement loop without end on Voronoi
+// cells of the sphere (measured: over 100 minutes on one cell).
+using Kernel = CGAL::Exact_predicates_exact_constructions_kernel;
 using Point = Kernel::Point_3;
 using Mesh = CGAL::Surface_mesh<Point>;
 namespace PMP = CGAL::Polygon_mesh_processing;
+
+// A point rounded to doubles from its exact value. Converting the lazy number's interval instead
+// would depend on how far earlier predicates had refined it, which differs from call to call.
+Eigen::Vector3d toEigen(const Point& p) {
+  return {CGAL::to_double(CGAL::exact(p.x())), CGAL::to_double(CGAL::exact(p.y())),
+          CGAL::to_double(CGAL::exact(p.z()))};
+}
 
 Error invalid(const std::string& message) { return makeError(ErrorCode::InvalidArgument, message); }
 Error emptyFragment() { return invalid("empty fragment"); }
@@ -57,15 +69,44 @@ Result<Mesh> toCgal(const TriangleMesh& m) {
 double sixVolume(const Mesh& mesh, Mesh::Face_index f) {
   Eigen::Vector3d p[3];
   int c = 0;
-  for (auto v : mesh.vertices_around_face(mesh.halfedge(f))) {
-    const Point& q = mesh.point(v);
-    p[c++] = Eigen::Vector3d(q.x(), q.y(), q.z());
-  }
+  for (auto v : mesh.vertices_around_face(mesh.halfedge(f))) p[c++] = toEigen(mesh.point(v));
   return p[0].dot(p[1].cross(p[2]));
 }
 
+// Vertices in lexicographic (x, y, z) order, each face rotated to start at its smallest index
+// (orientation kept), faces in lexicographic order: the arrays then depend on the solid alone, not
+// on the order in which CGAL happened to create its elements.
+TriangleMesh canonicalOrder(const TriangleMesh& m) {
+  const auto n = static_cast<int>(m.vertices.rows());
+  std::vector<int> order(static_cast<size_t>(n));
+  std::iota(order.begin(), order.end(), 0);
+  auto row = [&](int i) { return std::array<double, 3>{m.vertices(i, 0), m.vertices(i, 1), m.vertices(i, 2)}; };
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return row(a) < row(b); });
+  std::vector<int> newIndex(static_cast<size_t>(n));
+  TriangleMesh out;
+  out.vertices.resize(n, 3);
+  for (int i = 0; i < n; ++i) {
+    newIndex[static_cast<size_t>(order[static_cast<size_t>(i)])] = i;
+    out.vertices.row(i) = m.vertices.row(order[static_cast<size_t>(i)]);
+  }
+  std::vector<std::array<int, 3>> faces;
+  faces.reserve(static_cast<size_t>(m.faces.rows()));
+  for (Eigen::Index f = 0; f < m.faces.rows(); ++f) {
+    std::array<int, 3> t{newIndex[static_cast<size_t>(m.faces(f, 0))], newIndex[static_cast<size_t>(m.faces(f, 1))],
+                         newIndex[static_cast<size_t>(m.faces(f, 2))]};
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    faces.push_back(t);
+  }
+  std::sort(faces.begin(), faces.end());
+  out.faces.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f) {
+    out.faces.row(static_cast<Eigen::Index>(f)) << faces[f][0], faces[f][1], faces[f][2];
+  }
+  return out;
+}
+
 // The faces of `mesh` (garbage collected, triangles) whose component passes `keep`, with only the
-// vertices they use, in CGAL's vertex order.
+// vertices they use, in canonical order.
 template <typename Keep>
 TriangleMesh fromCgal(const Mesh& mesh, Keep keep) {
   std::vector<int> index(mesh.number_of_vertices(), -1);
@@ -82,8 +123,7 @@ TriangleMesh fromCgal(const Mesh& mesh, Keep keep) {
   for (auto v : mesh.vertices()) {
     const int i = index[static_cast<size_t>(v)];
     if (i < 0) continue;
-    const Point& p = mesh.point(v);
-    out.vertices.row(i) << p.x(), p.y(), p.z();
+    out.vertices.row(i) = toEigen(mesh.point(v)).transpose();
   }
   out.faces.resize(faceCount, 3);
   Eigen::Index row = 0;
@@ -93,7 +133,7 @@ TriangleMesh fromCgal(const Mesh& mesh, Keep keep) {
     for (auto v : mesh.vertices_around_face(mesh.halfedge(f))) out.faces(row, c++) = index[static_cast<size_t>(v)];
     ++row;
   }
-  return out;
+  return canonicalOrder(out);
 }
 
 // Clips `mesh` in place by the planes, then converts the kept pieces.

@@ -75,7 +75,7 @@ TEST(BaseShapes, ShippedShapesAreValidSolidsWithTheirVolumes) {
   }
   EXPECT_EQ(kinds.size(), 7u);  // every kind is shipped
   for (const BaseShapeDefinition& d : shapes.value()) {
-    if (d.name == "box") EXPECT_EQ(d.sizeM, Eigen::Vector3d(1, 1, 1));
+    if (d.name == "box") EXPECT_EQ(d.sizeM, Eigen::Vector3d(1, 0.8, 0.6));
     if (d.name == "plate") EXPECT_EQ(d.sizeM, Eigen::Vector3d(1, 1, 0.1));
     if (d.name == "rod") EXPECT_EQ(d.sizeM, Eigen::Vector3d(0.2, 0.2, 1));
   }
@@ -98,13 +98,16 @@ TEST(BaseShapes, RoundShapesConvergeToTheirAnalyticVolumes) {
     previousGap = gap;
   }
   EXPECT_LT(previousGap, 1e-3);  // level 5
-  // 256 segments: within 0.01 % of the cylinder and the cone.
+  // 256 segments: the inscribed polygon's area is n/(2π)·sin(2π/n) ≈ 1 − (2π/n)²/6 = 1 − 1.004e-4
+  // of the circle's.
   const TriangleMesh rod = makeBaseShape(shape(BaseShapeKind::Rod, s, 256)).value();
   const TriangleMesh cone = makeBaseShape(shape(BaseShapeKind::Cone, s, 256)).value();
   expectValid(rod);
   expectValid(cone);
-  EXPECT_NEAR(volumeOf(rod) / (kPi / 4.0 * s.prod()), 1.0, 1e-4);
-  EXPECT_NEAR(volumeOf(cone) / (kPi / 12.0 * s.prod()), 1.0, 1e-4);
+  const double polygon = 256.0 / (2.0 * kPi) * std::sin(2.0 * kPi / 256.0);
+  EXPECT_NEAR(volumeOf(rod) / (kPi / 4.0 * s.prod()), polygon, 1e-12);
+  EXPECT_NEAR(volumeOf(cone) / (kPi / 12.0 * s.prod()), polygon, 1e-12);
+  EXPECT_NEAR(polygon, 1.0, 1.1e-4);
   // The smallest round shapes are still valid.
   expectValid(makeBaseShape(shape(BaseShapeKind::Rod, s, 3)).value());
   expectValid(makeBaseShape(shape(BaseShapeKind::Cone, s, 3)).value());

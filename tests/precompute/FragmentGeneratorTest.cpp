@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <limits>
 #include <random>
 #include <set>
@@ -91,8 +92,19 @@ TEST(FragmentGenerator, PlaneClipsOfACubeAreExact) {
   // Planes that miss (or touch) the solid leave it as it is.
   auto whole = clipByPlanes(cube, {{Eigen::Vector3d::UnitX(), 0.5}, {-Eigen::Vector3d::UnitZ(), 2.0}});
   ASSERT_TRUE(whole);
-  EXPECT_EQ(whole.value().vertices, cube.vertices);
+  // (same vertices, now in lexicographic order, and the same number of faces)
+  auto rows = [](const Eigen::MatrixX3d& v) {
+    std::set<std::array<double, 3>> out;
+    for (Eigen::Index i = 0; i < v.rows(); ++i) out.insert({v(i, 0), v(i, 1), v(i, 2)});
+    return out;
+  };
+  EXPECT_EQ(rows(whole.value().vertices), rows(cube.vertices));
+  EXPECT_EQ(whole.value().vertices.rows(), cube.vertices.rows());
   EXPECT_EQ(whole.value().faces.rows(), cube.faces.rows());
+  for (Eigen::Index i = 1; i < whole.value().vertices.rows(); ++i) {
+    const Eigen::RowVector3d a = whole.value().vertices.row(i - 1), b = whole.value().vertices.row(i);
+    EXPECT_TRUE(std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3));
+  }
 }
 
 TEST(FragmentGenerator, VoronoiCellsPartitionTheSolid) {

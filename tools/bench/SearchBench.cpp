@@ -131,12 +131,14 @@ Status runSearchBench(const SearchBenchSettings& s) {
   std::ofstream costCsv(s.descriptorCsv);
   if (!costCsv) return makeError(ErrorCode::PackIoError, "cannot write " + s.descriptorCsv.string());
   std::array<std::vector<double>, kDescriptorKindCount> costUs;
-  std::vector<double> frameUs;
+  std::vector<double> frameUs, cutUs;
   double triangles = 0.0;
   for (int q = 0; q < s.queries; ++q) {
+    const auto cutStart = Clock::now();
     auto fragment = generateFragment(bases[static_cast<size_t>(q) % bases.size()], bake.fragments,
                                      fragmentEntrySeed(s.seed + 0x5eed0000ull, q));
     if (!fragment) return fragment.error();
+    cutUs.push_back(1e6 * seconds(cutStart));
     Eigen::Vector4d g;
     for (int c = 0; c < 4; ++c) g[c] = normal(rng);  // one draw per statement: fixed order
     const Eigen::Matrix3d r = Eigen::Quaterniond(g[0], g[1], g[2], g[3]).normalized().toRotationMatrix();
@@ -168,6 +170,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
             << "," << percentile(us, 0.5) * 1000.0 / triangles << "\n";
     log(s.quiet, "descriptor cost %-16s median %8.1f us (%.0f triangles)\n", stage.c_str(), percentile(us, 0.5), triangles);
   };
+  costRow("fragment-cut", cutUs);  // generateFragment on the base shapes in turn (exact clipping)
   costRow("canonical-frame", frameUs);
   for (DescriptorKind kind : kAllDescriptorKinds) costRow(descriptorKindName(kind), costUs[static_cast<size_t>(kind)]);
 

@@ -1,19 +1,18 @@
 // FragmentGenerator.h — fragments cut from a solid with exact geometric predicates: Voronoi cells
 // of random sites and random plane cuts, both computed as intersections of the solid with
 // half-spaces by CGAL::Polygon_mesh_processing::clip (corefinement on a Surface_mesh with
-// Exact_predicates_inexact_constructions_kernel: every decision is exact, and each new
-// intersection point is computed exactly and rounded to double once, in the clip that makes it).
+// Exact_predicates_exact_constructions_kernel: every decision is exact and every cut point stays
+// exact through later clips; the result is rounded to doubles once, from the exact values).
+// Inexact constructions were tried first: rounded cut points fed to the next clip made CGAL's
+// corefinement loop without end on a Voronoi cell of the sphere.
 //
 // This is the only translation unit that instantiates CGAL's corefinement (heavy templates); its
-// interface is flat arrays (MeshTypes.h).
+// interface is flat arrays (MeshTypes.h). Output arrays are in a canonical order (vertices
+// lexicographic, faces rotated to their smallest index and sorted), so a fragment's arrays depend
+// on its geometry alone.
 //
-// Cost per generateFragment call with the default FragmentSettings, measured on the shipped base
-// shapes (assets/shapes/base-shapes.json; release build, one core, mean of 40 seeds; includes the
-// final validateSurfaceMesh):
-//   box 1.3 ms, plate 1.3 ms, rod 2.7 ms, sphere 16 ms (1280 faces), cone 2.1 ms, wedge 1.2 ms,
-//   blob 19 ms (1280 faces).
-// Each clip corefines the whole current mesh, so the cost grows with the base's face count and,
-// for Voronoi cells, with the number of bisectors that cut it.
+// Cost per generateFragment call with the default FragmentSettings: the "fragment-cut" row of
+// `brittle bench search` (bench/descriptor_cost.csv) and the README's "Fragment database".
 #pragma once
 
 #include <Eigen/Core>
@@ -47,7 +46,7 @@ enum class ClipComponents {
 /// PMP::clip(clip_volume = true).
 /// Input: solid is closed, outward, manifold and free of self-intersections (e.g. it passes
 /// validateSurfaceMesh); planes in the solid's frame.
-/// Output: closed, outward triangle mesh without unused vertices, vertices in CGAL's order.
+/// Output: closed, outward triangle mesh without unused vertices, in canonical order (above).
 /// Rounding of new points can, in near-degenerate configurations, leave a zero-area face or a tiny
 /// self-intersection: validate the result where it matters (generateFragment does).
 /// Errors: InvalidArgument (a non-finite or zero plane normal; a solid with out-of-range indices,
