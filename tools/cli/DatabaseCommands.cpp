@@ -18,7 +18,7 @@ namespace brittle::cli {
 namespace {
 
 struct BakeDbOptions {
-  std::string shapesFile;
+  std::string shapesFile = "assets/shapes/base-shapes.json";
   std::vector<std::string> only;
   std::string out;
   int64_t entries = 48;
@@ -54,7 +54,7 @@ Runner addBakeDbCommand(CLI::App& app) {
       "bake-db", "Bake a fragment shape database (fragments of base shapes, descriptors, tet meshes, modes) into a pack");
   auto o = std::make_shared<BakeDbOptions>();
   cmd->add_option("--shapes", o->shapesFile, "Base shape definitions (JSON, see assets/shapes/README.md)")
-      ->capture_default_str()->required();
+      ->capture_default_str();
   cmd->add_option("--only", o->only, "Use only these base shapes (names from the shapes file)")->delimiter(',');
   cmd->add_option("--entries", o->entries, "Number of fragments")->capture_default_str()->check(CLI::Range(int64_t{1}, int64_t{10000000}));
   cmd->add_option("--seed", o->seed, "Seed of the fragment cuts (the bake is reproducible from it)")->capture_default_str();
