@@ -75,9 +75,15 @@ TEST(BaseShapes, ShippedShapesAreValidSolidsWithTheirVolumes) {
   }
   EXPECT_EQ(kinds.size(), 7u);  // every kind is shipped
   for (const BaseShapeDefinition& d : shapes.value()) {
-    if (d.name == "box") EXPECT_EQ(d.sizeM, Eigen::Vector3d(1, 0.8, 0.6));
-    if (d.name == "plate") EXPECT_EQ(d.sizeM, Eigen::Vector3d(1, 1, 0.1));
-    if (d.name == "rod") EXPECT_EQ(d.sizeM, Eigen::Vector3d(0.2, 0.2, 1));
+    if (d.name == "box") {
+      EXPECT_EQ(d.sizeM, Eigen::Vector3d(1, 0.8, 0.6));
+    }
+    if (d.name == "plate") {
+      EXPECT_EQ(d.sizeM, Eigen::Vector3d(1, 1, 0.1));
+    }
+    if (d.name == "rod") {
+      EXPECT_EQ(d.sizeM, Eigen::Vector3d(0.2, 0.2, 1));
+    }
   }
 }
 

@@ -135,8 +135,13 @@ Status runSearchBench(const SearchBenchSettings& s) {
   double triangles = 0.0;
   for (int q = 0; q < s.queries; ++q) {
     const auto cutStart = Clock::now();
-    auto fragment = generateFragment(bases[static_cast<size_t>(q) % bases.size()], bake.fragments,
-                                     fragmentEntrySeed(s.seed + 0x5eed0000ull, q));
+    // Like the database bake, a draw that yields no acceptable fragment is redrawn from the next seed.
+    uint64_t querySeed = fragmentEntrySeed(s.seed + 0x5eed0000ull, q);
+    auto fragment = generateFragment(bases[static_cast<size_t>(q) % bases.size()], bake.fragments, querySeed);
+    for (int attempt = 1; !fragment && attempt < kEntryAttempts; ++attempt) {
+      querySeed = fragmentEntrySeed(querySeed, 1);
+      fragment = generateFragment(bases[static_cast<size_t>(q) % bases.size()], bake.fragments, querySeed);
+    }
     if (!fragment) return fragment.error();
     cutUs.push_back(1e6 * seconds(cutStart));
     Eigen::Vector4d g;

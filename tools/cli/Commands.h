@@ -14,6 +14,7 @@ Runner addInspectCommand(CLI::App& app);
 Runner addBakeDbCommand(CLI::App& app);
 Runner addQueryCommand(CLI::App& app);
 Runner addBenchCommand(CLI::App& app);
+Runner addImpactCommand(CLI::App& app);
 
 }  // namespace brittle::cli
 

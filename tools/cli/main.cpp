@@ -1,4 +1,4 @@
-// brittle — the command-line tool: bake packs and inspect them.
+// brittle — the command-line tool: bake packs, inspect them, query the database, break objects.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   add("bake-db", brittle::cli::addBakeDbCommand(app));
   add("query", brittle::cli::addQueryCommand(app));
   add("bench", brittle::cli::addBenchCommand(app));
+  add("impact", brittle::cli::addImpactCommand(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
