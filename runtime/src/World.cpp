@@ -73,7 +73,7 @@ struct Body {
   TetTopology topology;
   int modes = 0;
   Eigen::VectorXd omega, zeta;
-  Eigen::VectorXd stressBounds;
+  Eigen::MatrixXd stressBounds;  // T by modes
   Points nodeNormals;                    // #N, area-weighted outward normals (boundary nodes)
   std::vector<std::vector<int32_t>> ring;  // boundary neighbours per node
   std::vector<int32_t> boundaryNodes;
@@ -195,9 +195,9 @@ Status validateWorldSettings(const WorldSettings& s) {
     return bad("FractureSettings: modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0, ringDownPeriods ≥ 0 and finite, "
                "debrisVolumeFraction in [0, 1)");
   }
-  if (f.crack.maxCracks < 0 || !(f.crack.propagationStressRatio > 0.0) || !(f.crack.directionBlend >= 0.0) ||
+  if (f.crack.maxCracks < 0 || std::isnan(f.crack.propagationStressRatio) || !(f.crack.directionBlend >= 0.0) ||
       !(f.crack.directionBlend <= 1.0) || !(f.crack.noiseRad >= 0.0) || !std::isfinite(f.crack.noiseRad)) {
-    return bad("CrackSettings: maxCracks ≥ 0, propagationStressRatio > 0, directionBlend in [0, 1], noiseRad ≥ 0");
+    return bad("CrackSettings: maxCracks ≥ 0, propagationStressRatio not NaN, directionBlend in [0, 1], noiseRad ≥ 0");
   }
   return Ok{};
 }

@@ -178,19 +178,24 @@ TEST_F(WorldTest, ThresholdMovesWithStrengthImpactorMassAndRadius) {
   World base = makeWorld({}, false);
   const double v0 = breakingSpeed(base, [](ObjectId id, double v) { return ball(id, v); });
   const double heavier = breakingSpeed(base, [](ObjectId id, double v) { return ball(id, v, 0.4); });
-  const double smaller = breakingSpeed(base, [](ObjectId id, double v) { return ball(id, v, 0.1, 0.005); });
+  const double smaller = breakingSpeed(base, [](ObjectId id, double v) { return ball(id, v, 0.1, 0.002); });
+  const double larger = breakingSpeed(base, [](ObjectId id, double v) { return ball(id, v, 0.1, 0.08); });
   Pack strong = *sPack;
   strong.database = {};
   strong.materials[0].tensileStrengthPa *= 2.0;
   World strongWorld = World::create(std::move(strong)).value();
   const double stronger = breakingSpeed(strongWorld, [](ObjectId id, double v) { return ball(id, v); });
-  std::printf("breaking speed: base %.3g m/s, 4x mass %.3g, radius 5 mm %.3g, 2x strength %.3g\n", v0, heavier, smaller, stronger);
+  std::printf("breaking speed: base %.3g m/s, 4x mass %.3g, radius 2 mm %.3g, radius 80 mm %.3g, 2x strength %.3g\n", v0,
+              heavier, smaller, larger, stronger);
   EXPECT_LT(heavier, v0);
   EXPECT_GT(stronger, v0);
-  // The plate fails in flexure (back-face tension). A smaller ball makes a softer Hertz contact: a
-  // longer, lower pulse for the same impulse, which loads the modes less, so it needs more speed.
-  // (Local Hertzian cone cracks, which favour small balls, are below the mesh's resolution.)
-  EXPECT_GT(smaller, v0);
+  // The plate fails in flexure (the back-face tension under the ball). A larger ball makes a stiffer
+  // Hertz contact: a shorter, higher pulse for the same impulse, which loads the modes more, so it
+  // breaks the plate at a lower speed (measured: 2 mm 1.63 m/s, 20 mm 1.61, 80 mm 1.50). Local
+  // Hertzian cone cracks, which favour small balls, are finer than the mesh and not modelled.
+  EXPECT_LT(larger, smaller * 0.97);
+  EXPECT_LE(larger, v0);
+  EXPECT_LE(v0, smaller);
 }
 
 TEST_F(WorldTest, MatchedFragmentsBreakAgain) {

@@ -21,7 +21,9 @@ struct ImpactOptions {
   double speed = 0.0, impactorMass = 0.1, impactorRadius = 0.02, impulse = 0.0, bodyRadius = 0.0;
   uint64_t seed = 1;
   int modes = 0;
-  double debris = 0.01;
+  double crackBlend = CrackSettings{}.directionBlend, crackNoise = CrackSettings{}.noiseRad;
+  double debris = 0.01, propagationRatio = CrackSettings{}.propagationStressRatio;
+  int maxCracks = CrackSettings{}.maxCracks, minFragmentNodes = CrackSettings{}.minFragmentNodes;
   bool noPrune = false, noMatch = false, json = false;
 };
 
@@ -46,6 +48,11 @@ Runner addImpactCommand(CLI::App& app) {
   cmd->add_option("--debris", o->debris, "Fragments below this volume fraction are rigid debris")->capture_default_str()->check(CLI::Range(0.0, 0.99));
   cmd->add_option("--descriptor", o->descriptor, "Descriptor used to match fragments")
       ->check(CLI::IsMember({"moment", "voxel", "voxel-improved"}))->capture_default_str();
+  cmd->add_option("--propagation-ratio", o->propagationRatio, "A crack advances where the normal stress ≥ ratio × σ_t")->capture_default_str();
+  cmd->add_option("--max-cracks", o->maxCracks, "Cracks started at most")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--min-fragment-nodes", o->minFragmentNodes, "Smaller fragments are merged into a neighbour")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--crack-blend", o->crackBlend, "Weight of a crack's starting plane against the local principal direction")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--crack-noise", o->crackNoise, "Seeded turn of the crack plane per element (rad)")->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_flag("--no-prune", o->noPrune, "Evaluate every element stress (the reference for pruning)");
   cmd->add_flag("--no-match", o->noMatch, "Do not match fragments to the database");
   cmd->add_option("--seed", o->seed, "Seed of the crack noise")->capture_default_str();
@@ -63,6 +70,11 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.pruneStresses = !o->noPrune;
     settings.fracture.matchFragments = !o->noMatch;
     settings.fracture.debrisVolumeFraction = o->debris;
+    settings.fracture.crack.propagationStressRatio = o->propagationRatio;
+    settings.fracture.crack.maxCracks = o->maxCracks;
+    settings.fracture.crack.directionBlend = o->crackBlend;
+    settings.fracture.crack.noiseRad = o->crackNoise;
+    settings.fracture.crack.minFragmentNodes = o->minFragmentNodes;
     settings.fracture.descriptor = parseDescriptorKind(o->descriptor).value();
     auto world = World::create(std::move(pack).value(), settings);
     if (!world) return reportError(world.error());

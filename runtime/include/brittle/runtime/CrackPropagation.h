@@ -4,22 +4,25 @@
 //
 // Stress of element e at instant k: σ_e = S_e q_k (+ σ̂_e F_k, the static correction of the
 // truncated modes, when given). For the largest principal stress,
-//   σ₁ ≤ ‖σ‖_F = ‖D σ_voigt‖ ≤ ‖D S_e‖_F ‖q_k‖ + ‖D σ̂_e‖ |F_k|,   D = diag(1, 1, 1, √2, √2, √2),
-// so an element or instant whose bound is below what is sought is skipped without changing the
-// answer (scanStresses with prune = false evaluates everything, for tests and benchmarks).
+//   σ₁ ≤ ‖σ‖_F = ‖D σ_voigt‖ ≤ Σ_j ‖D S_e,j‖ |q_j,k| + ‖D σ̂_e‖ |F_k|,   D = diag(1, 1, 1, √2, √2, √2)
+// (S_e,j the stress of mode j), so an element or instant whose bound is below what is sought is
+// skipped without changing the answer; the bounds of all elements and instants are one matrix
+// product. scanStresses with prune = false evaluates everything, for tests and benchmarks.
 //
 // Growth: seeds are the elements whose σ₁ reaches σ_t at the instant of the peak, strongest first,
 // each the start of one crack with its plane normal to the principal direction. A crack advances
-// into a face neighbour its plane crosses. There the plane turns towards the local principal
-// direction (blend), plus seeded noise, and passes through the centre of the parent's cut on the
+// into a face neighbour its plane crosses. There the plane is a blend of the crack's starting
+// plane and the local principal direction, plus seeded noise (independent per element, so it
+// roughens the sheet without making its orientation random-walk), and passes through the centre of the parent's cut on the
 // shared face. It advances only where the normal stress on the new plane is at least
-// propagationStressRatio · σ_t. Each cut costs G_c × (area of the plane inside the element), paid from the
+// propagationStressRatio · σ_t (by default there is no such limit). Each cut costs G_c × (area of the plane inside the element), paid from the
 // elastic energy stored at the peak instant, ½ Σ ω_j² q_j²; growth stops when the next cut would
 // overspend it (Griffith). Fronts of all cracks advance together, strongest normal stress first.
 #pragma once
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "brittle/database/ObjectAsset.h"
@@ -33,8 +36,8 @@ using Voigt = Eigen::Matrix<double, 6, 1>;
 /// Largest principal stress (Pa) of a Voigt stress (xx, yy, zz, yz, xz, xy), and its unit direction.
 double maxPrincipalStress(const Voigt& stress, Eigen::Vector3d* direction = nullptr);
 
-/// ‖D S_e‖_F per element (#T): the stress bound per unit ‖q‖. Uses the first `modes` columns.
-Eigen::VectorXd stressModeBounds(const MatrixXdRow& stressModes, int modes);
+/// ‖D S_e,j‖ per element and mode (#T by modes): the stress bound per unit |q_j|.
+Eigen::MatrixXd stressModeBounds(const MatrixXdRow& stressModes, int modes);
 
 struct StressScan {
   double peakPrincipalPa = 0.0;   ///< exact maximum of σ₁ over elements and instants
@@ -45,17 +48,28 @@ struct StressScan {
 };
 
 /// Scans σ₁ over every element and instant. q: K by r (r ≤ columns of stressModes); bounds from
-/// stressModeBounds; staticStress (6T, per newton, may be empty) and forceN (K) add the static
+/// stressModeBounds (T by r); staticStress (6T, per newton, may be empty) and forceN (K) add the static
 /// correction. Pruned and unpruned scans return the same peak, element, instant and seeds.
-StressScan scanStresses(const MatrixXdRow& stressModes, const Eigen::VectorXd& bounds, const Eigen::MatrixXd& q,
+StressScan scanStresses(const MatrixXdRow& stressModes, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
                         const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double thresholdPa,
                         bool prune);
 
 struct CrackSettings {
   int maxCracks = 6;                     ///< seeds that start a crack, strongest first
-  double propagationStressRatio = 0.3;   ///< a crack advances where σ_nn ≥ ratio · σ_t
-  double directionBlend = 0.5;           ///< weight of the parent's plane against the local principal direction
+  /// A crack advances where the normal stress on its plane is σ_nn ≥ ratio · σ_t. The default, −∞,
+  /// leaves the Griffith energy balance as the only stop. Measured on the default pack: with a
+  /// positive ratio, cracks stall in the compressed half of a bent plate and never run through its
+  /// thickness (nothing separates); with −1, strong impacts compress so much of the body that they
+  /// break it into fewer pieces than weaker ones (60 m/s: 2 fragments, 20 m/s: 17).
+  double propagationStressRatio = -std::numeric_limits<double>::infinity();
+  /// Weight of the crack's starting plane against the local principal direction; the local
+  /// direction's share, 1 − blend, is scaled by σ₁/σ_t (clamped to [0, 1]) where it is read.
+  double directionBlend = 0.5;
   double noiseRad = 0.15;                ///< standard deviation of the seeded turn per element (rad)
+  /// Fragments with fewer nodes are merged into the neighbour they share most cut edges with: a
+  /// crack plane per element zigzags at the mesh's scale and would otherwise chip off single-node
+  /// crumbs that are artefacts of the resolution, not fracture.
+  int minFragmentNodes = 8;
   uint64_t seed = 1;
 };
 
@@ -70,6 +84,7 @@ struct FractureState {
   double energyBudgetJ = 0.0;
   double energySpentJ = 0.0;
   bool arrestedByEnergy = false;                    ///< growth ended because the energy ran out
+  int mergedCrumbs = 0;                             ///< fragments below minFragmentNodes merged away
 };
 
 /// The stress field at one instant: σ_e = S_e q (+ σ̂_e F).
@@ -86,6 +101,11 @@ struct StressField {
 Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& topology, const StressScan& scan,
                                       const StressField& field, double tensileStrengthPa, double fractureEnergyJPerM2,
                                       double energyBudgetJ, const CrackSettings& settings);
+
+/// Merges fragments of fewer than minNodes nodes into their best-connected neighbour (by
+/// un-cutting the edges between them), smallest first, and relabels. Returns the merges done.
+int mergeCrumbs(const TetTopology& topology, int minNodes, Eigen::VectorXd& edgeCuts, Eigen::VectorXi& labels,
+                int& fragmentCount);
 
 /// Labels nodes by connected components over uncut edges (NaN in edgeCuts), numbered in order of
 /// their lowest node. Returns the number of labels.
