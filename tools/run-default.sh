@@ -1,10 +1,32 @@
 #!/usr/bin/env bash
-# The main job, end to end on the bundled default assets: install, build, bake the default pack,
-# and print its inspection. Output: out/default.h5 (+ out/default.json, the inspection as JSON).
+# The main job, end to end on the bundled default assets: install, build, bake the default pack
+# (four objects and a 70-entry fragment database), break each object with one impact, print the
+# results and write the fragments and their pictures.
+# Output: out/default.h5 (+ out/default.json, its inspection), out/impacts/<object>.json,
+# out/fragments/<object>/fragment-NN.off, out/pictures/<object>.png.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh
-mkdir -p out
+rm -rf out/impacts out/fragments out/pictures
+mkdir -p out/impacts out/fragments
 build/bin/brittle bake --manifest assets/default-pack.json --out out/default.h5
 build/bin/brittle inspect out/default.h5 --json > out/default.json
 echo "inspection JSON: out/default.json"
+
+# One impact per object (points and normals in the object's frame; see assets/meshes/):
+#   a 100 g steel ball at 5 m/s on the glass pane, the same ball at 10 m/s on the vase's side,
+#   the brick dropped on a corner at 10 m/s, the stone ball dropped at 15 m/s (the ground is an
+#   immovable flat impactor).
+impact() {
+  local object=$1
+  shift
+  echo
+  build/bin/brittle impact out/default.h5 --object "$object" "$@" --out "out/fragments/$object"
+  build/bin/brittle impact out/default.h5 --object "$object" "$@" --json > "out/impacts/$object.json"
+}
+impact glass-plate --point 0.02,0.01,0.005 --normal 0,0,1 --speed 5 --impactor-mass 0.1 --impactor-radius 0.02
+impact porcelain-vase --point 0.0741,0,0.12 --normal 1,0,0 --speed 10 --impactor-mass 0.1 --impactor-radius 0.02
+impact brick --point 0.1075,0.05125,0.0325 --normal 0.7,0.5,0.5 --speed 10 --impactor-mass inf --impactor-radius inf
+impact stone-ball --point 0,0,-0.1 --normal 0,0,-1 --speed 15 --impactor-mass inf --impactor-radius inf
+echo
+/usr/bin/python3 tools/scripts/plot_fragments.py out/fragments/* --out out/pictures

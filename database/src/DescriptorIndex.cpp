@@ -128,6 +128,11 @@ Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, 
   }
 }
 
+int64_t DescriptorIndex::memoryBytes() const {
+  const auto data = static_cast<int64_t>(mData.size() * sizeof(float));
+  return data + (mFlann ? static_cast<int64_t>(mFlann->index.usedMemory()) : 0);
+}
+
 Status DescriptorIndex::validateQuery(const float* descriptor, int k, int64_t queryRow,
                                       bool batch) const {
   if (descriptor == nullptr) return invalid("DescriptorIndex query: descriptor is null");

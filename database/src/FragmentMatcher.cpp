@@ -8,6 +8,10 @@ namespace brittle {
 
 Result<FragmentMatcher> FragmentMatcher::build(const FragmentDatabase& database, const FragmentMatcherSettings& settings) {
   if (database.empty()) return makeError(ErrorCode::InvalidArgument, "the pack has no fragment database (0 entries)");
+  if (settings.entryLimit < 0) return makeError(ErrorCode::InvalidArgument, "entryLimit must be ≥ 0");
+  const auto rows = static_cast<Eigen::Index>(
+      settings.entryLimit > 0 ? std::min<int64_t>(settings.entryLimit, static_cast<int64_t>(database.entries.size()))
+                              : static_cast<int64_t>(database.entries.size()));
   FragmentMatcher matcher;
   matcher.mDatabase = &database;
   for (DescriptorKind kind : kAllDescriptorKinds) {
@@ -15,7 +19,11 @@ Result<FragmentMatcher> FragmentMatcher::build(const FragmentDatabase& database,
     if (!settings.enabled[slot]) continue;
     const DescriptorMatrix& m = database.descriptorsOf(kind);
     const DescriptorIndexSettings indexSettings = settings.indexOverride[slot].value_or(database.indexSettings[slot]);
-    auto index = DescriptorIndex::build(m.data(), m.rows(), m.cols(), indexSettings);
+    if (m.rows() != static_cast<Eigen::Index>(database.entries.size())) {
+      return makeError(ErrorCode::InvalidArgument, std::string("the ") + descriptorKindName(kind) +
+                                                       " descriptor matrix does not have one row per entry");
+    }
+    auto index = DescriptorIndex::build(m.data(), rows, m.cols(), indexSettings);
     if (!index) {
       return makeError(index.error().code,
                        std::string(descriptorKindName(kind)) + " index: " + index.error().message);

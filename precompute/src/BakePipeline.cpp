@@ -168,6 +168,8 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
   const auto dir = path.parent_path();
   std::vector<ObjectBakeSettings> out;
   try {
+    // A manifest may hold only a fragment database (FragmentDatabaseBake.h reads that section).
+    if (doc.is_object() && !doc.contains("objects") && doc.contains("database")) return out;
     if (!doc.is_object() || !doc.contains("objects") || !doc["objects"].is_array()) {
       return makeError(ErrorCode::ParseError, "manifest " + path.filename().string() + ": needs an \"objects\" array");
     }

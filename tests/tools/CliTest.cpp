@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <Eigen/Geometry>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "brittle/database/Pack.h"
@@ -161,6 +163,95 @@ TEST_F(CliTest, UsageErrorsAndHelp) {
   EXPECT_NE(help.out.find("glass"), std::string::npos);
   const CliRun missing = run("inspect " + path("none.h5"));
   EXPECT_EQ(missing.exitCode, 6) << missing.out;
+}
+
+// bake-db → query → inspect, and the search benchmark, through the CLI.
+TEST_F(CliTest, BakeDbThenQueryFindsTheEntryInAnotherPose) {
+  const std::string shapes = "\"" + (testing::sourceDir() / "assets" / "shapes" / "base-shapes.json").string() + "\"";
+  const CliRun bake = run("bake-db --shapes " + shapes + " --only box,wedge,cone --entries 6 --seed 3 --tets 300 --modes 4 --quiet --out " + path("db.h5"));
+  ASSERT_EQ(bake.exitCode, 0) << bake.out;
+  auto pack = readPack(dir / "db.h5");
+  ASSERT_TRUE(pack) << pack.error().message;
+  const FragmentDatabase& db = pack.value().database;
+  ASSERT_EQ(db.entries.size(), 6u);
+  EXPECT_EQ(db.entries[1].baseShape, "wedge");
+  EXPECT_EQ(db.entries[2].asset.modal.frequenciesHz.size(), 4);
+
+  // Entry 4, turned 90° about z, scaled to 0.3 m and moved: found first at ~zero distance, with its
+  // mass rescaled by the volume (entries are at unit volume, up to the tet mesh's facet error).
+  TriangleMesh query = db.entries[4].surface;
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  query.vertices = ((query.vertices * r.transpose()) * 0.3).rowwise() + Eigen::RowVector3d(1, 2, 3);
+  testing::writeOff(query, dir / "query.off");
+  for (const char* descriptor : {"moment", "voxel-improved"}) {
+    SCOPED_TRACE(descriptor);
+    const CliRun q = run("query " + path("db.h5") + " --mesh " + path("query.off") + " --descriptor " + descriptor +
+                         " --index brute-force --k 3 --json");
+    ASSERT_EQ(q.exitCode, 0) << q.out;
+    const auto doc = nlohmann::json::parse(q.out);
+    ASSERT_EQ(doc["matches"].size(), 3u);
+    const auto& best = doc["matches"][0];
+    EXPECT_EQ(best["entry"], 4);
+    EXPECT_LT(best["distance"].get<double>(), 1e-3);
+    EXPECT_LE(best["distance"].get<double>(), doc["matches"][1]["distance"].get<double>());
+    EXPECT_NEAR(best["entry_to_query"]["scale_m"].get<double>(), 0.3, 1e-9);
+    const double entryMass = db.entries[4].asset.massProperties.massKg;  // ≈ ρ · 1 m³
+    EXPECT_NEAR(entryMass, db.referenceMaterial.densityKgPerM3, 0.01 * entryMass);
+    EXPECT_NEAR(best["physics"]["mass_kg"].get<double>(), 0.027 * entryMass, 1e-9 * entryMass);
+    // Frequencies scale as 1/size: f(0.3 m) = f(1 m) / 0.3.
+    EXPECT_NEAR(best["physics"]["frequencies_hz"][0].get<double>() * 0.3,
+                db.entries[4].asset.modal.frequenciesHz[0], 1e-6 * db.entries[4].asset.modal.frequenciesHz[0]);
+  }
+  const CliRun text = run("query " + path("db.h5") + " --mesh " + path("query.off"));
+  EXPECT_EQ(text.exitCode, 0) << text.out;
+  EXPECT_NE(text.out.find("-00004"), std::string::npos) << text.out;
+  const CliRun inspect = run("inspect " + path("db.h5") + " --json");
+  ASSERT_EQ(inspect.exitCode, 0) << inspect.out;
+  EXPECT_NE(inspect.out.find("\"database\""), std::string::npos);
+
+  // Errors: an unknown shape, an unknown descriptor, a pack without a database, an open query mesh.
+  const CliRun unknownShape = run("bake-db --shapes " + shapes + " --only teapot --entries 2 --quiet --out " + path("x.h5"));
+  EXPECT_EQ(unknownShape.exitCode, 2) << unknownShape.out;  // invalid_argument is a usage error
+  EXPECT_NE(unknownShape.out.find("teapot"), std::string::npos) << unknownShape.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.h5"));
+  EXPECT_EQ(run("query " + path("db.h5") + " --mesh " + path("query.off") + " --descriptor zernike").exitCode, 2);
+  testing::writeOff(testing::makeBoxSurface(0.2, 0.1, 0.05), dir / "box.off");
+  ASSERT_EQ(run("bake --mesh " + path("box.off") + " --material glass --tets 300 --modes 4 --quiet --out " + path("objects.h5")).exitCode, 0);
+  const CliRun noDatabase = run("query " + path("objects.h5") + " --mesh " + path("query.off"));
+  EXPECT_NE(noDatabase.exitCode, 0) << noDatabase.out;
+  EXPECT_NE(noDatabase.out.find("error ["), std::string::npos) << noDatabase.out;
+  auto open = testing::makeBoxSurface(1, 1, 1);
+  open.faces.conservativeResize(11, 3);
+  testing::writeOff(open, dir / "open.off");
+  const CliRun openQuery = run("query " + path("db.h5") + " --mesh " + path("open.off"));
+  EXPECT_EQ(openQuery.exitCode, 3) << openQuery.out;
+  EXPECT_NE(openQuery.out.find("error [open_mesh]"), std::string::npos) << openQuery.out;
+}
+
+TEST_F(CliTest, SearchBenchWritesItsCsv) {
+  const std::string shapes = "\"" + (testing::sourceDir() / "assets" / "shapes" / "base-shapes.json").string() + "\"";
+  const CliRun bench = run("bench search --shapes " + shapes + " --sizes 40,80 --queries 8 --physics-queries 0 --index kd-forest:2:16 --quiet --csv " +
+                           path("search.csv") + " --cost-csv " + path("cost.csv"));
+  ASSERT_EQ(bench.exitCode, 0) << bench.out;
+  std::ifstream csv(dir / "search.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("entries,descriptor,index,", 0), 0u) << header;
+  int rows = 0, bruteForce = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    if (line.find(",brute-force,") != std::string::npos) {
+      ++bruteForce;
+      EXPECT_NE(line.find(",1,0,0,0,0"), std::string::npos) << "exact search has recall 1: " << line;
+    }
+  }
+  EXPECT_EQ(rows, 2 * 3 * 2);  // sizes × kinds × (brute force, kd-forest)
+  EXPECT_EQ(bruteForce, 2 * 3);
+  std::ifstream cost(dir / "cost.csv");
+  const std::string costText((std::istreambuf_iterator<char>(cost)), std::istreambuf_iterator<char>());
+  for (const char* stage : {"fragment-cut", "canonical-frame", "moment", "voxel", "voxel-improved"}) {
+    EXPECT_NE(costText.find(std::string("\n") + stage + ","), std::string::npos) << stage;
+  }
 }
 
 }  // namespace

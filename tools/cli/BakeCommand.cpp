@@ -1,10 +1,12 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "CliSupport.h"
 #include "Commands.h"
 #include "brittle/precompute/BakePipeline.h"
+#include "brittle/precompute/FragmentDatabaseBake.h"
 #include "brittle/precompute/MaterialLibrary.h"
 
 namespace brittle::cli {
@@ -99,33 +101,28 @@ Runner addBakeCommand(CLI::App& app) {
     }
     for (auto& s : objects) s.modal.factorization = o->factorization == "eigen" ? Factorization::EigenLdlt : Factorization::Cholmod;
 
+    std::optional<DatabaseBakeSettings> database;
+    if (!o->manifest.empty()) {
+      auto section = loadDatabaseManifest(o->manifest);
+      if (!section) return reportError(section.error());
+      database = std::move(section).value();
+    }
     std::vector<ObjectBakeReport> reports;
-    Result<Pack> pack = [&] {
+    Result<Pack> pack = [&]() -> Result<Pack> {
       TerminalProgress progress(o->quiet);
-      return bakePack(objects, &progress, &reports);
+      auto objectsPack = bakePack(objects, &progress, &reports);
+      if (!objectsPack || !database) return objectsPack;
+      auto db = bakeFragmentDatabase(*database, &progress);
+      if (!db) return db.error();
+      objectsPack.value().database = std::move(db).value();
+      return objectsPack;
     }();
     if (!pack) return reportError(pack.error());
-    if (Status written = writePack(pack.value(), o->out); !written) {
-      reportError(written.error());
-      return kExitPack;  // includes the writer's own checks (InvalidArgument): a pack problem
-    }
-    // Read the pack back: what is printed is what is on disk, and it passed the reader's checks.
-    // A pack the reader rejects must not stay behind.
-    auto reread = readPack(o->out);
-    if (!reread) {
-      std::error_code ignored;
-      std::filesystem::remove(o->out, ignored);
-      reportError(reread.error());
-      return kExitPack;
-    }
-    if (o->json) {
-      std::cout << inspectJson(reread.value()).dump(2) << "\n";
-      return kExitOk;
-    }
-    printInspection(reread.value(), std::cout);
+    Pack reread;
+    if (int code = writeAndPrintPack(pack.value(), o->out, o->json, &reread); code != kExitOk || o->json) return code;
     for (size_t i = 0; i < reports.size(); ++i) {
       const auto& r = reports[i];
-      std::cout << "  check " << reread.value().objects[i].name << ": tet volume vs surface "
+      std::cout << "  check " << reread.objects[i].name << ": tet volume vs surface "
                 << 100.0 * r.tetVolumeRelativeError << "%";
       if (objects[i].repair) {
         std::cout << ", repair voxel " << r.repair.voxelSizeM << " m changed the volume by "
@@ -136,6 +133,27 @@ Runner addBakeCommand(CLI::App& app) {
     std::cout << "\nwrote " << o->out << "\n";
     return kExitOk;
   };
+}
+
+int writeAndPrintPack(const Pack& pack, const std::string& path, bool json, Pack* written) {
+  if (Status status = writePack(pack, path); !status) {
+    reportError(status.error());
+    return kExitPack;  // includes the writer's own checks (InvalidArgument): a pack problem
+  }
+  auto reread = readPack(path);
+  if (!reread) {
+    std::error_code ignored;
+    std::filesystem::remove(path, ignored);
+    reportError(reread.error());
+    return kExitPack;
+  }
+  if (json) {
+    std::cout << inspectJson(reread.value()).dump(2) << "\n";
+  } else {
+    printInspection(reread.value(), std::cout);
+  }
+  if (written) *written = std::move(reread).value();
+  return kExitOk;
 }
 
 }  // namespace brittle::cli

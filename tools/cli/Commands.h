@@ -11,6 +11,10 @@ using Runner = std::function<int()>;
 
 Runner addBakeCommand(CLI::App& app);
 Runner addInspectCommand(CLI::App& app);
+Runner addBakeDbCommand(CLI::App& app);
+Runner addQueryCommand(CLI::App& app);
+Runner addBenchCommand(CLI::App& app);
+Runner addImpactCommand(CLI::App& app);
 
 }  // namespace brittle::cli
 
@@ -26,5 +30,10 @@ nlohmann::json inspectJson(const Pack& pack);
 
 /// The human-readable inspection.
 void printInspection(const Pack& pack, std::ostream& out);
+
+/// Writes pack atomically, reads it back (what is printed is what is on disk; a pack the reader
+/// rejects is removed) and prints its inspection, JSON or text. Returns the exit code; on success
+/// *written (when given) receives the pack as read back.
+int writeAndPrintPack(const Pack& pack, const std::string& path, bool json, Pack* written = nullptr);
 
 }  // namespace brittle::cli

@@ -1,5 +1,6 @@
 #include <iomanip>
 #include <iostream>
+#include <map>
 
 #include "CliSupport.h"
 #include "Commands.h"
@@ -30,6 +31,39 @@ const Material* findMaterial(const Pack& pack, const std::string& name) {
   for (const auto& m : pack.materials)
     if (m.name == name) return &m;
   return nullptr;
+}
+
+nlohmann::json databaseJson(const FragmentDatabase& db) {
+  std::map<std::string, int64_t> shapes;
+  int64_t tets = 0;
+  for (const auto& e : db.entries) {
+    ++shapes[e.baseShape];
+    tets += e.asset.tetMesh.tets.rows();
+  }
+  nlohmann::json j = {{"entries", db.entries.size()},
+                      {"seed", db.seed},
+                      {"physics", db.hasPhysics()},
+                      {"total_tets", tets},
+                      {"reference_material", materialJson(db.referenceMaterial)},
+                      {"base_shapes", shapes}};
+  const ShapeDescriptorSettings& d = db.descriptorSettings;
+  for (DescriptorKind kind : kAllDescriptorKinds) {
+    const DescriptorIndexSettings& index = db.indexSettings[static_cast<size_t>(kind)];
+    nlohmann::json k = {{"dims", descriptorSize(kind, d)},
+                        {"index", {{"backend", descriptorIndexKindName(index.kind)},
+                                   {"trees", index.trees},
+                                   {"checks", index.checks},
+                                   {"target_precision", index.targetPrecision},
+                                   {"seed", index.seed}}}};
+    if (kind == DescriptorKind::Moment) k["max_order"] = d.moment.maxOrder;
+    if (kind == DescriptorKind::Voxel) k["resolution"] = d.voxel.resolution;
+    if (kind == DescriptorKind::VoxelImproved) {
+      k["resolution"] = d.voxelImproved.resolution;
+      k["clamp_voxels"] = d.voxelImproved.clampVoxels;
+    }
+    j["descriptors"][descriptorKindName(kind)] = k;
+  }
+  return j;
 }
 
 }  // namespace
@@ -87,6 +121,7 @@ nlohmann::json inspectJson(const Pack& pack) {
                    {"total", b.totalS}}}};
     doc["objects"].push_back(std::move(j));
   }
+  if (!pack.database.empty()) doc["database"] = databaseJson(pack.database);
   return doc;
 }
 
@@ -128,6 +163,21 @@ void printInspection(const Pack& pack, std::ostream& out) {
         << "\n";
     out << "  timings       meshing " << b.meshingS << " s, assembly " << b.assemblyS << " s, modal " << b.modalS
         << " s, stress modes " << b.stressModesS << " s, total " << b.totalS << " s\n";
+  }
+  if (!pack.database.empty()) {
+    const nlohmann::json db = databaseJson(pack.database);
+    out << "\nfragment database  " << pack.database.entries.size() << " entries ("
+        << (pack.database.hasPhysics() ? "tet meshes and modes, " + std::to_string(db["total_tets"].get<int64_t>()) + " tets"
+                                       : std::string("descriptors only"))
+        << "), reference material " << pack.database.referenceMaterial.name << ", seed " << pack.database.seed << "\n";
+    out << "  base shapes  ";
+    for (const auto& [shape, count] : db["base_shapes"].items()) out << " " << shape << " " << count.get<int64_t>();
+    out << "\n  descriptors  ";
+    for (const auto& [kind, k] : db["descriptors"].items()) {
+      out << " " << kind << " (" << k["dims"].get<int>() << " values, " << k["index"]["backend"].get<std::string>()
+          << ")";
+    }
+    out << "\n";
   }
 }
 

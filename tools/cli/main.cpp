@@ -1,4 +1,4 @@
-// brittle — the command-line tool: bake packs and inspect them.
+// brittle — the command-line tool: bake packs, inspect them, query the database, break objects.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
@@ -8,13 +8,17 @@
 #include "CliSupport.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{"brittle: bake breakable objects offline (tet meshes, modal bases, stress modes) into HDF5 packs"};
+  CLI::App app{"brittle: bake breakable objects and a fragment shape database offline (tet meshes, modal bases, stress modes, shape descriptors) into HDF5 packs"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("brittle ") + BRITTLE_VERSION);
   std::map<CLI::App*, brittle::cli::Runner> runners;
   auto add = [&](const char* name, brittle::cli::Runner runner) { runners[app.get_subcommand(name)] = std::move(runner); };
   add("bake", brittle::cli::addBakeCommand(app));
   add("inspect", brittle::cli::addInspectCommand(app));
+  add("bake-db", brittle::cli::addBakeDbCommand(app));
+  add("query", brittle::cli::addQueryCommand(app));
+  add("bench", brittle::cli::addBenchCommand(app));
+  add("impact", brittle::cli::addImpactCommand(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

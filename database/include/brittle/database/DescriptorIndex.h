@@ -81,6 +81,9 @@ class DescriptorIndex {
   [[nodiscard]] Status queryBatch(const float* descriptors, int64_t count, int k, int64_t* ids,
                                   float* squaredDistances) const;
 
+  /// Bytes held: the descriptor copy plus FLANN's index structures (FLANN's own count).
+  int64_t memoryBytes() const;
+
   int64_t size() const { return mRows; }
   int64_t dims() const { return mDims; }
   const DescriptorIndexSettings& settings() const { return mSettings; }

@@ -34,6 +34,9 @@ struct FragmentMatcherSettings {
   std::array<std::optional<DescriptorIndexSettings>, kDescriptorKindCount> indexOverride;
   /// Kinds to build indices for; the others cannot be queried.
   std::array<bool, kDescriptorKindCount> enabled = {true, true, true};
+  /// Search only the first entryLimit entries (0: all). A smaller database answers faster and
+  /// matches worse; the search benchmark sweeps it.
+  int64_t entryLimit = 0;
 };
 
 class FragmentMatcher {

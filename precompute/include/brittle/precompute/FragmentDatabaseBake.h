@@ -1,0 +1,87 @@
+// FragmentDatabaseBake.h — bakes the fragment shape database (FragmentDatabase.h): fragments cut
+// from procedural base shapes (BaseShapes.h, FragmentGenerator.h), each normalised to its
+// canonical frame at unit volume, described by every descriptor kind and, unless descriptors only
+// are asked for, tetrahedralised and solved for its modes at the reference material.
+//
+// Parallel and reproducible: entries are baked concurrently (TBB), but entry i depends only on
+// the settings and its own seed, seed_i = splitmix64(seed + i), and results are gathered in entry
+// order, so the database is the same for any thread count. Entry i is cut from base shape
+// i mod #shapes. An entry whose tet meshing or modal solve fails is cut again from the next seed
+// of the same stream (at most kEntryAttempts times) before the bake fails.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "brittle/database/FragmentDatabase.h"
+#include "brittle/precompute/BaseShapes.h"
+#include "brittle/precompute/FragmentGenerator.h"
+#include "brittle/precompute/ModalAnalysis.h"
+#include "brittle/precompute/Progress.h"
+#include "brittle/precompute/TetMesher.h"
+
+namespace brittle {
+
+inline constexpr int kEntryAttempts = 4;
+
+struct DatabaseBakeSettings {
+  std::vector<BaseShapeDefinition> shapes;  ///< at least one
+  int64_t entryCount = 48;
+  uint64_t seed = 1;
+  FragmentSettings fragments;
+  /// The material every entry is baked with; queries rescale from it (ScalingLaws.h).
+  Material referenceMaterial = referenceFragmentMaterial();
+  /// false: descriptors only (no tets, no modes); for search benchmarks on large databases.
+  bool physics = true;
+  TetMeshSettings tetMesh = defaultFragmentTetMeshSettings();
+  int modeCount = 12;
+  ShapeDescriptorSettings descriptors;
+  /// Kinds to compute. A disabled kind leaves a 0-column matrix, which FragmentMatcher cannot
+  /// search and writePack rejects: for benchmarks that need one kind on a huge database.
+  std::array<bool, kDescriptorKindCount> kinds = {true, true, true};
+  std::array<DescriptorIndexSettings, kDescriptorKindCount> index;
+  int threads = 0;  ///< worker threads; 0 = TBB's default (all cores)
+
+  /// The glass preset (E 70 GPa, ν 0.2, ρ 2500 kg/m³): a query of the same ν rescales exactly,
+  /// another ν goes through the Rayleigh–Ritz correction of ScalingLaws.h.
+  static Material referenceFragmentMaterial();
+  /// ~1000 tets per fragment, sharp features kept (cut faces meet at sharp edges).
+  static TetMeshSettings defaultFragmentTetMeshSettings();
+};
+
+/// Seed of entry i: splitmix64(seed + i).
+uint64_t fragmentEntrySeed(uint64_t seed, int64_t entry);
+
+/// One entry from any closed fragment surface (metres, any pose): canonical surface, descriptors
+/// of every kind (written to `descriptors`, one row each, in kind order) and, when
+/// settings.physics, the tet mesh and modes. name must be unique in the database.
+/// Errors: those of computeCanonicalFrames, validateSurfaceMesh, bakeSurface.
+Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std::string& name,
+                                        const DatabaseBakeSettings& settings,
+                                        std::array<Descriptor, kDescriptorKindCount>& descriptors,
+                                        ProgressSink* progress = nullptr);
+
+/// The whole database. Progress reports "fragment database" with the fraction of entries done.
+/// Errors: InvalidArgument (no shapes, entryCount < 1, bad descriptor settings), the first
+/// failing entry's error after kEntryAttempts, Cancelled.
+Result<FragmentDatabase> bakeFragmentDatabase(const DatabaseBakeSettings& settings, ProgressSink* progress = nullptr);
+
+/// The optional "database" section of a bake manifest (BakePipeline.h):
+///   "database": { "shapes": "shapes/base-shapes.json", "only": ["box", "plate"], "entries": 48,
+///                 "seed": 1, "tets": 1000, "modes": 12, "descriptors_only": false,
+///                 "moment_order": 4, "voxel_resolution": 16 }
+/// Every key is optional except "shapes" (relative to the manifest's directory); "only" picks
+/// shapes by name. nullopt when the manifest has no "database" key.
+/// Errors: FileNotFound, ParseError (naming the key), those of loadBaseShapes.
+Result<std::optional<DatabaseBakeSettings>> loadDatabaseManifest(const std::filesystem::path& manifestPath);
+
+/// Keeps the shapes whose names are listed (in the listed order). Error: InvalidArgument naming
+/// an unknown shape and listing the known ones.
+Result<std::vector<BaseShapeDefinition>> selectBaseShapes(const std::vector<BaseShapeDefinition>& shapes,
+                                                          const std::vector<std::string>& names);
+
+}  // namespace brittle

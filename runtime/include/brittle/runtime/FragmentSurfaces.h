@@ -1,0 +1,36 @@
+// FragmentSurfaces.h — closed surfaces of the fragments of a cracked tet mesh.
+//
+// Input: a fragment label per node (nodes joined by uncut edges share a label) and, for every edge
+// whose two nodes carry different labels, where the crack crosses it (a parameter in (0, 1)).
+// Each tet is split into four corner cells, one per node, bounded by points on its edges, faces
+// and centre (a barycentric dual). A fragment is the union of the corner cells of its nodes, so
+// the fragments partition the mesh exactly and their volumes add up to the body's.
+//
+// Points: a point on each "mixed" edge (at the crack's parameter), one on each mixed face (the
+// mean of its mixed-edge points) and one in each mixed tet (the mean of its mixed-edge points).
+// When one plane crosses a tet, all of them lie on that plane, so the crack faces are planar there.
+// Surfaces: the boundary faces of the body (whole triangles when all three nodes share a label,
+// otherwise split at the edge and face points), and inside each mixed tet, for each mixed edge,
+// the quad (edge point, face point, tet point, face point) between the two corner cells. A quad
+// is triangulated the same way for both fragments, so the pieces fit without gaps.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/descriptors/Result.h"
+#include "brittle/runtime/TetTopology.h"
+
+namespace brittle {
+
+/// One closed, outward triangle surface per label 0..labelCount−1 (m, the mesh's frame).
+/// nodeLabels: #N in [0, labelCount); edgeCuts: #E, used where the labels of an edge differ,
+/// clamped to [0.05, 0.95] so that no face degenerates.
+/// Errors: InvalidArgument (sizes, labels out of range, a label with no node, an edge between two
+/// labels without a finite cut).
+Result<std::vector<TriangleMesh>> buildFragmentSurfaces(const TetMesh& mesh, const TetTopology& topology,
+                                                        const Eigen::VectorXi& nodeLabels, int labelCount,
+                                                        const Eigen::VectorXd& edgeCuts);
+
+}  // namespace brittle

@@ -1,0 +1,151 @@
+// World.h — the runtime's public API: load a pack, place breakable objects, report impacts, get
+// fragments back.
+//
+//   auto world = World::create(std::move(pack), WorldSettings{});     // Result<World>
+//   auto plate = world.value().addObject({.asset = "glass-plate"});   // Result<ObjectId>
+//   auto hit = world.value().impact({.object = plate.value(), .pointWorld = p, .normalWorld = n,
+//                                    .speedMps = 5, .impactorMassKg = 0.1, .impactorRadiusM = 0.02});
+//
+// No exception crosses this API: every call returns a Result or Status. Objects are reached by
+// ObjectId (index + generation, as in Box2D): an id whose object was removed or broken is stale and
+// every call with it returns InvalidArgument. Determinism: the same pack, settings, calls and
+// seeds give bit-identical results.
+//
+// An impact runs: Hertz contact (HertzContact.h) → modal response, integrated exactly
+// (ModalResponse.h) → stress scan with pruning and Rankine initiation → crack growth with the
+// Griffith stop (CrackPropagation.h) → fragment surfaces (FragmentSurfaces.h) → per fragment: exact
+// mass properties, and unless it is debris, the nearest database entry rescaled to it
+// (FragmentMatcher.h, ScalingLaws.h), which becomes a new object that can break again.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "brittle/database/FragmentMatcher.h"
+#include "brittle/database/Pack.h"
+#include "brittle/descriptors/Result.h"
+#include "brittle/runtime/CrackPropagation.h"
+#include "brittle/runtime/HertzContact.h"
+
+namespace brittle {
+
+/// An object handle: slot index and generation. Default-constructed ids are invalid.
+struct ObjectId {
+  uint32_t index = std::numeric_limits<uint32_t>::max();
+  uint32_t generation = 0;
+  bool valid() const { return index != std::numeric_limits<uint32_t>::max(); }
+  bool operator==(const ObjectId&) const = default;
+};
+
+struct FractureSettings {
+  int modeCount = 0;               ///< modes used per object (0: all stored); fewer is faster and less accurate
+  int pulseSteps = 16;             ///< stress-evaluation instants during the contact
+  double ringDownPeriods = 0.5;    ///< window after the contact, in periods of the lowest mode used
+  int ringDownSteps = 24;          ///< instants in that window
+  bool pruneStresses = true;       ///< skip elements and instants whose bound is below what is sought
+  CrackSettings crack;             ///< crack.seed is combined with the world seed and an impact counter
+  double debrisVolumeFraction = 0.01;  ///< fragments below this fraction of the broken body are rigid debris
+  bool matchFragments = true;      ///< look fragments up in the pack's database (when it has one)
+  DescriptorKind descriptor = DescriptorKind::Moment;
+};
+
+struct WorldSettings {
+  int32_t maxObjects = 4096;   ///< capacity of object slots (live objects, including fragments)
+  uint64_t seed = 1;
+  FractureSettings fracture;
+};
+
+/// Checks ranges: maxObjects ≥ 1, modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0,
+/// ringDownPeriods ≥ 0, debrisVolumeFraction in [0, 1), crack settings. Error: InvalidArgument.
+Status validateWorldSettings(const WorldSettings& settings);
+
+struct ObjectDesc {
+  std::string asset;                                             ///< an object name in the pack
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();        ///< local → world, det +1
+  Eigen::Vector3d translationM = Eigen::Vector3d::Zero();        ///< world position of the local origin
+};
+
+/// An impact as the host reports it. Point and normal are in world coordinates; the normal is the
+/// body's outward unit normal at the point (the impactor comes from that side).
+struct ImpactDesc {
+  ObjectId object;
+  Eigen::Vector3d pointWorld = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normalWorld = Eigen::Vector3d::UnitZ();
+  double speedMps = 0.0;                 ///< normal approach speed, > 0
+  double impactorMassKg = 1.0;           ///< +∞: an immovable impactor (the ground)
+  double impactorRadiusM = 0.01;         ///< +∞: flat
+  double impactorYoungsModulusPa = 210e9;  ///< default: steel
+  double impactorPoissonRatio = 0.3;
+  double impulseNs = 0.0;                ///< the host's impulse; ≤ 0: (1 + e) m* v with the body's restitution
+  double bodyRadiusM = 0.0;              ///< local radius of curvature; 0: estimated from the surface
+  /// How far the point may lie from the body's surface (m); 0: 5 % of the body's size.
+  double pointToleranceM = 0.0;
+};
+
+struct FragmentResult {
+  ObjectId object;              ///< the new breakable object; invalid for debris and unmatched fragments
+  bool debris = false;
+  TriangleMesh surface;         ///< closed, outward; the broken object's local frame (m)
+  MassProperties massProperties;  ///< exact, from the surface; local frame
+  int64_t matchedEntry = -1;    ///< database entry, −1 if none
+  double matchDistance = 0.0;
+};
+
+struct StageTimes {
+  double contactS = 0.0, modalS = 0.0, stressS = 0.0, propagationS = 0.0, surfacesS = 0.0, matchingS = 0.0;
+  double totalS() const { return contactS + modalS + stressS + propagationS + surfacesS + matchingS; }
+};
+
+struct ImpactResult {
+  bool broken = false;                 ///< the body fell apart (≥ 2 fragments); its id is then stale
+  HertzContact contact;
+  double bodyRadiusM = 0.0;            ///< the local radius of curvature used
+  double peakPrincipalStressPa = 0.0;  ///< exact maximum over elements and instants
+  int32_t peakElement = -1;
+  double peakTimeS = 0.0;
+  int modesUsed = 0;
+  int64_t stressEvaluations = 0;
+  FractureState fracture;
+  std::vector<FragmentResult> fragments;  ///< empty unless broken; ordered by fragment label
+  StageTimes times;
+};
+
+class World {
+ public:
+  /// Validates the settings and builds the search index of the pack's database (if any).
+  /// Errors: InvalidArgument (settings), those of FragmentMatcher::build.
+  static Result<World> create(Pack pack, const WorldSettings& settings = {});
+
+  World(World&&) noexcept;
+  World& operator=(World&&) noexcept;
+  ~World();
+
+  /// Places an instance of a pack object. Errors: InvalidArgument (unknown asset name, a rotation
+  /// that is not orthonormal with det +1, non-finite values, no free slot: maxObjects reached),
+  /// those of building the object's topology.
+  Result<ObjectId> addObject(const ObjectDesc& desc);
+  /// Errors: InvalidArgument (stale or invalid id).
+  Status removeObject(ObjectId id);
+  bool isAlive(ObjectId id) const;
+  int32_t objectCount() const;
+  /// The object's asset (local frame) and pose. Errors: InvalidArgument (stale id).
+  Result<const ObjectAsset*> objectAsset(ObjectId id) const;
+  Result<ObjectDesc> objectPose(ObjectId id) const;
+
+  /// Computes the fracture of one impact. When the body breaks, its id becomes stale and each
+  /// matched fragment is a new object (same pose). Errors: InvalidArgument (stale id, non-finite
+  /// or non-positive values, a point farther than the tolerance from the surface), those of the
+  /// stages; Internal failures are reported as InvalidArgument with the stage named.
+  Result<ImpactResult> impact(const ImpactDesc& desc);
+
+ private:
+  struct Impl;
+  explicit World(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> mImpl;
+};
+
+}  // namespace brittle

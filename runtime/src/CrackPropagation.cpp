@@ -1,0 +1,367 @@
+#include "brittle/runtime/CrackPropagation.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <limits>
+#include <cmath>
+#include <numeric>
+#include <queue>
+#include <random>
+
+namespace brittle {
+namespace {
+
+const Voigt kD = (Voigt() << 1.0, 1.0, 1.0, std::sqrt(2.0), std::sqrt(2.0), std::sqrt(2.0)).finished();
+
+Eigen::Matrix3d tensor(const Voigt& s) {
+  Eigen::Matrix3d t;
+  t << s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2];
+  return t;
+}
+
+// Signed distances of the tet's nodes to the plane n·x = offset.
+Eigen::Vector4d sides(const TetMesh& mesh, Eigen::Index e, const Eigen::Vector3d& n, double offset) {
+  Eigen::Vector4d d;
+  for (int i = 0; i < 4; ++i) d[i] = n.dot(mesh.nodes.row(mesh.tets(e, i)).transpose()) - offset;
+  return d;
+}
+
+bool crosses(const Eigen::Vector4d& d) { return d.maxCoeff() > 0.0 && d.minCoeff() < 0.0; }
+
+// Area of the plane's section of the tet (3 or 4 points where edges change side).
+double sectionArea(const TetMesh& mesh, Eigen::Index e, const Eigen::Vector4d& d, const Eigen::Vector3d& n) {
+  std::vector<Eigen::Vector3d> p;
+  for (const auto& [i, j] : kTetEdges) {
+    if ((d[i] > 0.0) == (d[j] > 0.0)) continue;
+    const double s = d[i] / (d[i] - d[j]);
+    const Eigen::Vector3d a = mesh.nodes.row(mesh.tets(e, i)), b = mesh.nodes.row(mesh.tets(e, j));
+    p.push_back(a + s * (b - a));
+  }
+  if (p.size() < 3) return 0.0;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& x : p) c += x;
+  c /= static_cast<double>(p.size());
+  const Eigen::Vector3d u = (p[0] - c).normalized(), v = n.cross(u);
+  std::sort(p.begin(), p.end(), [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return std::atan2((a - c).dot(v), (a - c).dot(u)) < std::atan2((b - c).dot(v), (b - c).dot(u));
+  });
+  double area = 0.0;
+  for (size_t k = 0; k < p.size(); ++k) area += 0.5 * (p[k] - c).cross(p[(k + 1) % p.size()] - c).dot(n);
+  return std::abs(area);
+}
+
+// The plane's cut through face f of tet e: the segment between the crossing points on its edges
+// (false when the plane only touches the face).
+bool faceCut(const TetMesh& mesh, Eigen::Index e, int f, const Eigen::Vector4d& d, Eigen::Vector3d& a, Eigen::Vector3d& b) {
+  const auto local = tetFaceNodes(f);
+  Eigen::Vector3d p[3];
+  int count = 0;
+  for (int k = 0; k < 3; ++k) {
+    const int i = local[static_cast<size_t>(k)], j = local[static_cast<size_t>((k + 1) % 3)];
+    if ((d[i] > 0.0) == (d[j] > 0.0)) continue;
+    const double s = d[i] / (d[i] - d[j]);
+    p[count++] = mesh.nodes.row(mesh.tets(e, i)).transpose() +
+                 s * (mesh.nodes.row(mesh.tets(e, j)) - mesh.nodes.row(mesh.tets(e, i))).transpose();
+  }
+  if (count != 2) return false;
+  a = p[0];
+  b = p[1];
+  return true;
+}
+
+struct Front {
+  double priority;  // normal stress on the parent plane
+  int32_t element;
+  int32_t crack;
+  Eigen::Vector3d normal;  // parent's plane normal (orients the local principal direction)
+  Eigen::Vector3d point;   // the parent's cut through the shared face: the new plane contains it
+  Eigen::Vector3d point2;
+};
+struct FrontOrder {
+  bool operator()(const Front& a, const Front& b) const {
+    if (a.priority != b.priority) return a.priority < b.priority;  // strongest first
+    return a.element > b.element;                                  // ties: lowest id first
+  }
+};
+
+}  // namespace
+
+double maxPrincipalStress(const Voigt& s, Eigen::Vector3d* direction) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(tensor(s), direction ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
+  if (direction) *direction = eig.eigenvectors().col(2);
+  return eig.eigenvalues()[2];
+}
+
+Eigen::MatrixXd stressModeBounds(const MatrixXdRow& s, int modes) {
+  const Eigen::Index t = s.rows() / 6;
+  Eigen::MatrixXd b(t, modes);
+  for (Eigen::Index e = 0; e < t; ++e) {
+    b.row(e) = (kD.asDiagonal() * s.block(6 * e, 0, 6, modes)).colwise().norm();
+  }
+  return b;
+}
+
+Voigt StressField::at(int32_t e) const {
+  Voigt s = stressModes->block(6 * e, 0, 6, q.size()) * q;
+  if (staticStress && staticStress->size() > 0) s += staticStress->segment<6>(6 * e) * forceN;
+  return s;
+}
+
+StressScan scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
+                        const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double threshold,
+                        bool prune) {
+  const Eigen::Index t = S.rows() / 6, steps = q.rows(), r = q.cols();
+  const bool correction = staticStress.size() > 0;
+  StressScan scan;
+  // σ_e at instant k, and its Frobenius norm ‖Dσ‖ (a bound on σ₁ that needs no eigen solve).
+  auto voigt = [&](Eigen::Index e, Eigen::Index k) {
+    Voigt s = S.block(6 * e, 0, 6, r) * q.row(k).transpose();
+    if (correction) s += staticStress.segment<6>(6 * e) * forceN[static_cast<size_t>(k)];
+    return s;
+  };
+  double best = -std::numeric_limits<double>::infinity();
+  auto consider = [&](Eigen::Index e, Eigen::Index k, double s1) {
+    // Ties break towards the lower instant, then the lower element, in both scans.
+    if (s1 > best || (s1 == best && (k < scan.peakInstant || (k == scan.peakInstant && e < scan.peakElement)))) {
+      best = s1;
+      scan.peakElement = static_cast<int32_t>(e);
+      scan.peakInstant = static_cast<int32_t>(k);
+    }
+  };
+  Eigen::MatrixXd bound;  // T by K
+  if (!prune) {
+    for (Eigen::Index e = 0; e < t; ++e) {
+      for (Eigen::Index k = 0; k < steps; ++k) {
+        ++scan.evaluations;
+        consider(e, k, maxPrincipalStress(voigt(e, k)));
+      }
+    }
+  } else {
+    bound = bounds.leftCols(r) * q.cwiseAbs().transpose();
+    if (correction) {
+      Eigen::VectorXd staticNorm(t), f(steps);
+      for (Eigen::Index e = 0; e < t; ++e) staticNorm[e] = (kD.asDiagonal() * staticStress.segment<6>(6 * e)).norm();
+      for (Eigen::Index k = 0; k < steps; ++k) f[k] = std::abs(forceN[static_cast<size_t>(k)]);
+      bound += staticNorm * f.transpose();
+    }
+    // Elements by their largest bound, largest first; stop once no bound can beat the best.
+    const Eigen::VectorXd elementBound = bound.rowwise().maxCoeff();
+    std::vector<int32_t> order(static_cast<size_t>(t));
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
+      return elementBound[a] != elementBound[b] ? elementBound[a] > elementBound[b] : a < b;
+    });
+    for (int32_t e : order) {
+      if (elementBound[e] < best) break;
+      for (Eigen::Index k = 0; k < steps; ++k) {
+        if (bound(e, k) < best) continue;
+        const Voigt s = voigt(e, k);
+        if ((kD.asDiagonal() * s).norm() < best) continue;
+        ++scan.evaluations;
+        consider(e, k, maxPrincipalStress(s));
+      }
+    }
+  }
+  scan.peakPrincipalPa = best;
+  // Seeds at the peak instant.
+  const Eigen::Index k = scan.peakInstant;
+  std::vector<std::pair<double, int32_t>> seeds;
+  for (Eigen::Index e = 0; e < t && k >= 0; ++e) {
+    if (prune && bound(e, k) < threshold) continue;
+    const Voigt s = voigt(e, k);
+    if (prune && (kD.asDiagonal() * s).norm() < threshold) continue;
+    ++scan.evaluations;
+    const double s1 = maxPrincipalStress(s);
+    if (s1 >= threshold) seeds.emplace_back(s1, static_cast<int32_t>(e));
+  }
+  std::sort(seeds.begin(), seeds.end(), [](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first > b.first : a.second < b.second;
+  });
+  for (const auto& [s1, e] : seeds) scan.seeds.push_back(e);
+  return scan;
+}
+
+Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& topo, const StressScan& scan,
+                                      const StressField& field, double sigmaT, double gc, double budget,
+                                      const CrackSettings& settings) {
+  if (settings.maxCracks < 0 || std::isnan(settings.propagationStressRatio) || !(settings.directionBlend >= 0.0) ||
+      !(settings.directionBlend <= 1.0) || !(settings.noiseRad >= 0.0)) {
+    return makeError(ErrorCode::InvalidArgument, "crack settings: maxCracks ≥ 0, propagationStressRatio not NaN, "
+                                                 "directionBlend in [0, 1], noiseRad ≥ 0");
+  }
+  if (!(sigmaT > 0.0) || !(gc > 0.0) || !std::isfinite(budget)) {
+    return makeError(ErrorCode::InvalidArgument, "crack growth needs σ_t > 0, G_c > 0 and a finite energy budget");
+  }
+  const Eigen::Index t = mesh.tets.rows();
+  FractureState state;
+  state.energyBudgetJ = budget;
+  state.edgeCuts = Eigen::VectorXd::Constant(topo.edges.rows(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<char> cut(static_cast<size_t>(t), 0);
+  std::mt19937_64 rng(settings.seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::priority_queue<Front, std::vector<Front>, FrontOrder> front;
+  std::vector<Eigen::Vector3d> seedNormals;  // per crack: the plane it started on
+
+  // Each crack is the zero set of a nodal level set φ_c, piecewise linear over the tets. A cut
+  // element gives its plane's signed distance to those of its nodes that have no value yet; the
+  // crack surface is where φ_c changes sign. Sharing nodal values makes the surface continuous
+  // across elements, so a crack crosses a layer of elements instead of thickening into a blob, and
+  // every edge it crosses is cut at the same point from every element around it.
+  std::vector<std::vector<double>> phi;
+  std::vector<std::vector<char>> cutBy;  // per crack: cracks cross each other, each needs its whole sheet
+  auto apply = [&](int32_t e, const Eigen::Vector3d& n, double offset, int32_t crack) -> bool {
+    std::vector<double>& level = phi[static_cast<size_t>(crack)];
+    Eigen::Vector4d d;
+    for (int i = 0; i < 4; ++i) {
+      double& v = level[static_cast<size_t>(mesh.tets(e, i))];
+      if (std::isnan(v)) v = n.dot(mesh.nodes.row(mesh.tets(e, i)).transpose()) - offset;
+      d[i] = v;
+    }
+    if (!crosses(d)) return true;  // the crack surface misses this element: nothing to pay, nothing to cut
+    const double area = sectionArea(mesh, e, d, n);
+    const double cost = gc * area;
+    if (state.energySpentJ + cost > budget) {
+      state.arrestedByEnergy = true;
+      return false;
+    }
+    state.energySpentJ += cost;
+    state.crackAreaM2 += area;
+    cutBy[static_cast<size_t>(crack)][static_cast<size_t>(e)] = 1;
+    if (!cut[static_cast<size_t>(e)]) state.cutElements.push_back(e);
+    cut[static_cast<size_t>(e)] = 1;
+    state.cutPlanes.emplace_back(n.x(), n.y(), n.z(), offset);
+    for (int k = 0; k < 6; ++k) {
+      const auto [i, j] = kTetEdges[static_cast<size_t>(k)];
+      if ((d[i] > 0.0) == (d[j] > 0.0)) continue;
+      const int32_t edge = topo.tetEdges(e, k);
+      if (!std::isnan(state.edgeCuts[edge])) continue;  // the first crack through an edge places the cut
+      const bool forward = topo.edges(edge, 0) == mesh.tets(e, i);
+      const double sCut = d[i] / (d[i] - d[j]);
+      state.edgeCuts[edge] = forward ? sCut : 1.0 - sCut;
+    }
+    for (int f = 0; f < 4; ++f) {
+      const int32_t nb = topo.neighbours(e, f);
+      Eigen::Vector3d a, b;
+      if (nb < 0 || cutBy[static_cast<size_t>(crack)][static_cast<size_t>(nb)] || !faceCut(mesh, e, f, d, a, b)) continue;
+      const Voigt sNb = field.at(nb);
+      front.push({n.dot(tensor(sNb) * n), nb, crack, n, a, b});
+    }
+    return true;
+  };
+
+  // Seeds: strongest first; one crack per seed that is neither cut nor next to a cut element.
+  for (int32_t e : scan.seeds) {
+    if (state.crackCount >= settings.maxCracks || state.arrestedByEnergy) break;
+    bool nearCut = cut[static_cast<size_t>(e)] != 0;
+    for (int f = 0; f < 4 && !nearCut; ++f) {
+      const int32_t nb = topo.neighbours(e, f);
+      nearCut = nb >= 0 && cut[static_cast<size_t>(nb)];
+    }
+    if (nearCut) continue;
+    Eigen::Vector3d dir;
+    maxPrincipalStress(field.at(e), &dir);
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int i = 0; i < 4; ++i) centroid += 0.25 * mesh.nodes.row(mesh.tets(e, i)).transpose();
+    seedNormals.push_back(dir);
+    phi.emplace_back(static_cast<size_t>(mesh.nodes.rows()), std::numeric_limits<double>::quiet_NaN());
+    cutBy.emplace_back(static_cast<size_t>(t), 0);
+    if (!apply(e, dir, dir.dot(centroid), state.crackCount)) break;
+    ++state.crackCount;
+  }
+  // Fronts advance together, strongest normal stress first.
+  while (!front.empty() && !state.arrestedByEnergy) {
+    const Front f = front.top();
+    front.pop();
+    if (cutBy[static_cast<size_t>(f.crack)][static_cast<size_t>(f.element)]) continue;
+    const Voigt s = field.at(f.element);
+    Eigen::Vector3d dir;
+    const double s1 = maxPrincipalStress(s, &dir);
+    if (dir.dot(f.normal) < 0.0) dir = -dir;
+    // Blend with the crack's starting plane, not the parent's: blending with the parent would let
+    // the noise accumulate into a random walk of orientations, and the sheet would curl up and fill
+    // the body instead of running through it.
+    Eigen::Vector3d start = seedNormals[static_cast<size_t>(f.crack)];
+    if (start.dot(f.normal) < 0.0) start = -start;
+    // The local direction steers in proportion to how close the tension is to σ_t: where the
+    // stress is low its direction means little, and the crack runs on straight.
+    const double steer = (1.0 - settings.directionBlend) * std::clamp(s1 / sigmaT, 0.0, 1.0);
+    Eigen::Vector3d n = (1.0 - steer) * start + steer * dir;
+    // Seeded turn: a random tangent direction scaled by noiseRad (one draw per statement).
+    const double gx = gauss(rng), gy = gauss(rng), gz = gauss(rng);
+    Eigen::Vector3d turn(gx, gy, gz);
+    n = n.normalized();
+    turn -= turn.dot(n) * n;
+    n = (n + settings.noiseRad * turn).normalized();
+    // The new plane contains the parent's cut through the shared face, so the sheet is continuous
+    // from element to element (and the shared edges are cut at the same points): keep only the
+    // part of the wanted normal that is orthogonal to that segment.
+    const Eigen::Vector3d along = (f.point2 - f.point).normalized();
+    n = (n - n.dot(along) * along).normalized();
+    if (!n.allFinite() || n.dot(f.normal) <= 0.0) n = f.normal;
+    if (n.dot(tensor(s) * n) < settings.propagationStressRatio * sigmaT) continue;
+    if (!apply(f.element, n, n.dot(f.point), f.crack)) break;
+  }
+  state.fragmentCount = labelFragments(topo, state.edgeCuts, mesh.nodes.rows(), state.nodeLabels);
+  state.mergedCrumbs = mergeCrumbs(topo, settings.minFragmentNodes, state.edgeCuts, state.nodeLabels, state.fragmentCount);
+  return state;
+}
+
+int mergeCrumbs(const TetTopology& topo, int minNodes, Eigen::VectorXd& edgeCuts, Eigen::VectorXi& labels,
+                int& fragmentCount) {
+  int merged = 0;
+  while (fragmentCount > 1) {
+    std::vector<int> size(static_cast<size_t>(fragmentCount), 0);
+    for (Eigen::Index i = 0; i < labels.size(); ++i) ++size[static_cast<size_t>(labels[i])];
+    // The smallest crumb (ties: lowest label) joins the neighbour it shares most cut edges with.
+    int crumb = -1;
+    for (int l = 0; l < fragmentCount; ++l) {
+      if (size[static_cast<size_t>(l)] < minNodes && (crumb < 0 || size[static_cast<size_t>(l)] < size[static_cast<size_t>(crumb)])) crumb = l;
+    }
+    if (crumb < 0) break;
+    std::vector<int> shared(static_cast<size_t>(fragmentCount), 0);
+    for (Eigen::Index e = 0; e < topo.edges.rows(); ++e) {
+      const int a = labels[topo.edges(e, 0)], b = labels[topo.edges(e, 1)];
+      if (a == crumb && b != crumb) ++shared[static_cast<size_t>(b)];
+      if (b == crumb && a != crumb) ++shared[static_cast<size_t>(a)];
+    }
+    const int into = static_cast<int>(std::max_element(shared.begin(), shared.end()) - shared.begin());
+    for (Eigen::Index e = 0; e < topo.edges.rows(); ++e) {
+      const int a = labels[topo.edges(e, 0)], b = labels[topo.edges(e, 1)];
+      if ((a == crumb && b == into) || (a == into && b == crumb)) edgeCuts[e] = std::numeric_limits<double>::quiet_NaN();
+    }
+    fragmentCount = labelFragments(topo, edgeCuts, labels.size(), labels);
+    ++merged;
+  }
+  return merged;
+}
+
+int labelFragments(const TetTopology& topo, const Eigen::VectorXd& edgeCuts, Eigen::Index nodeCount,
+                   Eigen::VectorXi& labels) {
+  std::vector<int32_t> parent(static_cast<size_t>(nodeCount));
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int32_t x) {
+    while (parent[static_cast<size_t>(x)] != x) {
+      parent[static_cast<size_t>(x)] = parent[static_cast<size_t>(parent[static_cast<size_t>(x)])];
+      x = parent[static_cast<size_t>(x)];
+    }
+    return x;
+  };
+  for (Eigen::Index e = 0; e < topo.edges.rows(); ++e) {
+    if (!std::isnan(edgeCuts[e])) continue;
+    const int32_t a = find(topo.edges(e, 0)), b = find(topo.edges(e, 1));
+    if (a != b) parent[static_cast<size_t>(std::max(a, b))] = std::min(a, b);  // root = lowest node
+  }
+  labels.resize(nodeCount);
+  std::vector<int32_t> labelOfRoot(static_cast<size_t>(nodeCount), -1);
+  int count = 0;
+  for (Eigen::Index i = 0; i < nodeCount; ++i) {
+    int32_t& l = labelOfRoot[static_cast<size_t>(find(static_cast<int32_t>(i)))];
+    if (l < 0) l = count++;
+    labels[i] = l;
+  }
+  return count;
+}
+
+}  // namespace brittle

@@ -1,0 +1,103 @@
+#include "brittle/runtime/TetTopology.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <string>
+#include <unordered_map>
+
+#include "brittle/descriptors/MassProperties.h"
+
+namespace brittle {
+
+std::array<int, 3> tetFaceNodes(int face) {
+  // For a positive tet (0,1,2,3), these triangles wind counter-clockwise seen from outside.
+  static constexpr std::array<std::array<int, 3>, 4> kFaces = {{{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
+  return kFaces[static_cast<size_t>(face)];
+}
+
+Result<TetTopology> buildTetTopology(const TetMesh& mesh) {
+  const auto n = mesh.nodes.rows(), t = mesh.tets.rows();
+  if (t == 0) return makeError(ErrorCode::InvalidArgument, "tet topology: no tetrahedra");
+  if (mesh.tets.minCoeff() < 0 || mesh.tets.maxCoeff() >= n) {
+    return makeError(ErrorCode::InvalidArgument, "tet topology: node index out of range");
+  }
+  TetTopology topo;
+  topo.tetEdges.resize(t, 6);
+  topo.neighbours.setConstant(t, 4, -1);
+  topo.tetVolumesM3.resize(t);
+  topo.nodeAreasM2.setZero(n);
+  std::unordered_map<uint64_t, int32_t> edgeIds;
+  edgeIds.reserve(static_cast<size_t>(t) * 2);
+  std::vector<std::array<int32_t, 2>> edges;
+  // Faces keyed by their sorted nodes; the value is the first (tet, face) seen.
+  struct FaceKey {
+    std::array<int32_t, 3> v;
+    bool operator==(const FaceKey&) const = default;
+  };
+  struct FaceHash {
+    size_t operator()(const FaceKey& k) const {
+      return (static_cast<size_t>(k.v[0]) * 73856093u) ^ (static_cast<size_t>(k.v[1]) * 19349663u) ^
+             (static_cast<size_t>(k.v[2]) * 83492791u);
+    }
+  };
+  std::unordered_map<FaceKey, std::array<int32_t, 2>, FaceHash> faces;
+  faces.reserve(static_cast<size_t>(t) * 3);
+  for (Eigen::Index e = 0; e < t; ++e) {
+    const Eigen::Vector3d a = mesh.nodes.row(mesh.tets(e, 0)), b = mesh.nodes.row(mesh.tets(e, 1)),
+                          c = mesh.nodes.row(mesh.tets(e, 2)), d = mesh.nodes.row(mesh.tets(e, 3));
+    const double volume = signedTetVolume(a, b, c, d);
+    if (!(volume > 0.0)) {
+      return makeError(ErrorCode::InvalidArgument, "tet topology: tet " + std::to_string(e) + " is not positively oriented");
+    }
+    topo.tetVolumesM3[e] = volume;
+    for (int k = 0; k < 6; ++k) {
+      int32_t p = mesh.tets(e, kTetEdges[k][0]), q = mesh.tets(e, kTetEdges[k][1]);
+      if (p > q) std::swap(p, q);
+      const uint64_t key = (static_cast<uint64_t>(p) << 32) | static_cast<uint32_t>(q);
+      auto [it, inserted] = edgeIds.try_emplace(key, static_cast<int32_t>(edges.size()));
+      if (inserted) edges.push_back({p, q});
+      topo.tetEdges(e, k) = it->second;
+    }
+    for (int f = 0; f < 4; ++f) {
+      const auto local = tetFaceNodes(f);
+      FaceKey key{{mesh.tets(e, local[0]), mesh.tets(e, local[1]), mesh.tets(e, local[2])}};
+      std::sort(key.v.begin(), key.v.end());
+      auto [it, inserted] = faces.try_emplace(key, std::array<int32_t, 2>{static_cast<int32_t>(e), f});
+      if (inserted) continue;
+      const auto [other, otherFace] = it->second;
+      if (other < 0 || topo.neighbours(other, otherFace) >= 0) {
+        return makeError(ErrorCode::InvalidArgument, "tet topology: a face of tet " + std::to_string(e) +
+                                                         " is shared by more than two tets");
+      }
+      topo.neighbours(e, f) = other;
+      topo.neighbours(other, otherFace) = static_cast<int32_t>(e);
+    }
+  }
+  topo.edges.resize(static_cast<Eigen::Index>(edges.size()), 2);
+  double edgeLength = 0.0;
+  for (size_t i = 0; i < edges.size(); ++i) {
+    topo.edges.row(static_cast<Eigen::Index>(i)) << edges[i][0], edges[i][1];
+    edgeLength += (mesh.nodes.row(edges[i][0]) - mesh.nodes.row(edges[i][1])).norm();
+  }
+  topo.meanEdgeLengthM = edgeLength / static_cast<double>(edges.size());
+  for (Eigen::Index e = 0; e < t; ++e) {
+    for (int f = 0; f < 4; ++f) {
+      if (topo.neighbours(e, f) < 0) topo.boundaryFaces.push_back({static_cast<int32_t>(e), f});
+    }
+  }
+  topo.boundaryTriangles.resize(static_cast<Eigen::Index>(topo.boundaryFaces.size()), 3);
+  for (size_t i = 0; i < topo.boundaryFaces.size(); ++i) {
+    const auto [e, f] = topo.boundaryFaces[i];
+    const auto local = tetFaceNodes(f);
+    for (int k = 0; k < 3; ++k) topo.boundaryTriangles(static_cast<Eigen::Index>(i), k) = mesh.tets(e, local[static_cast<size_t>(k)]);
+    const Eigen::Vector3d a = mesh.nodes.row(topo.boundaryTriangles(static_cast<Eigen::Index>(i), 0));
+    const Eigen::Vector3d b = mesh.nodes.row(topo.boundaryTriangles(static_cast<Eigen::Index>(i), 1));
+    const Eigen::Vector3d c = mesh.nodes.row(topo.boundaryTriangles(static_cast<Eigen::Index>(i), 2));
+    const double area = 0.5 * (b - a).cross(c - a).norm();
+    for (int k = 0; k < 3; ++k) topo.nodeAreasM2[topo.boundaryTriangles(static_cast<Eigen::Index>(i), k)] += area / 3.0;
+  }
+  topo.volumeM3 = topo.tetVolumesM3.sum();
+  return topo;
+}
+
+}  // namespace brittle

@@ -1,0 +1,166 @@
+// Baking the fragment database: contents, reproducibility, and the pack schema v2 round trip.
+#include "brittle/precompute/FragmentDatabaseBake.h"
+
+#include <gtest/gtest.h>
+#include <hdf5.h>
+
+#include <fstream>
+#include <set>
+
+#include "FragmentTestSupport.h"
+#include "brittle/database/Pack.h"
+#include "brittle/precompute/MeshValidation.h"
+#include "brittle/testing/AssetChecks.h"
+
+namespace brittle {
+namespace {
+
+class FragmentDatabaseTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    ASSERT_GE(testing::shippedBaseShapes().size(), 6u);
+    auto db = bakeFragmentDatabase(testing::smallDatabaseSettings(8, true));
+    ASSERT_TRUE(db) << db.error().message;
+    physical = new FragmentDatabase(std::move(db).value());
+  }
+  static void TearDownTestSuite() { delete physical; }
+  static inline FragmentDatabase* physical = nullptr;
+  std::filesystem::path dir = testing::makeTempDir("fragdb");
+};
+
+TEST_F(FragmentDatabaseTest, EveryEntryIsACanonicalClosedUnitVolumeFragmentWithModes) {
+  const FragmentDatabase& db = *physical;
+  ASSERT_EQ(db.entries.size(), 8u);
+  EXPECT_TRUE(db.hasPhysics());
+  std::set<std::string> shapes;
+  for (const FragmentEntry& e : db.entries) {
+    SCOPED_TRACE(e.asset.name);
+    shapes.insert(e.baseShape);
+    EXPECT_TRUE(validateSurfaceMesh(e.surface)) << "closed, manifold, outward";
+    const MassProperties surface = computeSurfaceMassProperties(e.surface, 1.0);
+    EXPECT_NEAR(surface.volumeM3, 1.0, 1e-9);
+    EXPECT_LT(surface.centerOfMassM.norm(), 1e-9);
+    // Principal axes, ascending, unless two principal moments are within the ambiguity gap (the
+    // frame is then chosen inside that plane by higher-order moments).
+    const Eigen::Matrix3d& c = surface.secondMomentM5;
+    const auto frames = computeCanonicalFrames(e.surface);
+    ASSERT_TRUE(frames);
+    if (!frames.value().degenerateLowerPair && !frames.value().degenerateUpperPair) {
+      EXPECT_LT(std::abs(c(0, 1)) + std::abs(c(0, 2)) + std::abs(c(1, 2)), 1e-9 * c.trace());
+      EXPECT_LE(c(0, 0), c(1, 1) * (1 + 1e-9));
+      EXPECT_LE(c(1, 1), c(2, 2) * (1 + 1e-9));
+    }
+    // The tet mesh fills the same solid (the surface is approximated within Mesh_3's tolerance).
+    EXPECT_NEAR(e.asset.massProperties.volumeM3, 1.0, 0.08);  // 400 tets on curved fragments
+    EXPECT_EQ(e.asset.modal.frequenciesHz.size(), 6);
+    EXPECT_LT(e.asset.modal.residuals.maxCoeff(), 1e-8);
+    EXPECT_GT(e.asset.modal.frequenciesHz(0), 0.0);
+    EXPECT_GT(e.baseVolumeFraction, 0.0);
+    EXPECT_LT(e.baseVolumeFraction, 1.0);
+    EXPECT_TRUE(e.cut == "voronoi" || e.cut == "planes") << e.cut;
+  }
+  EXPECT_GE(shapes.size(), 6u) << "entries cycle over the base shapes";
+  for (DescriptorKind kind : kAllDescriptorKinds) {
+    EXPECT_EQ(db.descriptorsOf(kind).rows(), 8);
+    EXPECT_EQ(db.descriptorsOf(kind).cols(), descriptorSize(kind, db.descriptorSettings));
+  }
+}
+
+TEST_F(FragmentDatabaseTest, SameSeedSameDatabaseForAnyThreadCount) {
+  DatabaseBakeSettings s = testing::smallDatabaseSettings(12, false);
+  s.threads = 1;
+  auto one = bakeFragmentDatabase(s);
+  s.threads = 2;
+  auto two = bakeFragmentDatabase(s);
+  s.seed = 8;
+  auto other = bakeFragmentDatabase(s);
+  ASSERT_TRUE(one && two && other);
+  for (size_t i = 0; i < 12; ++i) {
+    EXPECT_EQ(one.value().entries[i].surface.vertices, two.value().entries[i].surface.vertices);
+    EXPECT_EQ(one.value().entries[i].seed, two.value().entries[i].seed);
+  }
+  for (DescriptorKind kind : kAllDescriptorKinds) {
+    EXPECT_EQ(one.value().descriptorsOf(kind), two.value().descriptorsOf(kind));
+    EXPECT_NE(one.value().descriptorsOf(kind), other.value().descriptorsOf(kind));
+  }
+}
+
+TEST_F(FragmentDatabaseTest, PackRoundTripIsBitExact) {
+  Pack pack;
+  pack.database = *physical;
+  const auto path = dir / "db.h5";
+  ASSERT_TRUE(writePack(pack, path));
+  auto read = readPack(path);
+  ASSERT_TRUE(read) << read.error().message;
+  const FragmentDatabase& a = physical[0];
+  const FragmentDatabase& b = read.value().database;
+  EXPECT_EQ(a.referenceMaterial, b.referenceMaterial);
+  EXPECT_EQ(a.seed, b.seed);
+  EXPECT_EQ(a.descriptorSettings.moment.maxOrder, b.descriptorSettings.moment.maxOrder);
+  EXPECT_EQ(a.descriptorSettings.voxel.resolution, b.descriptorSettings.voxel.resolution);
+  EXPECT_EQ(a.descriptorSettings.voxelImproved.clampVoxels, b.descriptorSettings.voxelImproved.clampVoxels);
+  ASSERT_EQ(a.entries.size(), b.entries.size());
+  for (size_t i = 0; i < a.entries.size(); ++i) {
+    testing::expectSameBakedData(a.entries[i].asset, b.entries[i].asset);
+    EXPECT_EQ(a.entries[i].surface.vertices, b.entries[i].surface.vertices);
+    EXPECT_EQ(a.entries[i].surface.faces, b.entries[i].surface.faces);
+    EXPECT_EQ(a.entries[i].baseShape, b.entries[i].baseShape);
+    EXPECT_EQ(a.entries[i].cut, b.entries[i].cut);
+    EXPECT_EQ(a.entries[i].seed, b.entries[i].seed);
+  }
+  for (DescriptorKind kind : kAllDescriptorKinds) {
+    EXPECT_EQ(a.descriptorsOf(kind), b.descriptorsOf(kind));
+    EXPECT_EQ(a.indexSettings[static_cast<size_t>(kind)].checks, b.indexSettings[static_cast<size_t>(kind)].checks);
+  }
+}
+
+TEST_F(FragmentDatabaseTest, DamagedDatabaseGivesTypedErrors) {
+  Pack pack;
+  pack.database = *physical;
+  const auto path = dir / "db.h5";
+  ASSERT_TRUE(writePack(pack, path));
+  // A descriptor matrix of the wrong width.
+  {
+    const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    ASSERT_GE(H5Ldelete(f, "/database/descriptors/moment", H5P_DEFAULT), 0);
+    H5Fclose(f);
+  }
+  auto read = readPack(path);
+  ASSERT_FALSE(read);
+  EXPECT_EQ(read.error().code, ErrorCode::PackShapeMismatch);
+  EXPECT_NE(read.error().message.find("/database/descriptors/moment"), std::string::npos) << read.error().message;
+
+  // The writer refuses an inconsistent database instead of writing it.
+  pack.database.descriptors[0].conservativeResize(3, Eigen::NoChange);
+  auto status = writePack(pack, dir / "bad.h5");
+  ASSERT_FALSE(status);
+  EXPECT_EQ(status.error().code, ErrorCode::InvalidArgument);
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.h5"));
+}
+
+TEST_F(FragmentDatabaseTest, ManifestDatabaseSectionAndErrors) {
+  std::ofstream(dir / "m.json") << R"({"database": {"shapes": ")" +
+                                       (testing::sourceDir() / "assets/shapes/base-shapes.json").string() +
+                                       R"(", "only": ["box", "sphere"], "entries": 5, "seed": 3, "tets": 300, "modes": 4}})";
+  auto s = loadDatabaseManifest(dir / "m.json");
+  ASSERT_TRUE(s) << s.error().message;
+  ASSERT_TRUE(s.value().has_value());
+  EXPECT_EQ(s.value()->shapes.size(), 2u);
+  EXPECT_EQ(s.value()->entryCount, 5);
+  EXPECT_EQ(s.value()->modeCount, 4);
+  std::ofstream(dir / "bad.json") << R"({"database": {"shapes": "x.json", "entries": -3}})";
+  EXPECT_EQ(loadDatabaseManifest(dir / "bad.json").error().code, ErrorCode::ParseError);
+  std::ofstream(dir / "unknown.json") << R"({"database": {"shapes": "x.json", "entires": 3}})";
+  auto unknown = loadDatabaseManifest(dir / "unknown.json");
+  ASSERT_FALSE(unknown);
+  EXPECT_NE(unknown.error().message.find("entires"), std::string::npos);
+  std::ofstream(dir / "none.json") << R"({"objects": []})";
+  EXPECT_FALSE(loadDatabaseManifest(dir / "none.json").value().has_value());
+  DatabaseBakeSettings empty = testing::smallDatabaseSettings(3, false);
+  empty.shapes.clear();
+  EXPECT_EQ(bakeFragmentDatabase(empty).error().code, ErrorCode::InvalidArgument);
+}
+
+}  // namespace
+}  // namespace brittle

@@ -1,0 +1,140 @@
+#include "brittle/runtime/FragmentSurfaces.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <random>
+
+#include "brittle/descriptors/MassProperties.h"
+#include "brittle/precompute/MeshValidation.h"
+#include "brittle/runtime/CrackPropagation.h"
+#include "brittle/testing/Fixtures.h"
+
+namespace brittle {
+namespace {
+
+double volumeOf(const TriangleMesh& m) { return computeSurfaceMassProperties(m, 1.0).volumeM3; }
+
+// Every directed edge has exactly one opposite: closed and consistently oriented.
+bool closedAndOriented(const TriangleMesh& m) {
+  std::map<std::pair<int, int>, int> count;
+  for (Eigen::Index f = 0; f < m.faces.rows(); ++f) {
+    for (int k = 0; k < 3; ++k) ++count[{m.faces(f, k), m.faces(f, (k + 1) % 3)}];
+  }
+  for (const auto& [e, c] : count) {
+    const auto it = count.find({e.second, e.first});
+    if (c != 1 || it == count.end() || it->second != 1) return false;
+  }
+  return true;
+}
+
+// Cuts every edge that crosses one of the planes n·x = d (first plane wins), as a crack would.
+Eigen::VectorXd cutsByPlanes(const TetMesh& mesh, const TetTopology& topo, const std::vector<Eigen::Vector4d>& planes) {
+  Eigen::VectorXd cuts = Eigen::VectorXd::Constant(topo.edges.rows(), std::nan(""));
+  for (Eigen::Index e = 0; e < topo.edges.rows(); ++e) {
+    const Eigen::Vector3d a = mesh.nodes.row(topo.edges(e, 0)), b = mesh.nodes.row(topo.edges(e, 1));
+    for (const auto& p : planes) {
+      const double da = p.head<3>().dot(a) - p[3], db = p.head<3>().dot(b) - p[3];
+      if ((da > 0) != (db > 0)) {
+        cuts[e] = da / (da - db);
+        break;
+      }
+    }
+  }
+  return cuts;
+}
+
+class FragmentSurfacesTest : public ::testing::Test {
+ protected:
+  TetMesh mesh = testing::makeBoxTetMesh(0.3, 0.2, 0.1, 6, 4, 2);
+  TetTopology topo = buildTetTopology(mesh).value();
+};
+
+TEST_F(FragmentSurfacesTest, TopologyOfABox) {
+  EXPECT_NEAR(topo.volumeM3, 0.3 * 0.2 * 0.1, 1e-15);
+  EXPECT_NEAR(topo.nodeAreasM2.sum(), 2 * (0.3 * 0.2 + 0.3 * 0.1 + 0.2 * 0.1), 1e-14);
+  TriangleMesh surface{mesh.nodes, topo.boundaryTriangles};
+  EXPECT_TRUE(closedAndOriented(surface));
+  EXPECT_NEAR(volumeOf(surface), topo.volumeM3, 1e-15);
+  // Euler: V − E + F − T = 1 for a ball.
+  EXPECT_EQ(mesh.nodes.rows() - topo.edges.rows() + (4 * mesh.tets.rows() + static_cast<Eigen::Index>(topo.boundaryFaces.size())) / 2 -
+                mesh.tets.rows(),
+            1);
+}
+
+TEST_F(FragmentSurfacesTest, OnePlaneSplitsTheBoxExactlyAlongIt) {
+  // The box spans [0, 0.3] in x with 0.05 cells: x = 0.163 cuts edges at parameter 0.26.
+  const double x0 = mesh.nodes.col(0).minCoeff() + 0.163;
+  const Eigen::VectorXd cuts = cutsByPlanes(mesh, topo, {Eigen::Vector4d(1, 0, 0, x0)});
+  Eigen::VectorXi labels;
+  ASSERT_EQ(labelFragments(topo, cuts, mesh.nodes.rows(), labels), 2);
+  auto surfaces = buildFragmentSurfaces(mesh, topo, labels, 2, cuts);
+  ASSERT_TRUE(surfaces) << surfaces.error().message;
+  double total = 0.0;
+  for (const TriangleMesh& s : surfaces.value()) {
+    EXPECT_TRUE(closedAndOriented(s));
+    const Status valid = validateSurfaceMesh(s);
+    EXPECT_TRUE(valid) << valid.error().message;
+    total += volumeOf(s);
+  }
+  EXPECT_NEAR(total, topo.volumeM3, 1e-9 * topo.volumeM3);
+  // The crack faces lie on the plane, so each side has exactly its slab's volume.
+  const double left = 0.163 * 0.2 * 0.1;
+  const int leftLabel = labels[0];  // node 0 is at the minimum corner in makeBoxTetMesh
+  EXPECT_NEAR(volumeOf(surfaces.value()[static_cast<size_t>(leftLabel)]), left, 1e-12);
+}
+
+TEST_F(FragmentSurfacesTest, ThreePlanesGiveClosedFragmentsThatConserveVolume) {
+  const Eigen::Vector3d c = mesh.nodes.colwise().mean();
+  std::vector<Eigen::Vector4d> planes;
+  for (const Eigen::Vector3d& n : {Eigen::Vector3d(1, 0.3, 0.1).normalized(), Eigen::Vector3d(-0.2, 1, 0.05).normalized(),
+                                   Eigen::Vector3d(0.6, -0.7, 0.2).normalized()}) {
+    planes.emplace_back(n.x(), n.y(), n.z(), n.dot(c) + 0.0071);
+  }
+  const Eigen::VectorXd cuts = cutsByPlanes(mesh, topo, planes);
+  Eigen::VectorXi labels;
+  const int count = labelFragments(topo, cuts, mesh.nodes.rows(), labels);
+  EXPECT_GE(count, 4);
+  auto surfaces = buildFragmentSurfaces(mesh, topo, labels, count, cuts);
+  ASSERT_TRUE(surfaces) << surfaces.error().message;
+  double total = 0.0;
+  for (const TriangleMesh& s : surfaces.value()) {
+    EXPECT_TRUE(closedAndOriented(s));
+    EXPECT_GT(volumeOf(s), 0.0);
+    total += volumeOf(s);
+  }
+  EXPECT_NEAR(total, topo.volumeM3, 1e-9 * topo.volumeM3);
+}
+
+TEST_F(FragmentSurfacesTest, AnyLabellingPartitionsTheVolume) {
+  std::mt19937_64 rng(5);
+  for (int trial = 0; trial < 5; ++trial) {
+    Eigen::VectorXi labels(mesh.nodes.rows());
+    for (Eigen::Index i = 0; i < labels.size(); ++i) labels[i] = static_cast<int>(rng() % 3);
+    Eigen::VectorXd cuts(topo.edges.rows());
+    for (Eigen::Index e = 0; e < cuts.size(); ++e) cuts[e] = static_cast<double>(rng() % 1000) / 1000.0;
+    auto surfaces = buildFragmentSurfaces(mesh, topo, labels, 3, cuts);
+    ASSERT_TRUE(surfaces) << surfaces.error().message;
+    double total = 0.0;
+    for (const TriangleMesh& s : surfaces.value()) {
+      EXPECT_TRUE(closedAndOriented(s));
+      total += volumeOf(s);
+    }
+    EXPECT_NEAR(total, topo.volumeM3, 1e-9 * topo.volumeM3);
+  }
+}
+
+TEST_F(FragmentSurfacesTest, BadInputsGiveTypedErrors) {
+  Eigen::VectorXi labels = Eigen::VectorXi::Zero(mesh.nodes.rows());
+  const Eigen::VectorXd cuts = Eigen::VectorXd::Constant(topo.edges.rows(), 0.5);
+  EXPECT_EQ(buildFragmentSurfaces(mesh, topo, labels, 2, cuts).error().code, ErrorCode::InvalidArgument);  // label 1 empty
+  labels[0] = 7;
+  EXPECT_EQ(buildFragmentSurfaces(mesh, topo, labels, 2, cuts).error().code, ErrorCode::InvalidArgument);
+  EXPECT_FALSE(buildFragmentSurfaces(mesh, topo, Eigen::VectorXi::Zero(3), 1, cuts));
+  TetMesh inverted = mesh;
+  inverted.tets.col(0).swap(inverted.tets.col(1));
+  EXPECT_EQ(buildTetTopology(inverted).error().code, ErrorCode::InvalidArgument);
+}
+
+}  // namespace
+}  // namespace brittle

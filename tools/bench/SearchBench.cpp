@@ -1,0 +1,288 @@
+#include "SearchBench.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <random>
+
+#include "brittle/database/FragmentMatcher.h"
+#include "brittle/database/ScalingLaws.h"
+#include "brittle/precompute/BakePipeline.h"
+#include "brittle/precompute/FragmentDatabaseBake.h"
+
+namespace brittle::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t i = std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5));
+  return v[i];
+}
+
+struct Query {
+  TriangleMesh surface;
+  CanonicalFrames frames;
+  std::array<DescriptorMatrix, kDescriptorKindCount> descriptors;
+};
+
+struct Physics {
+  double massKg = 0.0;
+  Eigen::Vector3d principalInertia = Eigen::Vector3d::Zero();
+  Eigen::Vector3d frequenciesHz = Eigen::Vector3d::Zero();
+};
+
+Physics physicsOf(const ObjectAsset& a) {
+  Physics p;
+  p.massKg = a.massProperties.massKg;
+  p.principalInertia = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(a.massProperties.inertiaKgM2).eigenvalues();
+  p.frequenciesHz = a.modal.frequenciesHz.head<3>();
+  return p;
+}
+
+double maxRelative(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return ((a - b).array().abs() / b.array().abs()).maxCoeff();
+}
+
+void log(bool quiet, const char* format, auto... args) {
+  if (quiet) return;
+  std::fprintf(stderr, format, args...);
+  std::fflush(stderr);
+}
+
+}  // namespace
+
+Result<IndexChoice> parseIndexChoice(const std::string& text) {
+  IndexChoice c;
+  c.label = text;
+  const auto bad = [&] {
+    return makeError(ErrorCode::InvalidArgument, "index '" + text +
+                                                     "': expected kd-forest:TREES:CHECKS, autotuned:PRECISION or "
+                                                     "brute-force");
+  };
+  if (text == "brute-force") {
+    c.settings.kind = DescriptorIndexSettings::Kind::BruteForce;
+    return c;
+  }
+  int trees = 0, checks = 0;
+  float precision = 0.0f;
+  if (std::sscanf(text.c_str(), "kd-forest:%d:%d", &trees, &checks) == 2 && trees >= 1 && checks >= 1) {
+    c.settings.kind = DescriptorIndexSettings::Kind::KdForest;
+    c.settings.trees = trees;
+    c.settings.checks = checks;
+    return c;
+  }
+  if (std::sscanf(text.c_str(), "autotuned:%f", &precision) == 1 && precision > 0.0f && precision <= 1.0f) {
+    c.settings.kind = DescriptorIndexSettings::Kind::Autotuned;
+    c.settings.targetPrecision = precision;
+    return c;
+  }
+  return bad();
+}
+
+Status runSearchBench(const SearchBenchSettings& s) {
+  if (s.sizes.empty() || s.kinds.empty() || s.shapes.empty() || s.queries < 1) {
+    return makeError(ErrorCode::InvalidArgument, "bench search needs sizes, kinds, shapes and queries");
+  }
+  const int64_t maxSize = *std::max_element(s.sizes.begin(), s.sizes.end());
+  const bool anyVoxel = std::any_of(s.kinds.begin(), s.kinds.end(), [](auto k) { return k != DescriptorKind::Moment; });
+  const int64_t fullSize = anyVoxel ? std::min(maxSize, s.voxelSizeLimit) : 0;
+
+  DatabaseBakeSettings bake;
+  bake.shapes = s.shapes;
+  bake.seed = s.seed;
+  bake.physics = false;
+  bake.descriptors.voxel.resolution = bake.descriptors.voxelImproved.resolution = s.voxelResolution;
+
+  // Databases: every kind up to fullSize entries, moments only beyond (same seed: same fragments).
+  FragmentDatabase full, big;
+  if (fullSize > 0) {
+    auto t = Clock::now();
+    bake.entryCount = fullSize;
+    auto db = bakeFragmentDatabase(bake);
+    if (!db) return db.error();
+    full = std::move(db).value();
+    log(s.quiet, "database: %lld entries with every descriptor in %.1f s\n", static_cast<long long>(fullSize), seconds(t));
+  }
+  if (maxSize > fullSize) {
+    auto t = Clock::now();
+    bake.entryCount = maxSize;
+    bake.kinds = {true, false, false};
+    auto db = bakeFragmentDatabase(bake);
+    if (!db) return db.error();
+    big = std::move(db).value();
+    log(s.quiet, "database: %lld entries with moments in %.1f s\n", static_cast<long long>(maxSize), seconds(t));
+  }
+
+  // Queries: new fragments (another seed) in random poses and sizes.
+  std::vector<TriangleMesh> bases;
+  for (const auto& def : s.shapes) bases.push_back(makeBaseShape(def).value());
+  std::vector<Query> queries;
+  std::mt19937_64 rng(s.seed ^ 0x9e3779b97f4a7c15ull);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> size(0.05, 2.0), shift(-5.0, 5.0);
+  std::ofstream costCsv(s.descriptorCsv);
+  if (!costCsv) return makeError(ErrorCode::PackIoError, "cannot write " + s.descriptorCsv.string());
+  std::array<std::vector<double>, kDescriptorKindCount> costUs;
+  std::vector<double> frameUs, cutUs;
+  double triangles = 0.0;
+  for (int q = 0; q < s.queries; ++q) {
+    const auto cutStart = Clock::now();
+    // Like the database bake, a draw that yields no acceptable fragment is redrawn from the next seed.
+    uint64_t querySeed = fragmentEntrySeed(s.seed + 0x5eed0000ull, q);
+    auto fragment = generateFragment(bases[static_cast<size_t>(q) % bases.size()], bake.fragments, querySeed);
+    for (int attempt = 1; !fragment && attempt < kEntryAttempts; ++attempt) {
+      querySeed = fragmentEntrySeed(querySeed, 1);
+      fragment = generateFragment(bases[static_cast<size_t>(q) % bases.size()], bake.fragments, querySeed);
+    }
+    if (!fragment) return fragment.error();
+    cutUs.push_back(1e6 * seconds(cutStart));
+    Eigen::Vector4d g;
+    for (int c = 0; c < 4; ++c) g[c] = normal(rng);  // one draw per statement: fixed order
+    const Eigen::Matrix3d r = Eigen::Quaterniond(g[0], g[1], g[2], g[3]).normalized().toRotationMatrix();
+    const double scale = size(rng);
+    Eigen::Vector3d offset;
+    for (int c = 0; c < 3; ++c) offset[c] = shift(rng);
+    Query query;
+    query.surface = fragment.value();
+    query.surface.vertices = ((query.surface.vertices * r.transpose()) * scale).rowwise() + offset.transpose();
+    triangles += static_cast<double>(query.surface.faces.rows());
+    auto t = Clock::now();
+    auto frames = computeCanonicalFrames(query.surface, bake.descriptors.frame);
+    if (!frames) return frames.error();
+    frameUs.push_back(1e6 * seconds(t));
+    query.frames = std::move(frames).value();
+    for (DescriptorKind kind : kAllDescriptorKinds) {
+      t = Clock::now();
+      auto d = computeShapeDescriptors(query.surface, query.frames, kind, bake.descriptors);
+      if (!d) return d.error();
+      costUs[static_cast<size_t>(kind)].push_back(1e6 * seconds(t) / static_cast<double>(query.frames.candidates.size()));
+      query.descriptors[static_cast<size_t>(kind)] = std::move(d).value();
+    }
+    queries.push_back(std::move(query));
+  }
+  triangles /= static_cast<double>(queries.size());
+  costCsv << "stage,fragments,mean_triangles,median_us,p99_us,median_us_per_1k_triangles\n";
+  auto costRow = [&](const std::string& stage, const std::vector<double>& us) {
+    costCsv << stage << "," << us.size() << "," << triangles << "," << percentile(us, 0.5) << "," << percentile(us, 0.99)
+            << "," << percentile(us, 0.5) * 1000.0 / triangles << "\n";
+    log(s.quiet, "descriptor cost %-16s median %8.1f us (%.0f triangles)\n", stage.c_str(), percentile(us, 0.5), triangles);
+  };
+  costRow("fragment-cut", cutUs);  // generateFragment on the base shapes in turn (exact clipping)
+  costRow("canonical-frame", frameUs);
+  for (DescriptorKind kind : kAllDescriptorKinds) costRow(descriptorKindName(kind), costUs[static_cast<size_t>(kind)]);
+
+  // Ground truth physics of the first queries: their own tet mesh and modes.
+  const Material glass = bake.referenceMaterial;
+  const int physicsQueries = std::min(s.physicsQueries, s.queries);
+  std::vector<Physics> truth;
+  for (int q = 0; q < physicsQueries; ++q) {
+    ObjectBakeSettings b;
+    b.name = "query-" + std::to_string(q);
+    b.material = glass;
+    b.tetMesh.targetTets = s.physicsTets;
+    b.modal.modeCount = 3;
+    auto asset = bakeSurface(queries[static_cast<size_t>(q)].surface, b);
+    if (!asset) return asset.error();
+    truth.push_back(physicsOf(asset.value()));
+  }
+  if (physicsQueries > 0) log(s.quiet, "ground truth: %d query fragments meshed and solved\n", physicsQueries);
+  std::map<int64_t, FragmentEntry> physical;  // entries baked with physics on demand
+  DatabaseBakeSettings physicsBake = bake;
+  physicsBake.physics = true;
+  physicsBake.kinds = {false, false, false};
+  physicsBake.tetMesh.targetTets = s.physicsTets;
+  physicsBake.modeCount = 3;
+
+  std::ofstream csv(s.searchCsv);
+  if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.searchCsv.string());
+  csv << "entries,descriptor,index,trees,checks,build_s,memory_mb,query_median_us,query_p99_us,brute_median_us,"
+         "speedup_vs_brute,recall_at_1,physics_queries,mass_err_median,inertia_err_median,frequency_err_median\n";
+
+  for (int64_t n : s.sizes) {
+    for (DescriptorKind kind : s.kinds) {
+      const FragmentDatabase& db = kind == DescriptorKind::Moment && n > fullSize ? big : full;
+      if (static_cast<int64_t>(db.entries.size()) < n) {
+        log(s.quiet, "skip %s at %lld entries (voxel kinds stop at %lld)\n", descriptorKindName(kind),
+            static_cast<long long>(n), static_cast<long long>(fullSize));
+        continue;
+      }
+      std::vector<IndexChoice> choices{parseIndexChoice("brute-force").value()};
+      choices.insert(choices.end(), s.indices.begin(), s.indices.end());
+      std::vector<int64_t> exactTop;
+      std::vector<float> exactDistance;
+      double bruteMedian = 0.0;
+      for (const IndexChoice& choice : choices) {
+        FragmentMatcherSettings ms;
+        ms.enabled = {false, false, false};
+        ms.enabled[static_cast<size_t>(kind)] = true;
+        ms.entryLimit = n;
+        ms.indexOverride[static_cast<size_t>(kind)] = choice.settings;
+        auto t = Clock::now();
+        auto matcher = FragmentMatcher::build(db, ms);
+        if (!matcher) return matcher.error();
+        const double buildS = seconds(t);
+        std::vector<double> times;
+        std::vector<FragmentMatch> top;
+        for (const Query& q : queries) {
+          t = Clock::now();
+          auto m = matcher.value().matchDescriptors(q.frames, q.descriptors[static_cast<size_t>(kind)], kind, 1);
+          times.push_back(1e6 * seconds(t));
+          if (!m) return m.error();
+          top.push_back(m.value().front());
+        }
+        if (choice.settings.kind == DescriptorIndexSettings::Kind::BruteForce) {
+          for (const auto& m : top) {
+            exactTop.push_back(m.entry);
+            exactDistance.push_back(m.distance);
+          }
+          bruteMedian = percentile(times, 0.5);
+        }
+        int hits = 0;
+        for (size_t q = 0; q < top.size(); ++q) hits += top[q].entry == exactTop[q] || top[q].distance <= exactDistance[q];
+        // Physical error of this setting's matches.
+        std::vector<double> massErr, inertiaErr, freqErr;
+        for (int q = 0; q < physicsQueries; ++q) {
+          const FragmentMatch& m = top[static_cast<size_t>(q)];
+          auto it = physical.find(m.entry);
+          if (it == physical.end()) {
+            std::array<Descriptor, kDescriptorKindCount> unused;
+            const FragmentEntry& e = db.entries[static_cast<size_t>(m.entry)];
+            auto entry = bakeFragmentEntry(e.surface, e.asset.name, physicsBake, unused);
+            if (!entry) return entry.error();
+            it = physical.emplace(m.entry, std::move(entry).value()).first;
+          }
+          auto placed = instantiateEntry(it->second, glass, glass, m.queryFrame);
+          if (!placed) return placed.error();
+          const Physics p = physicsOf(placed.value());
+          const Physics& g = truth[static_cast<size_t>(q)];
+          massErr.push_back(std::abs(p.massKg - g.massKg) / g.massKg);
+          inertiaErr.push_back(maxRelative(p.principalInertia, g.principalInertia));
+          freqErr.push_back(maxRelative(p.frequenciesHz, g.frequenciesHz));
+        }
+        const double median = percentile(times, 0.5);
+        const double recall = static_cast<double>(hits) / static_cast<double>(top.size());
+        csv << n << "," << descriptorKindName(kind) << "," << descriptorIndexKindName(choice.settings.kind) << ","
+            << choice.settings.trees << "," << choice.settings.checks << "," << buildS << ","
+            << static_cast<double>(matcher.value().index(kind)->memoryBytes()) / 1048576.0 << "," << median << ","
+            << percentile(times, 0.99) << "," << bruteMedian << "," << bruteMedian / median << "," << recall << ","
+            << physicsQueries << "," << percentile(massErr, 0.5) << "," << percentile(inertiaErr, 0.5) << ","
+            << percentile(freqErr, 0.5) << "\n";
+        csv.flush();
+        log(s.quiet, "%7lld %-14s %-22s recall %.3f  median %8.1f us  p99 %8.1f us  (brute %8.1f us)  freq err %.3f\n",
+            static_cast<long long>(n), descriptorKindName(kind), choice.label.c_str(), recall, median,
+            percentile(times, 0.99), bruteMedian, percentile(freqErr, 0.5));
+      }
+    }
+  }
+  return Ok{};
+}
+
+}  // namespace brittle::bench

@@ -1,0 +1,52 @@
+// SearchBench.h — the descriptor similarity-search benchmark behind `brittle bench search`.
+//
+// For each database size × descriptor kind × index setting it measures, against exact
+// brute-force search over the same rows in the same run:
+//   recall@1, query time (median, p99; the search only, descriptors precomputed), build time and
+//   memory; and, on a subset of queries, the physical error of the match: relative error of mass,
+//   principal inertia and the first three elastic frequencies of the matched entry rescaled to
+//   the query (ScalingLaws.h) against a direct bake (tet mesh + modal analysis) of the query.
+// It also times each descriptor kind per fragment. Output: CSV files for plot_search.py.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "brittle/database/DescriptorIndex.h"
+#include "brittle/descriptors/ShapeDescriptors.h"
+#include "brittle/precompute/BaseShapes.h"
+
+namespace brittle::bench {
+
+struct IndexChoice {
+  std::string label;              ///< "kd-forest 4x64", "brute-force"
+  DescriptorIndexSettings settings;
+};
+
+/// "kd-forest:TREES:CHECKS", "autotuned:PRECISION" or "brute-force".
+Result<IndexChoice> parseIndexChoice(const std::string& text);
+
+struct SearchBenchSettings {
+  std::vector<BaseShapeDefinition> shapes;
+  std::vector<int64_t> sizes = {1000, 10000, 100000};
+  std::vector<DescriptorKind> kinds = {DescriptorKind::Moment, DescriptorKind::Voxel, DescriptorKind::VoxelImproved};
+  /// Voxel kinds cost ~100× the moments per fragment; sizes above this use moments only.
+  int64_t voxelSizeLimit = 10000;
+  std::vector<IndexChoice> indices;
+  int queries = 200;
+  int physicsQueries = 12;         ///< queries with a direct bake as ground truth (0: skip)
+  int64_t physicsTets = 1000;
+  int voxelResolution = 16;
+  uint64_t seed = 1;
+  std::filesystem::path searchCsv = "bench/search.csv";
+  std::filesystem::path descriptorCsv = "bench/descriptor_cost.csv";
+  bool quiet = false;
+};
+
+/// Runs the benchmark and writes both CSV files. Errors: those of the bakes, PackIoError when a
+/// CSV cannot be written.
+Status runSearchBench(const SearchBenchSettings& settings);
+
+}  // namespace brittle::bench

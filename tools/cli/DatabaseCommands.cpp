@@ -1,0 +1,246 @@
+// bake-db and query: the fragment shape database from the command line.
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+
+#include "../bench/SearchBench.h"
+#include "CliSupport.h"
+#include "Commands.h"
+#include "brittle/database/FragmentMatcher.h"
+#include "brittle/database/ScalingLaws.h"
+#include "brittle/precompute/FragmentDatabaseBake.h"
+#include "brittle/precompute/MaterialLibrary.h"
+#include "brittle/precompute/MeshIO.h"
+#include "brittle/precompute/MeshValidation.h"
+
+namespace brittle::cli {
+namespace {
+
+struct BakeDbOptions {
+  std::string shapesFile = "assets/shapes/base-shapes.json";
+  std::vector<std::string> only;
+  std::string out;
+  int64_t entries = 48;
+  uint64_t seed = 1;
+  int64_t tets = 1000;
+  int modes = 12;
+  bool descriptorsOnly = false;
+  int momentOrder = 4;
+  int voxelResolution = 16;
+  int threads = 0;
+  bool quiet = false;
+  bool json = false;
+};
+
+struct QueryOptions {
+  std::string pack;
+  std::string mesh;
+  std::string descriptor = "moment";
+  std::string index;
+  std::string material;
+  int k = 3;
+  bool json = false;
+};
+
+nlohmann::json matrixJson(const Eigen::Matrix3d& m) {
+  return {{m(0, 0), m(0, 1), m(0, 2)}, {m(1, 0), m(1, 1), m(1, 2)}, {m(2, 0), m(2, 1), m(2, 2)}};
+}
+
+}  // namespace
+
+Runner addBakeDbCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "bake-db", "Bake a fragment shape database (fragments of base shapes, descriptors, tet meshes, modes) into a pack");
+  auto o = std::make_shared<BakeDbOptions>();
+  cmd->add_option("--shapes", o->shapesFile, "Base shape definitions (JSON, see assets/shapes/README.md)")
+      ->capture_default_str();
+  cmd->add_option("--only", o->only, "Use only these base shapes (names from the shapes file)")->delimiter(',');
+  cmd->add_option("--entries", o->entries, "Number of fragments")->capture_default_str()->check(CLI::Range(int64_t{1}, int64_t{10000000}));
+  cmd->add_option("--seed", o->seed, "Seed of the fragment cuts (the bake is reproducible from it)")->capture_default_str();
+  cmd->add_option("--tets", o->tets, "Target tetrahedra per fragment")->capture_default_str()->check(CLI::Range(int64_t{100}, int64_t{1000000}));
+  cmd->add_option("--modes", o->modes, "Elastic modes per fragment")->capture_default_str()->check(CLI::Range(1, 200));
+  cmd->add_flag("--descriptors-only", o->descriptorsOnly, "Skip tet meshes and modes (search benchmarks on large databases)");
+  cmd->add_option("--moment-order", o->momentOrder, "Highest moment order of the moment descriptor")->capture_default_str()->check(CLI::Range(2, 10));
+  cmd->add_option("--voxel-resolution", o->voxelResolution, "Voxels per axis k of both voxel descriptors")->capture_default_str()->check(CLI::Range(2, 64));
+  cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores); the result does not depend on it")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--out", o->out, "Output pack (.h5), written atomically")->required();
+  cmd->add_flag("--quiet", o->quiet, "No progress display");
+  cmd->add_flag("--json", o->json, "Print the inspection of the new pack as JSON");
+
+  return [o]() -> int {
+    auto shapes = loadBaseShapes(o->shapesFile);
+    if (!shapes) return reportError(shapes.error());
+    DatabaseBakeSettings s;
+    s.shapes = std::move(shapes).value();
+    if (!o->only.empty()) {
+      auto picked = selectBaseShapes(s.shapes, o->only);
+      if (!picked) return reportError(picked.error());
+      s.shapes = std::move(picked).value();
+    }
+    s.entryCount = o->entries;
+    s.seed = o->seed;
+    s.tetMesh.targetTets = o->tets;
+    s.tetMesh.seed = o->seed;
+    s.modeCount = o->modes;
+    s.physics = !o->descriptorsOnly;
+    s.descriptors.moment.maxOrder = o->momentOrder;
+    s.descriptors.voxel.resolution = s.descriptors.voxelImproved.resolution = o->voxelResolution;
+    s.threads = o->threads;
+    Result<FragmentDatabase> db = [&] {
+      TerminalProgress progress(o->quiet);
+      return bakeFragmentDatabase(s, &progress);
+    }();
+    if (!db) return reportError(db.error());
+    Pack pack;
+    pack.database = std::move(db).value();
+    return writeAndPrintPack(pack, o->out, o->json);
+  };
+}
+
+Runner addQueryCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand("query", "Find the database entries nearest to a closed mesh, with rescaled physical data");
+  auto o = std::make_shared<QueryOptions>();
+  cmd->add_option("pack", o->pack, "Pack with a fragment database")->required();
+  cmd->add_option("--mesh", o->mesh, "Query surface (OFF, OBJ, PLY, STL), closed and outward, in metres")->required();
+  cmd->add_option("--descriptor", o->descriptor, "Descriptor kind")
+      ->check(CLI::IsMember({"moment", "voxel", "voxel-improved"}))->capture_default_str();
+  cmd->add_option("--k", o->k, "Number of matches")->capture_default_str()->check(CLI::Range(1, 1000));
+  cmd->add_option("--index", o->index, "Override the stored index: brute-force (exact), kd-forest or autotuned")
+      ->check(CLI::IsMember({"brute-force", "kd-forest", "autotuned"}));
+  cmd->add_option("--material", o->material,
+                  "Material of the query (preset or JSON file) to rescale the physics to; default: the reference");
+  cmd->add_flag("--json", o->json, "Print the matches as JSON");
+
+  return [o]() -> int {
+    auto pack = readPack(o->pack);
+    if (!pack) return reportError(pack.error());
+    const FragmentDatabase& db = pack.value().database;
+    auto surface = readSurfaceMesh(o->mesh);
+    if (!surface) return reportError(surface.error());
+    if (Status valid = validateSurfaceMesh(surface.value()); !valid) return reportError(valid.error());
+    const DescriptorKind kind = parseDescriptorKind(o->descriptor).value();
+    Material material = db.referenceMaterial;
+    if (!o->material.empty()) {
+      auto m = resolveMaterial(o->material);
+      if (!m) return reportError(m.error());
+      material = std::move(m).value();
+    }
+    FragmentMatcherSettings settings;
+    for (DescriptorKind other : kAllDescriptorKinds) settings.enabled[static_cast<size_t>(other)] = other == kind;
+    if (!o->index.empty()) {
+      DescriptorIndexSettings index = db.indexSettings[static_cast<size_t>(kind)];
+      index.kind = parseDescriptorIndexKind(o->index).value();
+      settings.indexOverride[static_cast<size_t>(kind)] = index;
+    }
+    auto matcher = FragmentMatcher::build(db, settings);
+    if (!matcher) return reportError(matcher.error());
+    const int k = static_cast<int>(std::min<int64_t>(o->k, static_cast<int64_t>(db.entries.size())));
+    const auto start = std::chrono::steady_clock::now();
+    auto matches = matcher.value().match(surface.value(), kind, k);
+    const double matchS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!matches) return reportError(matches.error());
+
+    nlohmann::json doc;
+    doc["query"] = {{"mesh", std::filesystem::path(o->mesh).filename().string()},
+                    {"descriptor", o->descriptor},
+                    {"index", descriptorIndexKindName(matcher.value().index(kind)->settings().kind)},
+                    {"material", material.name},
+                    {"match_time_s", matchS}};
+    doc["matches"] = nlohmann::json::array();
+    for (const FragmentMatch& m : matches.value()) {
+      const FragmentEntry& e = db.entries[static_cast<size_t>(m.entry)];
+      nlohmann::json j = {{"entry", m.entry},
+                          {"name", e.asset.name},
+                          {"base_shape", e.baseShape},
+                          {"cut", e.cut},
+                          {"distance", m.distance},
+                          {"candidate_frame", m.candidate},
+                          // entry point x̂ maps to rotationᵀ x̂ · scale_m + translation_m
+                          {"entry_to_query", {{"rotation_transposed", matrixJson(m.queryFrame.rotation.transpose())},
+                                              {"scale_m", 1.0 / m.queryFrame.scalePerM},
+                                              {"translation_m", {m.queryFrame.translationM.x(), m.queryFrame.translationM.y(),
+                                                                 m.queryFrame.translationM.z()}}}}};
+      if (db.hasPhysics()) {
+        InstantiateReport report;
+        auto placed = instantiateEntry(e, db.referenceMaterial, material, m.queryFrame, &report);
+        if (!placed) return reportError(placed.error());
+        const ObjectAsset& a = placed.value();
+        const Eigen::VectorXd& f = a.modal.frequenciesHz;
+        j["physics"] = {{"mass_kg", a.massProperties.massKg},
+                        {"volume_m3", a.massProperties.volumeM3},
+                        {"frequencies_hz", std::vector<double>(f.data(), f.data() + f.size())},
+                        {"poisson_corrected", report.poissonCorrected}};
+      }
+      doc["matches"].push_back(std::move(j));
+    }
+    if (o->json) {
+      std::cout << doc.dump(2) << "\n";
+      return kExitOk;
+    }
+    std::cout << std::setprecision(4) << "query " << doc["query"]["mesh"].get<std::string>() << ": " << o->descriptor
+              << " descriptor, " << doc["query"]["index"].get<std::string>() << " index, " << db.entries.size()
+              << " entries, " << 1e3 * matchS << " ms\n";
+    for (const auto& j : doc["matches"]) {
+      std::cout << "  " << std::setw(4) << j["entry"].get<int64_t>() << "  " << std::setw(16) << std::left
+                << j["name"].get<std::string>() << std::right << "  distance " << j["distance"].get<double>()
+                << "  scale " << j["entry_to_query"]["scale_m"].get<double>() << " m";
+      if (j.contains("physics")) {
+        const auto& f = j["physics"]["frequencies_hz"];
+        std::cout << "  mass " << j["physics"]["mass_kg"].get<double>() << " kg  f1-3 (Hz)";
+        for (size_t i = 0; i < std::min<size_t>(3, f.size()); ++i) std::cout << " " << f[i].get<double>();
+      }
+      std::cout << "\n";
+    }
+    return kExitOk;
+  };
+}
+
+Runner addBenchCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand("bench", "Benchmarks that write CSV for tools/scripts/plot_search.py");
+  cmd->require_subcommand(1);
+  auto* search = cmd->add_subcommand(
+      "search", "Descriptor search: recall@1, query time, build time, memory and physical error per setting");
+  auto s = std::make_shared<bench::SearchBenchSettings>();
+  auto shapes = std::make_shared<std::string>("assets/shapes/base-shapes.json");
+  auto kinds = std::make_shared<std::vector<std::string>>(std::vector<std::string>{"moment", "voxel", "voxel-improved"});
+  auto indices = std::make_shared<std::vector<std::string>>(
+      std::vector<std::string>{"kd-forest:1:8", "kd-forest:4:32", "kd-forest:4:128", "kd-forest:8:512"});
+  search->add_option("--shapes", *shapes, "Base shape definitions (JSON)")->capture_default_str();
+  search->add_option("--sizes", s->sizes, "Database sizes")->delimiter(',')->capture_default_str();
+  search->add_option("--kinds", *kinds, "Descriptor kinds")->delimiter(',')->capture_default_str()
+      ->check(CLI::IsMember({"moment", "voxel", "voxel-improved"}));
+  search->add_option("--voxel-size-limit", s->voxelSizeLimit, "Largest database size for the voxel kinds")->capture_default_str();
+  search->add_option("--index", *indices, "Index settings: kd-forest:TREES:CHECKS, autotuned:PRECISION")
+      ->delimiter(',')->capture_default_str();
+  search->add_option("--queries", s->queries, "Query fragments")->capture_default_str()->check(CLI::Range(1, 100000));
+  search->add_option("--physics-queries", s->physicsQueries, "Queries with a direct bake as ground truth")
+      ->capture_default_str()->check(CLI::Range(0, 10000));
+  search->add_option("--physics-tets", s->physicsTets, "Tetrahedra per fragment for the physical error")->capture_default_str();
+  search->add_option("--voxel-resolution", s->voxelResolution, "Voxels per axis")->capture_default_str()->check(CLI::Range(2, 64));
+  search->add_option("--seed", s->seed, "Seed of the database and the queries")->capture_default_str();
+  search->add_option("--csv", s->searchCsv, "Search results CSV")->capture_default_str();
+  search->add_option("--cost-csv", s->descriptorCsv, "Descriptor cost CSV")->capture_default_str();
+  search->add_flag("--quiet", s->quiet, "No progress lines");
+  return [s, shapes, kinds, indices]() -> int {
+    auto loaded = loadBaseShapes(*shapes);
+    if (!loaded) return reportError(loaded.error());
+    s->shapes = std::move(loaded).value();
+    s->kinds.clear();
+    for (const auto& k : *kinds) s->kinds.push_back(parseDescriptorKind(k).value());
+    s->indices.clear();
+    for (const auto& text : *indices) {
+      auto choice = bench::parseIndexChoice(text);
+      if (!choice) return reportError(choice.error());
+      s->indices.push_back(std::move(choice).value());
+    }
+    for (const auto& path : {s->searchCsv, s->descriptorCsv}) {
+      if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+    }
+    if (Status st = bench::runSearchBench(*s); !st) return reportError(st.error());
+    std::cout << "wrote " << s->searchCsv.string() << " and " << s->descriptorCsv.string() << "\n";
+    return kExitOk;
+  };
+}
+
+}  // namespace brittle::cli

@@ -1,0 +1,166 @@
+// brittle impact — load a pack, place one object, report one impact, print and write the fragments.
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "CliSupport.h"
+#include "Commands.h"
+#include "brittle/database/Pack.h"
+#include "brittle/precompute/MaterialLibrary.h"
+#include "brittle/precompute/MeshIO.h"
+#include "brittle/runtime/World.h"
+
+namespace brittle::cli {
+namespace {
+
+struct ImpactOptions {
+  std::string pack, object, impactorMaterial = "steel", out, descriptor = "moment";
+  std::vector<double> point, normal;
+  double speed = 0.0, impactorMass = 0.1, impactorRadius = 0.02, impulse = 0.0, bodyRadius = 0.0;
+  uint64_t seed = 1;
+  int modes = 0;
+  double crackBlend = CrackSettings{}.directionBlend, crackNoise = CrackSettings{}.noiseRad;
+  double debris = 0.01, propagationRatio = CrackSettings{}.propagationStressRatio;
+  int maxCracks = CrackSettings{}.maxCracks, minFragmentNodes = CrackSettings{}.minFragmentNodes;
+  bool noPrune = false, noMatch = false, json = false;
+};
+
+nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+}  // namespace
+
+Runner addImpactCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand("impact", "Break an object of a pack with one impact; print and write the fragments");
+  auto o = std::make_shared<ImpactOptions>();
+  cmd->add_option("pack", o->pack, "Pack (.h5)")->required();
+  cmd->add_option("--object", o->object, "Object name in the pack")->required();
+  cmd->add_option("--point", o->point, "Contact point x,y,z in the object's frame (m)")->delimiter(',')->expected(3)->required();
+  cmd->add_option("--normal", o->normal, "Outward surface normal at the point x,y,z")->delimiter(',')->expected(3)->required();
+  cmd->add_option("--speed", o->speed, "Normal approach speed (m/s)")->required();
+  cmd->add_option("--impactor-mass", o->impactorMass, "Impactor mass (kg); inf for the ground")->capture_default_str();
+  cmd->add_option("--impactor-radius", o->impactorRadius, "Impactor radius (m); inf for flat")->capture_default_str();
+  cmd->add_option("--impactor-material", o->impactorMaterial, "Impactor material: preset name or JSON file")->capture_default_str();
+  cmd->add_option("--impulse", o->impulse, "Impulse the host resolved (N s); default (1 + e) m* v")->capture_default_str();
+  cmd->add_option("--body-radius", o->bodyRadius, "Local radius of curvature (m); 0: estimated from the surface")->capture_default_str();
+  cmd->add_option("--modes", o->modes, "Modes used (0: all stored)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--debris", o->debris, "Fragments below this volume fraction are rigid debris")->capture_default_str()->check(CLI::Range(0.0, 0.99));
+  cmd->add_option("--descriptor", o->descriptor, "Descriptor used to match fragments")
+      ->check(CLI::IsMember({"moment", "voxel", "voxel-improved"}))->capture_default_str();
+  cmd->add_option("--propagation-ratio", o->propagationRatio, "A crack advances where the normal stress ≥ ratio × σ_t")->capture_default_str();
+  cmd->add_option("--max-cracks", o->maxCracks, "Cracks started at most")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--min-fragment-nodes", o->minFragmentNodes, "Smaller fragments are merged into a neighbour")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--crack-blend", o->crackBlend, "Weight of a crack's starting plane against the local principal direction")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--crack-noise", o->crackNoise, "Seeded turn of the crack plane per element (rad)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--no-prune", o->noPrune, "Evaluate every element stress (the reference for pruning)");
+  cmd->add_flag("--no-match", o->noMatch, "Do not match fragments to the database");
+  cmd->add_option("--seed", o->seed, "Seed of the crack noise")->capture_default_str();
+  cmd->add_option("--out", o->out, "Directory for the fragment meshes (fragment-NN.off)");
+  cmd->add_flag("--json", o->json, "Print the result as JSON");
+
+  return [o]() -> int {
+    auto pack = readPack(o->pack);
+    if (!pack) return reportError(pack.error());
+    auto impactor = resolveMaterial(o->impactorMaterial);
+    if (!impactor) return reportError(impactor.error());
+    WorldSettings settings;
+    settings.seed = o->seed;
+    settings.fracture.modeCount = o->modes;
+    settings.fracture.pruneStresses = !o->noPrune;
+    settings.fracture.matchFragments = !o->noMatch;
+    settings.fracture.debrisVolumeFraction = o->debris;
+    settings.fracture.crack.propagationStressRatio = o->propagationRatio;
+    settings.fracture.crack.maxCracks = o->maxCracks;
+    settings.fracture.crack.directionBlend = o->crackBlend;
+    settings.fracture.crack.noiseRad = o->crackNoise;
+    settings.fracture.crack.minFragmentNodes = o->minFragmentNodes;
+    settings.fracture.descriptor = parseDescriptorKind(o->descriptor).value();
+    auto world = World::create(std::move(pack).value(), settings);
+    if (!world) return reportError(world.error());
+    auto id = world.value().addObject({.asset = o->object});
+    if (!id) return reportError(id.error());
+    ImpactDesc d;
+    d.object = id.value();
+    d.pointWorld = Eigen::Vector3d(o->point[0], o->point[1], o->point[2]);
+    d.normalWorld = Eigen::Vector3d(o->normal[0], o->normal[1], o->normal[2]);
+    if (d.normalWorld.norm() > 0.0) d.normalWorld.normalize();
+    d.speedMps = o->speed;
+    d.impactorMassKg = o->impactorMass;
+    d.impactorRadiusM = o->impactorRadius;
+    d.impactorYoungsModulusPa = impactor.value().youngsModulusPa;
+    d.impactorPoissonRatio = impactor.value().poissonRatio;
+    d.impulseNs = o->impulse;
+    d.bodyRadiusM = o->bodyRadius;
+    auto result = world.value().impact(d);
+    if (!result) return reportError(result.error());
+    const ImpactResult& r = result.value();
+
+    if (!o->out.empty()) {
+      std::error_code ec;
+      std::filesystem::create_directories(o->out, ec);
+      for (size_t i = 0; i < r.fragments.size(); ++i) {
+        char name[48];
+        std::snprintf(name, sizeof name, "fragment-%02zu.off", i);
+        if (Status st = writeSurfaceMesh(r.fragments[i].surface, std::filesystem::path(o->out) / name); !st) {
+          return reportError(st.error());
+        }
+      }
+    }
+    nlohmann::json doc;
+    doc["object"] = o->object;
+    doc["broken"] = r.broken;
+    doc["contact"] = {{"effective_mass_kg", r.contact.effectiveMassKg}, {"effective_radius_m", r.contact.effectiveRadiusM},
+                      {"effective_modulus_pa", r.contact.effectiveModulusPa}, {"duration_s", r.contact.durationS},
+                      {"hertz_peak_force_n", r.contact.hertzPeakForceN}, {"pulse_peak_force_n", r.contact.pulseAmplitudeN},
+                      {"impulse_ns", r.contact.impulseNs}, {"patch_radius_m", r.contact.patchRadiusM},
+                      {"body_radius_m", std::isfinite(r.bodyRadiusM) ? nlohmann::json(r.bodyRadiusM) : nlohmann::json("inf")}};
+    doc["peak_principal_stress_pa"] = r.peakPrincipalStressPa;
+    doc["peak_time_s"] = r.peakTimeS;
+    doc["modes_used"] = r.modesUsed;
+    doc["stress_evaluations"] = r.stressEvaluations;
+    doc["cracks"] = {{"count", r.fracture.crackCount}, {"cut_elements", r.fracture.cutElements.size()},
+                     {"area_m2", r.fracture.crackAreaM2}, {"energy_budget_j", r.fracture.energyBudgetJ},
+                     {"energy_spent_j", r.fracture.energySpentJ}, {"arrested_by_energy", r.fracture.arrestedByEnergy}};
+    doc["fragments"] = nlohmann::json::array();
+    for (const FragmentResult& f : r.fragments) {
+      doc["fragments"].push_back({{"volume_m3", f.massProperties.volumeM3}, {"mass_kg", f.massProperties.massKg},
+                                  {"center_of_mass_m", vec(f.massProperties.centerOfMassM)},
+                                  {"triangles", f.surface.faces.rows()}, {"debris", f.debris},
+                                  {"matched_entry", f.matchedEntry}, {"match_distance", f.matchDistance}});
+    }
+    doc["times_s"] = {{"contact", r.times.contactS}, {"modal", r.times.modalS}, {"stress", r.times.stressS},
+                      {"propagation", r.times.propagationS}, {"surfaces", r.times.surfacesS},
+                      {"matching", r.times.matchingS}, {"total", r.times.totalS()}};
+    if (o->json) {
+      std::cout << doc.dump(2) << "\n";
+      return kExitOk;
+    }
+    std::cout << std::setprecision(4) << o->object << " hit at " << o->speed << " m/s: contact " << 1e6 * r.contact.durationS
+              << " us, peak force " << r.contact.pulseAmplitudeN << " N; peak principal stress "
+              << r.peakPrincipalStressPa / 1e6 << " MPa (" << r.modesUsed << " modes)\n";
+    if (!r.broken) {
+      std::cout << "  not broken" << (r.fracture.crackCount > 0 ? " (cracked, not separated)" : "") << "\n";
+    } else {
+      std::cout << "  " << r.fracture.crackCount << " cracks, " << r.fracture.cutElements.size() << " elements cut, "
+                << r.fracture.crackAreaM2 * 1e4 << " cm2, energy " << r.fracture.energySpentJ << " / "
+                << r.fracture.energyBudgetJ << " J\n";
+      for (size_t i = 0; i < r.fragments.size(); ++i) {
+        const FragmentResult& f = r.fragments[i];
+        std::cout << "  fragment " << std::setw(2) << i << "  " << std::setw(10) << f.massProperties.volumeM3 * 1e6
+                  << " cm3  " << std::setw(10) << f.massProperties.massKg * 1e3 << " g  ";
+        if (f.debris) std::cout << "debris";
+        else if (f.matchedEntry >= 0) std::cout << "entry " << f.matchedEntry << " (distance " << f.matchDistance << ")";
+        else std::cout << "unmatched";
+        std::cout << "\n";
+      }
+    }
+    std::cout << "  times (ms): contact " << 1e3 * r.times.contactS << ", modal " << 1e3 * r.times.modalS << ", stress "
+              << 1e3 * r.times.stressS << ", propagation " << 1e3 * r.times.propagationS << ", surfaces "
+              << 1e3 * r.times.surfacesS << ", matching " << 1e3 * r.times.matchingS << ", total "
+              << 1e3 * r.times.totalS() << "\n";
+    return kExitOk;
+  };
+}
+
+}  // namespace brittle::cli

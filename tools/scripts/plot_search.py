@@ -1,0 +1,124 @@
+#!/usr/bin/python3
+"""Charts for `brittle bench search` (bench/search.csv, bench/descriptor_cost.csv).
+
+Writes, next to the CSV:
+  search_recall_vs_time.png   recall@1 against median query time, per descriptor and size
+  search_latency_vs_size.png  median query time against database size: brute force and kd-forest
+  search_physical_error.png   median frequency error of the match against median query time
+and prints the figures the README quotes.
+"""
+import csv
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+TEXT = {"descriptor", "index"}
+COLORS = {"moment": "tab:blue", "voxel": "tab:orange", "voxel-improved": "tab:green"}
+
+
+def load(path):
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    for r in rows:
+        for k, v in r.items():
+            if k not in TEXT and k != "stage":
+                r[k] = float(v)
+    return rows
+
+
+def label(r):
+    if r["index"] == "kd-forest":
+        return f"kd {int(r['trees'])}x{int(r['checks'])}"
+    return r["index"]
+
+
+def main():
+    src = Path(sys.argv[1] if len(sys.argv) > 1 else "bench/search.csv")
+    rows = load(src)
+    out = src.parent
+    sizes = sorted({int(r["entries"]) for r in rows})
+    kinds = [k for k in COLORS if any(r["descriptor"] == k for r in rows)]
+    markers = ["o", "s", "^", "D", "v", "P"]
+
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for kind in kinds:
+        for si, n in enumerate(sizes):
+            pts = [r for r in rows if r["descriptor"] == kind and int(r["entries"]) == n]
+            if not pts:
+                continue
+            pts.sort(key=lambda r: r["query_median_us"])
+            ax.plot([r["query_median_us"] for r in pts], [r["recall_at_1"] for r in pts],
+                    "-" + markers[si % len(markers)], color=COLORS[kind], label=f"{kind}, {n} entries")
+    ax.axhline(0.99, color="grey", ls=":", lw=1)
+    ax.axvline(20.0, color="grey", ls=":", lw=1)
+    ax.set_xscale("log")
+    ax.set_xlabel("median query time (µs, search only)")
+    ax.set_ylabel("recall@1 against exact search")
+    ax.set_title("Descriptor search: accuracy against speed (targets: 0.99 at ≤ 20 µs)")
+    ax.legend(fontsize=7)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out / "search_recall_vs_time.png", dpi=120)
+
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for kind in kinds:
+        brute = [(int(r["entries"]), r["query_median_us"]) for r in rows
+                 if r["descriptor"] == kind and r["index"] == "brute-force"]
+        best = []
+        for n in sizes:
+            ok = [r for r in rows if r["descriptor"] == kind and int(r["entries"]) == n
+                  and r["index"] != "brute-force" and r["recall_at_1"] >= 0.99]
+            if ok:
+                best.append((n, min(r["query_median_us"] for r in ok)))
+        if brute:
+            ax.plot(*zip(*brute), "--o", color=COLORS[kind], label=f"{kind}: brute force (exact)")
+        if best:
+            ax.plot(*zip(*best), "-s", color=COLORS[kind], label=f"{kind}: fastest kd-forest with recall ≥ 0.99")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("database entries")
+    ax.set_ylabel("median query time (µs)")
+    ax.set_title("Query latency against database size")
+    ax.legend(fontsize=7)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out / "search_latency_vs_size.png", dpi=120)
+
+    phys = [r for r in rows if r["physics_queries"] > 0]
+    if phys:
+        fig, ax = plt.subplots(figsize=(8, 5))
+        for kind in kinds:
+            pts = [r for r in phys if r["descriptor"] == kind]
+            ax.scatter([r["query_median_us"] for r in pts], [100 * r["frequency_err_median"] for r in pts],
+                       s=[10 + 12 * sizes.index(int(r["entries"])) ** 2 for r in pts], color=COLORS[kind],
+                       label=kind, alpha=0.7)
+        ax.set_xscale("log")
+        ax.set_xlabel("median query time (µs)")
+        ax.set_ylabel("median max error of f1..f3 (%)")
+        ax.set_title("Physical error of the match (marker size: database size)")
+        ax.legend()
+        ax.grid(True, which="both", alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(out / "search_physical_error.png", dpi=120)
+
+    print("entries  descriptor      index          recall  median_us  p99_us  brute_us  mass%  inertia%  freq%")
+    for r in rows:
+        print(f"{int(r['entries']):7d}  {r['descriptor']:14s}  {label(r):13s}  {r['recall_at_1']:.3f}  "
+              f"{r['query_median_us']:9.1f}  {r['query_p99_us']:6.1f}  {r['brute_median_us']:8.1f}  "
+              f"{100 * r['mass_err_median']:5.2f}  {100 * r['inertia_err_median']:7.2f}  "
+              f"{100 * r['frequency_err_median']:5.2f}")
+    cost = out / "descriptor_cost.csv"
+    if cost.exists():
+        with open(cost, newline="") as f:
+            for r in csv.DictReader(f):
+                print(f"descriptor cost {r['stage']:16s} median {float(r['median_us']):9.1f} us "
+                      f"({float(r['mean_triangles']):.0f} triangles, "
+                      f"{float(r['median_us_per_1k_triangles']):.1f} us per 1k triangles)")
+
+
+if __name__ == "__main__":
+    main()
