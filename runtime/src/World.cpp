@@ -74,6 +74,9 @@ struct Body {
   int modes = 0;
   Eigen::VectorXd omega, zeta;
   Eigen::MatrixXd stressBounds;  // T by modes
+  // Built on the body's first impact, not when it is created: most fragments are never hit again,
+  // and factorising K for each of them would dominate the impact that made them.
+  mutable std::optional<StaticCorrection> correction;
   Points nodeNormals;                    // #N, area-weighted outward normals (boundary nodes)
   std::vector<std::vector<int32_t>> ring;  // boundary neighbours per node
   std::vector<int32_t> boundaryNodes;
@@ -247,6 +250,12 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
       if (mat == w.pack.materials.end()) return bad("object '" + desc.asset + "' names a missing material");
       auto body = makeBody(*it, *mat, w.settings.fracture.modeCount);
       if (!body) return body.error();
+      if (w.settings.fracture.staticCorrection) {  // pack objects pay the factorisation at load
+        const Body& b = *body.value();
+        auto correction = StaticCorrection::build(b.asset, b.material, b.modes);
+        if (!correction) return Error{correction.error().code, "object '" + desc.asset + "': " + correction.error().message};
+        b.correction.emplace(std::move(correction).value());
+      }
       w.packBodies[index] = std::move(body).value();
     }
     return w.place(w.packBodies[index], desc.rotation, desc.translationM);
@@ -390,6 +399,15 @@ Result<ImpactResult> World::Impl::impact(const ImpactDesc& desc) {
   }
   result.times.contactS = since(t0);
 
+  // --- First impact on this body: factorise K for the static correction.
+  t0 = Clock::now();
+  if (fs.staticCorrection && !body.correction) {
+    auto correction = StaticCorrection::build(asset, body.material, body.modes);
+    if (!correction) return Error{correction.error().code, "object '" + asset.name + "': " + correction.error().message};
+    body.correction.emplace(std::move(correction).value());
+  }
+  result.times.prepareS = since(t0);
+
   // --- Modal response over the pulse and the ring-down.
   t0 = Clock::now();
   const int r = body.modes;
@@ -399,6 +417,9 @@ Result<ImpactResult> World::Impl::impact(const ImpactDesc& desc) {
     g -= (w / total) * (asset.modal.modes.block(3 * i, 0, 3, r).transpose() * n);  // force along −n
   }
   const double lowestPeriod = 2.0 * std::numbers::pi / body.omega[0];
+  for (const auto& [i, w] : load) result.loadWeights.emplace_back(i, w / total);
+  result.forceDirectionLocal = -n;
+  result.ringDownS = fs.ringDownPeriods * lowestPeriod;
   const std::vector<double> times = impactTimeGrid(hc.durationS, fs.pulseSteps, fs.ringDownPeriods * lowestPeriod,
                                                    fs.ringDownPeriods > 0.0 ? fs.ringDownSteps : 0);
   std::vector<double> force(times.size());
@@ -410,9 +431,21 @@ Result<ImpactResult> World::Impl::impact(const ImpactDesc& desc) {
   // --- Stresses, Rankine.
   t0 = Clock::now();
   const Eigen::VectorXd noStatic;
-  const StressScan scan = scanStresses(asset.stressModes, body.stressBounds, q, noStatic, force,
+  Eigen::VectorXd staticStress;
+  double compliance = 0.0;
+  if (fs.staticCorrection) {
+    if (Status st = body.correction->stressPerNewton(result.loadWeights, -n, staticStress, compliance); !st) {
+      return st.error();
+    }
+    // The truncated modes alone, for the report (peak only: no seeds needed).
+    result.peakWithoutCorrectionPa = scanStresses(asset.stressModes, body.stressBounds, q, noStatic, force,
+                                                  std::numeric_limits<double>::infinity(), fs.pruneStresses)
+                                         .peakPrincipalPa;
+  }
+  const StressScan scan = scanStresses(asset.stressModes, body.stressBounds, q, staticStress, force,
                                        body.material.tensileStrengthPa, fs.pruneStresses);
   result.peakPrincipalStressPa = scan.peakPrincipalPa;
+  if (!fs.staticCorrection) result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
   result.peakElement = scan.peakElement;
   result.peakTimeS = scan.peakInstant >= 0 ? times[static_cast<size_t>(scan.peakInstant)] : 0.0;
   result.stressEvaluations = scan.evaluations;
@@ -425,7 +458,10 @@ Result<ImpactResult> World::Impl::impact(const ImpactDesc& desc) {
   field.stressModes = &asset.stressModes;
   field.q = q.row(scan.peakInstant).transpose();
   field.forceN = force[static_cast<size_t>(scan.peakInstant)];
-  const double energy = 0.5 * (body.omega.array().square() * field.q.array().square()).sum();
+  if (fs.staticCorrection) field.staticStress = &staticStress;
+  // Elastic energy at the peak: the kept modes' ½Σω²q², plus the truncated modes' static ½F²f·u_t.
+  const double energy = 0.5 * (body.omega.array().square() * field.q.array().square()).sum() +
+                        0.5 * field.forceN * field.forceN * compliance;
   CrackSettings cs = fs.crack;
   cs.seed = mix(settings.seed ^ mix(fs.crack.seed + impactIndex));
   auto state = propagateCracks(asset.tetMesh, body.topology, scan, field, body.material.tensileStrengthPa,

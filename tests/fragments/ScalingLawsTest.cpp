@@ -5,7 +5,7 @@
 
 #include "FragmentTestSupport.h"
 #include "brittle/precompute/BakePipeline.h"
-#include "brittle/precompute/FemAssembly.h"
+#include "brittle/runtime/FemAssembly.h"
 #include "brittle/precompute/MaterialLibrary.h"
 
 namespace brittle {

@@ -6,7 +6,7 @@
 #include <numbers>
 #include <vector>
 
-#include "brittle/precompute/FemAssembly.h"
+#include "brittle/runtime/FemAssembly.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/ModalAnalysis.h"
 #include "brittle/precompute/TetMesher.h"

@@ -21,7 +21,7 @@
 #include <fstream>
 #include <iostream>
 
-#include "brittle/precompute/FemAssembly.h"
+#include "brittle/runtime/FemAssembly.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshIO.h"
 #include "brittle/precompute/ModalAnalysis.h"

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "brittle/database/Pack.h"
-#include "brittle/precompute/FemAssembly.h"
+#include "brittle/runtime/FemAssembly.h"
 #include "brittle/precompute/MeshRepair.h"
 #include "brittle/precompute/ModalAnalysis.h"
 #include "brittle/precompute/Progress.h"

@@ -16,7 +16,7 @@
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
 #include "brittle/descriptors/Result.h"
-#include "brittle/precompute/FemAssembly.h"
+#include "brittle/runtime/FemAssembly.h"
 #include "brittle/precompute/Progress.h"
 
 namespace brittle {

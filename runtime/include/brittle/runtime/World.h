@@ -9,10 +9,10 @@
 // No exception crosses this API: every call returns a Result or Status. Objects are reached by
 // ObjectId (index + generation, as in Box2D): an id whose object was removed or broken is stale and
 // every call with it returns InvalidArgument. Determinism: the same pack, settings, calls and
-// seeds give bit-identical results.
+// seeds give bit-identical results. A World is used from one thread at a time.
 //
 // An impact runs: Hertz contact (HertzContact.h) → modal response, integrated exactly
-// (ModalResponse.h) → stress scan with pruning and Rankine initiation → crack growth with the
+// (ModalResponse.h), plus the static correction of the truncated modes (StaticCorrection.h) → stress scan with pruning and Rankine initiation → crack growth with the
 // Griffith stop (CrackPropagation.h) → fragment surfaces (FragmentSurfaces.h) → per fragment: exact
 // mass properties, and unless it is debris, the nearest database entry rescaled to it
 // (FragmentMatcher.h, ScalingLaws.h), which becomes a new object that can break again.
@@ -30,6 +30,7 @@
 #include "brittle/descriptors/Result.h"
 #include "brittle/runtime/CrackPropagation.h"
 #include "brittle/runtime/HertzContact.h"
+#include "brittle/runtime/StaticCorrection.h"
 
 namespace brittle {
 
@@ -47,6 +48,9 @@ struct FractureSettings {
   double ringDownPeriods = 0.5;    ///< window after the contact, in periods of the lowest mode used
   int ringDownSteps = 24;          ///< instants in that window
   bool pruneStresses = true;       ///< skip elements and instants whose bound is below what is sought
+  /// Add the quasi-static response of the modes beyond modeCount (StaticCorrection.h). Costs a
+  /// factorisation per object at load and a sparse solve per impact.
+  bool staticCorrection = true;
   CrackSettings crack;             ///< crack.seed is combined with the world seed and an impact counter
   double debrisVolumeFraction = 0.01;  ///< fragments below this fraction of the broken body are rigid debris
   bool matchFragments = true;      ///< look fragments up in the pack's database (when it has one)
@@ -96,8 +100,10 @@ struct FragmentResult {
 };
 
 struct StageTimes {
-  double contactS = 0.0, modalS = 0.0, stressS = 0.0, propagationS = 0.0, surfacesS = 0.0, matchingS = 0.0;
-  double totalS() const { return contactS + modalS + stressS + propagationS + surfacesS + matchingS; }
+  double contactS = 0.0;
+  double prepareS = 0.0;  ///< first impact on a fragment only: assembling and factorising its K (static correction)
+  double modalS = 0.0, stressS = 0.0, propagationS = 0.0, surfacesS = 0.0, matchingS = 0.0;
+  double totalS() const { return contactS + prepareS + modalS + stressS + propagationS + surfacesS + matchingS; }
 };
 
 struct ImpactResult {
@@ -105,9 +111,15 @@ struct ImpactResult {
   HertzContact contact;
   double bodyRadiusM = 0.0;            ///< the local radius of curvature used
   double peakPrincipalStressPa = 0.0;  ///< exact maximum over elements and instants
+  double peakWithoutCorrectionPa = 0.0;  ///< the same from the truncated modes alone
   int32_t peakElement = -1;
   double peakTimeS = 0.0;
   int modesUsed = 0;
+  /// The contact load: nodes with weights summing to 1, force along forceDirectionLocal (the
+  /// object's frame). What FullFemReference.h needs to solve the same impact.
+  std::vector<std::pair<int32_t, double>> loadWeights;
+  Eigen::Vector3d forceDirectionLocal = Eigen::Vector3d::Zero();
+  double ringDownS = 0.0;              ///< the window simulated after the contact
   int64_t stressEvaluations = 0;
   FractureState fracture;
   std::vector<FragmentResult> fragments;  ///< empty unless broken; ordered by fragment label
@@ -124,7 +136,9 @@ class World {
   World& operator=(World&&) noexcept;
   ~World();
 
-  /// Places an instance of a pack object. Errors: InvalidArgument (unknown asset name, a rotation
+  /// Places an instance of a pack object. The first instance of each pack object builds what
+  /// impacts need (topology, stress bounds, the factorised K of the static correction).
+  /// Errors: InvalidArgument (unknown asset name, a rotation
   /// that is not orthonormal with det +1, non-finite values, no free slot: maxObjects reached),
   /// those of building the object's topology.
   Result<ObjectId> addObject(const ObjectDesc& desc);

@@ -1,4 +1,4 @@
-#include "brittle/precompute/FemAssembly.h"
+#include "brittle/runtime/FemAssembly.h"
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>

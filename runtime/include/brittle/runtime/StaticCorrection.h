@@ -1,0 +1,45 @@
+// StaticCorrection.h — the quasi-static contribution of the modes a truncated basis leaves out
+// (mode acceleration). A short contact excites many more modes than r; their response is nearly
+// static, u_t(t) ≈ F(t) Σ_{j>r} φ_j φ_jᵀ f / λ_j, and near the contact it carries most of the stress.
+//
+//   Σ_{j>r} φ_j φ_jᵀ f/λ_j = K⁺ f_e − Σ_{j≤r} φ_j φ_jᵀ f/λ_j,   f_e = f − M Ψ Ψᵀ f,
+// where f is the load pattern per newton, Ψ the six M-orthonormal rigid modes (f_e is the load
+// in equilibrium with the body's rigid acceleration: inertia relief) and K⁺ the inverse of K on
+// the elastic modes, computed as (K + μM)⁻¹ with a tiny shift μ = 10⁻⁶ λ₁ and the rigid part
+// projected out (relative error μ/λ_j ≤ 10⁻⁶). The stress per newton, σ̂ = C B u_t, is added to the
+// modal stress as σ_e(t) = S_e q(t) + σ̂_e F(t).
+//
+// K and M are assembled and K + μM is factorised (sparse LDLᵀ) once per object when it is loaded;
+// an impact costs one solve and one pass over the elements.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "brittle/database/Material.h"
+#include "brittle/database/ObjectAsset.h"
+#include "brittle/descriptors/Result.h"
+
+namespace brittle {
+
+class StaticCorrection {
+ public:
+  /// Factorises the object's K + μM for the first `modes` stored modes.
+  /// Errors: those of assembleFem, FactorizationFailed.
+  static Result<StaticCorrection> build(const ObjectAsset& asset, const Material& material, int modes);
+
+  /// Stress per newton (6T, Voigt, Pa/N) of the truncated modes for a unit force along `direction`
+  /// spread over nodes with weights summing to 1, and the work f·u_t (m/N) of that load on them.
+  /// Errors: InvalidArgument (a node out of range, weights that do not sum to 1).
+  Status stressPerNewton(const std::vector<std::pair<int32_t, double>>& weights, const Eigen::Vector3d& direction,
+                         Eigen::VectorXd& stress, double& complianceMPerN) const;
+
+ private:
+  struct Data;
+  explicit StaticCorrection(std::shared_ptr<const Data> data) : mData(std::move(data)) {}
+  std::shared_ptr<const Data> mData;
+};
+
+}  // namespace brittle
