@@ -4,6 +4,7 @@
 #include <iostream>
 #include <memory>
 
+#include "../bench/ImpactBench.h"
 #include "../bench/SearchBench.h"
 #include "CliSupport.h"
 #include "Commands.h"
@@ -197,7 +198,7 @@ Runner addQueryCommand(CLI::App& app) {
 }
 
 Runner addBenchCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("bench", "Benchmarks that write CSV for tools/scripts/plot_search.py");
+  auto* cmd = app.add_subcommand("bench", "Benchmarks that write CSV (charts: tools/scripts/plot_search.py, plot_impact.py)");
   cmd->require_subcommand(1);
   auto* search = cmd->add_subcommand(
       "search", "Descriptor search: recall@1, query time, build time, memory and physical error per setting");
@@ -222,7 +223,23 @@ Runner addBenchCommand(CLI::App& app) {
   search->add_option("--csv", s->searchCsv, "Search results CSV")->capture_default_str();
   search->add_option("--cost-csv", s->descriptorCsv, "Descriptor cost CSV")->capture_default_str();
   search->add_flag("--quiet", s->quiet, "No progress lines");
-  return [s, shapes, kinds, indices]() -> int {
+  auto* impact = cmd->add_subcommand(
+      "impact", "Impact latency per stage on glass panes of several sizes and mode counts, pruned and unpruned");
+  auto is = std::make_shared<bench::ImpactBenchSettings>();
+  impact->add_option("--tets", is->tets, "Target tet counts")->delimiter(',')->capture_default_str();
+  impact->add_option("--modes", is->modes, "Mode counts")->delimiter(',')->capture_default_str();
+  impact->add_option("--impacts", is->impacts, "Impacts per setting")->capture_default_str()->check(CLI::Range(1, 100000));
+  impact->add_option("--speed", is->speedMps, "Impact speed (m/s)")->capture_default_str();
+  impact->add_option("--seed", is->seed, "Seed of the impact points and cracks")->capture_default_str();
+  impact->add_option("--csv", is->csv, "Output CSV")->capture_default_str();
+  impact->add_flag("--quiet", is->quiet, "No progress lines");
+  return [s, shapes, kinds, indices, impact, is]() -> int {
+    if (impact->parsed()) {
+      if (is->csv.has_parent_path()) std::filesystem::create_directories(is->csv.parent_path());
+      if (Status st = bench::runImpactBench(*is); !st) return reportError(st.error());
+      std::cout << "wrote " << is->csv.string() << "\n";
+      return kExitOk;
+    }
     auto loaded = loadBaseShapes(*shapes);
     if (!loaded) return reportError(loaded.error());
     s->shapes = std::move(loaded).value();

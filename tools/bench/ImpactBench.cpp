@@ -1,0 +1,113 @@
+#include "ImpactBench.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include "brittle/precompute/BakePipeline.h"
+#include "brittle/precompute/MaterialLibrary.h"
+#include "brittle/runtime/World.h"
+
+namespace brittle::bench {
+namespace {
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(std::min<double>(static_cast<double>(v.size() - 1), p * static_cast<double>(v.size() - 1) + 0.5))];
+}
+
+TriangleMesh paneSurface() {
+  TriangleMesh m;
+  m.vertices.resize(8, 3);
+  for (int i = 0; i < 8; ++i) m.vertices.row(i) << ((i & 1) ? 0.1 : -0.1), ((i & 2) ? 0.1 : -0.1), ((i & 4) ? 0.025 : -0.025);
+  m.faces.resize(12, 3);
+  m.faces << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5;
+  return m;
+}
+
+}  // namespace
+
+Status runImpactBench(const ImpactBenchSettings& s) {
+  std::ofstream csv(s.csv);
+  if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.csv.string());
+  csv << "target_tets,tets,modes,prune,stage,impacts,median_ms,p99_ms,broken_fraction,mean_fragments,median_evaluations\n";
+  const Material glass = materialPreset("glass").value();
+  const int maxModes = *std::max_element(s.modes.begin(), s.modes.end());
+  for (int64_t target : s.tets) {
+    ObjectBakeSettings b;
+    b.name = "pane";
+    b.material = glass;
+    b.tetMesh.targetTets = target;
+    b.modal.modeCount = maxModes;
+    auto asset = bakeSurface(paneSurface(), b);
+    if (!asset) return asset.error();
+    const int64_t tets = asset.value().tetMesh.tets.rows();
+    Pack pack;
+    pack.materials.push_back(glass);
+    pack.objects.push_back(std::move(asset).value());
+    for (int modes : s.modes) {
+      for (bool prune : {true, false}) {
+        WorldSettings ws;
+        ws.seed = s.seed;
+        ws.fracture.modeCount = modes;
+        ws.fracture.pruneStresses = prune;
+        ws.fracture.matchFragments = false;  // no database in this pack; matching is measured by bench search
+        auto world = World::create(Pack(pack), ws);
+        if (!world) return world.error();
+        if (auto warm = world.value().addObject({.asset = "pane"}); !warm) return warm.error();  // factorises K
+        std::mt19937_64 rng(s.seed);
+        std::uniform_real_distribution<double> where(-0.08, 0.08);
+        std::vector<std::vector<double>> stage(8);
+        std::vector<double> evaluations;
+        int broken = 0;
+        double fragments = 0.0;
+        for (int i = 0; i < s.impacts; ++i) {
+          auto id = world.value().addObject({.asset = "pane"});
+          if (!id) return id.error();
+          ImpactDesc d;
+          d.object = id.value();
+          const double x = where(rng);
+          const double y = where(rng);
+          d.pointWorld = Eigen::Vector3d(x, y, 0.025);
+          d.normalWorld = Eigen::Vector3d::UnitZ();
+          d.speedMps = s.speedMps;
+          d.impactorMassKg = 0.1;
+          d.impactorRadiusM = 0.02;
+          auto r = world.value().impact(d);
+          if (!r) return r.error();
+          const StageTimes& t = r.value().times;
+          const double ms[] = {t.contactS, t.modalS, t.stressS, t.propagationS, t.surfacesS, t.matchingS, t.totalS(),
+                               t.totalS() - t.surfacesS - t.propagationS};
+          for (size_t k = 0; k < 8; ++k) stage[k].push_back(1e3 * ms[k]);
+          evaluations.push_back(static_cast<double>(r.value().stressEvaluations));
+          broken += r.value().broken ? 1 : 0;
+          fragments += static_cast<double>(r.value().fragments.size());
+          if (world.value().isAlive(id.value())) (void)world.value().removeObject(id.value());
+          for (const FragmentResult& f : r.value().fragments) {
+            if (f.object.valid()) (void)world.value().removeObject(f.object);
+          }
+        }
+        static const char* kStages[] = {"contact", "modal", "stress", "propagation", "surfaces", "matching", "total",
+                                        "to_initiation"};
+        for (size_t k = 0; k < 8; ++k) {
+          csv << target << "," << tets << "," << modes << "," << (prune ? 1 : 0) << "," << kStages[k] << "," << s.impacts
+              << "," << percentile(stage[k], 0.5) << "," << percentile(stage[k], 0.99) << ","
+              << static_cast<double>(broken) / s.impacts << "," << fragments / s.impacts << "," << percentile(evaluations, 0.5)
+              << "\n";
+        }
+        if (!s.quiet) {
+          std::printf("%6lld tets %3d modes %-9s total median %8.2f ms p99 %8.2f ms (stress %.2f, cracks %.2f, surfaces %.2f)\n",
+                      static_cast<long long>(tets), modes, prune ? "pruned" : "unpruned", percentile(stage[6], 0.5),
+                      percentile(stage[6], 0.99), percentile(stage[2], 0.5), percentile(stage[3], 0.5), percentile(stage[4], 0.5));
+          std::fflush(stdout);
+        }
+      }
+    }
+  }
+  return Ok{};
+}
+
+}  // namespace brittle::bench

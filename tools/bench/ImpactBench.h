@@ -1,0 +1,31 @@
+// ImpactBench.h — impact-event latency of the runtime, behind `brittle bench impact`.
+//
+// For each target tet count × mode count it bakes a glass slab (0.2 × 0.2 × 0.05 m: thick enough
+// to mesh at 1k tets), places it in a warm world (pack loaded, K factorised) and hits it
+// `impacts` times with a 100 g steel ball at random points of its top face, at `speedMps`. Each impact is timed per stage; the same impacts without pruning
+// are timed in the same run as the reference. Output: one CSV row per setting and stage with the
+// median and p99 (ms), and the pruned/unpruned ratio of the medians.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+#include "brittle/descriptors/Result.h"
+
+namespace brittle::bench {
+
+struct ImpactBenchSettings {
+  std::vector<int64_t> tets = {1000, 5000, 20000};
+  std::vector<int> modes = {20, 40};
+  int impacts = 30;
+  double speedMps = 50.0;   // breaks the slab every time (5 fragments on average at 1k tets)
+  uint64_t seed = 1;
+  std::filesystem::path csv = "bench/impact_latency.csv";
+  bool quiet = false;
+};
+
+/// Errors: those of the bake and the runtime, PackIoError when the CSV cannot be written.
+Status runImpactBench(const ImpactBenchSettings& settings);
+
+}  // namespace brittle::bench
