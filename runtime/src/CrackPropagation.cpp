@@ -20,13 +20,6 @@ Eigen::Matrix3d tensor(const Voigt& s) {
   return t;
 }
 
-// Signed distances of the tet's nodes to the plane n·x = offset.
-Eigen::Vector4d sides(const TetMesh& mesh, Eigen::Index e, const Eigen::Vector3d& n, double offset) {
-  Eigen::Vector4d d;
-  for (int i = 0; i < 4; ++i) d[i] = n.dot(mesh.nodes.row(mesh.tets(e, i)).transpose()) - offset;
-  return d;
-}
-
 bool crosses(const Eigen::Vector4d& d) { return d.maxCoeff() > 0.0 && d.minCoeff() < 0.0; }
 
 // Area of the plane's section of the tet (3 or 4 points where edges change side).
@@ -43,9 +36,11 @@ double sectionArea(const TetMesh& mesh, Eigen::Index e, const Eigen::Vector4d& d
   for (const auto& x : p) c += x;
   c /= static_cast<double>(p.size());
   const Eigen::Vector3d u = (p[0] - c).normalized(), v = n.cross(u);
-  std::sort(p.begin(), p.end(), [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    return std::atan2((a - c).dot(v), (a - c).dot(u)) < std::atan2((b - c).dot(v), (b - c).dot(u));
-  });
+  // Order the 3–4 points around the centre (angles computed once, not in the comparator).
+  std::vector<std::pair<double, Eigen::Vector3d>> byAngle;
+  for (const auto& x : p) byAngle.emplace_back(std::atan2((x - c).dot(v), (x - c).dot(u)), x);
+  std::sort(byAngle.begin(), byAngle.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (size_t k = 0; k < p.size(); ++k) p[k] = byAngle[k].second;
   double area = 0.0;
   for (size_t k = 0; k < p.size(); ++k) area += 0.5 * (p[k] - c).cross(p[(k + 1) % p.size()] - c).dot(n);
   return std::abs(area);

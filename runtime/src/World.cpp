@@ -437,6 +437,8 @@ Result<ImpactResult> World::Impl::impact(const ImpactDesc& desc) {
     if (Status st = body.correction->stressPerNewton(result.loadWeights, -n, staticStress, compliance); !st) {
       return st.error();
     }
+  }
+  if (fs.staticCorrection && fs.reportUncorrectedPeak) {
     // The truncated modes alone, for the report (peak only: no seeds needed).
     result.peakWithoutCorrectionPa = scanStresses(asset.stressModes, body.stressBounds, q, noStatic, force,
                                                   std::numeric_limits<double>::infinity(), fs.pruneStresses)

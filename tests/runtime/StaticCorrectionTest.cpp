@@ -34,6 +34,7 @@ Case runPlateCase(int modes) {
   for (bool correction : {true, false}) {
     WorldSettings s;
     s.fracture.staticCorrection = correction;
+    s.fracture.reportUncorrectedPeak = true;
     World world = World::create(Pack(c.pack), s).value();
     ImpactDesc d;
     d.object = world.addObject({.asset = "plate"}).value();

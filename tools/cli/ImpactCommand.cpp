@@ -76,6 +76,7 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.pulseSteps = o->pulseSteps;
     settings.fracture.ringDownSteps = o->ringDownSteps;
     settings.fracture.staticCorrection = !o->noCorrection;
+    settings.fracture.reportUncorrectedPeak = true;
     settings.fracture.matchFragments = !o->noMatch;
     settings.fracture.debrisVolumeFraction = o->debris;
     settings.fracture.crack.propagationStressRatio = o->propagationRatio;

@@ -51,6 +51,9 @@ struct FractureSettings {
   /// Add the quasi-static response of the modes beyond modeCount (StaticCorrection.h). Costs a
   /// factorisation per object at load and a sparse solve per impact.
   bool staticCorrection = true;
+  /// Also scan the stresses without the correction, for ImpactResult::peakWithoutCorrectionPa
+  /// (a second stress scan: off in the hot path, on in `brittle impact`).
+  bool reportUncorrectedPeak = false;
   CrackSettings crack;             ///< crack.seed is combined with the world seed and an impact counter
   double debrisVolumeFraction = 0.01;  ///< fragments below this fraction of the broken body are rigid debris
   bool matchFragments = true;      ///< look fragments up in the pack's database (when it has one)
@@ -111,7 +114,9 @@ struct ImpactResult {
   HertzContact contact;
   double bodyRadiusM = 0.0;            ///< the local radius of curvature used
   double peakPrincipalStressPa = 0.0;  ///< exact maximum over elements and instants
-  double peakWithoutCorrectionPa = 0.0;  ///< the same from the truncated modes alone
+  /// The same from the truncated modes alone; NaN unless staticCorrection is off or
+  /// reportUncorrectedPeak is on.
+  double peakWithoutCorrectionPa = std::numeric_limits<double>::quiet_NaN();
   int32_t peakElement = -1;
   double peakTimeS = 0.0;
   int modesUsed = 0;
