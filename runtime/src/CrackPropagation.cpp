@@ -107,9 +107,21 @@ Voigt StressField::at(int32_t e) const {
 StressScan scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
                         const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double threshold,
                         bool prune) {
+  StressScanWorkspace workspace;
+  StressScan scan;
+  scanStresses(S, bounds, q, staticStress, forceN, threshold, prune, workspace, scan);
+  return scan;
+}
+
+void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
+                  const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double threshold, bool prune,
+                  StressScanWorkspace& w, StressScan& scan) {
   const Eigen::Index t = S.rows() / 6, steps = q.rows(), r = q.cols();
   const bool correction = staticStress.size() > 0;
-  StressScan scan;
+  scan.peakPrincipalPa = 0.0;
+  scan.peakElement = scan.peakInstant = -1;
+  scan.seeds.clear();
+  scan.evaluations = 0;
   // σ_e at instant k, and its Frobenius norm ‖Dσ‖ (a bound on σ₁ that needs no eigen solve).
   auto voigt = [&](Eigen::Index e, Eigen::Index k) {
     Voigt s = S.block(6 * e, 0, 6, r) * q.row(k).transpose();
@@ -125,7 +137,6 @@ StressScan scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, con
       scan.peakInstant = static_cast<int32_t>(k);
     }
   };
-  Eigen::MatrixXd bound;  // T by K
   if (!prune) {
     for (Eigen::Index e = 0; e < t; ++e) {
       for (Eigen::Index k = 0; k < steps; ++k) {
@@ -134,24 +145,30 @@ StressScan scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, con
       }
     }
   } else {
-    bound = bounds.leftCols(r) * q.cwiseAbs().transpose();
+    // bound(e, k) = Σ_j ‖D S_e,j‖ |q_kj| (+ ‖D σ̂_e‖ |F_k|). A coefficient-wise (lazy) product: the
+    // blocked one would allocate its packing buffers on every call.
+    w.qAbsT = q.cwiseAbs().transpose();
+    w.bound.resize(t, steps);
+    w.bound.noalias() = bounds.leftCols(r).lazyProduct(w.qAbsT);
     if (correction) {
-      Eigen::VectorXd staticNorm(t), f(steps);
-      for (Eigen::Index e = 0; e < t; ++e) staticNorm[e] = (kD.asDiagonal() * staticStress.segment<6>(6 * e)).norm();
-      for (Eigen::Index k = 0; k < steps; ++k) f[k] = std::abs(forceN[static_cast<size_t>(k)]);
-      bound += staticNorm * f.transpose();
+      w.staticNorm.resize(t);
+      w.forceAbs.resize(steps);
+      for (Eigen::Index e = 0; e < t; ++e) w.staticNorm[e] = (kD.asDiagonal() * staticStress.segment<6>(6 * e)).norm();
+      for (Eigen::Index k = 0; k < steps; ++k) w.forceAbs[k] = std::abs(forceN[static_cast<size_t>(k)]);
+      w.bound.noalias() += w.staticNorm.lazyProduct(w.forceAbs.transpose());
     }
     // Elements by their largest bound, largest first; stop once no bound can beat the best.
-    const Eigen::VectorXd elementBound = bound.rowwise().maxCoeff();
-    std::vector<int32_t> order(static_cast<size_t>(t));
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
+    w.elementBound = w.bound.rowwise().maxCoeff();
+    w.order.resize(static_cast<size_t>(t));
+    std::iota(w.order.begin(), w.order.end(), 0);
+    const Eigen::VectorXd& elementBound = w.elementBound;
+    std::sort(w.order.begin(), w.order.end(), [&](int32_t a, int32_t b) {
       return elementBound[a] != elementBound[b] ? elementBound[a] > elementBound[b] : a < b;
     });
-    for (int32_t e : order) {
+    for (int32_t e : w.order) {
       if (elementBound[e] < best) break;
       for (Eigen::Index k = 0; k < steps; ++k) {
-        if (bound(e, k) < best) continue;
+        if (w.bound(e, k) < best) continue;
         const Voigt s = voigt(e, k);
         if ((kD.asDiagonal() * s).norm() < best) continue;
         ++scan.evaluations;
@@ -162,20 +179,19 @@ StressScan scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, con
   scan.peakPrincipalPa = best;
   // Seeds at the peak instant.
   const Eigen::Index k = scan.peakInstant;
-  std::vector<std::pair<double, int32_t>> seeds;
+  w.seeds.clear();
   for (Eigen::Index e = 0; e < t && k >= 0; ++e) {
-    if (prune && bound(e, k) < threshold) continue;
+    if (prune && w.bound(e, k) < threshold) continue;
     const Voigt s = voigt(e, k);
     if (prune && (kD.asDiagonal() * s).norm() < threshold) continue;
     ++scan.evaluations;
     const double s1 = maxPrincipalStress(s);
-    if (s1 >= threshold) seeds.emplace_back(s1, static_cast<int32_t>(e));
+    if (s1 >= threshold) w.seeds.emplace_back(s1, static_cast<int32_t>(e));
   }
-  std::sort(seeds.begin(), seeds.end(), [](const auto& a, const auto& b) {
+  std::sort(w.seeds.begin(), w.seeds.end(), [](const auto& a, const auto& b) {
     return a.first != b.first ? a.first > b.first : a.second < b.second;
   });
-  for (const auto& [s1, e] : seeds) scan.seeds.push_back(e);
-  return scan;
+  for (const auto& [s1, e] : w.seeds) scan.seeds.push_back(e);
 }
 
 Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& topo, const StressScan& scan,

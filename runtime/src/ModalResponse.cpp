@@ -43,11 +43,16 @@ Eigen::Matrix<double, 2, 4> exactStepMatrix(double w, double z, double h) {
   return p;
 }
 
-std::vector<double> impactTimeGrid(double tc, int pulseSteps, double ringDownS, int ringDownSteps) {
-  std::vector<double> t;
+void impactTimeGrid(double tc, int pulseSteps, double ringDownS, int ringDownSteps, std::vector<double>& t) {
+  t.clear();
   t.reserve(static_cast<size_t>(pulseSteps + ringDownSteps + 1));
   for (int i = 0; i <= pulseSteps; ++i) t.push_back(tc * i / pulseSteps);
   for (int i = 1; i <= ringDownSteps; ++i) t.push_back(tc + ringDownS * i / ringDownSteps);
+}
+
+std::vector<double> impactTimeGrid(double tc, int pulseSteps, double ringDownS, int ringDownSteps) {
+  std::vector<double> t;
+  impactTimeGrid(tc, pulseSteps, ringDownS, ringDownSteps, t);
   return t;
 }
 

@@ -147,6 +147,16 @@ struct World::Impl {
   std::vector<uint32_t> freeSlots;
   uint64_t impacts = 0;
   int32_t live = 0;
+  // The buffers of an impact, kept between impacts: once they have grown to the largest body hit,
+  // an impact that does not break its body allocates nothing.
+  struct Workspace {
+    std::vector<double> times, force;
+    Eigen::VectorXd modalLoad, staticStress;
+    Eigen::MatrixXd q;
+    StaticCorrection::Workspace correction;
+    StressScanWorkspace scanBuffers;
+    StressScan scan;
+  } work;
 
   Result<Slot*> slot(ObjectId id) {
     if (!id.valid() || id.index >= slots.size()) return bad("invalid object id");
@@ -187,8 +197,31 @@ struct World::Impl {
     --live;
   }
 
-  Result<ImpactResult> impact(const ImpactDesc& desc);
+  Status impact(const ImpactDesc& desc, ImpactResult& result);
 };
+
+namespace {
+
+// Back to a default result, keeping the storage of loadWeights.
+void resetResult(ImpactResult& r) {
+  r.broken = false;
+  r.contact = HertzContact{};
+  r.bodyRadiusM = 0.0;
+  r.peakPrincipalStressPa = 0.0;
+  r.peakWithoutCorrectionPa = std::numeric_limits<double>::quiet_NaN();
+  r.peakElement = -1;
+  r.peakTimeS = 0.0;
+  r.modesUsed = 0;
+  r.loadWeights.clear();
+  r.forceDirectionLocal.setZero();
+  r.ringDownS = 0.0;
+  r.stressEvaluations = 0;
+  r.fracture = FractureState{};
+  r.fragments.clear();
+  r.times = StageTimes{};
+}
+
+}  // namespace
 
 Status validateWorldSettings(const WorldSettings& s) {
   const FractureSettings& f = s.fracture;
@@ -291,14 +324,21 @@ Result<ObjectDesc> World::objectPose(ObjectId id) const {
 }
 
 Result<ImpactResult> World::impact(const ImpactDesc& desc) {
+  ImpactResult result;
+  if (Status st = impact(desc, result); !st) return st.error();
+  return result;
+}
+
+Status World::impact(const ImpactDesc& desc, ImpactResult& result) {
   try {
-    return mImpl->impact(desc);
+    return mImpl->impact(desc, result);
   } catch (const std::exception& e) {
     return bad(std::string("impact failed: ") + e.what());
   }
 }
 
-Result<ImpactResult> World::Impl::impact(const ImpactDesc& desc) {
+Status World::Impl::impact(const ImpactDesc& desc, ImpactResult& result) {
+  resetResult(result);
   auto found = slot(desc.object);
   if (!found) return found.error();
   const Slot& s = *found.value();
@@ -313,7 +353,6 @@ Result<ImpactResult> World::Impl::impact(const ImpactDesc& desc) {
   if (!(desc.bodyRadiusM >= 0.0) || !(desc.pointToleranceM >= 0.0)) {
     return bad("impact: bodyRadiusM and pointToleranceM must be ≥ 0");
   }
-  ImpactResult result;
   const uint64_t impactIndex = impacts++;
 
   // --- Contact: where, how curved, Hertz.
@@ -380,7 +419,7 @@ Result<ImpactResult> World::Impl::impact(const ImpactDesc& desc) {
 
   // Load pattern: Hertz pressure √(1 − r²/a²) on the nodes inside the patch, weighted by their
   // area; a patch smaller than the mesh loads the nearest face's nodes barycentrically.
-  std::vector<std::pair<int32_t, double>> load;
+  auto& load = result.loadWeights;  // normalised below
   double total = 0.0;
   for (int32_t i : body.boundaryNodes) {
     const double r2 = (x.row(i).transpose() - p).squaredNorm() / (hc.patchRadiusM * hc.patchRadiusM);
@@ -412,47 +451,53 @@ Result<ImpactResult> World::Impl::impact(const ImpactDesc& desc) {
   t0 = Clock::now();
   const int r = body.modes;
   result.modesUsed = r;
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(r);
+  for (auto& [i, w] : load) w /= total;
+  Eigen::VectorXd& g = work.modalLoad;
+  g.setZero(r);
   for (const auto& [i, w] : load) {
-    g -= (w / total) * (asset.modal.modes.block(3 * i, 0, 3, r).transpose() * n);  // force along −n
+    g.noalias() -= w * (asset.modal.modes.block(3 * i, 0, 3, r).transpose() * n);  // force along −n
   }
   const double lowestPeriod = 2.0 * std::numbers::pi / body.omega[0];
-  for (const auto& [i, w] : load) result.loadWeights.emplace_back(i, w / total);
   result.forceDirectionLocal = -n;
   result.ringDownS = fs.ringDownPeriods * lowestPeriod;
-  const std::vector<double> times = impactTimeGrid(hc.durationS, fs.pulseSteps, fs.ringDownPeriods * lowestPeriod,
-                                                   fs.ringDownPeriods > 0.0 ? fs.ringDownSteps : 0);
-  std::vector<double> force(times.size());
+  std::vector<double>& times = work.times;
+  impactTimeGrid(hc.durationS, fs.pulseSteps, fs.ringDownPeriods * lowestPeriod,
+                 fs.ringDownPeriods > 0.0 ? fs.ringDownSteps : 0, times);
+  std::vector<double>& force = work.force;
+  force.resize(times.size());
   for (size_t k = 0; k < times.size(); ++k) force[k] = hertzPulseForceN(hc, times[k]);
-  Eigen::MatrixXd q;
+  Eigen::MatrixXd& q = work.q;
   if (Status st = integrateModalResponse(body.omega, body.zeta, g, times, force, q); !st) return st.error();
   result.times.modalS = since(t0);
 
   // --- Stresses, Rankine.
   t0 = Clock::now();
   const Eigen::VectorXd noStatic;
-  Eigen::VectorXd staticStress;
+  Eigen::VectorXd& staticStress = work.staticStress;
   double compliance = 0.0;
   if (fs.staticCorrection) {
-    if (Status st = body.correction->stressPerNewton(result.loadWeights, -n, staticStress, compliance); !st) {
+    if (Status st = body.correction->stressPerNewton(result.loadWeights, -n, staticStress, compliance, work.correction);
+        !st) {
       return st.error();
     }
   }
+  StressScan& scan = work.scan;
   if (fs.staticCorrection && fs.reportUncorrectedPeak) {
     // The truncated modes alone, for the report (peak only: no seeds needed).
-    result.peakWithoutCorrectionPa = scanStresses(asset.stressModes, body.stressBounds, q, noStatic, force,
-                                                  std::numeric_limits<double>::infinity(), fs.pruneStresses)
-                                         .peakPrincipalPa;
+    scanStresses(asset.stressModes, body.stressBounds, q, noStatic, force, std::numeric_limits<double>::infinity(),
+                 fs.pruneStresses, work.scanBuffers, scan);
+    result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
   }
-  const StressScan scan = scanStresses(asset.stressModes, body.stressBounds, q, staticStress, force,
-                                       body.material.tensileStrengthPa, fs.pruneStresses);
+  const Eigen::VectorXd& scanStatic = fs.staticCorrection ? staticStress : noStatic;
+  scanStresses(asset.stressModes, body.stressBounds, q, scanStatic, force, body.material.tensileStrengthPa,
+               fs.pruneStresses, work.scanBuffers, scan);
   result.peakPrincipalStressPa = scan.peakPrincipalPa;
   if (!fs.staticCorrection) result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
   result.peakElement = scan.peakElement;
   result.peakTimeS = scan.peakInstant >= 0 ? times[static_cast<size_t>(scan.peakInstant)] : 0.0;
   result.stressEvaluations = scan.evaluations;
   result.times.stressS = since(t0);
-  if (scan.seeds.empty()) return result;
+  if (scan.seeds.empty()) return Ok{};
 
   // --- Cracks.
   t0 = Clock::now();
@@ -471,7 +516,7 @@ Result<ImpactResult> World::Impl::impact(const ImpactDesc& desc) {
   if (!state) return state.error();
   result.fracture = std::move(state).value();
   result.times.propagationS = since(t0);
-  if (result.fracture.fragmentCount < 2) return result;
+  if (result.fracture.fragmentCount < 2) return Ok{};
 
   // --- Fragment surfaces and mass properties.
   t0 = Clock::now();
@@ -512,7 +557,7 @@ Result<ImpactResult> World::Impl::impact(const ImpactDesc& desc) {
     }
   }
   result.times.matchingS = since(t0);
-  return result;
+  return Ok{};
 }
 
 }  // namespace brittle

@@ -54,6 +54,21 @@ StressScan scanStresses(const MatrixXdRow& stressModes, const Eigen::MatrixXd& b
                         const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double thresholdPa,
                         bool prune);
 
+/// Buffers of scanStresses, kept between calls so that a scan allocates nothing once they have
+/// grown to the largest body scanned.
+struct StressScanWorkspace {
+  Eigen::MatrixXd qAbsT;          ///< r by K: |q|ᵀ
+  Eigen::MatrixXd bound;          ///< T by K
+  Eigen::VectorXd staticNorm, forceAbs, elementBound;
+  std::vector<int32_t> order;
+  std::vector<std::pair<double, int32_t>> seeds;
+};
+
+/// The same scan into `out` (its seeds keep their capacity), with the buffers of `workspace`.
+void scanStresses(const MatrixXdRow& stressModes, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
+                  const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double thresholdPa, bool prune,
+                  StressScanWorkspace& workspace, StressScan& out);
+
 struct CrackSettings {
   int maxCracks = 6;                     ///< seeds that start a crack, strongest first
   /// A crack advances where the normal stress on its plane is σ_nn ≥ ratio · σ_t. The default, −∞,

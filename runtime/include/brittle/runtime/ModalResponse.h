@@ -29,10 +29,14 @@ Eigen::Matrix<double, 2, 4> exactStepMatrixByExponential(double omegaRadPerS, do
 /// The time grid of an impact: `pulseSteps` equal steps over the contact [0, t_c], then
 /// `ringDownSteps` equal steps over ringDownS after it. Returns the instants (s), starting at 0.
 std::vector<double> impactTimeGrid(double contactDurationS, int pulseSteps, double ringDownS, int ringDownSteps);
+/// The same into `timesS` (resized; no allocation once its capacity suffices).
+void impactTimeGrid(double contactDurationS, int pulseSteps, double ringDownS, int ringDownSteps,
+                    std::vector<double>& timesS);
 
 /// Modal coordinates at every instant of `timesS` (K instants, ascending, timesS[0] = 0, body at
 /// rest there) under the force forceN[k] (N) at those instants, linear in between.
 /// omega, zeta, modalLoad: r each (rad/s, 1, m/√kg·… per N). Output q: K by r.
+/// q is resized only when its shape changes, so a reused q costs no allocation.
 /// Errors: InvalidArgument (sizes differ, non-finite values, ω ≤ 0, ζ < 0, times not increasing).
 Status integrateModalResponse(const Eigen::VectorXd& omegaRadPerS, const Eigen::VectorXd& dampingRatio,
                               const Eigen::VectorXd& modalLoad, const std::vector<double>& timesS,

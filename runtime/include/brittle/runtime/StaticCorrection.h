@@ -9,8 +9,9 @@
 // projected out (relative error μ/λ_j ≤ 10⁻⁶). The stress per newton, σ̂ = C B u_t, is added to the
 // modal stress as σ_e(t) = S_e q(t) + σ̂_e F(t).
 //
-// K and M are assembled and K + μM is factorised (sparse LDLᵀ) once per object when it is loaded;
-// an impact costs one solve and one pass over the elements.
+// K and M are assembled and K + μM is factorised (sparse LDLᵀ) once per object when it is loaded,
+// and each element's C B_e (6 × 12) is kept; an impact costs one solve and one pass over the
+// elements. With a Workspace reused across impacts, that costs no heap allocation.
 #pragma once
 
 #include <Eigen/Core>
@@ -30,9 +31,18 @@ class StaticCorrection {
   /// Errors: those of assembleFem, FactorizationFailed.
   static Result<StaticCorrection> build(const ObjectAsset& asset, const Material& material, int modes);
 
+  /// Buffers of stressPerNewton, sized on first use.
+  struct Workspace {
+    Eigen::VectorXd load, relieved, displacement, scratch, modal;
+  };
+
   /// Stress per newton (6T, Voigt, Pa/N) of the truncated modes for a unit force along `direction`
   /// spread over nodes with weights summing to 1, and the work f·u_t (m/N) of that load on them.
+  /// `stress` and the workspace keep their storage between calls of the same object.
   /// Errors: InvalidArgument (a node out of range, weights that do not sum to 1).
+  Status stressPerNewton(const std::vector<std::pair<int32_t, double>>& weights, const Eigen::Vector3d& direction,
+                         Eigen::VectorXd& stress, double& complianceMPerN, Workspace& workspace) const;
+  /// The same with a workspace of its own.
   Status stressPerNewton(const std::vector<std::pair<int32_t, double>>& weights, const Eigen::Vector3d& direction,
                          Eigen::VectorXd& stress, double& complianceMPerN) const;
 

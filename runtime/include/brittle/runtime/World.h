@@ -160,6 +160,12 @@ class World {
   /// or non-positive values, a point farther than the tolerance from the surface), those of the
   /// stages; Internal failures are reported as InvalidArgument with the stage named.
   Result<ImpactResult> impact(const ImpactDesc& desc);
+  /// The same into `result`, which keeps its storage between calls. This is the hot path: once the
+  /// World's buffers have grown to the largest body hit (after one impact on it), an impact that
+  /// does not break the body allocates no heap memory (contact, modal response, static correction,
+  /// stress scan; tested). A body's first impact may factorise its K (StaticCorrection.h), and a
+  /// breaking impact allocates what it returns: crack state, fragment surfaces, new objects.
+  Status impact(const ImpactDesc& desc, ImpactResult& result);
 
  private:
   struct Impl;

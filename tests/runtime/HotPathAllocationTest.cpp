@@ -1,0 +1,166 @@
+// The runtime's hot path allocates nothing after warm-up: an impact that does not break its body,
+// reported into a reused ImpactResult, makes no heap allocation once the World's buffers have grown.
+//
+// Allocations are counted by interposing the C allocator (operator new, Eigen and the standard
+// containers all end in malloc), so this test has an executable of its own. Under AddressSanitizer,
+// which owns the allocator, the interposer is left out and the test is skipped.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstddef>
+
+#include "brittle/precompute/BakePipeline.h"
+#include "brittle/precompute/MaterialLibrary.h"
+#include "brittle/runtime/World.h"
+#include "brittle/testing/Fixtures.h"
+
+#if defined(__SANITIZE_ADDRESS__)
+#define BRITTLE_COUNT_ALLOCATIONS 0
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define BRITTLE_COUNT_ALLOCATIONS 0
+#endif
+#endif
+#ifndef BRITTLE_COUNT_ALLOCATIONS
+#define BRITTLE_COUNT_ALLOCATIONS 1
+#endif
+
+namespace {
+std::atomic<long> gAllocations{0};
+}
+
+#if BRITTLE_COUNT_ALLOCATIONS
+extern "C" {
+void* __libc_malloc(size_t);
+void* __libc_calloc(size_t, size_t);
+void* __libc_realloc(void*, size_t);
+void* __libc_memalign(size_t, size_t);
+void __libc_free(void*);
+
+void* malloc(size_t n) {
+  gAllocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_malloc(n);
+}
+void* calloc(size_t count, size_t n) {
+  gAllocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_calloc(count, n);
+}
+void* realloc(void* p, size_t n) {
+  gAllocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_realloc(p, n);
+}
+void* memalign(size_t alignment, size_t n) {
+  gAllocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_memalign(alignment, n);
+}
+void* aligned_alloc(size_t alignment, size_t n) {
+  gAllocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_memalign(alignment, n);
+}
+int posix_memalign(void** p, size_t alignment, size_t n) {
+  gAllocations.fetch_add(1, std::memory_order_relaxed);
+  *p = __libc_memalign(alignment, n);
+  return *p ? 0 : ENOMEM;
+}
+void free(void* p) { __libc_free(p); }
+}
+#endif
+
+namespace brittle {
+namespace {
+
+class HotPathAllocationTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    Material glass = materialPreset("glass").value();
+    ObjectBakeSettings b;
+    b.name = "plate";
+    b.material = glass;
+    b.tetMesh.targetTets = 1500;
+    b.modal.modeCount = 20;
+    auto plate = bakeSurface(testing::makeBoxSurface(0.3, 0.3, 0.01), b);
+    ASSERT_TRUE(plate) << plate.error().message;
+    sPack = new Pack;
+    sPack->materials.push_back(glass);
+    sPack->objects.push_back(std::move(plate).value());
+  }
+  static void TearDownTestSuite() { delete sPack; }
+  static Pack* sPack;
+
+  // Impacts below the breaking speed, at different points, speeds and impactors (load patches of
+  // different sizes): one round warms up, the next must not allocate.
+  static std::vector<ImpactDesc> impacts(ObjectId id) {
+    std::vector<ImpactDesc> out;
+    const double speeds[] = {0.2, 0.6, 0.05};
+    const double radii[] = {0.02, 0.005, 0.05};
+    for (int i = 0; i < 3; ++i) {
+      ImpactDesc d;
+      d.object = id;
+      d.pointWorld = Eigen::Vector3d(0.03 * i - 0.02, 0.01 * i, 0.005);
+      d.normalWorld = Eigen::Vector3d::UnitZ();
+      d.speedMps = speeds[i];
+      d.impactorMassKg = 0.1;
+      d.impactorRadiusM = radii[i];
+      out.push_back(d);
+    }
+    return out;
+  }
+
+  static void expectNoAllocationAfterWarmUp(const WorldSettings& settings) {
+    if (!BRITTLE_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";
+    auto world = World::create(*sPack, settings);
+    ASSERT_TRUE(world) << world.error().message;
+    auto id = world.value().addObject({.asset = "plate"});
+    ASSERT_TRUE(id) << id.error().message;
+    const auto descs = impacts(id.value());
+    ImpactResult result;
+    for (const ImpactDesc& d : descs) {  // warm-up
+      ASSERT_TRUE(world.value().impact(d, result));
+      ASSERT_FALSE(result.broken) << "the hot-path impacts must not break the plate";
+      ASSERT_GT(result.peakPrincipalStressPa, 0.0);
+    }
+    const double warmPeak = result.peakPrincipalStressPa;
+    long counted = 0;
+    bool ok = true, broken = false;
+    for (int round = 0; round < 2; ++round) {
+      for (const ImpactDesc& d : descs) {
+        const long before = gAllocations.load();
+        const Status st = world.value().impact(d, result);
+        counted += gAllocations.load() - before;
+        ok = ok && st.ok();
+        broken = broken || result.broken;
+      }
+    }
+    EXPECT_TRUE(ok);
+    EXPECT_FALSE(broken);
+    EXPECT_EQ(counted, 0) << "heap allocations in 6 warm impacts";
+    EXPECT_EQ(result.peakPrincipalStressPa, warmPeak) << "a reused result gives the same answer";
+    // The counter is live: the allocating form of impact is seen.
+    const long before = gAllocations.load();
+    auto fresh = world.value().impact(descs.back());
+    ASSERT_TRUE(fresh);
+    EXPECT_GT(gAllocations.load() - before, 0);
+    EXPECT_EQ(fresh.value().peakPrincipalStressPa, warmPeak);
+  }
+};
+Pack* HotPathAllocationTest::sPack = nullptr;
+
+TEST_F(HotPathAllocationTest, DefaultSettingsAllocateNothingAfterWarmUp) { expectNoAllocationAfterWarmUp({}); }
+
+TEST_F(HotPathAllocationTest, WithoutStaticCorrectionOrPruningAllocateNothingEither) {
+  WorldSettings s;
+  s.fracture.staticCorrection = false;
+  s.fracture.pruneStresses = false;
+  expectNoAllocationAfterWarmUp(s);
+}
+
+TEST_F(HotPathAllocationTest, ReportingTheUncorrectedPeakAllocatesNothing) {
+  WorldSettings s;
+  s.fracture.reportUncorrectedPeak = true;
+  s.fracture.modeCount = 12;
+  expectNoAllocationAfterWarmUp(s);
+}
+
+}  // namespace
+}  // namespace brittle
