@@ -1,5 +1,7 @@
 #include "brittle/precompute/BaseShapes.h"
 
+#include "brittle/descriptors/MeshRefinement.h"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -94,37 +96,6 @@ TriangleMesh wedge(const Eigen::Vector3d& size) {
   return b.mesh();
 }
 
-// Unit icosphere, subdivided `level` times, vertices on the unit sphere.
-TriangleMesh icosphere(int level) {
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
-  for (auto& p : v) p.normalize();
-  std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                                    {11, 10, 2}, {10, 7, 6}, {7, 1, 8},   {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                                    {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
-  for (int l = 0; l < level; ++l) {
-    std::map<std::pair<int, int>, int> mid;
-    auto midpoint = [&](int a, int b) {
-      const auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      v.push_back((v[a] + v[b]).normalized());
-      return mid[key] = static_cast<int>(v.size()) - 1;
-    };
-    std::vector<Eigen::Vector3i> next;
-    for (const auto& t3 : f) {
-      const int a = midpoint(t3[0], t3[1]), b = midpoint(t3[1], t3[2]), c = midpoint(t3[2], t3[0]);
-      next.insert(next.end(), {{t3[0], a, c}, {t3[1], b, a}, {t3[2], c, b}, {a, b, c}});
-    }
-    f = std::move(next);
-  }
-  Builder out;
-  out.vertices = v;
-  out.faces = f;
-  return out.mesh();
-}
-
 }  // namespace
 
 const char* baseShapeKindName(BaseShapeKind kind) {
@@ -173,7 +144,7 @@ Result<TriangleMesh> makeBaseShape(const BaseShapeDefinition& d) {
     case BaseShapeKind::Wedge: return wedge(d.sizeM);
     case BaseShapeKind::Sphere:
     case BaseShapeKind::Blob: {
-      TriangleMesh m = icosphere(d.segments);
+      TriangleMesh m = unitIcosphere(d.segments);
       // Blob: see the header. tanh bounds the bump sum smoothly, so r ≥ 1 − noise > 0.
       std::vector<Eigen::Vector3d> centres;
       std::vector<double> weights;

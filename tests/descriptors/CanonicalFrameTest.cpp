@@ -73,7 +73,7 @@ TEST(CanonicalFrame, InvariantToSimilarityAndRemeshing) {
     EXPECT_LT((canonical - reference).cwiseAbs().maxCoeff(), 1e-9) << seed;
     EXPECT_NEAR(frames.value().volumeM3, base.value().volumeM3 * std::pow(s.scale, 3), 1e-10 * frames.value().volumeM3);
   }
-  const auto fine = testing::subdivide(testing::subdivide(solid));
+  const auto fine = subdivideMidpoints(subdivideMidpoints(solid));
   const auto frames = computeCanonicalFrames(fine);
   ASSERT_TRUE(frames.ok());
   const Points canonical = frames.value().candidates.front().pointsToCanonical(Points(fine.vertices.topRows(8)));

@@ -9,6 +9,7 @@
 #include <random>
 #include <utility>
 
+#include "brittle/descriptors/MeshRefinement.h"
 #include "brittle/descriptors/MeshTypes.h"
 
 namespace brittle::testing {
@@ -56,32 +57,6 @@ inline TriangleMesh makeCylinder(double r, double h, int n) {
     s.row(i) << r * std::cos(t), r * std::sin(t);
   }
   return makePrism(s, 0.0, h);
-}
-
-/// Every triangle split into four through shared edge midpoints: the same polyhedron, 4× the faces.
-inline TriangleMesh subdivide(const TriangleMesh& in) {
-  TriangleMesh out;
-  std::vector<Eigen::RowVector3d> v;
-  for (Eigen::Index i = 0; i < in.vertices.rows(); ++i) v.push_back(in.vertices.row(i));
-  std::map<std::pair<int, int>, int> mid;
-  auto midpoint = [&](int a, int b) {
-    const auto key = std::minmax(a, b);
-    if (auto it = mid.find(key); it != mid.end()) return it->second;
-    v.push_back(0.5 * (v[a] + v[b]));
-    return mid[key] = static_cast<int>(v.size()) - 1;
-  };
-  out.faces.resize(4 * in.faces.rows(), 3);
-  for (Eigen::Index f = 0; f < in.faces.rows(); ++f) {
-    const int a = in.faces(f, 0), b = in.faces(f, 1), c = in.faces(f, 2);
-    const int ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
-    out.faces.row(4 * f + 0) << a, ab, ca;
-    out.faces.row(4 * f + 1) << b, bc, ab;
-    out.faces.row(4 * f + 2) << c, ca, bc;
-    out.faces.row(4 * f + 3) << ab, bc, ca;
-  }
-  out.vertices.resize(static_cast<Eigen::Index>(v.size()), 3);
-  for (size_t i = 0; i < v.size(); ++i) out.vertices.row(static_cast<Eigen::Index>(i)) = v[i];
-  return out;
 }
 
 /// A generic (asymmetric) closed polyhedron: an irregular hexahedron, 12 triangles, with distinct

@@ -88,7 +88,7 @@ TEST(VoxelDescriptor, InvariantToSimilarityAndRemeshing) {
   // Same polyhedron, 16× the triangles. OpenVDB computes narrow-band distances away from the
   // surface from the triangles its dilation reaches, so they depend slightly on the triangulation
   // (measured: ≤ 0.023 of the clamp distance, i.e. < 0.05 voxel).
-  const auto fine = testing::subdivide(testing::subdivide(solid));
+  const auto fine = subdivideMidpoints(subdivideMidpoints(solid));
   EXPECT_EQ(voxelHammingDistance(occupancy(fine), occRef), 0.0f);
   const Descriptor fineSdf = clampedDistance(fine, primaryFrame(fine));
   EXPECT_LT((fineSdf - sdfRef).cwiseAbs().maxCoeff(), 0.05f);

@@ -218,6 +218,10 @@ Runner addBenchCommand(CLI::App& app) {
   search->add_option("--physics-queries", s->physicsQueries, "Queries with a direct bake as ground truth")
       ->capture_default_str()->check(CLI::Range(0, 10000));
   search->add_option("--physics-tets", s->physicsTets, "Tetrahedra per fragment for the physical error")->capture_default_str();
+  search->add_option("--min-query-triangles", s->minQueryTriangles,
+                     "Query fragments are refined by midpoint subdivision (same solid) to at least this many triangles")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{0}, int64_t{1} << 20));
   search->add_option("--voxel-resolution", s->voxelResolution, "Voxels per axis")->capture_default_str()->check(CLI::Range(2, 64));
   search->add_option("--seed", s->seed, "Seed of the database and the queries")->capture_default_str();
   search->add_option("--csv", s->searchCsv, "Search results CSV")->capture_default_str();
