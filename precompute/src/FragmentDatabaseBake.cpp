@@ -72,6 +72,10 @@ TetMeshSettings DatabaseBakeSettings::defaultFragmentTetMeshSettings() {
 
 uint64_t fragmentEntrySeed(uint64_t seed, int64_t entry) { return splitmix64(seed + static_cast<uint64_t>(entry)); }
 
+bool isRuntimeFragmentEntry(uint64_t entrySeed, double fraction) {
+  return static_cast<double>(splitmix64(entrySeed ^ 0x52554e54494d45ull) >> 11) * 0x1.0p-53 < fraction;
+}
+
 Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std::string& name,
                                         const DatabaseBakeSettings& settings,
                                         std::array<Descriptor, kDescriptorKindCount>& descriptors,
@@ -106,7 +110,15 @@ Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std:
     bake.material = settings.referenceMaterial;
     bake.tetMesh = settings.tetMesh;
     bake.modal.modeCount = settings.modeCount;
+    // A fragment thinner than the cell size in places comes out of Mesh_3 in pieces: mesh the
+    // same fragment finer (2×, 4× the tets) before the caller draws another one.
     auto asset = bakeSurface(entry.surface, bake, progress);
+    for (int finer = 0; finer < 2 && !asset && asset.error().code == ErrorCode::MeshingFailed &&
+                        bake.tetMesh.targetTets > 0;
+         ++finer) {
+      bake.tetMesh.targetTets *= 2;
+      asset = bakeSurface(entry.surface, bake, progress);
+    }
     if (!asset) return asset.error();
     entry.asset = std::move(asset).value();
   } else {
@@ -135,11 +147,26 @@ Result<FragmentDatabase> bakeFragmentDatabase(const DatabaseBakeSettings& settin
     bases.push_back(std::move(mesh).value());
   }
 
+  std::optional<RuntimeFragmentSource> runtime;
+  if (settings.runtimeFragments.fraction > 0.0) {
+    auto source = RuntimeFragmentSource::build(settings.shapes, bases, settings.referenceMaterial,
+                                               settings.runtimeFragments, progress);
+    if (!source) return source.error();
+    runtime.emplace(std::move(source).value());
+  } else if (Status st = validateRuntimeFragmentSettings(settings.runtimeFragments); !st) {
+    return st.error();
+  }
+
   const auto count = static_cast<size_t>(settings.entryCount);
   std::vector<std::optional<Result<FragmentEntry>>> results(count);
   std::vector<std::array<Descriptor, kDescriptorKindCount>> rows(count);
   SharedProgress shared(progress, settings.entryCount);
   std::atomic<bool> stop{false};
+
+  // Runtime fragments' crack faces zigzag at the runtime mesh's scale: their creases are not
+  // features to keep, and protecting them starves Mesh_3 of cells.
+  DatabaseBakeSettings runtimeEntrySettings = settings;
+  runtimeEntrySettings.tetMesh.detectSharpFeatures = false;
 
   auto bakeOne = [&](size_t i) {
     if (stop.load()) return;
@@ -151,15 +178,17 @@ Result<FragmentDatabase> bakeFragmentDatabase(const DatabaseBakeSettings& settin
     const size_t shape = i % bases.size();
     const std::string name = entryName(settings.shapes[shape].name, static_cast<int64_t>(i));
     uint64_t seed = fragmentEntrySeed(settings.seed, static_cast<int64_t>(i));
+    const bool fromRuntime = runtime && isRuntimeFragmentEntry(seed, settings.runtimeFragments.fraction);
     std::optional<Error> lastError;
     for (int attempt = 0; attempt < kEntryAttempts; ++attempt, seed = splitmix64(seed)) {
       std::string cut;
-      auto fragment = generateFragment(bases[shape], settings.fragments, seed, &cut);
+      auto fragment = fromRuntime ? runtime->fragment(shape, seed, &cut)
+                                  : generateFragment(bases[shape], settings.fragments, seed, &cut);
       if (!fragment) {
         lastError = fragment.error();
         continue;
       }
-      auto entry = bakeFragmentEntry(fragment.value(), name, settings, rows[i]);
+      auto entry = bakeFragmentEntry(fragment.value(), name, fromRuntime ? runtimeEntrySettings : settings, rows[i]);
       if (!entry) {
         lastError = entry.error();
         continue;
@@ -230,7 +259,8 @@ Result<std::optional<DatabaseBakeSettings>> loadDatabaseManifest(const std::file
     const nlohmann::json& d = doc["database"];
     if (!d.is_object()) return makeError(ErrorCode::ParseError, where + ": not an object");
     static const std::set<std::string> kKeys = {"shapes", "only", "entries", "seed", "tets", "modes",
-                                                "descriptors_only", "moment_order", "voxel_resolution"};
+                                                "descriptors_only", "moment_order", "voxel_resolution",
+                                                "runtime_fraction"};
     for (const auto& [key, value] : d.items()) {
       if (!kKeys.count(key)) return makeError(ErrorCode::ParseError, where + ": unknown key \"" + key + "\"");
     }
@@ -246,6 +276,11 @@ Result<std::optional<DatabaseBakeSettings>> loadDatabaseManifest(const std::file
                                                     std::to_string(static_cast<int64_t>(lo)) + ", " +
                                                     std::to_string(static_cast<int64_t>(hi)) + "]");
       }
+    }
+    if (d.contains("runtime_fraction") &&
+        !(d["runtime_fraction"].is_number() && d["runtime_fraction"].get<double>() >= 0.0 &&
+          d["runtime_fraction"].get<double>() <= 1.0)) {
+      return makeError(ErrorCode::ParseError, where + ": \"runtime_fraction\" must be a number in [0, 1]");
     }
     DatabaseBakeSettings s;
     auto shapes = loadBaseShapes(path.parent_path() / d["shapes"].get<std::string>());
@@ -265,6 +300,7 @@ Result<std::optional<DatabaseBakeSettings>> loadDatabaseManifest(const std::file
     s.descriptors.moment.maxOrder = d.value("moment_order", s.descriptors.moment.maxOrder);
     s.descriptors.voxel.resolution = d.value("voxel_resolution", s.descriptors.voxel.resolution);
     s.descriptors.voxelImproved.resolution = s.descriptors.voxel.resolution;
+    s.runtimeFragments.fraction = d.value("runtime_fraction", 0.0);
     return std::optional<DatabaseBakeSettings>(std::move(s));
   } catch (const nlohmann::json::exception& e) {
     return makeError(ErrorCode::ParseError, where + ": " + e.what());

@@ -142,13 +142,17 @@ TEST_F(FragmentDatabaseTest, DamagedDatabaseGivesTypedErrors) {
 TEST_F(FragmentDatabaseTest, ManifestDatabaseSectionAndErrors) {
   std::ofstream(dir / "m.json") << R"({"database": {"shapes": ")" +
                                        (testing::sourceDir() / "assets/shapes/base-shapes.json").string() +
-                                       R"(", "only": ["box", "sphere"], "entries": 5, "seed": 3, "tets": 300, "modes": 4}})";
+                                       R"(", "only": ["box", "sphere"], "entries": 5, "seed": 3, "tets": 300, "modes": 4,)"
+                                       R"( "runtime_fraction": 0.25}})";
   auto s = loadDatabaseManifest(dir / "m.json");
   ASSERT_TRUE(s) << s.error().message;
   ASSERT_TRUE(s.value().has_value());
   EXPECT_EQ(s.value()->shapes.size(), 2u);
   EXPECT_EQ(s.value()->entryCount, 5);
   EXPECT_EQ(s.value()->modeCount, 4);
+  EXPECT_EQ(s.value()->runtimeFragments.fraction, 0.25);
+  std::ofstream(dir / "fraction.json") << R"({"database": {"shapes": "x.json", "runtime_fraction": 2}})";
+  EXPECT_EQ(loadDatabaseManifest(dir / "fraction.json").error().code, ErrorCode::ParseError);
   std::ofstream(dir / "bad.json") << R"({"database": {"shapes": "x.json", "entries": -3}})";
   EXPECT_EQ(loadDatabaseManifest(dir / "bad.json").error().code, ErrorCode::ParseError);
   std::ofstream(dir / "unknown.json") << R"({"database": {"shapes": "x.json", "entires": 3}})";

@@ -30,6 +30,7 @@ struct BakeDbOptions {
   int momentOrder = 4;
   int voxelResolution = 16;
   int threads = 0;
+  double runtimeFraction = 0.0;
   bool quiet = false;
   bool json = false;
 };
@@ -64,6 +65,10 @@ Runner addBakeDbCommand(CLI::App& app) {
   cmd->add_flag("--descriptors-only", o->descriptorsOnly, "Skip tet meshes and modes (search benchmarks on large databases)");
   cmd->add_option("--moment-order", o->momentOrder, "Highest moment order of the moment descriptor")->capture_default_str()->check(CLI::Range(2, 10));
   cmd->add_option("--voxel-resolution", o->voxelResolution, "Voxels per axis k of both voxel descriptors")->capture_default_str()->check(CLI::Range(2, 64));
+  cmd->add_option("--runtime-fraction", o->runtimeFraction,
+                  "Share of entries broken off base shapes by the runtime instead of cut (a second source)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores); the result does not depend on it")->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--out", o->out, "Output pack (.h5), written atomically")->required();
   cmd->add_flag("--quiet", o->quiet, "No progress display");
@@ -88,6 +93,7 @@ Runner addBakeDbCommand(CLI::App& app) {
     s.descriptors.moment.maxOrder = o->momentOrder;
     s.descriptors.voxel.resolution = s.descriptors.voxelImproved.resolution = o->voxelResolution;
     s.threads = o->threads;
+    s.runtimeFragments.fraction = o->runtimeFraction;
     Result<FragmentDatabase> db = [&] {
       TerminalProgress progress(o->quiet);
       return bakeFragmentDatabase(s, &progress);

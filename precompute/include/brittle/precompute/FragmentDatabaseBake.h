@@ -5,9 +5,11 @@
 //
 // Parallel and reproducible: entries are baked concurrently (TBB), but entry i depends only on
 // the settings and its own seed, seed_i = splitmix64(seed + i), and results are gathered in entry
-// order, so the database is the same for any thread count. Entry i is cut from base shape
-// i mod #shapes. An entry whose tet meshing or modal solve fails is cut again from the next seed
-// of the same stream (at most kEntryAttempts times) before the bake fails.
+// order, so the database is the same for any thread count. Entry i comes from base shape
+// i mod #shapes: cut (FragmentGenerator.h) or, for a seeded share runtimeFragments.fraction of
+// the entries, broken off by the runtime (RuntimeFragments.h). An entry whose fragment, tet
+// meshing or modal solve fails is made again from the next seed of the same stream (at most
+// kEntryAttempts times) before the bake fails.
 #pragma once
 
 #include <array>
@@ -22,6 +24,7 @@
 #include "brittle/precompute/FragmentGenerator.h"
 #include "brittle/precompute/ModalAnalysis.h"
 #include "brittle/precompute/Progress.h"
+#include "brittle/precompute/RuntimeFragments.h"
 #include "brittle/precompute/TetMesher.h"
 
 namespace brittle {
@@ -45,6 +48,8 @@ struct DatabaseBakeSettings {
   std::array<bool, kDescriptorKindCount> kinds = {true, true, true};
   std::array<DescriptorIndexSettings, kDescriptorKindCount> index;
   int threads = 0;  ///< worker threads; 0 = TBB's default (all cores)
+  /// Runtime fracture as a second source of fragments (fraction 0: every entry is cut).
+  RuntimeFragmentSettings runtimeFragments;
 
   /// The glass preset (E 70 GPa, ν 0.2, ρ 2500 kg/m³): a query of the same ν rescales exactly,
   /// another ν goes through the Rayleigh–Ritz correction of ScalingLaws.h.
@@ -55,6 +60,10 @@ struct DatabaseBakeSettings {
 
 /// Seed of entry i: splitmix64(seed + i).
 uint64_t fragmentEntrySeed(uint64_t seed, int64_t entry);
+
+/// Whether the entry with first seed `entrySeed` comes from runtime fracture: a uniform draw from
+/// the seed below `fraction` (so about that share of entries, the same ones for any thread count).
+bool isRuntimeFragmentEntry(uint64_t entrySeed, double fraction);
 
 /// One entry from any closed fragment surface (metres, any pose): canonical surface, descriptors
 /// of every kind (written to `descriptors`, one row each, in kind order) and, when
@@ -73,7 +82,7 @@ Result<FragmentDatabase> bakeFragmentDatabase(const DatabaseBakeSettings& settin
 /// The optional "database" section of a bake manifest (BakePipeline.h):
 ///   "database": { "shapes": "shapes/base-shapes.json", "only": ["box", "plate"], "entries": 48,
 ///                 "seed": 1, "tets": 1000, "modes": 12, "descriptors_only": false,
-///                 "moment_order": 4, "voxel_resolution": 16 }
+///                 "moment_order": 4, "voxel_resolution": 16, "runtime_fraction": 0.5 }
 /// Every key is optional except "shapes" (relative to the manifest's directory); "only" picks
 /// shapes by name. nullopt when the manifest has no "database" key.
 /// Errors: FileNotFound, ParseError (naming the key), those of loadBaseShapes.
