@@ -249,9 +249,29 @@ TEST_F(CliTest, SearchBenchWritesItsCsv) {
   EXPECT_EQ(bruteForce, 2 * 3);
   std::ifstream cost(dir / "cost.csv");
   const std::string costText((std::istreambuf_iterator<char>(cost)), std::istreambuf_iterator<char>());
-  for (const char* stage : {"fragment-cut", "canonical-frame", "moment", "voxel", "voxel-improved"}) {
+  for (const char* stage : {"fragment-cut", "canonical-frame", "moment", "voxel", "voxel-improved", "moment-total",
+                            "voxel-total", "voxel-improved-total"}) {
     EXPECT_NE(costText.find(std::string("\n") + stage + ","), std::string::npos) << stage;
   }
+}
+
+TEST_F(CliTest, SearchBenchWithRuntimeFragmentsAsQueriesAndEntries) {
+  const std::string shapes = "\"" + (testing::sourceDir() / "assets" / "shapes" / "base-shapes.json").string() + "\"";
+  const CliRun bench = run("bench search --shapes " + shapes +
+                           " --sizes 14 --kinds moment --queries 4 --physics-queries 2 --physics-tets 300"
+                           " --runtime-fraction 0.5 --runtime-queries --index kd-forest:1:8 --quiet --csv " +
+                           path("search.csv") + " --cost-csv " + path("cost.csv"));
+  ASSERT_EQ(bench.exitCode, 0) << bench.out;
+  std::ifstream csv(dir / "search.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_NE(header.find(",database_runtime_fraction,query_source"), std::string::npos) << header;
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    EXPECT_NE(line.find(",0.5,runtime"), std::string::npos) << line;
+  }
+  EXPECT_EQ(rows, 2);  // brute force and the kd-forest
 }
 
 }  // namespace

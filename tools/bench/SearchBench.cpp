@@ -17,6 +17,7 @@
 #include "brittle/descriptors/MeshRefinement.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/FragmentDatabaseBake.h"
+#include "brittle/precompute/RuntimeFragments.h"
 
 namespace brittle::bench {
 namespace {
@@ -104,6 +105,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
   bake.seed = s.seed;
   bake.physics = false;
   bake.descriptors.voxel.resolution = bake.descriptors.voxelImproved.resolution = s.voxelResolution;
+  bake.runtimeFragments.fraction = s.runtimeFraction;
 
   // Databases: every kind up to fullSize entries, moments only beyond (same seed: same fragments).
   FragmentDatabase full, big;
@@ -128,6 +130,14 @@ Status runSearchBench(const SearchBenchSettings& s) {
   // Queries: new fragments (another seed) in random poses and sizes.
   std::vector<TriangleMesh> bases;
   for (const auto& def : s.shapes) bases.push_back(makeBaseShape(def).value());
+  std::optional<RuntimeFragmentSource> runtime;
+  if (s.runtimeQueries) {
+    RuntimeFragmentSettings rs = bake.runtimeFragments;
+    rs.fraction = 1.0;
+    auto source = RuntimeFragmentSource::build(s.shapes, bases, bake.referenceMaterial, rs);
+    if (!source) return source.error();
+    runtime.emplace(std::move(source).value());
+  }
   std::vector<Query> queries;
   std::mt19937_64 rng(s.seed ^ 0x9e3779b97f4a7c15ull);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -141,10 +151,14 @@ Status runSearchBench(const SearchBenchSettings& s) {
     const auto cutStart = Clock::now();
     // Like the database bake, a draw that yields no acceptable fragment is redrawn from the next seed.
     uint64_t querySeed = fragmentEntrySeed(s.seed + 0x5eed0000ull, q);
-    auto fragment = generateFragment(bases[static_cast<size_t>(q) % bases.size()], bake.fragments, querySeed);
+    const size_t shape = static_cast<size_t>(q) % bases.size();
+    auto draw = [&] {
+      return runtime ? runtime->fragment(shape, querySeed) : generateFragment(bases[shape], bake.fragments, querySeed);
+    };
+    auto fragment = draw();
     for (int attempt = 1; !fragment && attempt < kEntryAttempts; ++attempt) {
       querySeed = fragmentEntrySeed(querySeed, 1);
-      fragment = generateFragment(bases[static_cast<size_t>(q) % bases.size()], bake.fragments, querySeed);
+      fragment = draw();
     }
     if (!fragment) return fragment.error();
     cutUs.push_back(1e6 * seconds(cutStart));
@@ -219,11 +233,14 @@ Status runSearchBench(const SearchBenchSettings& s) {
   physicsBake.kinds = {false, false, false};
   physicsBake.tetMesh.targetTets = s.physicsTets;
   physicsBake.modeCount = 3;
+  DatabaseBakeSettings runtimePhysicsBake = physicsBake;  // as the database bake meshes runtime entries
+  runtimePhysicsBake.tetMesh.detectSharpFeatures = false;
 
   std::ofstream csv(s.searchCsv);
   if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.searchCsv.string());
   csv << "entries,descriptor,index,trees,checks,build_s,memory_mb,query_median_us,query_p99_us,brute_median_us,"
-         "speedup_vs_brute,recall_at_1,physics_queries,mass_err_median,inertia_err_median,frequency_err_median\n";
+         "speedup_vs_brute,recall_at_1,physics_queries,mass_err_median,inertia_err_median,frequency_err_median,"
+         "database_runtime_fraction,query_source\n";
 
   for (int64_t n : s.sizes) {
     for (DescriptorKind kind : s.kinds) {
@@ -275,7 +292,8 @@ Status runSearchBench(const SearchBenchSettings& s) {
           if (it == physical.end()) {
             std::array<Descriptor, kDescriptorKindCount> unused;
             const FragmentEntry& e = db.entries[static_cast<size_t>(m.entry)];
-            auto entry = bakeFragmentEntry(e.surface, e.asset.name, physicsBake, unused);
+            const bool fromRuntime = e.cut.rfind("runtime:", 0) == 0;
+            auto entry = bakeFragmentEntry(e.surface, e.asset.name, fromRuntime ? runtimePhysicsBake : physicsBake, unused);
             if (!entry) continue;  // counted out like a query without ground truth
             it = physical.emplace(m.entry, std::move(entry).value()).first;
           }
@@ -294,7 +312,8 @@ Status runSearchBench(const SearchBenchSettings& s) {
             << static_cast<double>(matcher.value().index(kind)->memoryBytes()) / 1048576.0 << "," << median << ","
             << percentile(times, 0.99) << "," << bruteMedian << "," << bruteMedian / median << "," << recall << ","
             << massErr.size() << "," << percentile(massErr, 0.5) << "," << percentile(inertiaErr, 0.5) << ","
-            << percentile(freqErr, 0.5) << "\n";
+            << percentile(freqErr, 0.5) << "," << s.runtimeFraction << "," << (s.runtimeQueries ? "runtime" : "cut")
+            << "\n";
         csv.flush();
         log(s.quiet, "%7lld %-14s %-22s recall %.3f  median %8.1f us  p99 %8.1f us  (brute %8.1f us)  freq err %.3f\n",
             static_cast<long long>(n), descriptorKindName(kind), choice.label.c_str(), recall, median,

@@ -42,6 +42,11 @@ struct SearchBenchSettings {
   int physicsQueries = 12;         ///< queries with a direct bake as ground truth (0: skip)
   int64_t physicsTets = 1000;
   int64_t minQueryTriangles = 700;  ///< queries are subdivided up to this (fragments have ~200)
+  /// Share of database entries broken off by the runtime (DatabaseBakeSettings::runtimeFragments).
+  double runtimeFraction = 0.0;
+  /// Where the query fragments come from: exact cuts, or runtime fracture of the base shapes
+  /// (what the runtime asks the database about).
+  bool runtimeQueries = false;
   int voxelResolution = 16;
   uint64_t seed = 1;
   std::filesystem::path searchCsv = "bench/search.csv";

@@ -228,6 +228,12 @@ Runner addBenchCommand(CLI::App& app) {
                      "Query fragments are refined by midpoint subdivision (same solid) to at least this many triangles")
       ->capture_default_str()
       ->check(CLI::Range(int64_t{0}, int64_t{1} << 20));
+  search->add_option("--runtime-fraction", s->runtimeFraction,
+                     "Share of database entries broken off base shapes by the runtime (a second source)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  search->add_flag("--runtime-queries", s->runtimeQueries,
+                   "Query with fragments broken off by the runtime instead of exact cuts");
   search->add_option("--voxel-resolution", s->voxelResolution, "Voxels per axis")->capture_default_str()->check(CLI::Range(2, 64));
   search->add_option("--seed", s->seed, "Seed of the database and the queries")->capture_default_str();
   search->add_option("--csv", s->searchCsv, "Search results CSV")->capture_default_str();
