@@ -145,30 +145,36 @@ void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eig
       }
     }
   } else {
-    // bound(e, k) = Σ_j ‖D S_e,j‖ |q_kj| (+ ‖D σ̂_e‖ |F_k|). A coefficient-wise (lazy) product: the
-    // blocked one would allocate its packing buffers on every call.
-    w.qAbsT = q.cwiseAbs().transpose();
-    w.bound.resize(t, steps);
-    w.bound.noalias() = bounds.leftCols(r).lazyProduct(w.qAbsT);
+    // Two levels of bounds. Per element, over all instants: B_e = Σ_j ‖D S_e,j‖ max_k |q_kj|
+    // (+ ‖D σ̂_e‖ max_k |F_k|), one matrix-vector product. Elements are taken from a max-heap on
+    // B_e until B_e < best; only then are the per-instant bounds b_e,k = Σ_j ‖D S_e,j‖ |q_kj|
+    // (+ ‖D σ̂_e‖ |F_k|) formed, for that element alone. Anything skipped is below the final peak,
+    // so the answer is the full scan's.
+    w.qAbsT = q.cwiseAbs().transpose();  // r by K
+    w.qMax = w.qAbsT.rowwise().maxCoeff();
+    w.elementBound.resize(t);
+    w.elementBound.noalias() = bounds.leftCols(r) * w.qMax;
+    double forceMax = 0.0;
     if (correction) {
       w.staticNorm.resize(t);
       w.forceAbs.resize(steps);
       for (Eigen::Index e = 0; e < t; ++e) w.staticNorm[e] = (kD.asDiagonal() * staticStress.segment<6>(6 * e)).norm();
       for (Eigen::Index k = 0; k < steps; ++k) w.forceAbs[k] = std::abs(forceN[static_cast<size_t>(k)]);
-      w.bound.noalias() += w.staticNorm.lazyProduct(w.forceAbs.transpose());
+      forceMax = w.forceAbs.maxCoeff();
+      w.elementBound += forceMax * w.staticNorm;
     }
-    // Elements by their largest bound, largest first; stop once no bound can beat the best.
-    w.elementBound = w.bound.rowwise().maxCoeff();
-    w.order.resize(static_cast<size_t>(t));
-    std::iota(w.order.begin(), w.order.end(), 0);
-    const Eigen::VectorXd& elementBound = w.elementBound;
-    std::sort(w.order.begin(), w.order.end(), [&](int32_t a, int32_t b) {
-      return elementBound[a] != elementBound[b] ? elementBound[a] > elementBound[b] : a < b;
-    });
-    for (int32_t e : w.order) {
-      if (elementBound[e] < best) break;
+    w.heap.resize(static_cast<size_t>(t));
+    for (Eigen::Index e = 0; e < t; ++e) w.heap[static_cast<size_t>(e)] = {w.elementBound[e], static_cast<int32_t>(e)};
+    std::make_heap(w.heap.begin(), w.heap.end());
+    w.instantBound.resize(steps);
+    while (!w.heap.empty() && w.heap.front().first >= best) {
+      std::pop_heap(w.heap.begin(), w.heap.end());
+      const int32_t e = w.heap.back().second;
+      w.heap.pop_back();
+      w.instantBound.noalias() = w.qAbsT.transpose() * bounds.row(e).head(r).transpose();
+      if (correction) w.instantBound += w.staticNorm[e] * w.forceAbs;
       for (Eigen::Index k = 0; k < steps; ++k) {
-        if (w.bound(e, k) < best) continue;
+        if (w.instantBound[k] < best) continue;
         const Voigt s = voigt(e, k);
         if ((kD.asDiagonal() * s).norm() < best) continue;
         ++scan.evaluations;
@@ -180,8 +186,13 @@ void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eig
   // Seeds at the peak instant.
   const Eigen::Index k = scan.peakInstant;
   w.seeds.clear();
+  if (prune && k >= 0) {  // b_e,k at the peak instant, for every element
+    w.seedBound.resize(t);
+    w.seedBound.noalias() = bounds.leftCols(r) * w.qAbsT.col(k);
+    if (correction) w.seedBound += w.forceAbs[k] * w.staticNorm;
+  }
   for (Eigen::Index e = 0; e < t && k >= 0; ++e) {
-    if (prune && w.bound(e, k) < threshold) continue;
+    if (prune && w.seedBound[e] < threshold) continue;
     const Voigt s = voigt(e, k);
     if (prune && (kD.asDiagonal() * s).norm() < threshold) continue;
     ++scan.evaluations;

@@ -6,8 +6,9 @@
 // truncated modes, when given). For the largest principal stress,
 //   σ₁ ≤ ‖σ‖_F = ‖D σ_voigt‖ ≤ Σ_j ‖D S_e,j‖ |q_j,k| + ‖D σ̂_e‖ |F_k|,   D = diag(1, 1, 1, √2, √2, √2)
 // (S_e,j the stress of mode j), so an element or instant whose bound is below what is sought is
-// skipped without changing the answer; the bounds of all elements and instants are one matrix
-// product. scanStresses with prune = false evaluates everything, for tests and benchmarks.
+// skipped without changing the answer. Elements are visited by a bound over all instants (one
+// matrix-vector product), and per-instant bounds are formed only for the elements visited.
+// scanStresses with prune = false evaluates everything, for tests and benchmarks.
 //
 // Growth: seeds are the elements whose σ₁ reaches σ_t at the instant of the peak, strongest first,
 // each the start of one crack with its plane normal to the principal direction. A crack advances
@@ -57,11 +58,10 @@ StressScan scanStresses(const MatrixXdRow& stressModes, const Eigen::MatrixXd& b
 /// Buffers of scanStresses, kept between calls so that a scan allocates nothing once they have
 /// grown to the largest body scanned.
 struct StressScanWorkspace {
-  Eigen::MatrixXd qAbsT;          ///< r by K: |q|ᵀ
-  Eigen::MatrixXd bound;          ///< T by K
-  Eigen::VectorXd staticNorm, forceAbs, elementBound;
-  std::vector<int32_t> order;
-  std::vector<std::pair<double, int32_t>> seeds;
+  Eigen::MatrixXd qAbsT;                       ///< r by K: |q|ᵀ
+  Eigen::VectorXd qMax, staticNorm, forceAbs;  ///< r, T, K
+  Eigen::VectorXd elementBound, instantBound, seedBound;  ///< T, K, T
+  std::vector<std::pair<double, int32_t>> heap, seeds;
 };
 
 /// The same scan into `out` (its seeds keep their capacity), with the buffers of `workspace`.
