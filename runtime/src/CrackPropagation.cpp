@@ -22,28 +22,27 @@ Eigen::Matrix3d tensor(const Voigt& s) {
 
 bool crosses(const Eigen::Vector4d& d) { return d.maxCoeff() > 0.0 && d.minCoeff() < 0.0; }
 
-// Area of the plane's section of the tet (3 or 4 points where edges change side).
+// Area of the section of the tet where the nodal values d change sign, projected on n: a triangle
+// (one node apart from three) or a quadrilateral (two and two), whose corners are ordered by the
+// tet's combinatorics (for positive nodes i, j and the others k, l: edges ik, il, jl, jk).
 double sectionArea(const TetMesh& mesh, Eigen::Index e, const Eigen::Vector4d& d, const Eigen::Vector3d& n) {
-  std::vector<Eigen::Vector3d> p;
-  for (const auto& [i, j] : kTetEdges) {
-    if ((d[i] > 0.0) == (d[j] > 0.0)) continue;
+  int positive[4], negative[4], np = 0, nn = 0;
+  for (int i = 0; i < 4; ++i) (d[i] > 0.0 ? positive[np++] : negative[nn++]) = i;
+  auto crossing = [&](int i, int j) -> Eigen::Vector3d {
     const double s = d[i] / (d[i] - d[j]);
     const Eigen::Vector3d a = mesh.nodes.row(mesh.tets(e, i)), b = mesh.nodes.row(mesh.tets(e, j));
-    p.push_back(a + s * (b - a));
+    return a + s * (b - a);
+  };
+  if (np == 0 || nn == 0) return 0.0;
+  if (np == 2) {
+    const Eigen::Vector3d p0 = crossing(positive[0], negative[0]), p1 = crossing(positive[0], negative[1]),
+                          p2 = crossing(positive[1], negative[1]), p3 = crossing(positive[1], negative[0]);
+    return 0.5 * std::abs((p2 - p0).cross(p3 - p1).dot(n));
   }
-  if (p.size() < 3) return 0.0;
-  Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (const auto& x : p) c += x;
-  c /= static_cast<double>(p.size());
-  const Eigen::Vector3d u = (p[0] - c).normalized(), v = n.cross(u);
-  // Order the 3–4 points around the centre (angles computed once, not in the comparator).
-  std::vector<std::pair<double, Eigen::Vector3d>> byAngle;
-  for (const auto& x : p) byAngle.emplace_back(std::atan2((x - c).dot(v), (x - c).dot(u)), x);
-  std::sort(byAngle.begin(), byAngle.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  for (size_t k = 0; k < p.size(); ++k) p[k] = byAngle[k].second;
-  double area = 0.0;
-  for (size_t k = 0; k < p.size(); ++k) area += 0.5 * (p[k] - c).cross(p[(k + 1) % p.size()] - c).dot(n);
-  return std::abs(area);
+  const int apex = np == 1 ? positive[0] : negative[0];
+  const int* others = np == 1 ? negative : positive;
+  const Eigen::Vector3d p0 = crossing(apex, others[0]), p1 = crossing(apex, others[1]), p2 = crossing(apex, others[2]);
+  return 0.5 * std::abs((p1 - p0).cross(p2 - p0).dot(n));
 }
 
 // The plane's cut through face f of tet e: the segment between the crossing points on its edges
@@ -231,6 +230,16 @@ Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& to
   // crack surface is where φ_c changes sign. Sharing nodal values makes the surface continuous
   // across elements, so a crack crosses a layer of elements instead of thickening into a blob, and
   // every edge it crosses is cut at the same point from every element around it.
+  // Stresses at the peak instant, each computed once (an element is read by its cut neighbours).
+  std::vector<Voigt> stressCache(static_cast<size_t>(t));
+  std::vector<char> stressKnown(static_cast<size_t>(t), 0);
+  auto stressAt = [&](int32_t e) -> const Voigt& {
+    if (!stressKnown[static_cast<size_t>(e)]) {
+      stressCache[static_cast<size_t>(e)] = field.at(e);
+      stressKnown[static_cast<size_t>(e)] = 1;
+    }
+    return stressCache[static_cast<size_t>(e)];
+  };
   std::vector<std::vector<double>> phi;
   std::vector<std::vector<char>> cutBy;  // per crack: cracks cross each other, each needs its whole sheet
   auto apply = [&](int32_t e, const Eigen::Vector3d& n, double offset, int32_t crack) -> bool {
@@ -267,7 +276,7 @@ Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& to
       const int32_t nb = topo.neighbours(e, f);
       Eigen::Vector3d a, b;
       if (nb < 0 || cutBy[static_cast<size_t>(crack)][static_cast<size_t>(nb)] || !faceCut(mesh, e, f, d, a, b)) continue;
-      const Voigt sNb = field.at(nb);
+      const Voigt& sNb = stressAt(nb);
       front.push({n.dot(tensor(sNb) * n), nb, crack, n, a, b});
     }
     return true;
@@ -283,7 +292,7 @@ Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& to
     }
     if (nearCut) continue;
     Eigen::Vector3d dir;
-    maxPrincipalStress(field.at(e), &dir);
+    maxPrincipalStress(stressAt(e), &dir);
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
     for (int i = 0; i < 4; ++i) centroid += 0.25 * mesh.nodes.row(mesh.tets(e, i)).transpose();
     seedNormals.push_back(dir);
@@ -297,7 +306,7 @@ Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& to
     const Front f = front.top();
     front.pop();
     if (cutBy[static_cast<size_t>(f.crack)][static_cast<size_t>(f.element)]) continue;
-    const Voigt s = field.at(f.element);
+    const Voigt& s = stressAt(f.element);
     Eigen::Vector3d dir;
     const double s1 = maxPrincipalStress(s, &dir);
     if (dir.dot(f.normal) < 0.0) dir = -dir;
