@@ -1,4 +1,4 @@
-// DescriptorIndex.cpp — brute-force and FLANN backends of DescriptorIndex.
+// DescriptorIndex.cpp — brute-force, FLANN and hnswlib backends of DescriptorIndex.
 #include "brittle/database/DescriptorIndex.h"
 
 #include <climits>
@@ -6,10 +6,12 @@
 #include <cstddef>
 #include <exception>
 #include <limits>
+#include <memory>
 #include <string>
 #include <type_traits>
 
 #include <flann/flann.hpp>
+#include <hnswlib/hnswlib.h>
 
 namespace brittle {
 
@@ -21,6 +23,11 @@ static_assert(std::is_same_v<std::make_unsigned_t<int64_t>, std::size_t>,
 struct DescriptorIndex::Flann {
   flann::Index<flann::L2<float>> index;
   flann::SearchParams searchParams;
+};
+
+struct DescriptorIndex::Hnsw {
+  std::unique_ptr<hnswlib::L2Space> space;  // squared L2, as the other backends
+  std::unique_ptr<hnswlib::HierarchicalNSW<float>> graph;
 };
 
 namespace {
@@ -55,17 +62,18 @@ const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind) {
     case DescriptorIndexSettings::Kind::BruteForce: return "brute-force";
     case DescriptorIndexSettings::Kind::KdForest: return "kd-forest";
     case DescriptorIndexSettings::Kind::Autotuned: return "autotuned";
+    case DescriptorIndexSettings::Kind::Hnsw: return "hnsw";
   }
   return "unknown";
 }
 
 Result<DescriptorIndexSettings::Kind> parseDescriptorIndexKind(std::string_view name) {
   using Kind = DescriptorIndexSettings::Kind;
-  for (Kind kind : {Kind::BruteForce, Kind::KdForest, Kind::Autotuned}) {
+  for (Kind kind : {Kind::BruteForce, Kind::KdForest, Kind::Autotuned, Kind::Hnsw}) {
     if (name == descriptorIndexKindName(kind)) return kind;
   }
-  return makeError(ErrorCode::InvalidArgument,
-                   "unknown index backend '" + std::string(name) + "' (expected brute-force, kd-forest or autotuned)");
+  return makeError(ErrorCode::InvalidArgument, "unknown index backend '" + std::string(name) +
+                                                   "' (expected brute-force, kd-forest, autotuned or hnsw)");
 }
 
 Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, int64_t dims,
@@ -77,7 +85,7 @@ Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, 
   if (rows > std::numeric_limits<int64_t>::max() / dims ||
       static_cast<uint64_t>(rows * dims) > std::numeric_limits<std::size_t>::max() / sizeof(float))
     return invalid("DescriptorIndex: rows * dims overflows");
-  const bool flannKind = settings.kind != Kind::BruteForce;
+  const bool flannKind = settings.kind == Kind::KdForest || settings.kind == Kind::Autotuned;
   // FLANN 1.9 stores point indices and dimensions as int internally.
   if (flannKind && (rows > INT_MAX || dims > INT_MAX))
     return invalid("DescriptorIndex: FLANN backends need rows and dims <= INT32_MAX");
@@ -85,6 +93,12 @@ Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, 
     return invalid("DescriptorIndex: settings.trees must be >= 1, got " + std::to_string(settings.trees));
   if (settings.kind == Kind::KdForest && settings.checks < 1)
     return invalid("DescriptorIndex: settings.checks must be >= 1, got " + std::to_string(settings.checks));
+  if (settings.kind == Kind::Hnsw && (settings.trees < 2 || settings.trees > 1024))
+    return invalid("DescriptorIndex: settings.trees (HNSW M) must be in [2, 1024], got " + std::to_string(settings.trees));
+  if (settings.kind == Kind::Hnsw && settings.checks < 1)
+    return invalid("DescriptorIndex: settings.checks (HNSW ef) must be >= 1, got " + std::to_string(settings.checks));
+  if (settings.kind == Kind::Hnsw && rows > static_cast<int64_t>(std::numeric_limits<uint32_t>::max()))
+    return invalid("DescriptorIndex: HNSW needs rows <= UINT32_MAX");
   if (settings.kind == Kind::Autotuned &&
       !(settings.targetPrecision > 0.0f && settings.targetPrecision <= 1.0f))
     return invalid("DescriptorIndex: settings.targetPrecision must be in (0, 1], got " +
@@ -103,6 +117,19 @@ Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, 
     result.mRows = rows;
     result.mDims = dims;
     result.mData.assign(data, data + rows * dims);
+    if (settings.kind == Kind::Hnsw) {
+      auto hnsw = std::make_unique<Hnsw>();
+      hnsw->space = std::make_unique<hnswlib::L2Space>(static_cast<size_t>(dims));
+      hnsw->graph = std::make_unique<hnswlib::HierarchicalNSW<float>>(
+          hnsw->space.get(), static_cast<size_t>(rows), static_cast<size_t>(settings.trees), size_t{200},
+          static_cast<size_t>(settings.seed));
+      for (int64_t r = 0; r < rows; ++r) {
+        hnsw->graph->addPoint(result.mData.data() + r * dims, static_cast<hnswlib::labeltype>(r));
+      }
+      hnsw->graph->setEf(static_cast<size_t>(settings.checks));
+      result.mHnsw = std::move(hnsw);
+      return result;
+    }
     if (!flannKind) return result;
 
     // The Matrix is a non-owning view of mData. mData's buffer never moves after this point
@@ -124,12 +151,20 @@ Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, 
     result.mFlann->index.buildIndex();
     return result;
   } catch (const std::exception& e) {
-    return invalid(std::string("DescriptorIndex: FLANN build failed: ") + e.what());
+    return invalid(std::string("DescriptorIndex: ") + descriptorIndexKindName(settings.kind) + " build failed: " + e.what());
   }
 }
 
 int64_t DescriptorIndex::memoryBytes() const {
   const auto data = static_cast<int64_t>(mData.size() * sizeof(float));
+  if (mHnsw) {  // level 0 (links, its own copy of the data, labels) plus the upper levels' links
+    const auto& g = *mHnsw->graph;
+    int64_t bytes = static_cast<int64_t>(g.max_elements_ * g.size_data_per_element_);
+    for (size_t i = 0; i < g.cur_element_count; ++i) {
+      bytes += static_cast<int64_t>(g.size_links_per_element_) * g.element_levels_[i];
+    }
+    return data + bytes;
+  }
   return data + (mFlann ? static_cast<int64_t>(mFlann->index.usedMemory()) : 0);
 }
 
@@ -155,11 +190,14 @@ Status DescriptorIndex::query(const float* descriptor, int k, int64_t* ids,
     return invalid("DescriptorIndex query: ids or squaredDistances is null");
   Status valid = validateQuery(descriptor, k, 0, false);
   if (!valid) return valid;
-  if (!mFlann) {
-    queryBruteForce(descriptor, k, ids, squaredDistances);
-    return Ok{};
-  }
-  return queryFlann(descriptor, k, ids, squaredDistances);
+  return queryBackend(descriptor, k, ids, squaredDistances);
+}
+
+Status DescriptorIndex::queryBackend(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const {
+  if (mHnsw) return queryHnsw(descriptor, k, ids, squaredDistances);
+  if (mFlann) return queryFlann(descriptor, k, ids, squaredDistances);
+  queryBruteForce(descriptor, k, ids, squaredDistances);
+  return Ok{};
 }
 
 Status DescriptorIndex::queryBatch(const float* descriptors, int64_t count, int k, int64_t* ids,
@@ -177,12 +215,8 @@ Status DescriptorIndex::queryBatch(const float* descriptors, int64_t count, int 
     const float* descriptor = descriptors + q * mDims;
     int64_t* rowIds = ids + q * k;
     float* rowDistances = squaredDistances + q * k;
-    if (!mFlann) {
-      queryBruteForce(descriptor, k, rowIds, rowDistances);
-    } else {
-      Status status = queryFlann(descriptor, k, rowIds, rowDistances);
-      if (!status) return status;
-    }
+    Status status = queryBackend(descriptor, k, rowIds, rowDistances);
+    if (!status) return status;
   }
   return Ok{};
 }
@@ -232,6 +266,24 @@ Status DescriptorIndex::queryFlann(const float* descriptor, int k, int64_t* ids,
                      std::to_string(k) + " neighbours");
   } catch (const std::exception& e) {
     return invalid(std::string("DescriptorIndex query: FLANN search failed: ") + e.what());
+  }
+  sortByDistanceThenId(k, ids, squaredDistances);
+  return Ok{};
+}
+
+Status DescriptorIndex::queryHnsw(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const {
+  try {
+    auto found = mHnsw->graph->searchKnn(descriptor, static_cast<size_t>(k));  // max-heap: farthest on top
+    if (static_cast<int>(found.size()) < k)
+      return invalid("DescriptorIndex query: HNSW returned " + std::to_string(found.size()) + " of " +
+                     std::to_string(k) + " neighbours");
+    for (int i = k - 1; i >= 0; --i) {
+      squaredDistances[i] = found.top().first;
+      ids[i] = static_cast<int64_t>(found.top().second);
+      found.pop();
+    }
+  } catch (const std::exception& e) {
+    return invalid(std::string("DescriptorIndex query: HNSW search failed: ") + e.what());
   }
   sortByDistanceThenId(k, ids, squaredDistances);
   return Ok{};

@@ -93,11 +93,59 @@ TEST(DescriptorIndex, KdForestRecallAtOneAgainstBruteForce) {
   EXPECT_GE(recall, 0.99);
 }
 
-TEST(DescriptorIndex, SelfRetrievalBothBackends) {
+// HNSW on the same hard case: M 16 and ef 200 reach 0.99; its build is deterministic, so two
+// builds answer alike, and a tie is ordered by id as in the other backends.
+TEST(DescriptorIndex, HnswRecallDeterminismAndTies) {
+  const int64_t rows = 2000, dims = 28, queries = 500;
+  const auto data = randomMatrix(rows, dims, 42);
+  const auto q = randomMatrix(queries, dims, 43);
+  DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+  DescriptorIndexSettings hs = settingsFor(Kind::Hnsw, 200);
+  hs.trees = 16;
+  DescriptorIndex graph = buildOrDie(data, dims, hs);
+  DescriptorIndex again = buildOrDie(data, dims, hs);
+  std::vector<int64_t> exactIds(queries), ids(queries), ids2(queries);
+  std::vector<float> exactD(queries), d(queries), d2(queries);
+  ASSERT_TRUE(exact.queryBatch(q.data(), queries, 1, exactIds.data(), exactD.data()).ok());
+  ASSERT_TRUE(graph.queryBatch(q.data(), queries, 1, ids.data(), d.data()).ok());
+  ASSERT_TRUE(again.queryBatch(q.data(), queries, 1, ids2.data(), d2.data()).ok());
+  int hits = 0;
+  for (int64_t i = 0; i < queries; ++i) hits += exactIds[i] == ids[i];
+  const double recall = double(hits) / double(queries);
+  RecordProperty("recall_at_1", std::to_string(recall));
+  EXPECT_GE(recall, 0.99);
+  EXPECT_EQ(ids, ids2);
+  EXPECT_EQ(d, d2);
+  EXPECT_EQ(graph.settings().kind, Kind::Hnsw);
+  EXPECT_GT(graph.memoryBytes(), exact.memoryBytes());  // the graph's links on top of the data
+
+  const std::vector<float> dup = {1, 1, /**/ 5, 5, /**/ 1, 1, /**/ 1, 1};
+  DescriptorIndexSettings small = settingsFor(Kind::Hnsw, 16);
+  small.trees = 4;
+  DescriptorIndex tied = buildOrDie(dup, 2, small);
+  const float query[2] = {1, 1};
+  int64_t tieIds[3];
+  float tieD[3];
+  ASSERT_TRUE(tied.query(query, 3, tieIds, tieD).ok());
+  EXPECT_EQ(tieIds[0], 0);
+  EXPECT_EQ(tieIds[1], 2);
+  EXPECT_EQ(tieIds[2], 3);
+  EXPECT_EQ(parseDescriptorIndexKind("hnsw").value(), Kind::Hnsw);
+  DescriptorIndexSettings bad = settingsFor(Kind::Hnsw);
+  bad.trees = 1;
+  EXPECT_EQ(DescriptorIndex::build(dup.data(), 4, 2, bad).error().code, ErrorCode::InvalidArgument);
+  bad.trees = 16;
+  bad.checks = 0;
+  EXPECT_EQ(DescriptorIndex::build(dup.data(), 4, 2, bad).error().code, ErrorCode::InvalidArgument);
+}
+
+TEST(DescriptorIndex, SelfRetrievalEveryBackend) {
   const int64_t rows = 1000, dims = 28;
   const auto data = randomMatrix(rows, dims, 7);
-  for (Kind kind : {Kind::BruteForce, Kind::KdForest}) {
-    DescriptorIndex index = buildOrDie(data, dims, settingsFor(kind));
+  for (Kind kind : {Kind::BruteForce, Kind::KdForest, Kind::Hnsw}) {
+    DescriptorIndexSettings s = settingsFor(kind);
+    if (kind == Kind::Hnsw) s.trees = 16;
+    DescriptorIndex index = buildOrDie(data, dims, s);
     std::vector<int64_t> ids(rows);
     std::vector<float> d(rows);
     ASSERT_TRUE(index.queryBatch(data.data(), rows, 1, ids.data(), d.data()).ok());

@@ -69,8 +69,8 @@ Result<IndexChoice> parseIndexChoice(const std::string& text) {
   c.label = text;
   const auto bad = [&] {
     return makeError(ErrorCode::InvalidArgument, "index '" + text +
-                                                     "': expected kd-forest:TREES:CHECKS, autotuned:PRECISION or "
-                                                     "brute-force");
+                                                     "': expected kd-forest:TREES:CHECKS, hnsw:M:EF, autotuned:PRECISION "
+                                                     "or brute-force");
   };
   if (text == "brute-force") {
     c.settings.kind = DescriptorIndexSettings::Kind::BruteForce;
@@ -80,6 +80,12 @@ Result<IndexChoice> parseIndexChoice(const std::string& text) {
   float precision = 0.0f;
   if (std::sscanf(text.c_str(), "kd-forest:%d:%d", &trees, &checks) == 2 && trees >= 1 && checks >= 1) {
     c.settings.kind = DescriptorIndexSettings::Kind::KdForest;
+    c.settings.trees = trees;
+    c.settings.checks = checks;
+    return c;
+  }
+  if (std::sscanf(text.c_str(), "hnsw:%d:%d", &trees, &checks) == 2 && trees >= 2 && checks >= 1) {
+    c.settings.kind = DescriptorIndexSettings::Kind::Hnsw;
     c.settings.trees = trees;
     c.settings.checks = checks;
     return c;

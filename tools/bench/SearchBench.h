@@ -28,7 +28,7 @@ struct IndexChoice {
   DescriptorIndexSettings settings;
 };
 
-/// "kd-forest:TREES:CHECKS", "autotuned:PRECISION" or "brute-force".
+/// "kd-forest:TREES:CHECKS", "hnsw:M:EF", "autotuned:PRECISION" or "brute-force".
 Result<IndexChoice> parseIndexChoice(const std::string& text);
 
 struct SearchBenchSettings {

@@ -113,8 +113,8 @@ Runner addQueryCommand(CLI::App& app) {
   cmd->add_option("--descriptor", o->descriptor, "Descriptor kind")
       ->check(CLI::IsMember({"moment", "voxel", "voxel-improved"}))->capture_default_str();
   cmd->add_option("--k", o->k, "Number of matches")->capture_default_str()->check(CLI::Range(1, 1000));
-  cmd->add_option("--index", o->index, "Override the stored index: brute-force (exact), kd-forest or autotuned")
-      ->check(CLI::IsMember({"brute-force", "kd-forest", "autotuned"}));
+  cmd->add_option("--index", o->index, "Override the stored index: brute-force (exact), kd-forest, autotuned or hnsw (M 16, ef 64)")
+      ->check(CLI::IsMember({"brute-force", "kd-forest", "autotuned", "hnsw"}));
   cmd->add_option("--material", o->material,
                   "Material of the query (preset or JSON file) to rescale the physics to; default: the reference");
   cmd->add_flag("--json", o->json, "Print the matches as JSON");
@@ -138,6 +138,11 @@ Runner addQueryCommand(CLI::App& app) {
     if (!o->index.empty()) {
       DescriptorIndexSettings index = db.indexSettings[static_cast<size_t>(kind)];
       index.kind = parseDescriptorIndexKind(o->index).value();
+      if (index.kind == DescriptorIndexSettings::Kind::Hnsw &&
+          db.indexSettings[static_cast<size_t>(kind)].kind != DescriptorIndexSettings::Kind::Hnsw) {
+        index.trees = 16;  // M and ef: hnswlib's usual defaults, not the stored kd-forest's numbers
+        index.checks = 64;
+      }
       settings.indexOverride[static_cast<size_t>(kind)] = index;
     }
     auto matcher = FragmentMatcher::build(db, settings);
@@ -218,7 +223,7 @@ Runner addBenchCommand(CLI::App& app) {
   search->add_option("--kinds", *kinds, "Descriptor kinds")->delimiter(',')->capture_default_str()
       ->check(CLI::IsMember({"moment", "voxel", "voxel-improved"}));
   search->add_option("--voxel-size-limit", s->voxelSizeLimit, "Largest database size for the voxel kinds")->capture_default_str();
-  search->add_option("--index", *indices, "Index settings: kd-forest:TREES:CHECKS, autotuned:PRECISION")
+  search->add_option("--index", *indices, "Index settings: kd-forest:TREES:CHECKS, hnsw:M:EF, autotuned:PRECISION")
       ->delimiter(',')->capture_default_str();
   search->add_option("--queries", s->queries, "Query fragments")->capture_default_str()->check(CLI::Range(1, 100000));
   search->add_option("--physics-queries", s->physicsQueries, "Queries with a direct bake as ground truth")

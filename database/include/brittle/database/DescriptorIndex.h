@@ -1,6 +1,6 @@
 // DescriptorIndex.h — k-nearest-neighbour search over a row-major float32 descriptor matrix.
 //
-// One API, three backends:
+// One API, four backends:
 //   - BruteForce: exact search, the reference. Squared L2 accumulated in double, reported as
 //     float; ties (equal reported float distance) break by lower entry id.
 //   - KdForest:   FLANN randomized kd-tree forest (flann::KDTreeIndexParams(trees)), searched with
@@ -11,6 +11,10 @@
 //     (default sample fraction 0.1) against linear-scan ground truth; it is one to several orders
 //     of magnitude slower than a KdForest build (seconds at 1e4 entries, minutes at 1e5+). Use it
 //     offline, then copy the chosen parameters into a KdForest setting.
+//   - Hnsw:       hierarchical navigable small-world graph (hnswlib, Debian's libhnswlib-dev), a
+//     peer of FLANN: `trees` is M (graph links per node), `checks` is ef (candidates kept per
+//     query); built with ef_construction 200 by inserting rows in order, with `seed` as hnswlib's
+//     level seed, so a build is deterministic. Approximate like KdForest.
 //
 // Distances are squared Euclidean (no square root). Entry ids are 0-based row indices.
 //
@@ -27,7 +31,8 @@
 // deterministic. Because std::srand is process-global, do not build FLANN indices from several
 // threads at once.
 //
-// Allocation: query() never allocates in the BruteForce backend (it writes straight into the
+// Allocation (HNSW: its result heaps allocate per query, like FLANN's): query() never allocates
+// in the BruteForce backend (it writes straight into the
 // caller's arrays, so there is no capacity limit beyond k ≤ size()). In the FLANN backends, FLANN
 // 1.9 allocates on every query inside knnSearch: a k-entry result set, a branch heap that reserves
 // room for size() branches (16 bytes each), and a size()-bit visited set. That cannot be avoided
@@ -46,15 +51,15 @@
 namespace brittle {
 
 struct DescriptorIndexSettings {
-  enum class Kind { BruteForce, KdForest, Autotuned };
+  enum class Kind { BruteForce, KdForest, Autotuned, Hnsw };
   Kind kind = Kind::KdForest;
-  int trees = 4;                  ///< KdForest: number of randomized kd-trees, ≥ 1.
-  int checks = 64;                ///< KdForest: leaves visited per query, ≥ 1 (more: slower, better).
+  int trees = 4;                  ///< KdForest: number of randomized kd-trees, ≥ 1. Hnsw: M, in [2, 1024].
+  int checks = 64;                ///< KdForest: leaves visited per query, ≥ 1 (more: slower, better). Hnsw: ef, ≥ 1.
   float targetPrecision = 0.95f;  ///< Autotuned: wanted fraction of exact neighbours, in (0, 1].
   uint64_t seed = 1;              ///< FLANN random seed (only its low 32 bits are used).
 };
 
-/// "brute-force", "kd-forest" or "autotuned" (the CLI and pack spelling).
+/// "brute-force", "kd-forest", "autotuned" or "hnsw" (the CLI and pack spelling).
 const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind);
 /// Inverse of descriptorIndexKindName. Error: InvalidArgument listing the valid names.
 Result<DescriptorIndexSettings::Kind> parseDescriptorIndexKind(std::string_view name);
@@ -96,17 +101,21 @@ class DescriptorIndex {
 
  private:
   struct Flann;  // FLANN state, kept out of this header.
+  struct Hnsw;   // hnswlib state, likewise.
 
   DescriptorIndex() = default;
   Status validateQuery(const float* descriptor, int k, int64_t queryRow, bool batch) const;
   void queryBruteForce(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const;
   Status queryFlann(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const;
+  Status queryHnsw(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const;
+  Status queryBackend(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const;
 
   DescriptorIndexSettings mSettings;
   int64_t mRows = 0;
   int64_t mDims = 0;
   std::vector<float> mData;  ///< rows × dims row-major copy; FLANN points into it.
   std::unique_ptr<Flann> mFlann;
+  std::unique_ptr<Hnsw> mHnsw;
 };
 
 }  // namespace brittle
