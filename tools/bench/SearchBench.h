@@ -41,7 +41,7 @@ struct SearchBenchSettings {
   int queries = 200;
   int physicsQueries = 12;         ///< queries with a direct bake as ground truth (0: skip)
   int64_t physicsTets = 1000;
-  int64_t minQueryTriangles = 700;  ///< queries are subdivided up to this (fragments have ~200)
+  int64_t minQueryTriangles = 500;  ///< queries are subdivided up to this (cut fragments have 100–500; mean ≈1k after)
   /// Share of database entries broken off by the runtime (DatabaseBakeSettings::runtimeFragments).
   double runtimeFraction = 0.0;
   /// Where the query fragments come from: exact cuts, or runtime fracture of the base shapes
