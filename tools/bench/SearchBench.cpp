@@ -222,8 +222,15 @@ Status runSearchBench(const SearchBenchSettings& s) {
     b.name = "query-" + std::to_string(q);
     b.material = glass;
     b.tetMesh.targetTets = s.physicsTets;
+    // As the database bake meshes its entries: runtime fragments without feature protection (their
+    // creases are the runtime mesh's zigzag), and a fragment in pieces meshed finer.
+    b.tetMesh.detectSharpFeatures = !s.runtimeQueries;
     b.modal.modeCount = 3;
     auto asset = bakeSurface(queries[static_cast<size_t>(q)].surface, b);
+    for (int finer = 0; finer < 2 && !asset && asset.error().code == ErrorCode::MeshingFailed; ++finer) {
+      b.tetMesh.targetTets *= 2;
+      asset = bakeSurface(queries[static_cast<size_t>(q)].surface, b);
+    }
     if (!asset) {
       log(s.quiet, "ground truth: query %d skipped (%s)\n", q, asset.error().message.c_str());
       truth.emplace_back();
