@@ -16,7 +16,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-TEXT = {"descriptor", "index"}
+TEXT = {"descriptor", "index", "query_source"}
+FAMILY_STYLE = {"kd-forest": "-", "hnsw": "--", "autotuned": ":", "brute-force": ""}
 COLORS = {"moment": "tab:blue", "voxel": "tab:orange", "voxel-improved": "tab:green"}
 
 
@@ -33,6 +34,8 @@ def load(path):
 def label(r):
     if r["index"] == "kd-forest":
         return f"kd {int(r['trees'])}x{int(r['checks'])}"
+    if r["index"] == "hnsw":
+        return f"hnsw M{int(r['trees'])} ef{int(r['checks'])}"
     return r["index"]
 
 
@@ -47,12 +50,13 @@ def main():
     fig, ax = plt.subplots(figsize=(8, 5))
     for kind in kinds:
         for si, n in enumerate(sizes):
-            pts = [r for r in rows if r["descriptor"] == kind and int(r["entries"]) == n]
-            if not pts:
-                continue
-            pts.sort(key=lambda r: r["query_median_us"])
-            ax.plot([r["query_median_us"] for r in pts], [r["recall_at_1"] for r in pts],
-                    "-" + markers[si % len(markers)], color=COLORS[kind], label=f"{kind}, {n} entries")
+            for family, style in FAMILY_STYLE.items():
+                pts = [r for r in rows if r["descriptor"] == kind and int(r["entries"]) == n and r["index"] == family]
+                if not pts:
+                    continue
+                pts.sort(key=lambda r: r["query_median_us"])
+                ax.plot([r["query_median_us"] for r in pts], [r["recall_at_1"] for r in pts],
+                        style + markers[si % len(markers)], color=COLORS[kind], label=f"{kind}, {n} entries, {family}")
     ax.axhline(0.99, color="grey", ls=":", lw=1)
     ax.axvline(20.0, color="grey", ls=":", lw=1)
     ax.set_xscale("log")
@@ -68,16 +72,18 @@ def main():
     for kind in kinds:
         brute = [(int(r["entries"]), r["query_median_us"]) for r in rows
                  if r["descriptor"] == kind and r["index"] == "brute-force"]
-        best = []
-        for n in sizes:
-            ok = [r for r in rows if r["descriptor"] == kind and int(r["entries"]) == n
-                  and r["index"] != "brute-force" and r["recall_at_1"] >= 0.99]
-            if ok:
-                best.append((n, min(r["query_median_us"] for r in ok)))
         if brute:
-            ax.plot(*zip(*brute), "--o", color=COLORS[kind], label=f"{kind}: brute force (exact)")
-        if best:
-            ax.plot(*zip(*best), "-s", color=COLORS[kind], label=f"{kind}: fastest kd-forest with recall ≥ 0.99")
+            ax.plot(*zip(*brute), ":o", color=COLORS[kind], label=f"{kind}: brute force (exact)")
+        for family, style, marker in (("kd-forest", "-", "s"), ("hnsw", "--", "^")):
+            best = []
+            for n in sizes:
+                ok = [r for r in rows if r["descriptor"] == kind and int(r["entries"]) == n
+                      and r["index"] == family and r["recall_at_1"] >= 0.99]
+                if ok:
+                    best.append((n, min(r["query_median_us"] for r in ok)))
+            if best:
+                ax.plot(*zip(*best), style + marker, color=COLORS[kind],
+                        label=f"{kind}: fastest {family} with recall ≥ 0.99")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("database entries")
@@ -105,9 +111,9 @@ def main():
         fig.tight_layout()
         fig.savefig(out / "search_physical_error.png", dpi=120)
 
-    print("entries  descriptor      index          recall  median_us  p99_us  brute_us  mass%  inertia%  freq%")
+    print("entries  descriptor      index              recall  median_us  p99_us  brute_us  mass%  inertia%  freq%")
     for r in rows:
-        print(f"{int(r['entries']):7d}  {r['descriptor']:14s}  {label(r):13s}  {r['recall_at_1']:.3f}  "
+        print(f"{int(r['entries']):7d}  {r['descriptor']:14s}  {label(r):17s}  {r['recall_at_1']:.3f}  "
               f"{r['query_median_us']:9.1f}  {r['query_p99_us']:6.1f}  {r['brute_median_us']:8.1f}  "
               f"{100 * r['mass_err_median']:5.2f}  {100 * r['inertia_err_median']:7.2f}  "
               f"{100 * r['frequency_err_median']:5.2f}")
