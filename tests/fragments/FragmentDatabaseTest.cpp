@@ -8,6 +8,7 @@
 #include <set>
 
 #include "FragmentTestSupport.h"
+#include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/Pack.h"
 #include "brittle/precompute/MeshValidation.h"
 #include "brittle/testing/AssetChecks.h"
@@ -88,11 +89,16 @@ TEST_F(FragmentDatabaseTest, SameSeedSameDatabaseForAnyThreadCount) {
 TEST_F(FragmentDatabaseTest, PackRoundTripIsBitExact) {
   Pack pack;
   pack.database = *physical;
+  // One kind stores an HNSW index (M in `trees`, ef in `checks`): it must come back as such.
+  DescriptorIndexSettings& hnsw = pack.database.indexSettings[static_cast<size_t>(DescriptorKind::VoxelImproved)];
+  hnsw.kind = DescriptorIndexSettings::Kind::Hnsw;
+  hnsw.trees = 12;
+  hnsw.checks = 40;
   const auto path = dir / "db.h5";
   ASSERT_TRUE(writePack(pack, path));
   auto read = readPack(path);
   ASSERT_TRUE(read) << read.error().message;
-  const FragmentDatabase& a = physical[0];
+  const FragmentDatabase& a = pack.database;
   const FragmentDatabase& b = read.value().database;
   EXPECT_EQ(a.referenceMaterial, b.referenceMaterial);
   EXPECT_EQ(a.seed, b.seed);
@@ -111,7 +117,15 @@ TEST_F(FragmentDatabaseTest, PackRoundTripIsBitExact) {
   for (DescriptorKind kind : kAllDescriptorKinds) {
     EXPECT_EQ(a.descriptorsOf(kind), b.descriptorsOf(kind));
     EXPECT_EQ(a.indexSettings[static_cast<size_t>(kind)].checks, b.indexSettings[static_cast<size_t>(kind)].checks);
+    EXPECT_EQ(a.indexSettings[static_cast<size_t>(kind)].trees, b.indexSettings[static_cast<size_t>(kind)].trees);
+    EXPECT_EQ(a.indexSettings[static_cast<size_t>(kind)].kind, b.indexSettings[static_cast<size_t>(kind)].kind);
   }
+  // And the matcher builds that index from the pack.
+  FragmentMatcherSettings ms;
+  ms.enabled = {false, false, true};
+  auto matcher = FragmentMatcher::build(b, ms);
+  ASSERT_TRUE(matcher) << matcher.error().message;
+  EXPECT_EQ(matcher.value().index(DescriptorKind::VoxelImproved)->settings().kind, DescriptorIndexSettings::Kind::Hnsw);
 }
 
 TEST_F(FragmentDatabaseTest, DamagedDatabaseGivesTypedErrors) {
