@@ -136,8 +136,53 @@ TriangleMesh fromCgal(const Mesh& mesh, Keep keep) {
   return canonicalOrder(out);
 }
 
+// Where the clippers are built: the centre and diagonal of the input solid's bounding box, from its
+// double coordinates. Every fragment lies inside the solid.
+struct ClipFrame {
+  Eigen::Vector3d centre;
+  double diagonal = 0.0;
+};
+
+ClipFrame clipFrame(const TriangleMesh& solid) {
+  const Eigen::Vector3d lo = solid.vertices.colwise().minCoeff(), hi = solid.vertices.colwise().maxCoeff();
+  return {0.5 * (lo + hi), std::max((hi - lo).norm(), 1e-300)};
+}
+
+// The closed clipper of one plane: a tetrahedron whose base is a single triangle lying exactly in
+// the plane (its corners are exact projections), ten diagonals across, and whose apex is ten
+// diagonals down on the kept side, so it holds the whole kept part of anything in the frame.
+//
+// PMP::clip(mesh, plane) builds its clipper as the part of a bounding box below the plane, with the
+// cap polygon triangulated. Two things follow from that and both are avoided here: the cap's
+// diagonals cross the mesh and leave extra vertices on the cut (needles, and zero-area faces after
+// rounding), and the box comes from the lazy points' interval approximations, whose width depends
+// on which exact evaluations earlier predicates happened to trigger — an order that follows heap
+// addresses — so those vertices moved by an ulp from run to run (1 call in ~400 on the sphere).
+// With one triangle in the plane the cut vertices are the mesh's edges crossing the plane, nothing
+// else: a function of the mesh and the plane alone.
+Mesh planeClipper(const Kernel::Plane_3& plane, const Plane& p, const ClipFrame& frame) {
+  const Eigen::Vector3d n = p.normal.normalized();
+  const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);  // (u, v, n) right-handed
+  const double radius = 10.0 * frame.diagonal;
+  Mesh clipper;
+  std::array<Mesh::Vertex_index, 3> base;
+  for (int k = 0; k < 3; ++k) {
+    const double angle = 2.0 * std::numbers::pi * k / 3.0;
+    const Eigen::Vector3d q = frame.centre + radius * (std::cos(angle) * u + std::sin(angle) * v);
+    base[static_cast<size_t>(k)] = clipper.add_vertex(plane.projection(Point(q.x(), q.y(), q.z())));
+  }
+  const Eigen::Vector3d a = frame.centre - radius * n;
+  const auto apex = clipper.add_vertex(Point(a.x(), a.y(), a.z()));
+  clipper.add_face(base[0], base[1], base[2]);  // counter-clockwise about n: faces the cut-away side
+  clipper.add_face(base[1], base[0], apex);
+  clipper.add_face(base[2], base[1], apex);
+  clipper.add_face(base[0], base[2], apex);
+  return clipper;
+}
+
 // Clips `mesh` in place by the planes, then converts the kept pieces.
-Result<TriangleMesh> clipMesh(Mesh& mesh, const std::vector<Plane>& planes, ClipComponents components) {
+Result<TriangleMesh> clipMesh(Mesh& mesh, const ClipFrame& frame, const std::vector<Plane>& planes,
+                              ClipComponents components) {
   for (const Plane& p : planes) {
     // CGAL keeps the negative side of a·x + b·y + c·z + d = 0, i.e. normal·x − offset ≤ 0.
     const Kernel::Plane_3 plane(p.normal.x(), p.normal.y(), p.normal.z(), -p.offset);
@@ -151,7 +196,8 @@ Result<TriangleMesh> clipMesh(Mesh& mesh, const std::vector<Plane>& planes, Clip
     }
     if (!anyOutside) continue;
     if (!anyInside) return emptyFragment();
-    if (!PMP::clip(mesh, plane, CGAL::parameters::clip_volume(true))) {
+    Mesh clipper = planeClipper(plane, p, frame);
+    if (!PMP::clip(mesh, clipper, CGAL::parameters::clip_volume(true), CGAL::parameters::default_values())) {
       return makeError(ErrorCode::MeshingFailed, "CGAL clip gave a non-manifold result (self-intersecting input?)");
     }
     if (mesh.number_of_faces() == 0) return emptyFragment();
@@ -222,7 +268,7 @@ Result<TriangleMesh> clipByPlanes(const TriangleMesh& solid, const std::vector<P
   try {
     auto mesh = toCgal(solid);
     if (!mesh) return mesh.error();
-    return clipMesh(mesh.value(), planes, components);
+    return clipMesh(mesh.value(), clipFrame(solid), planes, components);
   } catch (const std::exception& e) {
     return makeError(ErrorCode::MeshingFailed, std::string("CGAL clip failed: ") + e.what());
   }
@@ -269,6 +315,7 @@ Result<TriangleMesh> generateFragment(const TriangleMesh& solid, const FragmentS
     const double volume = computeSurfaceMassProperties(solid, 1.0).volumeM3;
     if (!(volume > 0.0)) return invalid("the solid to fragment has no positive volume");
     const CGAL::Side_of_triangle_mesh<Mesh, Kernel> inside(mesh);
+    const ClipFrame frame = clipFrame(solid);
     const Eigen::Vector3d lo = solid.vertices.colwise().minCoeff(), hi = solid.vertices.colwise().maxCoeff();
 
     std::mt19937_64 rng(seed);
@@ -317,7 +364,7 @@ Result<TriangleMesh> generateFragment(const TriangleMesh& solid, const FragmentS
         planes = std::move(cellPlanes).value();
       }
       Mesh work = mesh;
-      auto piece = clipMesh(work, planes, ClipComponents::RequireOne);
+      auto piece = clipMesh(work, frame, planes, ClipComponents::RequireOne);
       if (!piece) {
         reason = piece.error().message;
         continue;
