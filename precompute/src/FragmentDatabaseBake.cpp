@@ -13,7 +13,10 @@
 #include <cstdio>
 #include <mutex>
 #include <optional>
+#include <memory>
+#include <unistd.h>
 
+#include "brittle/database/Pack.h"
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/MaterialLibrary.h"
@@ -132,106 +135,376 @@ Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std:
   return entry;
 }
 
-Result<FragmentDatabase> bakeFragmentDatabase(const DatabaseBakeSettings& settings, ProgressSink* progress) {
-  if (settings.shapes.empty()) return makeError(ErrorCode::InvalidArgument, "the fragment database needs base shapes");
-  if (settings.entryCount < 1) return makeError(ErrorCode::InvalidArgument, "the fragment database needs ≥ 1 entry");
-  if (Status st = validateShapeDescriptorSettings(settings.descriptors); !st) return st.error();
-  if (Status st = validateMaterial(settings.referenceMaterial); !st) return st.error();
+namespace {
 
-  std::vector<TriangleMesh> bases;
-  std::vector<double> baseVolumes;
-  for (const BaseShapeDefinition& def : settings.shapes) {
-    auto mesh = makeBaseShape(def);
-    if (!mesh) return Error{mesh.error().code, "base shape '" + def.name + "': " + mesh.error().message};
-    baseVolumes.push_back(computeSurfaceMassProperties(mesh.value(), 1.0).volumeM3);
-    bases.push_back(std::move(mesh).value());
-  }
-
-  std::optional<RuntimeFragmentSource> runtime;
-  if (settings.runtimeFragments.fraction > 0.0) {
-    auto source = RuntimeFragmentSource::build(settings.shapes, bases, settings.referenceMaterial,
-                                               settings.runtimeFragments, progress);
-    if (!source) return source.error();
-    runtime.emplace(std::move(source).value());
-  } else if (Status st = validateRuntimeFragmentSettings(settings.runtimeFragments); !st) {
-    return st.error();
-  }
-
-  const auto count = static_cast<size_t>(settings.entryCount);
-  std::vector<std::optional<Result<FragmentEntry>>> results(count);
-  std::vector<std::array<Descriptor, kDescriptorKindCount>> rows(count);
-  SharedProgress shared(progress, settings.entryCount);
-  std::atomic<bool> stop{false};
-
-  // Runtime fragments' crack faces zigzag at the runtime mesh's scale: their creases are not
-  // features to keep, and protecting them starves Mesh_3 of cells.
-  DatabaseBakeSettings runtimeEntrySettings = settings;
-  runtimeEntrySettings.tetMesh.detectSharpFeatures = false;
-
-  auto bakeOne = [&](size_t i) {
-    if (stop.load()) return;
-    if (shared.interrupted()) {
-      stop = true;
-      results[i] = Result<FragmentEntry>(makeError(ErrorCode::Cancelled, "fragment database bake cancelled"));
-      return;
+// What every entry of one bake shares: the base shapes, their volumes and, for a runtime share,
+// the runtime source. bake() fills entries [first, end) in parallel (TBB).
+class EntryBaker {
+ public:
+  static Result<std::unique_ptr<EntryBaker>> create(const DatabaseBakeSettings& settings, ProgressSink* progress) {
+    if (settings.shapes.empty()) return makeError(ErrorCode::InvalidArgument, "the fragment database needs base shapes");
+    if (settings.entryCount < 1) return makeError(ErrorCode::InvalidArgument, "the fragment database needs ≥ 1 entry");
+    if (Status st = validateShapeDescriptorSettings(settings.descriptors); !st) return st.error();
+    if (Status st = validateMaterial(settings.referenceMaterial); !st) return st.error();
+    auto baker = std::unique_ptr<EntryBaker>(new EntryBaker(settings));
+    for (const BaseShapeDefinition& def : settings.shapes) {
+      auto mesh = makeBaseShape(def);
+      if (!mesh) return Error{mesh.error().code, "base shape '" + def.name + "': " + mesh.error().message};
+      baker->mBaseVolumes.push_back(computeSurfaceMassProperties(mesh.value(), 1.0).volumeM3);
+      baker->mBases.push_back(std::move(mesh).value());
     }
-    const size_t shape = i % bases.size();
-    const std::string name = entryName(settings.shapes[shape].name, static_cast<int64_t>(i));
-    uint64_t seed = fragmentEntrySeed(settings.seed, static_cast<int64_t>(i));
-    const bool fromRuntime = runtime && isRuntimeFragmentEntry(seed, settings.runtimeFragments.fraction);
+    if (settings.runtimeFragments.fraction > 0.0) {
+      auto source = RuntimeFragmentSource::build(settings.shapes, baker->mBases, settings.referenceMaterial,
+                                                 settings.runtimeFragments, progress);
+      if (!source) return source.error();
+      baker->mRuntime.emplace(std::move(source).value());
+    } else if (Status st = validateRuntimeFragmentSettings(settings.runtimeFragments); !st) {
+      return st.error();
+    }
+    return baker;
+  }
+
+  // entries and rows get end − first elements, entry i at i − first. Errors: the first failing
+  // entry's after kEntryAttempts, Cancelled.
+  Status bake(int64_t first, int64_t end, std::vector<FragmentEntry>& entries,
+              std::vector<std::array<Descriptor, kDescriptorKindCount>>& rows, SharedProgress& shared) const {
+    const auto count = static_cast<size_t>(end - first);
+    std::vector<std::optional<Result<FragmentEntry>>> results(count);
+    rows.assign(count, {});
+    std::atomic<bool> stop{false};
+    auto bakeOne = [&](size_t k) {
+      if (stop.load()) return;
+      if (shared.interrupted()) {
+        stop = true;
+        results[k] = Result<FragmentEntry>(makeError(ErrorCode::Cancelled, "fragment database bake cancelled"));
+        return;
+      }
+      results[k] = bakeEntry(first + static_cast<int64_t>(k), rows[k]);
+      if (results[k]->ok()) {
+        shared.entryDone();
+      } else {
+        stop = true;
+      }
+    };
+    std::optional<tbb::global_control> limit;
+    if (mSettings.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, mSettings.threads);
+    tbb::parallel_for(size_t{0}, count, bakeOne);
+
+    for (size_t k = 0; k < count; ++k) {
+      if (results[k] && !*results[k]) return results[k]->error();  // skipped after another entry failed
+    }
+    entries.clear();
+    entries.reserve(count);
+    for (size_t k = 0; k < count; ++k) {
+      if (!results[k]) return makeError(ErrorCode::Cancelled, "fragment database bake stopped early");
+      entries.push_back(std::move(*results[k]).value());
+    }
+    return Ok{};
+  }
+
+ private:
+  explicit EntryBaker(const DatabaseBakeSettings& settings) : mSettings(settings), mRuntimeEntrySettings(settings) {
+    // Runtime fragments' crack faces zigzag at the runtime mesh's scale: their creases are not
+    // features to keep, and protecting them starves Mesh_3 of cells.
+    mRuntimeEntrySettings.tetMesh.detectSharpFeatures = false;
+  }
+
+  Result<FragmentEntry> bakeEntry(int64_t i, std::array<Descriptor, kDescriptorKindCount>& row) const {
+    const size_t shape = static_cast<size_t>(i) % mBases.size();
+    const std::string name = entryName(mSettings.shapes[shape].name, i);
+    uint64_t seed = fragmentEntrySeed(mSettings.seed, i);
+    const bool fromRuntime = mRuntime && isRuntimeFragmentEntry(seed, mSettings.runtimeFragments.fraction);
     std::optional<Error> lastError;
     for (int attempt = 0; attempt < kEntryAttempts; ++attempt, seed = splitmix64(seed)) {
       std::string cut;
-      auto fragment = fromRuntime ? runtime->fragment(shape, seed, &cut)
-                                  : generateFragment(bases[shape], settings.fragments, seed, &cut);
+      auto fragment = fromRuntime ? mRuntime->fragment(shape, seed, &cut)
+                                  : generateFragment(mBases[shape], mSettings.fragments, seed, &cut);
       if (!fragment) {
         lastError = fragment.error();
         continue;
       }
-      auto entry = bakeFragmentEntry(fragment.value(), name, fromRuntime ? runtimeEntrySettings : settings, rows[i]);
+      auto entry = bakeFragmentEntry(fragment.value(), name, fromRuntime ? mRuntimeEntrySettings : mSettings, row);
       if (!entry) {
         lastError = entry.error();
         continue;
       }
-      entry.value().baseShape = settings.shapes[shape].name;
+      entry.value().baseShape = mSettings.shapes[shape].name;
       entry.value().cut = cut;
       entry.value().seed = seed;
-      entry.value().baseVolumeFraction = computeSurfaceMassProperties(fragment.value(), 1.0).volumeM3 / baseVolumes[shape];
-      results[i] = std::move(entry);
-      shared.entryDone();
-      return;
+      entry.value().baseVolumeFraction =
+          computeSurfaceMassProperties(fragment.value(), 1.0).volumeM3 / mBaseVolumes[shape];
+      return entry;
     }
-    results[i] = Result<FragmentEntry>(Error{lastError->code, "entry '" + name + "' failed " +
-                                                                  std::to_string(kEntryAttempts) +
-                                                                  " times; last error: " + lastError->message});
-    stop = true;
-  };
+    return Error{lastError->code, "entry '" + name + "' failed " + std::to_string(kEntryAttempts) +
+                                      " times; last error: " + lastError->message};
+  }
 
-  std::optional<tbb::global_control> limit;
-  if (settings.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, settings.threads);
-  tbb::parallel_for(size_t{0}, count, bakeOne);
+  const DatabaseBakeSettings& mSettings;
+  DatabaseBakeSettings mRuntimeEntrySettings;
+  std::vector<TriangleMesh> mBases;
+  std::vector<double> mBaseVolumes;
+  std::optional<RuntimeFragmentSource> mRuntime;
+};
 
+// The database of these entries (rows in entry order) with the bake's settings.
+FragmentDatabase databaseOf(const DatabaseBakeSettings& settings, std::vector<FragmentEntry> entries,
+                            const std::vector<std::array<Descriptor, kDescriptorKindCount>>& rows) {
   FragmentDatabase db;
   db.referenceMaterial = settings.referenceMaterial;
   db.descriptorSettings = settings.descriptors;
   db.seed = settings.seed;
   db.indexSettings = settings.index;
-  db.entries.reserve(count);
-  for (size_t i = 0; i < count; ++i) {
-    if (!results[i]) continue;  // skipped after another entry failed
-    if (!*results[i]) return results[i]->error();
-  }
-  for (size_t i = 0; i < count; ++i) {
-    if (!results[i]) return makeError(ErrorCode::Cancelled, "fragment database bake stopped early");
-    db.entries.push_back(std::move(*results[i]).value());
-  }
+  const auto count = static_cast<Eigen::Index>(entries.size());
+  db.entries = std::move(entries);
   for (DescriptorKind kind : kAllDescriptorKinds) {
     const auto k = static_cast<size_t>(kind);
     DescriptorMatrix& m = db.descriptors[k];
-    m.resize(static_cast<Eigen::Index>(count), settings.kinds[k] ? descriptorSize(kind, settings.descriptors) : 0);
-    for (size_t i = 0; i < count; ++i) m.row(static_cast<Eigen::Index>(i)) = rows[i][k].transpose();
+    m.resize(count, settings.kinds[k] ? descriptorSize(kind, settings.descriptors) : 0);
+    for (Eigen::Index i = 0; i < count; ++i) m.row(i) = rows[static_cast<size_t>(i)][k].transpose();
   }
   return db;
+}
+
+}  // namespace
+
+Result<FragmentDatabase> bakeFragmentDatabase(const DatabaseBakeSettings& settings, ProgressSink* progress) {
+  auto baker = EntryBaker::create(settings, progress);
+  if (!baker) return baker.error();
+  SharedProgress shared(progress, settings.entryCount);
+  std::vector<FragmentEntry> entries;
+  std::vector<std::array<Descriptor, kDescriptorKindCount>> rows;
+  if (Status st = baker.value()->bake(0, settings.entryCount, entries, rows, shared); !st) return st.error();
+  return databaseOf(settings, std::move(entries), rows);
+}
+
+// --- Checkpoints ---------------------------------------------------------------------------------
+
+namespace {
+
+constexpr const char* kCheckpointManifest = "bake.json";
+
+Status validateCheckpointSettings(const DatabaseBakeSettings& settings, const DatabaseCheckpointSettings& c) {
+  if (c.directory.empty()) return makeError(ErrorCode::InvalidArgument, "checkpoints need a directory");
+  if (c.chunkEntries < 1) return makeError(ErrorCode::InvalidArgument, "checkpoint chunks need ≥ 1 entry");
+  if (c.ranks < 1 || c.rank < 0 || c.rank >= c.ranks) {
+    return makeError(ErrorCode::InvalidArgument, "checkpoint rank " + std::to_string(c.rank) + " of " +
+                                                     std::to_string(c.ranks) + " ranks");
+  }
+  for (bool on : settings.kinds) {
+    if (!on) return makeError(ErrorCode::InvalidArgument, "checkpointed bakes compute every descriptor kind");
+  }
+  return Ok{};
+}
+
+// The manifest text: the settings and the chunking, so a resume under other settings is refused.
+std::string checkpointManifest(const DatabaseBakeSettings& settings, const DatabaseCheckpointSettings& c) {
+  nlohmann::json doc = nlohmann::json::parse(describeDatabaseBake(settings));
+  doc["chunk_entries"] = c.chunkEntries;
+  return doc.dump(2) + "\n";
+}
+
+Status writeFileAtomically(const std::filesystem::path& path, const std::string& text) {
+  const std::filesystem::path temporary = path.string() + ".tmp-" + std::to_string(::getpid());
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.flush();
+    if (!out) {
+      std::error_code ignored;
+      std::filesystem::remove(temporary, ignored);
+      return makeError(ErrorCode::PackIoError, "cannot write '" + temporary.string() + "'");
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(temporary, path, ec);
+  if (ec) {
+    std::filesystem::remove(temporary, ec);
+    return makeError(ErrorCode::PackIoError, "cannot rename '" + temporary.string() + "' to '" + path.string() + "'");
+  }
+  return Ok{};
+}
+
+Status checkManifest(const DatabaseBakeSettings& settings, const DatabaseCheckpointSettings& c) {
+  std::ifstream in(c.directory / kCheckpointManifest, std::ios::binary);
+  if (!in) {
+    return makeError(ErrorCode::FileNotFound, "no checkpoint manifest in '" + c.directory.string() + "'");
+  }
+  const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (found != checkpointManifest(settings, c)) {
+    return makeError(ErrorCode::InvalidArgument, "the checkpoints in '" + c.directory.string() +
+                                                     "' belong to a bake with other settings; remove them or bake afresh");
+  }
+  return Ok{};
+}
+
+std::pair<int64_t, int64_t> chunkRange(const DatabaseBakeSettings& settings, const DatabaseCheckpointSettings& c,
+                                       int64_t chunk) {
+  const int64_t first = chunk * c.chunkEntries;
+  return {first, std::min(settings.entryCount, first + c.chunkEntries)};
+}
+
+// The chunk as written, or an error if it is missing, unreadable or not the entries it should be.
+Result<FragmentDatabase> readChunk(const DatabaseBakeSettings& settings, const DatabaseCheckpointSettings& c,
+                                   int64_t chunk) {
+  const std::filesystem::path path = fragmentDatabaseChunkPath(settings, c, chunk);
+  auto pack = readPack(path);
+  if (!pack) return pack.error();
+  FragmentDatabase& db = pack.value().database;
+  const auto [first, end] = chunkRange(settings, c, chunk);
+  bool same = static_cast<int64_t>(db.entries.size()) == end - first && db.seed == settings.seed;
+  for (int64_t i = first; same && i < end; ++i) {
+    const std::string expected = entryName(settings.shapes[static_cast<size_t>(i) % settings.shapes.size()].name, i);
+    same = db.entries[static_cast<size_t>(i - first)].asset.name == expected;
+  }
+  if (!same) return makeError(ErrorCode::PackCorrupt, "checkpoint '" + path.string() + "' holds other entries");
+  return std::move(pack.value().database);
+}
+
+}  // namespace
+
+std::string describeDatabaseBake(const DatabaseBakeSettings& s) {
+  nlohmann::json shapes = nlohmann::json::array();
+  for (const BaseShapeDefinition& d : s.shapes) {
+    shapes.push_back({{"name", d.name}, {"kind", baseShapeKindName(d.kind)},
+                      {"size", {d.sizeM.x(), d.sizeM.y(), d.sizeM.z()}}, {"segments", d.segments},
+                      {"noise", d.noiseAmplitude}, {"seed", d.seed}});
+  }
+  const Material& m = s.referenceMaterial;
+  const TetMeshSettings& t = s.tetMesh;
+  const ShapeDescriptorSettings& d = s.descriptors;
+  nlohmann::json index = nlohmann::json::array();
+  for (const DescriptorIndexSettings& x : s.index) {
+    index.push_back({static_cast<int>(x.kind), x.trees, x.checks, x.targetPrecision, x.seed});
+  }
+  const nlohmann::json doc = {
+      {"generator", std::string("brittle ") + BRITTLE_VERSION},
+      {"shapes", shapes},
+      {"entries", s.entryCount},
+      {"seed", s.seed},
+      {"fragments", {s.fragments.minCells, s.fragments.maxCells, s.fragments.planeCutFraction,
+                     s.fragments.minVolumeFraction, s.fragments.maxAttempts}},
+      {"material", {m.name, m.youngsModulusPa, m.poissonRatio, m.densityKgPerM3, m.tensileStrengthPa,
+                    m.fractureEnergyJPerM2, m.rayleighAlphaPerS, m.rayleighBetaS, m.restitution}},
+      {"physics", s.physics},
+      {"tet_mesh", {t.targetTets, t.countTolerance, t.maxAttempts, t.cellSizeM, t.facetAngleDeg,
+                    t.facetDistanceFraction, t.cellRadiusEdgeRatio, t.detectSharpFeatures, t.featureAngleDeg,
+                    t.optimize, t.sliverBoundDeg, t.seed}},
+      {"modes", s.modeCount},
+      {"frame", {d.frame.eigenGapTolerance, d.frame.skewnessTolerance, d.frame.shapeTolerance,
+                 d.frame.tieTolerance, d.frame.duplicateTolerance, d.frame.maxCandidates}},
+      {"moment", {d.moment.maxOrder, d.moment.orderWeights}},
+      {"voxel", {d.voxel.resolution, d.voxel.halfExtent}},
+      {"voxel_improved", {d.voxelImproved.resolution, d.voxelImproved.halfExtent, d.voxelImproved.clampVoxels}},
+      {"kinds", s.kinds},
+      {"index", index},
+      {"runtime", {s.runtimeFragments.fraction, s.runtimeFragments.targetTets, s.runtimeFragments.modeCount,
+                   s.runtimeFragments.minSpeedMps, s.runtimeFragments.maxSpeedMps}}};
+  return doc.dump();
+}
+
+int64_t fragmentDatabaseChunkCount(const DatabaseBakeSettings& settings, const DatabaseCheckpointSettings& c) {
+  if (c.chunkEntries < 1 || settings.entryCount < 1) return 0;
+  return (settings.entryCount + c.chunkEntries - 1) / c.chunkEntries;
+}
+
+std::filesystem::path fragmentDatabaseChunkPath(const DatabaseBakeSettings& settings,
+                                                const DatabaseCheckpointSettings& c, int64_t chunk) {
+  const auto [first, end] = chunkRange(settings, c, chunk);
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "entries-%09lld-%09lld.h5", static_cast<long long>(first),
+                static_cast<long long>(end));
+  return c.directory / buffer;
+}
+
+Status prepareFragmentDatabaseCheckpoints(const DatabaseBakeSettings& settings, const DatabaseCheckpointSettings& c) {
+  if (Status st = validateCheckpointSettings(settings, c); !st) return st;
+  std::error_code ec;
+  std::filesystem::create_directories(c.directory, ec);
+  if (ec || !std::filesystem::is_directory(c.directory)) {
+    return makeError(ErrorCode::PackIoError, "cannot create the checkpoint directory '" + c.directory.string() + "'");
+  }
+  const bool hasManifest = std::filesystem::exists(c.directory / kCheckpointManifest);
+  if (c.resume && hasManifest) return checkManifest(settings, c);
+  if (!c.resume) {
+    // Afresh: every chunk file of an earlier bake goes, whatever its settings were.
+    for (const auto& file : std::filesystem::directory_iterator(c.directory, ec)) {
+      const std::string name = file.path().filename().string();
+      if (name.rfind("entries-", 0) == 0 && file.path().extension() == ".h5") std::filesystem::remove(file.path(), ec);
+    }
+  }
+  return writeFileAtomically(c.directory / kCheckpointManifest, checkpointManifest(settings, c));
+}
+
+Result<DatabaseCheckpointReport> bakeFragmentDatabaseChunks(const DatabaseBakeSettings& settings,
+                                                            const DatabaseCheckpointSettings& c,
+                                                            ProgressSink* progress) {
+  if (Status st = validateCheckpointSettings(settings, c); !st) return st.error();
+  if (Status st = checkManifest(settings, c); !st) return st.error();
+  DatabaseCheckpointReport report;
+  std::vector<int64_t> missing;
+  int64_t mine = 0;
+  for (int64_t chunk = c.rank; chunk < fragmentDatabaseChunkCount(settings, c); chunk += c.ranks) {
+    const auto [first, end] = chunkRange(settings, c, chunk);
+    mine += end - first;
+    if (c.resume && readChunk(settings, c, chunk)) {
+      ++report.chunksReused;
+      report.entriesReused += end - first;
+    } else {
+      missing.push_back(chunk);
+    }
+  }
+  SharedProgress shared(progress, std::max<int64_t>(mine, 1));
+  for (int64_t k = 0; k < report.entriesReused; ++k) shared.entryDone();
+  if (missing.empty()) return report;
+
+  auto baker = EntryBaker::create(settings, progress);
+  if (!baker) return baker.error();
+  for (int64_t chunk : missing) {
+    const auto [first, end] = chunkRange(settings, c, chunk);
+    std::vector<FragmentEntry> entries;
+    std::vector<std::array<Descriptor, kDescriptorKindCount>> rows;
+    if (Status st = baker.value()->bake(first, end, entries, rows, shared); !st) return st.error();
+    Pack pack;
+    pack.database = databaseOf(settings, std::move(entries), rows);
+    if (Status st = writePack(pack, fragmentDatabaseChunkPath(settings, c, chunk)); !st) return st.error();
+    ++report.chunksBaked;
+    report.entriesBaked += end - first;
+  }
+  return report;
+}
+
+Result<FragmentDatabase> assembleFragmentDatabase(const DatabaseBakeSettings& settings,
+                                                  const DatabaseCheckpointSettings& c) {
+  if (Status st = validateCheckpointSettings(settings, c); !st) return st.error();
+  if (Status st = checkManifest(settings, c); !st) return st.error();
+  FragmentDatabase db;
+  for (int64_t chunk = 0; chunk < fragmentDatabaseChunkCount(settings, c); ++chunk) {
+    auto part = readChunk(settings, c, chunk);
+    if (!part) return Error{part.error().code, "checkpoint chunk " + std::to_string(chunk) + ": " + part.error().message};
+    if (chunk == 0) {
+      db = std::move(part).value();
+      continue;
+    }
+    FragmentDatabase& p = part.value();
+    for (FragmentEntry& e : p.entries) db.entries.push_back(std::move(e));
+    for (size_t k = 0; k < kDescriptorKindCount; ++k) {
+      DescriptorMatrix& m = db.descriptors[k];
+      const Eigen::Index rows = m.rows();
+      m.conservativeResize(rows + p.descriptors[k].rows(), Eigen::NoChange);
+      m.bottomRows(p.descriptors[k].rows()) = p.descriptors[k];
+    }
+  }
+  return db;
+}
+
+Result<FragmentDatabase> bakeFragmentDatabase(const DatabaseBakeSettings& settings,
+                                              const DatabaseCheckpointSettings& checkpoints, ProgressSink* progress,
+                                              DatabaseCheckpointReport* report) {
+  if (Status st = prepareFragmentDatabaseCheckpoints(settings, checkpoints); !st) return st.error();
+  auto baked = bakeFragmentDatabaseChunks(settings, checkpoints, progress);
+  if (!baked) return baked.error();
+  if (report) *report = baked.value();
+  return assembleFragmentDatabase(settings, checkpoints);
 }
 
 Result<std::vector<BaseShapeDefinition>> selectBaseShapes(const std::vector<BaseShapeDefinition>& shapes,

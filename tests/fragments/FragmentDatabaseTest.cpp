@@ -128,6 +128,165 @@ TEST_F(FragmentDatabaseTest, PackRoundTripIsBitExact) {
   EXPECT_EQ(matcher.value().index(DescriptorKind::VoxelImproved)->settings().kind, DescriptorIndexSettings::Kind::Hnsw);
 }
 
+// The bytes of the pack holding just this database (writePack is deterministic).
+std::string packBytes(const FragmentDatabase& db, const std::filesystem::path& path) {
+  Pack pack;
+  pack.database = db;
+  EXPECT_TRUE(writePack(pack, path));
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+size_t chunkFiles(const std::filesystem::path& directory) {
+  size_t n = 0;
+  for (const auto& f : std::filesystem::directory_iterator(directory)) n += f.path().extension() == ".h5";
+  return n;
+}
+
+// Stops the bake once `after` entries are done.
+class StopAfter final : public ProgressSink {
+ public:
+  explicit StopAfter(int after) : mAfter(after) {}
+  void report(std::string_view stage, double) override { mDone += stage == "fragment database"; }
+  bool wasInterrupted() override { return mDone >= mAfter; }
+
+ private:
+  int mAfter;
+  int mDone = 0;
+};
+
+TEST_F(FragmentDatabaseTest, CheckpointedBakeEqualsTheUninterruptedOne) {
+  DatabaseCheckpointSettings c;
+  c.directory = dir / "chunks";
+  c.chunkEntries = 3;  // 3 + 3 + 2
+  DatabaseCheckpointReport report;
+  auto db = bakeFragmentDatabase(testing::smallDatabaseSettings(8, true), c, nullptr, &report);
+  ASSERT_TRUE(db) << db.error().message;
+  EXPECT_EQ(report.chunksBaked, 3);
+  EXPECT_EQ(report.entriesBaked, 8);
+  EXPECT_EQ(chunkFiles(c.directory), 3u);
+  EXPECT_TRUE(std::filesystem::exists(c.directory / "bake.json"));
+  testing::expectSameDatabase(db.value(), *physical);  // bake timings aside, so not the bytes
+}
+
+TEST_F(FragmentDatabaseTest, InterruptedBakeResumesFromItsFinishedChunks) {
+  DatabaseBakeSettings s = testing::smallDatabaseSettings(12, false);
+  s.threads = 1;
+  const std::string reference = packBytes(bakeFragmentDatabase(s).value(), dir / "reference.h5");
+  DatabaseCheckpointSettings c;
+  c.directory = dir / "chunks";
+  c.chunkEntries = 4;
+  StopAfter stop(6);  // in the second chunk
+  auto cancelled = bakeFragmentDatabase(s, c, &stop);
+  ASSERT_FALSE(cancelled);
+  EXPECT_EQ(cancelled.error().code, ErrorCode::Cancelled);
+  EXPECT_EQ(chunkFiles(c.directory), 1u);  // the first chunk, whole; nothing of the second
+
+  c.resume = true;
+  DatabaseCheckpointReport report;
+  auto resumed = bakeFragmentDatabase(s, c, nullptr, &report);
+  ASSERT_TRUE(resumed) << resumed.error().message;
+  EXPECT_EQ(report.chunksReused, 1);
+  EXPECT_EQ(report.entriesReused, 4);
+  EXPECT_EQ(report.entriesBaked, 8);
+  EXPECT_TRUE(packBytes(resumed.value(), dir / "resumed.h5") == reference);
+
+  // Resuming a finished bake bakes nothing.
+  auto again = bakeFragmentDatabase(s, c, nullptr, &report);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(report.entriesReused, 12);
+  EXPECT_EQ(report.entriesBaked, 0);
+}
+
+TEST_F(FragmentDatabaseTest, CheckpointsRefuseOtherSettingsAndRebakeDamagedChunks) {
+  DatabaseBakeSettings s = testing::smallDatabaseSettings(6, false);
+  DatabaseCheckpointSettings c;
+  c.directory = dir / "chunks";
+  c.chunkEntries = 2;
+  auto first = bakeFragmentDatabase(s, c);
+  ASSERT_TRUE(first);
+  const std::string reference = packBytes(first.value(), dir / "reference.h5");
+
+  c.resume = true;
+  DatabaseBakeSettings other = s;
+  other.seed = 99;
+  EXPECT_EQ(bakeFragmentDatabase(other, c).error().code, ErrorCode::InvalidArgument);
+  other = s;
+  other.modeCount = 7;
+  EXPECT_EQ(bakeFragmentDatabase(other, c).error().code, ErrorCode::InvalidArgument);
+
+  // A damaged chunk (one flipped byte in its middle) is baked again, and only it.
+  const auto chunk = fragmentDatabaseChunkPath(s, c, 1);
+  {
+    std::fstream f(chunk, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(0, std::ios::end);
+    const auto size = static_cast<std::streamoff>(f.tellg());
+    f.seekg(size / 2);
+    char byte = 0;
+    f.read(&byte, 1);
+    byte = static_cast<char>(byte ^ 0x5a);
+    f.seekp(size / 2);
+    f.write(&byte, 1);
+  }
+  EXPECT_FALSE(assembleFragmentDatabase(s, c));
+  DatabaseCheckpointReport report;
+  auto repaired = bakeFragmentDatabase(s, c, nullptr, &report);
+  ASSERT_TRUE(repaired) << repaired.error().message;
+  EXPECT_EQ(report.chunksBaked, 1);
+  EXPECT_EQ(report.chunksReused, 2);
+  EXPECT_TRUE(packBytes(repaired.value(), dir / "repaired.h5") == reference);
+
+  // A missing chunk names itself; afresh (no resume) removes the old chunks first.
+  std::filesystem::remove(fragmentDatabaseChunkPath(s, c, 2));
+  auto incomplete = assembleFragmentDatabase(s, c);
+  ASSERT_FALSE(incomplete);
+  EXPECT_EQ(incomplete.error().code, ErrorCode::FileNotFound);
+  EXPECT_NE(incomplete.error().message.find("chunk 2"), std::string::npos) << incomplete.error().message;
+  c.resume = false;
+  ASSERT_TRUE(prepareFragmentDatabaseCheckpoints(other, c));
+  EXPECT_EQ(chunkFiles(c.directory), 0u);
+
+  // Bad checkpoint settings.
+  DatabaseCheckpointSettings bad = c;
+  bad.chunkEntries = 0;
+  EXPECT_EQ(bakeFragmentDatabase(s, bad).error().code, ErrorCode::InvalidArgument);
+  bad = c;
+  bad.rank = 2;
+  bad.ranks = 2;
+  EXPECT_EQ(bakeFragmentDatabase(s, bad).error().code, ErrorCode::InvalidArgument);
+  bad = c;
+  bad.directory.clear();
+  EXPECT_EQ(bakeFragmentDatabase(s, bad).error().code, ErrorCode::InvalidArgument);
+  DatabaseBakeSettings oneKind = s;
+  oneKind.kinds = {true, false, false};
+  EXPECT_EQ(bakeFragmentDatabase(oneKind, c).error().code, ErrorCode::InvalidArgument);
+}
+
+// Ranks bake disjoint chunks into one directory; any rank's chunks plus the others' assemble into
+// the single-process database.
+TEST_F(FragmentDatabaseTest, RanksBakeDisjointChunksThatAssembleIntoTheSameDatabase) {
+  DatabaseBakeSettings s = testing::smallDatabaseSettings(7, false);
+  const std::string reference = packBytes(bakeFragmentDatabase(s).value(), dir / "reference.h5");
+  DatabaseCheckpointSettings c;
+  c.directory = dir / "chunks";
+  c.chunkEntries = 2;  // chunks 0..3
+  c.ranks = 3;
+  int64_t baked = 0;
+  for (int rank = 0; rank < 3; ++rank) {
+    c.rank = rank;
+    ASSERT_TRUE(prepareFragmentDatabaseCheckpoints(s, c));
+    c.resume = true;  // the other ranks' chunks stay
+    auto report = bakeFragmentDatabaseChunks(s, c);
+    ASSERT_TRUE(report) << report.error().message;
+    EXPECT_EQ(report.value().chunksBaked, rank == 0 ? 2 : 1);  // chunks {0, 3}, {1}, {2}
+    baked += report.value().entriesBaked;
+  }
+  EXPECT_EQ(baked, 7);
+  auto db = assembleFragmentDatabase(s, c);
+  ASSERT_TRUE(db) << db.error().message;
+  EXPECT_TRUE(packBytes(db.value(), dir / "assembled.h5") == reference);
+}
+
 TEST_F(FragmentDatabaseTest, DamagedDatabaseGivesTypedErrors) {
   Pack pack;
   pack.database = *physical;

@@ -8,6 +8,7 @@
 #include "../bench/SearchBench.h"
 #include "CliSupport.h"
 #include "Commands.h"
+#include "Distributed.h"
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/precompute/FragmentDatabaseBake.h"
@@ -31,6 +32,10 @@ struct BakeDbOptions {
   int voxelResolution = 16;
   int threads = 0;
   double runtimeFraction = 0.0;
+  std::string checkpointDir;  // default: <out>.checkpoints
+  int64_t checkpointEvery = 64;
+  bool resume = false;
+  bool keepCheckpoints = false;
   bool quiet = false;
   bool json = false;
 };
@@ -71,10 +76,25 @@ Runner addBakeDbCommand(CLI::App& app) {
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores); the result does not depend on it")->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--out", o->out, "Output pack (.h5), written atomically")->required();
+  cmd->add_option("--checkpoint-dir", o->checkpointDir,
+                  "Where finished chunks of entries are kept while the bake runs (default: OUT.checkpoints)");
+  cmd->add_option("--checkpoint-every", o->checkpointEvery, "Entries per checkpoint chunk")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{1}, int64_t{10000000}));
+  cmd->add_flag("--resume", o->resume,
+                "Continue an interrupted bake: reuse its finished chunks (same settings required); the pack equals an "
+                "uninterrupted bake's");
+  cmd->add_flag("--keep-checkpoints", o->keepCheckpoints, "Keep the checkpoint directory after the pack is written");
   cmd->add_flag("--quiet", o->quiet, "No progress display");
   cmd->add_flag("--json", o->json, "Print the inspection of the new pack as JSON");
+  cmd->footer(
+      "Distributed: `mpirun -np N brittle bake-db ...` splits the chunks across N ranks (chunk c goes to rank c mod "
+      "N); rank 0 gathers them over MPI, so the ranks need not share a file system, and writes the pack. The pack "
+      "equals a single-process bake's.");
 
   return [o]() -> int {
+    auto group = ProcessGroup::join();
+    if (!group) return reportError(group.error());
     auto shapes = loadBaseShapes(o->shapesFile);
     if (!shapes) return reportError(shapes.error());
     DatabaseBakeSettings s;
@@ -94,14 +114,44 @@ Runner addBakeDbCommand(CLI::App& app) {
     s.descriptors.voxel.resolution = s.descriptors.voxelImproved.resolution = o->voxelResolution;
     s.threads = o->threads;
     s.runtimeFragments.fraction = o->runtimeFraction;
-    Result<FragmentDatabase> db = [&] {
-      TerminalProgress progress(o->quiet);
-      return bakeFragmentDatabase(s, &progress);
+    DatabaseCheckpointSettings checkpoints;
+    checkpoints.directory = o->checkpointDir.empty() ? o->out + ".checkpoints" : o->checkpointDir;
+    checkpoints.chunkEntries = o->checkpointEvery;
+    checkpoints.resume = o->resume;
+    checkpoints.rank = group.value().rank();
+    checkpoints.ranks = group.value().size();
+    const bool root = checkpoints.rank == 0;
+
+    // Every rank prepares its own directory (they may not share a file system; where they do,
+    // preparing twice is harmless), then bakes its chunks; all stop if one fails.
+    Status prepared = prepareFragmentDatabaseCheckpoints(s, checkpoints);
+    if (!group.value().allSucceeded(prepared.ok())) return prepared ? kExitPack : reportError(prepared.error());
+    Result<DatabaseCheckpointReport> baked = [&] {
+      TerminalProgress progress(o->quiet || !root);
+      return bakeFragmentDatabaseChunks(s, checkpoints, &progress);
     }();
+    if (!group.value().allSucceeded(baked.ok())) return baked ? kExitPack : reportError(baked.error());
+    const int64_t chunks = fragmentDatabaseChunkCount(s, checkpoints);
+    for (int64_t c = 0; c < chunks; ++c) {
+      const Status sent = group.value().sendToRoot(static_cast<int>(c % checkpoints.ranks),
+                                                   fragmentDatabaseChunkPath(s, checkpoints, c));
+      if (!sent) return reportError(sent.error());
+    }
+    std::cerr << "bake-db: rank " << checkpoints.rank << " of " << checkpoints.ranks << ": "
+              << baked.value().entriesBaked << " entries baked, " << baked.value().entriesReused
+              << " reused from checkpoints\n";
+    if (!root) return kExitOk;
+
+    auto db = assembleFragmentDatabase(s, checkpoints);
     if (!db) return reportError(db.error());
     Pack pack;
     pack.database = std::move(db).value();
-    return writeAndPrintPack(pack, o->out, o->json);
+    const int code = writeAndPrintPack(pack, o->out, o->json);
+    if (code == kExitOk && !o->keepCheckpoints) {
+      std::error_code ignored;
+      std::filesystem::remove_all(checkpoints.directory, ignored);
+    }
+    return code;
   };
 }
 

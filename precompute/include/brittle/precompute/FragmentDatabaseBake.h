@@ -79,6 +79,62 @@ Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std:
 /// failing entry's error after kEntryAttempts, Cancelled.
 Result<FragmentDatabase> bakeFragmentDatabase(const DatabaseBakeSettings& settings, ProgressSink* progress = nullptr);
 
+/// Checkpoints of a database bake. The entries are baked in chunks of chunkEntries consecutive
+/// entries; each finished chunk is written whole (writePack: temporary file and rename) as
+/// `<directory>/entries-<first>-<end>.h5`, a pack holding just those entries, beside `bake.json`,
+/// which records the settings (describeDatabaseBake) and the chunking. A bake killed at any point
+/// keeps its finished chunks and never a partial one. With resume, the next bake reads the
+/// finished chunks back instead of baking them again; the database then equals an uninterrupted
+/// bake's bit for bit, because entry i depends only on the settings and i. A distributed bake
+/// gives process `rank` of `ranks` the chunks c with c mod ranks = rank.
+struct DatabaseCheckpointSettings {
+  std::filesystem::path directory;  ///< where the chunks live; required
+  int64_t chunkEntries = 64;        ///< entries per chunk, ≥ 1
+  bool resume = false;              ///< reuse finished chunks; false: remove them and bake afresh
+  int rank = 0;                     ///< this process, in [0, ranks)
+  int ranks = 1;                    ///< processes sharing the bake
+};
+
+/// What a checkpointed bake did on this rank.
+struct DatabaseCheckpointReport {
+  int64_t chunksReused = 0, entriesReused = 0;  ///< read back from the directory
+  int64_t chunksBaked = 0, entriesBaked = 0;    ///< baked and written now
+};
+
+/// The settings that decide the entries, as one line of JSON (every field, doubles round-trip).
+std::string describeDatabaseBake(const DatabaseBakeSettings& settings);
+
+/// Number of chunks, ceil(entryCount / chunkEntries), and the file of chunk c.
+int64_t fragmentDatabaseChunkCount(const DatabaseBakeSettings& settings, const DatabaseCheckpointSettings& checkpoints);
+std::filesystem::path fragmentDatabaseChunkPath(const DatabaseBakeSettings& settings,
+                                                const DatabaseCheckpointSettings& checkpoints, int64_t chunk);
+
+/// Creates the directory and its bake.json. Afresh (no resume) it first removes every chunk file
+/// found there. Errors: InvalidArgument (bad chunking or rank, a disabled descriptor kind, resume
+/// over the checkpoints of a bake with other settings), PackIoError.
+Status prepareFragmentDatabaseCheckpoints(const DatabaseBakeSettings& settings,
+                                          const DatabaseCheckpointSettings& checkpoints);
+
+/// Bakes this rank's chunks that the directory does not hold whole (with resume) or all of them.
+/// Progress counts this rank's entries, reused ones included. Call after
+/// prepareFragmentDatabaseCheckpoints. Errors: those of prepare (FileNotFound without bake.json),
+/// bakeFragmentDatabase and writePack.
+Result<DatabaseCheckpointReport> bakeFragmentDatabaseChunks(const DatabaseBakeSettings& settings,
+                                                            const DatabaseCheckpointSettings& checkpoints,
+                                                            ProgressSink* progress = nullptr);
+
+/// The database from a directory that holds every chunk. Errors: those of readPack for a missing
+/// or damaged chunk (naming it), PackCorrupt for a chunk holding other entries.
+Result<FragmentDatabase> assembleFragmentDatabase(const DatabaseBakeSettings& settings,
+                                                  const DatabaseCheckpointSettings& checkpoints);
+
+/// One process, checkpointed: prepare, bake the chunks, assemble. Equal to the uncheckpointed
+/// bake for any chunking and thread count.
+Result<FragmentDatabase> bakeFragmentDatabase(const DatabaseBakeSettings& settings,
+                                              const DatabaseCheckpointSettings& checkpoints,
+                                              ProgressSink* progress = nullptr,
+                                              DatabaseCheckpointReport* report = nullptr);
+
 /// The optional "database" section of a bake manifest (BakePipeline.h):
 ///   "database": { "shapes": "shapes/base-shapes.json", "only": ["box", "plate"], "entries": 48,
 ///                 "seed": 1, "tets": 1000, "modes": 12, "descriptors_only": false,
