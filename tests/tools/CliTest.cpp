@@ -1,6 +1,8 @@
 // The brittle CLI end to end: exit codes, typed errors on stderr, and no pack left behind.
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -22,8 +24,8 @@ struct CliRun {
   std::string out;  // stdout and stderr together
 };
 
-CliRun run(const std::string& args) {
-  const std::string cmd = std::string(BRITTLE_CLI) + " " + args + " 2>&1";
+CliRun runCommand(const std::string& command) {
+  const std::string cmd = command + " 2>&1";
   CliRun r;
   FILE* pipe = ::popen(cmd.c_str(), "r");
   std::array<char, 4096> buf{};
@@ -31,6 +33,25 @@ CliRun run(const std::string& args) {
   const int status = ::pclose(pipe);
   r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+CliRun run(const std::string& args) { return runCommand(std::string(BRITTLE_CLI) + " " + args); }
+
+std::string fileBytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+std::string shapesOption() {
+  return "--shapes \"" + (testing::sourceDir() / "assets" / "shapes" / "base-shapes.json").string() + "\"";
+}
+
+// "bake-db: rank R of N: B entries baked, U reused from checkpoints" → {B, U}; {-1, -1} if absent.
+std::pair<long, long> bakedAndReused(const std::string& out) {
+  const auto at = out.find("entries baked, ");
+  if (at == std::string::npos) return {-1, -1};
+  const auto start = out.rfind(": ", at);
+  return {std::stol(out.substr(start + 2)), std::stol(out.substr(at + 15))};
 }
 
 class CliTest : public ::testing::Test {
@@ -272,6 +293,93 @@ TEST_F(CliTest, SearchBenchWithRuntimeFragmentsAsQueriesAndEntries) {
     EXPECT_NE(line.find(",0.5,runtime"), std::string::npos) << line;
   }
   EXPECT_EQ(rows, 2);  // brute force and the kd-forest
+}
+
+
+// Killed mid-bake: the pack at --out is still the previous one, whole; --resume then reuses the
+// finished chunks and gives the same database as an uninterrupted bake.
+TEST_F(CliTest, KilledDatabaseBakeKeepsThePreviousPackAndResumesToTheSameDatabase) {
+  const std::string bake = "bake-db " + shapesOption() + " --entries 12 --tets 400 --modes 6 --threads 1 --checkpoint-every 2 --quiet";
+  const CliRun reference = run(bake + " --out " + path("reference.h5"));
+  ASSERT_EQ(reference.exitCode, 0) << reference.out;
+  EXPECT_EQ(bakedAndReused(reference.out), std::make_pair(12l, 0l)) << reference.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "reference.h5.checkpoints"));  // removed once the pack is whole
+  const CliRun previous = run("bake-db " + shapesOption() + " --entries 2 --descriptors-only --quiet --out " + path("out.h5"));
+  ASSERT_EQ(previous.exitCode, 0) << previous.out;
+  const std::string previousBytes = fileBytes(dir / "out.h5");
+
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    const std::string command = "exec " + std::string(BRITTLE_CLI) + " " + bake + " --out " + path("out.h5") + " >/dev/null 2>&1";
+    ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const auto firstChunk = dir / "out.h5.checkpoints" / "entries-000000000-000000002.h5";
+  bool running = true;
+  for (int waited = 0; waited < 60000 && !std::filesystem::exists(firstChunk); waited += 5) {
+    if (::waitpid(child, nullptr, WNOHANG) == child) {
+      running = false;
+      break;
+    }
+    ::usleep(5000);
+  }
+  ASSERT_TRUE(running) << "the bake ended before it could be killed";
+  ASSERT_TRUE(std::filesystem::exists(firstChunk));
+  ::kill(child, SIGKILL);
+  ::waitpid(child, nullptr, 0);
+  EXPECT_TRUE(fileBytes(dir / "out.h5") == previousBytes) << "a killed bake touched the previous pack";
+
+  const CliRun resumed = run(bake + " --resume --out " + path("out.h5"));
+  ASSERT_EQ(resumed.exitCode, 0) << resumed.out;
+  const auto [baked, reused] = bakedAndReused(resumed.out);
+  EXPECT_GE(reused, 2) << resumed.out;
+  EXPECT_EQ(baked + reused, 12) << resumed.out;
+  auto a = readPack(dir / "reference.h5");
+  auto b = readPack(dir / "out.h5");
+  ASSERT_TRUE(a && b);
+  testing::expectSameDatabase(a.value().database, b.value().database);
+
+  // Resuming under other settings is refused with the pack untouched.
+  const std::string before = fileBytes(dir / "out.h5");
+  ASSERT_TRUE(std::filesystem::create_directories(dir / "other"));
+  const CliRun first = run(bake + " --keep-checkpoints --checkpoint-dir " + path("other") + " --out " + path("x.h5"));
+  ASSERT_EQ(first.exitCode, 0) << first.out;
+  const CliRun other = run("bake-db " + shapesOption() + " --entries 12 --tets 400 --modes 7 --checkpoint-every 2 --quiet --resume --checkpoint-dir " + path("other") + " --out " + path("out.h5"));
+  EXPECT_NE(other.exitCode, 0);
+  EXPECT_NE(other.out.find("other settings"), std::string::npos) << other.out;
+  EXPECT_TRUE(fileBytes(dir / "out.h5") == before);
+}
+
+// mpirun -np N brittle bake-db gives the single-process pack, byte for byte (descriptors only:
+// no wall-clock timings in the pack), and the same database with physics.
+TEST_F(CliTest, MpiBakeEqualsTheSingleProcessBake) {
+#ifndef BRITTLE_MPIEXEC
+  GTEST_SKIP() << "built without MPI";
+#else
+  ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);  // CI containers run as root
+  ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  const std::string descriptors = "bake-db " + shapesOption() + " --entries 10 --descriptors-only --checkpoint-every 2 --quiet";
+  const CliRun single = run(descriptors + " --out " + path("single.h5"));
+  ASSERT_EQ(single.exitCode, 0) << single.out;
+  for (int ranks : {2, 4}) {
+    const std::string out = "ranks" + std::to_string(ranks) + ".h5";
+    const CliRun r = runCommand(std::string(BRITTLE_MPIEXEC) + " --oversubscribe -np " + std::to_string(ranks) + " " +
+                                BRITTLE_CLI + " " + descriptors + " --out " + path(out));
+    ASSERT_EQ(r.exitCode, 0) << r.out;
+    EXPECT_NE(r.out.find("rank " + std::to_string(ranks - 1) + " of " + std::to_string(ranks)), std::string::npos) << r.out;
+    EXPECT_TRUE(fileBytes(dir / out) == fileBytes(dir / "single.h5")) << ranks << " ranks";
+  }
+  const std::string physics = "bake-db " + shapesOption() + " --entries 5 --tets 400 --modes 6 --checkpoint-every 2 --quiet";
+  ASSERT_EQ(run(physics + " --out " + path("p1.h5")).exitCode, 0);
+  const CliRun two = runCommand(std::string(BRITTLE_MPIEXEC) + " --oversubscribe -np 2 " + BRITTLE_CLI + " " + physics +
+                                " --threads 1 --out " + path("p2.h5"));
+  ASSERT_EQ(two.exitCode, 0) << two.out;
+  auto a = readPack(dir / "p1.h5");
+  auto b = readPack(dir / "p2.h5");
+  ASSERT_TRUE(a && b);
+  testing::expectSameDatabase(a.value().database, b.value().database);
+#endif
 }
 
 }  // namespace
