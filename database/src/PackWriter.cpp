@@ -4,13 +4,16 @@
 // target's directory, flushed to disk and renamed over the target. A reader therefore sees either
 // the old pack or the new one, never a half-written file.
 #include <fcntl.h>
+#include <signal.h>
 #include <hdf5.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cerrno>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <set>
@@ -628,11 +631,45 @@ void syncDirectory(const fs::path& dir) {
   ::close(fd);
 }
 
+std::string hostName() {
+  char name[256] = {};
+  if (::gethostname(name, sizeof name - 1) != 0) return "host";
+  std::string out(name);
+  std::replace(out.begin(), out.end(), '-', '_');  // '-' separates the fields of the name below
+  return out;
+}
+
+// "<target>.tmp-<host>-<pid>-<n>": the host and pid keep two processes apart (also on a shared
+// file system), the counter two threads of one process.
+std::string temporaryPrefix(const fs::path& target) {
+  return target.filename().string() + ".tmp-" + hostName() + "-";
+}
+
 fs::path temporaryPathFor(const fs::path& target) {
-  // The pid keeps two processes apart, the counter two threads of one process.
   static std::atomic<unsigned> counter{0};
   return target.parent_path() /
-         (target.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+         (temporaryPrefix(target) + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+}
+
+// A writer killed between creating its temporary file and the rename (SIGKILL, power loss)
+// leaves the file behind. Before writing, remove those of this target whose writer, on this
+// host, is gone. Best effort: a file that cannot be removed stays.
+void removeStaleTemporaries(const fs::path& target) {
+  const std::string prefix = temporaryPrefix(target);
+  std::error_code ec;
+  const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string rest = name.substr(prefix.size());  // "<pid>-<n>"
+    const auto dash = rest.find('-');
+    if (dash == 0 || dash == std::string::npos || rest.find_first_not_of("0123456789-") != std::string::npos) continue;
+    const long pid = std::strtol(rest.substr(0, dash).c_str(), nullptr, 10);
+    if (pid <= 0 || pid == ::getpid()) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to judge
+    std::error_code ignored;
+    fs::remove(entry.path(), ignored);
+  }
 }
 
 }  // namespace
@@ -648,6 +685,7 @@ Status writePack(const Pack& pack, const fs::path& path) {
   fs::path temporary;
   std::error_code ignored;
   try {
+    removeStaleTemporaries(path);
     temporary = temporaryPathFor(path);
     writeFile(pack, temporary);
     syncToDisk(temporary);
