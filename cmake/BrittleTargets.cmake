@@ -1,12 +1,16 @@
 # Per-target flags: warnings, sanitizers. Never global.
 function(brittle_target_flags target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local)
+  # The public headers are C++20 (defaulted comparisons): consumers get the standard from the targets.
+  target_compile_features(${target} PUBLIC cxx_std_20)
   # One version for every module and tool (packs record it as "generator").
   target_compile_definitions(${target} PRIVATE BRITTLE_VERSION="${PROJECT_VERSION}")
   if(BRITTLE_SANITIZE)
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer
       -fno-sanitize-recover=undefined)
-    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+    # PUBLIC: a program that loads a sanitized library must link the sanitizer runtime itself,
+    # a consumer of the installed package too.
+    target_link_options(${target} PUBLIC -fsanitize=address,undefined)
   endif()
 endfunction()
 

@@ -202,6 +202,18 @@ class FileReader {
   Handle openDataset(const std::string& path) {
     Handle dset = openObject(path, "dataset");
     if (H5Iget_type(dset.get()) != H5I_DATASET) fail(ErrorCode::PackShapeMismatch, "'" + path + "' is not a dataset");
+    // A dataset's values must be stored in this file. HDF5 also lets them live in raw external
+    // files or in datasets of other files (a virtual dataset): HDF5 would then open whatever
+    // file the pack names (a FIFO blocks the read for ever), and no checksum covers those bytes.
+    Handle dcpl = hdf5::propertyHandle(H5Dget_create_plist(dset.get()));
+    const H5D_layout_t layout = dcpl.valid() ? H5Pget_layout(dcpl.get()) : H5D_LAYOUT_ERROR;
+    const int externalFiles = dcpl.valid() ? H5Pget_external_count(dcpl.get()) : -1;
+    if (layout == H5D_LAYOUT_ERROR || externalFiles < 0) {
+      fail(ErrorCode::PackCorrupt, "cannot read the storage properties of '" + path + "'" + hdf5::withDetail());
+    }
+    if (layout == H5D_VIRTUAL || externalFiles > 0) {
+      fail(ErrorCode::PackShapeMismatch, "dataset '" + path + "' keeps its values in another file");
+    }
     return dset;
   }
 

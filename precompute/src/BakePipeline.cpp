@@ -1,14 +1,9 @@
 #include "brittle/precompute/BakePipeline.h"
 
 #include <chrono>
-#include <fstream>
-#include <nlohmann/json.hpp>
-#include <cmath>
 #include <set>
-#include <tuple>
 
 #include "brittle/descriptors/MassProperties.h"
-#include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshIO.h"
 #include "brittle/precompute/MeshValidation.h"
 
@@ -154,73 +149,6 @@ Result<Pack> bakePack(const std::vector<ObjectBakeSettings>& objects, ProgressSi
     if (reports) reports->push_back(report);
   }
   return pack;
-}
-
-Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) return makeError(ErrorCode::FileNotFound, "manifest not found: " + path.string());
-  nlohmann::json doc;
-  try {
-    doc = nlohmann::json::parse(in);
-  } catch (const std::exception& e) {
-    return makeError(ErrorCode::ParseError, "manifest " + path.filename().string() + ": " + e.what());
-  }
-  const auto dir = path.parent_path();
-  std::vector<ObjectBakeSettings> out;
-  try {
-    // A manifest may hold only a fragment database (FragmentDatabaseBake.h reads that section).
-    if (doc.is_object() && !doc.contains("objects") && doc.contains("database")) return out;
-    if (!doc.is_object() || !doc.contains("objects") || !doc["objects"].is_array()) {
-      return makeError(ErrorCode::ParseError, "manifest " + path.filename().string() + ": needs an \"objects\" array");
-    }
-    static const std::set<std::string> kKeys = {"name", "mesh", "material", "tets", "modes", "repair", "lumped_mass", "seed",
-                                                "sharp_features", "sliver_bound"};
-    for (size_t i = 0; i < doc["objects"].size(); ++i) {
-      const auto& o = doc["objects"][i];
-      const std::string where = "manifest " + path.filename().string() + ", object " + std::to_string(i);
-      if (!o.is_object()) return makeError(ErrorCode::ParseError, where + ": not an object");
-      for (const auto& [key, value] : o.items()) {
-        if (!kKeys.count(key)) return makeError(ErrorCode::ParseError, where + ": unknown key \"" + key + "\"");
-      }
-      if (!o.contains("mesh") || !o.contains("material")) {
-        return makeError(ErrorCode::ParseError, where + ": \"mesh\" and \"material\" are required");
-      }
-      ObjectBakeSettings s;
-      s.meshPath = dir / o.at("mesh").get<std::string>();
-      s.name = o.value("name", std::string());
-      std::string material = o.at("material").get<std::string>();
-      if (material.ends_with(".json")) material = (dir / material).string();
-      auto m = resolveMaterial(material);
-      if (!m) return Error{m.error().code, where + ": " + m.error().message};
-      s.material = std::move(m).value();
-      // Range checks, so a typo does not become a 2^64 seed or a million-mode solve.
-      auto checked = [&](const char* key, double lo, double hi) -> bool {
-        if (!o.contains(key)) return true;
-        if (!o[key].is_number()) return false;
-        const double v = o[key].get<double>();
-        return v >= lo && v <= hi && (std::string(key) == "sliver_bound" || v == std::floor(v));
-      };
-      for (const auto& [key, lo, hi] : {std::tuple{"tets", 0.0, 5e6}, std::tuple{"modes", 1.0, 2000.0},
-                                         std::tuple{"seed", 0.0, 9.007199254740992e15}, std::tuple{"sliver_bound", 0.0, 30.0}}) {
-        if (!checked(key, lo, hi)) {
-          return makeError(ErrorCode::ParseError, where + ": \"" + key + "\" must be a number in [" + std::to_string(lo) + ", " +
-                                                      std::to_string(hi) + "]" + (std::string(key) == "sliver_bound" ? "" : ", integer"));
-        }
-      }
-      s.tetMesh.targetTets = o.value("tets", s.tetMesh.targetTets);
-      s.modal.modeCount = o.value("modes", s.modal.modeCount);
-      s.repair = o.value("repair", false);
-      s.fem.lumpedMass = o.value("lumped_mass", false);
-      s.tetMesh.detectSharpFeatures = o.value("sharp_features", true);
-      s.tetMesh.sliverBoundDeg = o.value("sliver_bound", s.tetMesh.sliverBoundDeg);
-      const auto seed = o.value("seed", static_cast<uint64_t>(1));
-      s.modal.seed = s.tetMesh.seed = seed;
-      out.push_back(std::move(s));
-    }
-  } catch (const nlohmann::json::exception& e) {
-    return makeError(ErrorCode::ParseError, "manifest " + path.filename().string() + ": " + e.what());
-  }
-  return out;
 }
 
 }  // namespace brittle

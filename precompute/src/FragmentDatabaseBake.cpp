@@ -18,6 +18,7 @@
 
 #include "brittle/database/Pack.h"
 #include "brittle/descriptors/MassProperties.h"
+#include "brittle/precompute/AtomicFile.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshValidation.h"
@@ -301,27 +302,6 @@ std::string checkpointManifest(const DatabaseBakeSettings& settings, const Datab
   nlohmann::json doc = nlohmann::json::parse(describeDatabaseBake(settings));
   doc["chunk_entries"] = c.chunkEntries;
   return doc.dump(2) + "\n";
-}
-
-Status writeFileAtomically(const std::filesystem::path& path, const std::string& text) {
-  const std::filesystem::path temporary = path.string() + ".tmp-" + std::to_string(::getpid());
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      return makeError(ErrorCode::PackIoError, "cannot write '" + temporary.string() + "'");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(temporary, path, ec);
-  if (ec) {
-    std::filesystem::remove(temporary, ec);
-    return makeError(ErrorCode::PackIoError, "cannot rename '" + temporary.string() + "' to '" + path.string() + "'");
-  }
-  return Ok{};
 }
 
 Status checkManifest(const DatabaseBakeSettings& settings, const DatabaseCheckpointSettings& c) {

@@ -1,5 +1,7 @@
 #include "brittle/precompute/MaterialLibrary.h"
 
+#include "brittle/precompute/AtomicFile.h"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -282,6 +284,22 @@ Result<Material> materialFromJson(const nlohmann::json& doc, const std::filesyst
 }
 
 }  // namespace
+
+Status saveMaterialFile(const Material& m, const std::filesystem::path& path) {
+  if (Status valid = validateMaterial(m); !valid) return valid.error();
+  // Insertion order as documented; %.17g round-trips every double.
+  nlohmann::ordered_json doc = {{kKeyName, m.name},
+                                {kKeyYoungs, m.youngsModulusPa},
+                                {kKeyPoisson, m.poissonRatio},
+                                {kKeyDensity, m.densityKgPerM3},
+                                {kKeyStrength, m.tensileStrengthPa},
+                                {kKeyEnergy, m.fractureEnergyJPerM2},
+                                {kKeyAlpha, m.rayleighAlphaPerS},
+                                {kKeyBeta, m.rayleighBetaS},
+                                {kKeyRestitution, m.restitution},
+                                {kKeySource, m.source}};
+  return writeFileAtomically(path, doc.dump(2) + "\n");
+}
 
 std::vector<std::string> materialPresetNames() {
   std::vector<std::string> names;

@@ -223,5 +223,25 @@ TEST(BaseShapes, BadFilesGiveTypedErrorsNamingShapeAndKey) {
   }
 }
 
+TEST(BaseShapes, FineShapesAreCheckedNotBuiltWhenLoaded) {
+  // 66 level-6 spheres fit in 4 KB, the size of a fuzz input, and the loader built all 5.4 million
+  // faces to check them: seconds per file, past the fuzz timeout under the sanitizers. It now
+  // checks the parameters only (tests/fuzz/corpus keeps this input); each definition still builds.
+  const auto dir = testing::makeTempDir("shapes");
+  std::string text = R"({"shapes": [)";
+  for (int i = 0; i < 66; ++i) {
+    text += std::string(i ? "," : "") + R"({"name": "s)" + std::to_string(i) +
+            R"(", "kind": "sphere", "size": [1, 1, 1], "segments": 6})";
+  }
+  std::ofstream(dir / "fine.json") << text + "]}";
+  const auto shapes = loadBaseShapes(dir / "fine.json");
+  ASSERT_TRUE(shapes.ok()) << shapes.error().message;
+  ASSERT_EQ(shapes.value().size(), 66u);
+  EXPECT_EQ(shapes.value().back().segments, 6);
+  const auto mesh = makeBaseShape(shapes.value().back());
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  EXPECT_EQ(mesh.value().faces.rows(), 20 * 4096);
+}
+
 }  // namespace
 }  // namespace brittle

@@ -6,8 +6,11 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <string>
+#include <vector>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -85,6 +88,100 @@ TEST_F(CliTest, BakeThenInspectJson) {
   for (const char* key : {"meshing", "assembly", "modal", "stress_modes", "total"}) {
     EXPECT_TRUE(o["bake"]["timings_s"].contains(key)) << key;
   }
+}
+
+// calibrate: frequencies of the baked box as if its E were 80 % of glass's, at glass's ν and
+// density, give E = 0.8 × 70 GPa back; the written material file bakes.
+TEST_F(CliTest, CalibrateFitsTheMaterialAndWritesAFileThatBakes) {
+  testing::writeOff(testing::makeBoxSurface(0.2, 0.1, 0.05), dir / "box.off");
+  ASSERT_EQ(run("bake --mesh " + path("box.off") + " --material glass --tets 800 --modes 6 --quiet --out " + path("box.h5")).exitCode, 0);
+  const auto doc = nlohmann::json::parse(run("inspect " + path("box.h5") + " --json").out);
+  std::string frequencies, rates;
+  for (int i = 0; i < 4; ++i) {
+    const double f = std::sqrt(0.8) * doc["objects"][0]["modes"]["frequencies_hz"][i].get<double>();
+    const double omega = 2.0 * M_PI * f;
+    frequencies += (i ? "," : "") + std::to_string(f);
+    rates += (i ? "," : "") + std::to_string(0.5 * (10.0 + 3e-7 * omega * omega));
+  }
+  const CliRun fit = run("calibrate " + path("box.h5") + " --object box --fixed-poisson --frequencies " + frequencies +
+                         " --decay-rates " + rates + " --out " + path("fitted.json") + " --json");
+  ASSERT_EQ(fit.exitCode, 0) << fit.out;
+  const auto r = nlohmann::json::parse(fit.out);
+  EXPECT_NEAR(r["youngs_modulus_pa"].get<double>() / 56e9, 1.0, 1e-5);  // to_string keeps 6 decimals
+  EXPECT_EQ(r["poisson_ratio"].get<double>(), 0.2);
+  EXPECT_NEAR(r["rayleigh_alpha_per_s"].get<double>(), 10.0, 1e-3);
+  EXPECT_NEAR(r["rayleigh_beta_s"].get<double>() / 3e-7, 1.0, 1e-5);
+  EXPECT_LT(r["rms_frequency_error"].get<double>(), 1e-6);
+  EXPECT_EQ(r["frequencies"].size(), 4u);
+  const CliRun rebake = run("bake --mesh " + path("box.off") + " --material " + path("fitted.json") +
+                            " --tets 800 --modes 6 --quiet --json --out " + path("fitted.h5"));
+  ASSERT_EQ(rebake.exitCode, 0) << rebake.out;
+  EXPECT_EQ(nlohmann::json::parse(rebake.out)["materials"][0]["name"], "glass-calibrated");
+
+  const CliRun one = run("calibrate " + path("box.h5") + " --object box --frequencies 1000");
+  EXPECT_EQ(one.exitCode, 2) << one.out;
+  EXPECT_NE(one.out.find("error [invalid_argument]"), std::string::npos) << one.out;
+  EXPECT_NE(one.out.find("at least 2"), std::string::npos) << one.out;
+  const CliRun missing = run("calibrate " + path("box.h5") + " --object vase --frequencies 1000,2000");
+  EXPECT_EQ(missing.exitCode, 2) << missing.out;
+  std::ofstream(dir / "m.json") << R"({"frequencies_hz": [1000, 2000], "colour": 3})";
+  const CliRun badFile = run("calibrate " + path("box.h5") + " --object box --measurements " + path("m.json"));
+  EXPECT_EQ(badFile.exitCode, 3) << badFile.out;
+  EXPECT_NE(badFile.out.find("unknown key \"colour\""), std::string::npos) << badFile.out;
+}
+
+// The speed/accuracy benches write what their chart scripts read, with values that make sense.
+TEST_F(CliTest, SpeedAccuracyBenchesWriteTheirCsv) {
+  const CliRun integrators = run("bench integrators --points 5 --csv " + path("i.csv") + " --timing-csv " + path("t.csv"));
+  ASSERT_EQ(integrators.exitCode, 0) << integrators.out;
+  std::ifstream in(dir / "i.csv");
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "integrator,zeta,omega_h,steps_per_period,peak_error,late_amplitude");
+  int rows = 0;
+  while (std::getline(in, line)) {
+    ++rows;
+    std::vector<std::string> cells;
+    for (size_t at = 0; at != std::string::npos;) {
+      const size_t comma = line.find(',', at);
+      cells.push_back(line.substr(at, comma == std::string::npos ? std::string::npos : comma - at));
+      at = comma == std::string::npos ? comma : comma + 1;
+    }
+    ASSERT_EQ(cells.size(), 6u) << line;
+    const double omegaH = std::stod(cells[2]), error = std::stod(cells[4]), late = std::stod(cells[5]);
+    if (cells[0] == "exact") {
+      EXPECT_LT(error, 0.05) << line;  // stable and accurate at every step
+      EXPECT_LE(late, 1.0) << line;
+    }
+    if (cells[0] == "explicit-euler" && omegaH >= 100.0) {
+      EXPECT_FALSE(error < 1.0) << line;  // blown up
+    }
+  }
+  EXPECT_EQ(rows, 4 * 2 * 5);
+  const CliRun modes = run("bench modes --tets 3000 --modes 4,8 --points 1 --repeats 1 --quiet --csv " + path("m.csv"));
+  ASSERT_EQ(modes.exitCode, 0) << modes.out;
+  std::ifstream m(dir / "m.csv");
+  std::getline(m, line);
+  EXPECT_EQ(line.substr(0, 40), "point,x,y,tets,modes,reference_pa,correc");
+  rows = 0;
+  while (std::getline(m, line)) ++rows;
+  EXPECT_EQ(rows, 2);
+  EXPECT_EQ(run("bench integrators --zeta 1.5 --csv " + path("z.csv")).exitCode, 2);
+
+  // Resolution: the coarser mesh is further from the extrapolated frequencies than the finer.
+  const CliRun resolution = run("bench resolution --tets 300,2000 --modes 3 --quiet --csv " + path("r.csv"));
+  ASSERT_EQ(resolution.exitCode, 0) << resolution.out;
+  std::ifstream r(dir / "r.csv");
+  std::getline(r, line);
+  EXPECT_EQ(line, "target_tets,tets,mode,frequency_hz,reference_hz,error,difference_from_finest,meshing_s,modal_s,bake_s");
+  std::vector<double> errors;
+  while (std::getline(r, line)) {
+    const size_t a = line.find(',', line.find(',', line.find(',', line.find(',', line.find(',') + 1) + 1) + 1) + 1);
+    errors.push_back(std::abs(std::stod(line.substr(a + 1))));
+  }
+  ASSERT_EQ(errors.size(), 6u);
+  for (int j = 0; j < 3; ++j) EXPECT_GT(errors[static_cast<size_t>(j)], errors[static_cast<size_t>(3 + j)]) << j;
+  EXPECT_EQ(run("bench resolution --tets 300 --csv " + path("one.csv")).exitCode, 2);
 }
 
 TEST_F(CliTest, TwoProcessesBakeIdenticalDatasets) {
@@ -360,8 +457,13 @@ TEST_F(CliTest, MpiBakeEqualsTheSingleProcessBake) {
   ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);  // CI containers run as root
   ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
   // Under ASan, OpenMPI's own leftovers at MPI_Finalize are not brittle's leaks.
-  const std::string suppressions = (testing::sourceDir() / "tests" / "tools" / "openmpi.lsan.supp").string();
+  const std::string suppressions = (testing::sourceDir() / "tests" / "lsan.supp").string();
   ::setenv("LSAN_OPTIONS", ("suppressions=" + suppressions).c_str(), 1);
+  // OpenMPI's libraries have no frame pointers: with ASan's fast unwinder a leak's stack stops
+  // at an "<unknown module>" frame, and no suppression can name it. The slow unwinder gives the
+  // whole stack (the ranks run ~15x slower under ASan; nothing changes without it).
+  const char* asan = std::getenv("ASAN_OPTIONS");
+  ::setenv("ASAN_OPTIONS", (std::string(asan ? asan : "") + (asan && *asan ? ":" : "") + "fast_unwind_on_malloc=0").c_str(), 1);
   const std::string descriptors = "bake-db " + shapesOption() + " --entries 10 --descriptors-only --checkpoint-every 2 --quiet";
   const CliRun single = run(descriptors + " --out " + path("single.h5"));
   ASSERT_EQ(single.exitCode, 0) << single.out;

@@ -1,5 +1,7 @@
 #include "ImpactBench.h"
 
+#include "BenchSupport.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
@@ -11,24 +13,6 @@
 #include "brittle/runtime/World.h"
 
 namespace brittle::bench {
-namespace {
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<size_t>(std::min<double>(static_cast<double>(v.size() - 1), p * static_cast<double>(v.size() - 1) + 0.5))];
-}
-
-TriangleMesh paneSurface() {
-  TriangleMesh m;
-  m.vertices.resize(8, 3);
-  for (int i = 0; i < 8; ++i) m.vertices.row(i) << ((i & 1) ? 0.1 : -0.1), ((i & 2) ? 0.1 : -0.1), ((i & 4) ? 0.025 : -0.025);
-  m.faces.resize(12, 3);
-  m.faces << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5;
-  return m;
-}
-
-}  // namespace
 
 Status runImpactBench(const ImpactBenchSettings& s) {
   std::ofstream csv(s.csv);
@@ -42,7 +26,7 @@ Status runImpactBench(const ImpactBenchSettings& s) {
     b.material = glass;
     b.tetMesh.targetTets = target;
     b.modal.modeCount = maxModes;
-    auto asset = bakeSurface(paneSurface(), b);
+    auto asset = bakeSurface(boxSurface(0.2, 0.2, 0.05), b);
     if (!asset) return asset.error();
     const int64_t tets = asset.value().tetMesh.tets.rows();
     Pack pack;

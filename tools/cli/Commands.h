@@ -15,6 +15,7 @@ Runner addBakeDbCommand(CLI::App& app);
 Runner addQueryCommand(CLI::App& app);
 Runner addBenchCommand(CLI::App& app);
 Runner addImpactCommand(CLI::App& app);
+Runner addCalibrateCommand(CLI::App& app);
 
 }  // namespace brittle::cli
 

@@ -5,6 +5,9 @@
 #include <memory>
 
 #include "../bench/ImpactBench.h"
+#include "../bench/IntegratorBench.h"
+#include "../bench/ModeCountBench.h"
+#include "../bench/ResolutionBench.h"
 #include "../bench/SearchBench.h"
 #include "CliSupport.h"
 #include "Commands.h"
@@ -137,9 +140,10 @@ Runner addBakeDbCommand(CLI::App& app) {
                                                    fragmentDatabaseChunkPath(s, checkpoints, c));
       if (!sent) return reportError(sent.error());
     }
-    std::cerr << "bake-db: rank " << checkpoints.rank << " of " << checkpoints.ranks << ": "
-              << baked.value().entriesBaked << " entries baked, " << baked.value().entriesReused
-              << " reused from checkpoints\n";
+    // One write per line: std::cerr is unbuffered, and the ranks share the terminal.
+    std::cerr << ("bake-db: rank " + std::to_string(checkpoints.rank) + " of " + std::to_string(checkpoints.ranks) +
+                  ": " + std::to_string(baked.value().entriesBaked) + " entries baked, " +
+                  std::to_string(baked.value().entriesReused) + " reused from checkpoints\n");
     if (!root) return kExitOk;
 
     auto db = assembleFragmentDatabase(s, checkpoints);
@@ -259,7 +263,8 @@ Runner addQueryCommand(CLI::App& app) {
 }
 
 Runner addBenchCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("bench", "Benchmarks that write CSV (charts: tools/scripts/plot_search.py, plot_impact.py)");
+  auto* cmd = app.add_subcommand(
+      "bench", "Benchmarks that write CSV (charts: tools/scripts/plot_search.py, plot_impact.py, plot_integrators.py)");
   cmd->require_subcommand(1);
   auto* search = cmd->add_subcommand(
       "search", "Descriptor search: recall@1, query time, build time, memory and physical error per setting");
@@ -304,7 +309,59 @@ Runner addBenchCommand(CLI::App& app) {
   impact->add_option("--seed", is->seed, "Seed of the impact points and cracks")->capture_default_str();
   impact->add_option("--csv", is->csv, "Output CSV")->capture_default_str();
   impact->add_flag("--quiet", is->quiet, "No progress lines");
-  return [s, shapes, kinds, indices, impact, is]() -> int {
+  auto* integrators = cmd->add_subcommand(
+      "integrators", "Error and stability of the modal time integrators against the time step (ωh from 0.01 to 100)");
+  auto ib = std::make_shared<bench::IntegratorBenchSettings>();
+  integrators->add_option("--zeta", ib->dampingRatios, "Damping ratios")->delimiter(',')->capture_default_str();
+  integrators->add_option("--pulse-steps", ib->pulseSteps, "Steps over the 100 us pulse")->capture_default_str()->check(CLI::Range(2, 10000));
+  integrators->add_option("--points", ib->points, "Values of ωh")->capture_default_str()->check(CLI::Range(2, 1000));
+  integrators->add_option("--csv", ib->csv, "Error CSV")->capture_default_str();
+  integrators->add_option("--timing-csv", ib->timingCsv, "Timing CSV")->capture_default_str();
+  auto* modes = cmd->add_subcommand(
+      "modes", "Mode count against peak-stress error (full-FEM reference) and impact time, with and without the static correction");
+  auto mb = std::make_shared<bench::ModeCountBenchSettings>();
+  modes->add_option("--modes", mb->modes, "Mode counts")->delimiter(',')->capture_default_str();
+  modes->add_option("--tets", mb->tets, "Target tet count of the plate")->capture_default_str();
+  modes->add_option("--points", mb->points, "Impact points")->capture_default_str()->check(CLI::Range(1, 1000));
+  modes->add_option("--speed", mb->speedMps, "Impact speed (m/s)")->capture_default_str();
+  modes->add_option("--repeats", mb->repeats, "Impacts timed per setting")->capture_default_str()->check(CLI::Range(1, 1000));
+  modes->add_option("--reference-steps", mb->referenceStepsPerContact, "Newmark steps per contact time")
+      ->capture_default_str()->check(CLI::Range(10, 100000));
+  modes->add_option("--seed", mb->seed, "Seed of the impact points")->capture_default_str();
+  modes->add_option("--csv", mb->csv, "Output CSV")->capture_default_str();
+  modes->add_flag("--quiet", mb->quiet, "No progress lines");
+  auto* resolution = cmd->add_subcommand("resolution", "Tet resolution against frequency error and bake time");
+  auto rb = std::make_shared<bench::ResolutionBenchSettings>();
+  resolution->add_option("--mesh", rb->mesh, "Surface mesh")->capture_default_str();
+  resolution->add_option("--material", rb->material, "Material: preset or JSON file")->capture_default_str();
+  resolution->add_option("--tets", rb->tets, "Target tet counts (two or more)")->delimiter(',')->capture_default_str();
+  resolution->add_option("--modes", rb->modes, "Elastic modes compared")->capture_default_str()->check(CLI::Range(1, 500));
+  resolution->add_option("--csv", rb->csv, "Output CSV")->capture_default_str();
+  resolution->add_flag("--quiet", rb->quiet, "No progress lines");
+  return [s, shapes, kinds, indices, impact, is, integrators, ib, modes, mb, resolution, rb]() -> int {
+    if (resolution->parsed()) {
+      if (rb->csv.has_parent_path()) std::filesystem::create_directories(rb->csv.parent_path());
+      if (Status st = bench::runResolutionBench(*rb); !st) return reportError(st.error());
+      std::cout << "wrote " << rb->csv.string() << "\n";
+      return kExitOk;
+    }
+    if (modes->parsed()) {
+      if (mb->csv.has_parent_path()) std::filesystem::create_directories(mb->csv.parent_path());
+      if (Status st = bench::runModeCountBench(*mb); !st) return reportError(st.error());
+      std::cout << "wrote " << mb->csv.string() << "\n";
+      return kExitOk;
+    }
+    if (integrators->parsed()) {
+      for (const auto& path : {ib->csv, ib->timingCsv}) {
+        if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+      }
+      for (double z : ib->dampingRatios) {
+        if (!(z >= 0.0 && z < 1.0)) return reportError(makeError(ErrorCode::InvalidArgument, "--zeta values must be in [0, 1)"));
+      }
+      if (Status st = bench::runIntegratorBench(*ib); !st) return reportError(st.error());
+      std::cout << "wrote " << ib->csv.string() << " and " << ib->timingCsv.string() << "\n";
+      return kExitOk;
+    }
     if (impact->parsed()) {
       if (is->csv.has_parent_path()) std::filesystem::create_directories(is->csv.parent_path());
       if (Status st = bench::runImpactBench(*is); !st) return reportError(st.error());

@@ -1,8 +1,11 @@
 #include "Distributed.h"
 
+#include "brittle/precompute/AtomicFile.h"
+
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <string_view>
 #include <vector>
 
 #ifdef BRITTLE_WITH_MPI
@@ -23,19 +26,6 @@ bool launchedByMpirun() {
   std::ifstream in(path, std::ios::binary);
   if (!in) return makeError(ErrorCode::FileNotFound, "cannot open '" + path.string() + "'");
   return std::vector<char>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-[[maybe_unused]] Status writeBytesAtomically(const std::filesystem::path& path, const std::vector<char>& bytes) {
-  const std::filesystem::path temporary = path.string() + ".part";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    if (!out.flush()) return makeError(ErrorCode::PackIoError, "cannot write '" + temporary.string() + "'");
-  }
-  std::error_code ec;
-  std::filesystem::rename(temporary, path, ec);
-  if (ec) return makeError(ErrorCode::PackIoError, "cannot rename '" + temporary.string() + "': " + ec.message());
-  return Ok{};
 }
 
 }  // namespace
@@ -108,7 +98,7 @@ Status ProcessGroup::sendToRoot(int from, const std::filesystem::path& path) con
       MPI_Recv(bytes.data() + at, static_cast<int>(std::min(kPiece, size - at)), MPI_CHAR, from, 1, MPI_COMM_WORLD,
                MPI_STATUS_IGNORE);
     }
-    status = size < 0 ? 1 : (writeBytesAtomically(path, bytes) ? 0 : 2);
+    status = size < 0 ? 1 : (writeFileAtomically(path, std::string_view(bytes.data(), bytes.size())) ? 0 : 2);
   }
   MPI_Bcast(&status, 1, MPI_INT, 0, MPI_COMM_WORLD);
   if (status == 1) return makeError(ErrorCode::PackIoError, "rank " + std::to_string(from) + " cannot read '" + path.string() + "'");

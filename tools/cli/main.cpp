@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   add("query", brittle::cli::addQueryCommand(app));
   add("bench", brittle::cli::addBenchCommand(app));
   add("impact", brittle::cli::addImpactCommand(app));
+  add("calibrate", brittle::cli::addCalibrateCommand(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

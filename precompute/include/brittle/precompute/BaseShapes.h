@@ -56,7 +56,7 @@ Result<TriangleMesh> makeBaseShape(const BaseShapeDefinition& definition);
 ///                   "noise": 0.25, "seed": 7 }, ... ] }
 /// "size" is sizeM (m). "segments" (default 24; sphere and blob: 3), "noise" (default 0) and
 /// "seed" (unsigned, default 1) are optional; other keys are rejected. Names are unique and
-/// non-empty. Every shape is built once to check it.
+/// non-empty. Every shape is checked as makeBaseShape checks it (without building its mesh).
 /// Errors: FileNotFound; ParseError naming the file, the shape index and the key (bad JSON, a
 /// missing, unknown or mistyped key, a duplicate name, a shape makeBaseShape rejects).
 Result<std::vector<BaseShapeDefinition>> loadBaseShapes(const std::filesystem::path& jsonPath);

@@ -29,6 +29,11 @@ Result<Material> materialPreset(std::string_view name);
 /// values: E ≤ 0, ν ≥ 0.5, NaN, ...).
 Result<Material> loadMaterialFile(const std::filesystem::path& path);
 
+/// Writes a material as a custom material file (the keys above, fracture energy rather than
+/// toughness), atomically; loadMaterialFile reads it back equal. Errors: InvalidMaterial (the
+/// material fails validateMaterial; nothing is written), PackIoError (cannot write the file).
+Status saveMaterialFile(const Material& material, const std::filesystem::path& path);
+
 /// A preset name or a path to a JSON file (anything ending in ".json" or naming an existing
 /// file is read as a file).
 Result<Material> resolveMaterial(const std::string& nameOrPath);

@@ -1,0 +1,23 @@
+// Fuzz target: loadBaseShapes (BaseShapes.h) on arbitrary bytes. The definitions it returns must
+// build with makeBaseShape, as its header promises; the first few are built (a level-6 sphere is
+// 80k faces, and an input can hold dozens).
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+
+#include "FuzzSupport.h"
+#include "brittle/precompute/BaseShapes.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace brittle;
+  const auto path = fuzz::writeScratchFile("base-shapes.json", data, size);
+  const Result<std::vector<BaseShapeDefinition>> shapes = loadBaseShapes(path);
+  fuzz::expectDocumentedError(shapes, {ErrorCode::FileNotFound, ErrorCode::ParseError});
+  if (!shapes.ok()) return 0;
+  if (shapes.value().empty()) fuzz::finding("an empty list of base shapes was loaded");
+  for (size_t i = 0; i < std::min<size_t>(shapes.value().size(), 4); ++i) {
+    const BaseShapeDefinition& d = shapes.value()[i];
+    if (!makeBaseShape(d).ok()) fuzz::finding("base shape '" + d.name + "' loads but does not build");
+  }
+  return 0;
+}

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# The speed/accuracy charts, regenerated from scratch: each benchmark writes its CSV into bench/
+# and its chart script draws the PNG beside it and prints the figures the README quotes.
+#   tools/run-charts.sh          the modal-integrator, mode-count and tet-resolution charts (~5 min)
+#   tools/run-charts.sh --all    also the modal-solver, search and impact-latency benchmarks
+#                                (about an hour on 2 cores)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+all=0
+case "${1:-}" in
+  "") ;;
+  --all) all=1 ;;
+  *) echo "usage: tools/run-charts.sh [--all]" >&2; exit 2 ;;
+esac
+bash tools/setup.sh
+mkdir -p bench
+cli=build/bin/brittle
+plot() { /usr/bin/python3 "tools/scripts/$1" "${@:2}"; }
+
+$cli bench integrators --csv bench/integrators.csv --timing-csv bench/integrator_timing.csv
+plot plot_integrators.py bench/integrators.csv bench/integrator_timing.csv
+$cli bench modes --csv bench/modes.csv
+plot plot_modes.py bench/modes.csv
+$cli bench resolution --csv bench/resolution.csv
+plot plot_resolution.py bench/resolution.csv
+
+if [ "$all" = 1 ]; then
+  build/bin/brittle_bench_modal --tets 300 1000 3000 10000 30000 80000 --modes 20 40 --skip-eigen-ldlt \
+    --out bench/modal_solve.csv
+  plot plot_bench.py bench/modal_solve.csv
+  $cli bench search --csv bench/search.csv --cost-csv bench/descriptor_cost.csv
+  plot plot_search.py bench/search.csv bench/descriptor_cost.csv
+  $cli bench impact --csv bench/impact_latency.csv
+  plot plot_impact.py bench/impact_latency.csv
+fi
