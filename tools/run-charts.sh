@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The speed/accuracy charts, regenerated from scratch: each benchmark writes its CSV into bench/
 # and its chart script draws the PNG beside it and prints the figures the README quotes.
-#   tools/run-charts.sh          the modal-integrator, mode-count and tet-resolution charts (~5 min)
+#   tools/run-charts.sh          the modal-integrator, mode-count, tet-resolution and fracture-statistics
+#                                charts (~10 min)
 #   tools/run-charts.sh --all    also the modal-solver, search and impact-latency benchmarks
 #                                (about an hour on 2 cores)
 set -euo pipefail
@@ -23,6 +24,8 @@ $cli bench modes --csv bench/modes.csv
 plot plot_modes.py bench/modes.csv
 $cli bench resolution --csv bench/resolution.csv
 plot plot_resolution.py bench/resolution.csv
+$cli bench fracture --csv bench/fracture.csv
+plot plot_fracture.py bench/fracture.csv
 
 if [ "$all" = 1 ]; then
   build/bin/brittle_bench_modal --tets 300 1000 3000 10000 30000 80000 --modes 20 40 --skip-eigen-ldlt \

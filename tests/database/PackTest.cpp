@@ -568,7 +568,9 @@ void storeValuesOutside(hid_t file, const char* path, const fs::path& outside, b
   }
   const hid_t created = H5Dcreate2(file, path, H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
   EXPECT_GE(created, 0);
-  if (!isVirtual) EXPECT_GE(H5Dwrite(created, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
+  if (!isVirtual) {
+    EXPECT_GE(H5Dwrite(created, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
+  }
   H5Dclose(created);
   H5Pclose(dcpl);
   H5Sclose(space);

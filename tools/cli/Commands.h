@@ -16,6 +16,7 @@ Runner addQueryCommand(CLI::App& app);
 Runner addBenchCommand(CLI::App& app);
 Runner addImpactCommand(CLI::App& app);
 Runner addCalibrateCommand(CLI::App& app);
+Runner addSizeCommand(CLI::App& app);
 
 }  // namespace brittle::cli
 

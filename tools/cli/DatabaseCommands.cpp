@@ -4,6 +4,7 @@
 #include <iostream>
 #include <memory>
 
+#include "../bench/FractureStatsBench.h"
 #include "../bench/ImpactBench.h"
 #include "../bench/IntegratorBench.h"
 #include "../bench/ModeCountBench.h"
@@ -264,7 +265,7 @@ Runner addQueryCommand(CLI::App& app) {
 
 Runner addBenchCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "bench", "Benchmarks that write CSV (charts: tools/scripts/plot_search.py, plot_impact.py, plot_integrators.py)");
+      "bench", "Benchmarks that write CSV (charts: tools/scripts/plot_*.py, all redrawn by tools/run-charts.sh)");
   cmd->require_subcommand(1);
   auto* search = cmd->add_subcommand(
       "search", "Descriptor search: recall@1, query time, build time, memory and physical error per setting");
@@ -338,7 +339,27 @@ Runner addBenchCommand(CLI::App& app) {
   resolution->add_option("--modes", rb->modes, "Elastic modes compared")->capture_default_str()->check(CLI::Range(1, 500));
   resolution->add_option("--csv", rb->csv, "Output CSV")->capture_default_str();
   resolution->add_flag("--quiet", rb->quiet, "No progress lines");
-  return [s, shapes, kinds, indices, impact, is, integrators, ib, modes, mb, resolution, rb]() -> int {
+  auto* fracture = cmd->add_subcommand(
+      "fracture", "Fragment count and largest fragment's mass share against impact speed, over many seeds");
+  auto fb = std::make_shared<bench::FractureStatsBenchSettings>();
+  fracture->add_option("--plate-speeds", fb->plateSpeedsMps, "Speeds of the ball on the glass plate (m/s)")
+      ->delimiter(',')->capture_default_str();
+  fracture->add_option("--brick-speeds", fb->brickSpeedsMps, "Speeds of the brick dropped on a corner (m/s)")
+      ->delimiter(',')->capture_default_str();
+  fracture->add_option("--seeds", fb->seeds, "Seeds per speed")->capture_default_str()->check(CLI::Range(1, 100000));
+  fracture->add_option("--plate-tets", fb->plateTets, "Target tet count of the plate")->capture_default_str();
+  fracture->add_option("--brick-tets", fb->brickTets, "Target tet count of the brick")->capture_default_str();
+  fracture->add_option("--modes", fb->modes, "Modes per object")->capture_default_str()->check(CLI::Range(1, 500));
+  fracture->add_option("--brick-mesh", fb->brickMesh, "Surface mesh of the brick")->capture_default_str();
+  fracture->add_option("--csv", fb->csv, "Output CSV")->capture_default_str();
+  fracture->add_flag("--quiet", fb->quiet, "No progress lines");
+  return [s, shapes, kinds, indices, impact, is, integrators, ib, modes, mb, resolution, rb, fracture, fb]() -> int {
+    if (fracture->parsed()) {
+      if (fb->csv.has_parent_path()) std::filesystem::create_directories(fb->csv.parent_path());
+      if (Status st = bench::runFractureStatsBench(*fb); !st) return reportError(st.error());
+      std::cout << "wrote " << fb->csv.string() << "\n";
+      return kExitOk;
+    }
     if (resolution->parsed()) {
       if (rb->csv.has_parent_path()) std::filesystem::create_directories(rb->csv.parent_path());
       if (Status st = bench::runResolutionBench(*rb); !st) return reportError(st.error());

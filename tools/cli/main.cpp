@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   add("bench", brittle::cli::addBenchCommand(app));
   add("impact", brittle::cli::addImpactCommand(app));
   add("calibrate", brittle::cli::addCalibrateCommand(app));
+  add("size", brittle::cli::addSizeCommand(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

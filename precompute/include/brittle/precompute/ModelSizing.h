@@ -1,0 +1,139 @@
+// ModelSizing.h — the cheapest model that meets an accuracy target over a scene's impacts.
+//
+// A scene's requirements file says which objects the scene uses, the range of impacts each one
+// takes (speeds and impactors) and the accuracy it needs:
+//
+//   { "peak_stress_error": 0.15,        // worst |σ_modal / σ_reference − 1| allowed
+//     "refracture": true,                // fragments must break again: the pack needs a database
+//     "objects": [
+//       { "name": "glass-plate", "speeds_mps": [2, 10],
+//         "impactors": [ { "mass_kg": 0.1, "radius_m": 0.02, "material": "steel" } ] },
+//       { "name": "brick", "speeds_mps": [3, 12], "impactors": [ { "ground": true } ] } ] }
+//
+// An impactor is a sphere (mass, radius, material preset or JSON file; default steel) or the
+// ground (immovable and flat). Objects the file does not name are not baked.
+//
+// Sizing an object: it is baked once with the largest mode count of the ladder; impacts are drawn
+// from the scene's range (`points` seeded surface points by area, each impactor, the lowest and
+// the highest speed — the two ends of the contact time t_c ∝ v^(−1/5)); each is solved once by
+// the full-FEM reference (FullFemReference.h) and, for every mode count of the ladder, by the
+// runtime with the static correction (the lowest r modes of the same basis). The chosen count is
+// the smallest whose worst error over the impacts meets the target; when none does, the largest
+// is kept and the result says so. The peak stress is linear in the load, so the error does not
+// depend on the speed except through the pulse's length and shape, which the two ends bracket.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "brittle/database/Material.h"
+#include "brittle/database/ObjectAsset.h"
+#include "brittle/descriptors/Result.h"
+#include "brittle/precompute/BakePipeline.h"
+#include "brittle/precompute/FragmentDatabaseBake.h"
+#include "brittle/precompute/Progress.h"
+
+namespace brittle {
+
+struct SceneImpactor {
+  double massKg = 0.1;                                          ///< +∞: immovable
+  double radiusM = 0.02;                                        ///< +∞: flat
+  Material material;                                            ///< steel unless given
+  bool ground() const { return massKg == std::numeric_limits<double>::infinity(); }
+};
+
+struct SceneObjectRange {
+  std::string name;                    ///< an object of the bake manifest
+  double minSpeedMps = 1.0, maxSpeedMps = 10.0;
+  std::vector<SceneImpactor> impactors;
+};
+
+struct SceneRequirements {
+  double peakStressError = 0.15;
+  bool refracture = true;
+  std::vector<SceneObjectRange> objects;
+};
+
+/// Reads a requirements file. Material file names are relative to its directory.
+/// Errors: FileNotFound, ParseError (naming the key: unknown keys, 0 < error < 1, 0 < min ≤ max
+/// speed, positive mass and radius, at least one object and impactor, no name twice),
+/// UnknownMaterial, InvalidMaterial.
+Result<SceneRequirements> loadSceneRequirements(const std::filesystem::path& path);
+
+struct ModelSizingSettings {
+  std::vector<int> modeLadder = {5, 10, 15, 20, 30, 40, 60, 80, 100};  ///< ascending after validation
+  int points = 3;                    ///< surface points per impactor and speed
+  int referenceStepsPerContact = 60; ///< Newmark steps per contact time
+  int timingRepeats = 3;             ///< impacts timed per mode count and impact (median)
+  uint64_t seed = 1;
+};
+
+/// One mode count of the ladder.
+struct ModeTrial {
+  int modes = 0;
+  double worstError = 0.0;      ///< max over the impacts of |σ / σ_reference − 1|
+  double medianImpactMs = 0.0;  ///< the runtime's impact time (warm world, fracture included)
+};
+
+struct ObjectSizing {
+  std::string object;
+  int chosenModes = 0;
+  bool targetMet = false;
+  double chosenError = 0.0;       ///< worst error at the chosen count
+  int impacts = 0;                ///< impacts each count was measured on
+  double referenceS = 0.0;        ///< time spent in the full-FEM reference
+  std::vector<ModeTrial> trials;  ///< the ladder, ascending (counts above the stored modes dropped)
+};
+
+/// Sizes one object whose asset holds at least the ladder's first count of modes (baked with its
+/// largest). Errors: InvalidArgument (settings, an asset with fewer modes than the ladder's first
+/// count), those of the runtime and of solveFullFemImpact.
+Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& material, const SceneObjectRange& range,
+                                     double targetError, const ModelSizingSettings& settings = {});
+
+/// A whole scene: what the sized pack saves against the all-maximum one (every manifest object
+/// at the ladder's largest count, and the manifest's database).
+struct SceneSizingReport {
+  double targetError = 0.0;
+  bool refracture = true;
+  std::vector<ObjectSizing> objects;       ///< the scene's, in its order
+  std::vector<std::string> skippedObjects; ///< manifest objects the scene does not use
+  double maximumBakeS = 0.0, sizedBakeS = 0.0;  ///< objects and database, each side baked for real
+  double databaseBakeS = 0.0;                   ///< the database's share (once; reused by the sized side)
+  int64_t maximumPackBytes = 0, sizedPackBytes = 0;
+  double maximumImpactMs = 0.0, sizedImpactMs = 0.0;  ///< sums over the scene's objects of the median impact
+  bool allMet() const {
+    for (const auto& o : objects) {
+      if (!o.targetMet) return false;
+    }
+    return true;
+  }
+};
+
+struct SceneSizingPaths {
+  std::filesystem::path sizedPack;    ///< written atomically
+  std::filesystem::path maximumPack;  ///< empty: written beside sizedPack to be measured, then removed
+};
+
+/// Bakes the all-maximum pack, sizes every scene object on it, then bakes the sized pack: the
+/// scene's objects at their chosen counts, plus the database when the scene refractures. Both
+/// packs are written (writePack, atomic) to measure their size. Errors: InvalidArgument (a scene
+/// object the manifest lacks, listing those it has), those of bakePack, bakeFragmentDatabase,
+/// sizeObjectModes and writePack.
+Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manifest,
+                                    const std::optional<DatabaseBakeSettings>& database,
+                                    const SceneRequirements& requirements, const SceneSizingPaths& paths,
+                                    const ModelSizingSettings& settings = {}, ProgressSink* progress = nullptr);
+
+/// Writes the bake manifest of the sized pack: `manifest`'s JSON with only the scene's objects,
+/// each with its chosen "modes", and without the "database" section unless the scene
+/// refractures; relative file names are rewritten for `out`'s directory, so that
+/// `brittle bake --manifest out` bakes the sized pack. Errors: FileNotFound, ParseError,
+/// PackIoError (writing).
+Status writeSizedManifest(const std::filesystem::path& manifest, const SceneSizingReport& report,
+                          const std::filesystem::path& out);
+
+}  // namespace brittle

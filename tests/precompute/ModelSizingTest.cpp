@@ -1,0 +1,207 @@
+#include "brittle/precompute/ModelSizing.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "brittle/database/Pack.h"
+#include "brittle/precompute/MaterialLibrary.h"
+#include "brittle/testing/Fixtures.h"
+
+namespace brittle {
+namespace {
+
+std::filesystem::path writeText(const std::filesystem::path& dir, const std::string& name, const std::string& text) {
+  std::ofstream(dir / name) << text;
+  return dir / name;
+}
+
+Result<SceneRequirements> parse(const std::string& text) {
+  static const auto dir = testing::makeTempDir("requirements");
+  return loadSceneRequirements(writeText(dir, "scene.json", text));
+}
+
+TEST(SceneRequirementsTest, ReadsSpheresTheGroundAndTheTarget) {
+  auto r = parse(R"({ "peak_stress_error": 0.1, "refracture": false, "objects": [
+      { "name": "plate", "speeds_mps": [2, 10], "impactors": [ { "mass_kg": 0.1, "radius_m": 0.02 } ] },
+      { "name": "brick", "speeds_mps": [3, 3], "impactors": [ { "ground": true }, { "mass_kg": 1, "radius_m": 0.05, "material": "stone" } ] } ] })");
+  ASSERT_TRUE(r) << r.error().message;
+  EXPECT_DOUBLE_EQ(r.value().peakStressError, 0.1);
+  EXPECT_FALSE(r.value().refracture);
+  ASSERT_EQ(r.value().objects.size(), 2u);
+  EXPECT_EQ(r.value().objects[0].impactors[0].material.name, "steel");  // the default impactor
+  EXPECT_DOUBLE_EQ(r.value().objects[0].maxSpeedMps, 10.0);
+  EXPECT_TRUE(r.value().objects[1].impactors[0].ground());
+  EXPECT_TRUE(std::isinf(r.value().objects[1].impactors[0].radiusM));
+  EXPECT_EQ(r.value().objects[1].impactors[1].material.name, "stone");
+}
+
+TEST(SceneRequirementsTest, BadFilesGiveTypedErrors) {
+  const std::string sphere = R"({ "mass_kg": 0.1, "radius_m": 0.02 })";
+  auto object = [&](const std::string& speeds, const std::string& impactor) {
+    return R"({ "objects": [ { "name": "plate", "speeds_mps": )" + speeds + R"(, "impactors": [ )" + impactor + " ] } ] }";
+  };
+  for (const std::string& text : {std::string("{"), std::string(R"({ "objects": [] })"),
+                                  std::string(R"({ "peak_stress_error": 1.5, "objects": [] })"),
+                                  std::string(R"({ "colour": 1, "objects": [] })"), object("[0, 5]", sphere),
+                                  object("[5, 2]", sphere), object("[2]", sphere), object("[2, 5]", "{}"),
+                                  object("[2, 5]", R"({ "mass_kg": -1, "radius_m": 0.02 })"),
+                                  object("[2, 5]", R"({ "ground": true, "mass_kg": 1 })"),
+                                  object("[2, 5]", R"({ "mass_kg": "heavy", "radius_m": 0.02 })"),
+                                  std::string(R"({ "objects": [ { "name": "a", "speeds_mps": [1, 2], "impactors": [ { "ground": true } ] },
+                                                    { "name": "a", "speeds_mps": [1, 2], "impactors": [ { "ground": true } ] } ] })")}) {
+    auto r = parse(text);
+    ASSERT_FALSE(r) << text;
+    EXPECT_EQ(r.error().code, ErrorCode::ParseError) << text << ": " << r.error().message;
+  }
+  auto unknown = parse(object("[2, 5]", R"({ "mass_kg": 0.1, "radius_m": 0.02, "material": "unobtainium" })"));
+  ASSERT_FALSE(unknown);
+  EXPECT_EQ(unknown.error().code, ErrorCode::UnknownMaterial);
+  auto missing = loadSceneRequirements("no-such-scene.json");
+  ASSERT_FALSE(missing);
+  EXPECT_EQ(missing.error().code, ErrorCode::FileNotFound);
+}
+
+class ModelSizingTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    ObjectBakeSettings b;
+    b.name = "plate";
+    b.material = materialPreset("glass").value();
+    b.tetMesh.targetTets = 1500;
+    b.modal.modeCount = 40;
+    auto asset = bakeSurface(testing::makeBoxSurface(0.12, 0.12, 0.012), b);
+    ASSERT_TRUE(asset) << asset.error().message;
+    sAsset = new ObjectAsset(std::move(asset).value());
+  }
+  static void TearDownTestSuite() {
+    delete sAsset;
+    sAsset = nullptr;
+  }
+  static SceneObjectRange ballRange() {
+    SceneObjectRange r;
+    r.name = "plate";
+    r.minSpeedMps = 2.0;
+    r.maxSpeedMps = 8.0;
+    SceneImpactor ball;
+    ball.massKg = 0.05;
+    ball.radiusM = 0.01;
+    ball.material = materialPreset("steel").value();
+    r.impactors.push_back(ball);
+    return r;
+  }
+  static ModelSizingSettings quick() {
+    ModelSizingSettings s;
+    s.modeLadder = {40, 5, 20, 10};  // any order
+    s.points = 2;
+    s.timingRepeats = 1;
+    s.referenceStepsPerContact = 40;
+    return s;
+  }
+  static inline ObjectAsset* sAsset = nullptr;
+};
+
+TEST_F(ModelSizingTest, PicksTheSmallestCountThatMeetsTheTarget) {
+  const Material glass = materialPreset("glass").value();
+  auto loose = sizeObjectModes(*sAsset, glass, ballRange(), 0.30, quick());
+  ASSERT_TRUE(loose) << loose.error().message;
+  const auto& trials = loose.value().trials;
+  ASSERT_EQ(trials.size(), 4u);
+  EXPECT_EQ(loose.value().impacts, 4);  // 2 points × 1 impactor × 2 speeds
+  EXPECT_GT(loose.value().referenceS, 0.0);
+  for (size_t i = 0; i < trials.size(); ++i) {
+    EXPECT_EQ(trials[i].modes, std::vector<int>({5, 10, 20, 40})[i]);
+    EXPECT_TRUE(std::isfinite(trials[i].worstError) && trials[i].worstError >= 0.0);
+    EXPECT_GT(trials[i].medianImpactMs, 0.0);
+  }
+  // The full basis with the static correction is close to the reference on its own mesh.
+  EXPECT_LT(trials.back().worstError, 0.15);
+  ASSERT_TRUE(loose.value().targetMet);
+  for (const auto& t : trials) {
+    if (t.modes < loose.value().chosenModes) {
+      EXPECT_GT(t.worstError, 0.30) << t.modes;
+    }
+    if (t.modes == loose.value().chosenModes) {
+      EXPECT_LE(t.worstError, 0.30);
+    }
+  }
+  // The same seed gives the same errors; a target nothing meets keeps the largest count.
+  auto strict = sizeObjectModes(*sAsset, glass, ballRange(), 1e-9, quick());
+  ASSERT_TRUE(strict);
+  EXPECT_FALSE(strict.value().targetMet);
+  EXPECT_EQ(strict.value().chosenModes, 40);
+  for (size_t i = 0; i < trials.size(); ++i) EXPECT_EQ(strict.value().trials[i].worstError, trials[i].worstError);
+}
+
+TEST_F(ModelSizingTest, RefusesBadSettings) {
+  const Material glass = materialPreset("glass").value();
+  ModelSizingSettings s = quick();
+  s.modeLadder = {60, 80};  // more than the asset holds
+  auto tooMany = sizeObjectModes(*sAsset, glass, ballRange(), 0.1, s);
+  ASSERT_FALSE(tooMany);
+  EXPECT_EQ(tooMany.error().code, ErrorCode::InvalidArgument);
+  SceneObjectRange none = ballRange();
+  none.impactors.clear();
+  auto noImpactor = sizeObjectModes(*sAsset, glass, none, 0.1, quick());
+  ASSERT_FALSE(noImpactor);
+  EXPECT_EQ(noImpactor.error().code, ErrorCode::InvalidArgument);
+}
+
+TEST(SceneSizingTest, BakesOnlyWhatTheSceneUsesAndReportsTheSavings) {
+  const auto dir = testing::makeTempDir("scene-sizing");
+  std::filesystem::create_directories(dir / "meshes");
+  testing::writeOff(testing::makeBoxSurface(0.1, 0.1, 0.012), dir / "meshes" / "tile.off");
+  testing::writeOff(testing::makeBoxSurface(0.2, 0.1, 0.06), dir / "meshes" / "block.off");
+  const auto manifestPath = writeText(dir, "manifest.json", R"({ "objects": [
+      { "name": "tile", "mesh": "meshes/tile.off", "material": "glass", "tets": 800, "modes": 10 },
+      { "name": "block", "mesh": "meshes/block.off", "material": "concrete", "tets": 800, "modes": 10 } ] })");
+  auto manifest = loadBakeManifest(manifestPath);
+  ASSERT_TRUE(manifest) << manifest.error().message;
+  auto requirements = parse(R"({ "peak_stress_error": 0.3, "refracture": false, "objects": [
+      { "name": "tile", "speeds_mps": [2, 6], "impactors": [ { "mass_kg": 0.05, "radius_m": 0.01 } ] } ] })");
+  ASSERT_TRUE(requirements);
+  ModelSizingSettings s;
+  s.modeLadder = {5, 10, 30};
+  s.points = 1;
+  s.timingRepeats = 1;
+  s.referenceStepsPerContact = 30;
+  const auto out = dir / "out" / "sized.h5";
+  std::filesystem::create_directories(out.parent_path());
+  auto report = sizeScene(manifest.value(), std::nullopt, requirements.value(), {out, {}}, s);
+  ASSERT_TRUE(report) << report.error().message;
+  const auto& r = report.value();
+  ASSERT_EQ(r.objects.size(), 1u);
+  EXPECT_EQ(r.skippedObjects, std::vector<std::string>({"block"}));
+  EXPECT_GT(r.maximumPackBytes, r.sizedPackBytes);
+  EXPECT_GT(r.maximumBakeS, 0.0);
+  EXPECT_GT(r.sizedBakeS, 0.0);
+  EXPECT_FALSE(std::filesystem::exists(out.string() + ".maximum.h5"));  // measured, then removed
+  auto sized = readPack(out);
+  ASSERT_TRUE(sized) << sized.error().message;
+  ASSERT_EQ(sized.value().objects.size(), 1u);
+  EXPECT_EQ(sized.value().objects[0].name, "tile");
+  EXPECT_EQ(sized.value().objects[0].modal.eigenvaluesRad2PerS2.size(), r.objects[0].chosenModes);
+  EXPECT_EQ(static_cast<int64_t>(std::filesystem::file_size(out)), r.sizedPackBytes);
+
+  // The sized manifest bakes the same objects from another directory.
+  const auto sizedManifest = dir / "out" / "sized.json";
+  ASSERT_TRUE(writeSizedManifest(manifestPath, r, sizedManifest));
+  auto again = loadBakeManifest(sizedManifest);
+  ASSERT_TRUE(again) << again.error().message;
+  ASSERT_EQ(again.value().size(), 1u);
+  EXPECT_EQ(again.value()[0].modal.modeCount, r.objects[0].chosenModes);
+  EXPECT_TRUE(std::filesystem::exists(again.value()[0].meshPath));
+
+  // A scene object the manifest lacks is named in a typed error.
+  SceneRequirements unknown = requirements.value();
+  unknown.objects[0].name = "vase";
+  auto missing = sizeScene(manifest.value(), std::nullopt, unknown, {dir / "out" / "never.h5", {}}, s);
+  ASSERT_FALSE(missing);
+  EXPECT_EQ(missing.error().code, ErrorCode::InvalidArgument);
+  EXPECT_NE(missing.error().message.find("vase"), std::string::npos);
+  EXPECT_NE(missing.error().message.find("tile, block"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace brittle
