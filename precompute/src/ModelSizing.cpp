@@ -1,4 +1,4 @@
-// ModelSizing.cpp — loadSceneRequirements and sizeObjectModes (ModelSizing.h).
+// ModelSizing.cpp — sizeObjectModes, sizeScene and writeSizedManifest (ModelSizing.h).
 #include "brittle/precompute/ModelSizing.h"
 
 #include <algorithm>
@@ -6,9 +6,9 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <optional>
 #include <random>
-#include <set>
 
 #include "brittle/precompute/AtomicFile.h"
 #include "brittle/precompute/MaterialLibrary.h"
@@ -19,18 +19,6 @@ namespace brittle {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-Error parseError(const std::string& where, const std::string& what) {
-  return makeError(ErrorCode::ParseError, "requirements " + where + ": " + what);
-}
-
-Status checkKeys(const nlohmann::json& o, const std::set<std::string>& keys, const std::string& where) {
-  if (!o.is_object()) return parseError(where, "not an object");
-  for (const auto& [key, value] : o.items()) {
-    if (!keys.count(key)) return parseError(where, "unknown key \"" + key + "\"");
-  }
-  return Ok{};
-}
 
 /// A uniform double in [0, 1) from 53 bits of the generator (the same on every platform).
 double unit(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
@@ -44,89 +32,8 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
-Result<SceneRequirements> loadSceneRequirements(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) return makeError(ErrorCode::FileNotFound, "requirements not found: " + path.string());
-  const std::string file = path.filename().string();
-  nlohmann::json doc;
-  try {
-    doc = nlohmann::json::parse(in);
-  } catch (const std::exception& e) {
-    return parseError(file, e.what());
-  }
-  SceneRequirements r;
-  try {
-    if (Status st = checkKeys(doc, {"peak_stress_error", "refracture", "objects"}, file); !st) return st.error();
-    if (doc.contains("peak_stress_error")) {
-      if (!doc["peak_stress_error"].is_number()) return parseError(file, "\"peak_stress_error\" must be a number");
-      r.peakStressError = doc["peak_stress_error"].get<double>();
-      if (!(r.peakStressError > 0.0 && r.peakStressError < 1.0)) {
-        return parseError(file, "\"peak_stress_error\" must be in (0, 1)");
-      }
-    }
-    if (doc.contains("refracture")) {
-      if (!doc["refracture"].is_boolean()) return parseError(file, "\"refracture\" must be true or false");
-      r.refracture = doc["refracture"].get<bool>();
-    }
-    if (!doc.contains("objects") || !doc["objects"].is_array() || doc["objects"].empty()) {
-      return parseError(file, "needs a non-empty \"objects\" array");
-    }
-    std::set<std::string> names;
-    for (size_t i = 0; i < doc["objects"].size(); ++i) {
-      const auto& o = doc["objects"][i];
-      const std::string where = file + ", object " + std::to_string(i);
-      if (Status st = checkKeys(o, {"name", "speeds_mps", "impactors"}, where); !st) return st.error();
-      SceneObjectRange range;
-      if (!o.contains("name") || !o["name"].is_string()) return parseError(where, "needs a \"name\"");
-      range.name = o["name"].get<std::string>();
-      if (!names.insert(range.name).second) return parseError(where, "\"" + range.name + "\" is named twice");
-      const auto& speeds = o.value("speeds_mps", nlohmann::json());
-      if (!speeds.is_array() || speeds.size() != 2 || !speeds[0].is_number() || !speeds[1].is_number()) {
-        return parseError(where, "\"speeds_mps\" must be [lowest, highest]");
-      }
-      range.minSpeedMps = speeds[0].get<double>();
-      range.maxSpeedMps = speeds[1].get<double>();
-      if (!(range.minSpeedMps > 0.0 && range.minSpeedMps <= range.maxSpeedMps && std::isfinite(range.maxSpeedMps))) {
-        return parseError(where, "\"speeds_mps\" needs 0 < lowest ≤ highest");
-      }
-      const auto& impactors = o.value("impactors", nlohmann::json());
-      if (!impactors.is_array() || impactors.empty()) return parseError(where, "needs a non-empty \"impactors\" array");
-      for (size_t k = 0; k < impactors.size(); ++k) {
-        const auto& m = impactors[k];
-        const std::string at = where + ", impactor " + std::to_string(k);
-        if (Status st = checkKeys(m, {"ground", "mass_kg", "radius_m", "material"}, at); !st) return st.error();
-        SceneImpactor imp;
-        std::string material = m.value("material", std::string("steel"));
-        if (material.ends_with(".json")) material = (path.parent_path() / material).string();
-        auto resolved = resolveMaterial(material);
-        if (!resolved) return Error{resolved.error().code, "requirements " + at + ": " + resolved.error().message};
-        imp.material = std::move(resolved).value();
-        if (m.value("ground", false)) {
-          if (m.contains("mass_kg") || m.contains("radius_m")) return parseError(at, "the ground takes no mass or radius");
-          imp.massKg = kInf;
-          imp.radiusM = kInf;
-        } else {
-          if (!m.contains("mass_kg") || !m["mass_kg"].is_number() || !m.contains("radius_m") || !m["radius_m"].is_number()) {
-            return parseError(at, "a sphere needs \"mass_kg\" and \"radius_m\" (or \"ground\": true)");
-          }
-          imp.massKg = m["mass_kg"].get<double>();
-          imp.radiusM = m["radius_m"].get<double>();
-          if (!(imp.massKg > 0.0 && std::isfinite(imp.massKg) && imp.radiusM > 0.0 && std::isfinite(imp.radiusM))) {
-            return parseError(at, "mass and radius must be positive and finite");
-          }
-        }
-        range.impactors.push_back(std::move(imp));
-      }
-      r.objects.push_back(std::move(range));
-    }
-  } catch (const std::exception& e) {  // a value of the wrong type
-    return parseError(file, e.what());
-  }
-  return r;
-}
-
 Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& material, const SceneObjectRange& range,
-                                     double targetError, const ModelSizingSettings& settings) {
+                                     double targetError, const ModelSizingSettings& settings, ProgressSink* progress) {
   std::vector<int> ladder = settings.modeLadder;
   std::sort(ladder.begin(), ladder.end());
   ladder.erase(std::unique(ladder.begin(), ladder.end()), ladder.end());
@@ -155,15 +62,31 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
   std::mt19937_64 rng(settings.seed ^ 0x5CE7E5151ull);
   std::vector<ImpactDesc> impacts;
   for (int p = 0; p < settings.points; ++p) {
+    // A sphere hits a point drawn by area, along the face's normal.
     const double u = unit(rng) * area;
     const auto f = static_cast<Eigen::Index>(
         std::min<size_t>(std::lower_bound(cumulative.begin(), cumulative.end(), u) - cumulative.begin(), cumulative.size() - 1));
     const Eigen::Vector3d a = nodes.row(faces(f, 0)), b = nodes.row(faces(f, 1)), c = nodes.row(faces(f, 2));
+    // The ground meets a body that falls with a random orientation at its lowest point: the
+    // surface node farthest along a direction drawn uniformly on the sphere (a flat face on flat
+    // ground has no Hertz contact).
+    const double z = 2.0 * unit(rng) - 1.0, phi = 2.0 * std::numbers::pi * unit(rng);
+    const Eigen::Vector3d down(std::sqrt(1.0 - z * z) * std::cos(phi), std::sqrt(1.0 - z * z) * std::sin(phi), z);
+    Eigen::Index lowest = faces(0, 0);
+    for (Eigen::Index i = 0; i < faces.size(); ++i) {
+      const Eigen::Index n = faces.data()[i];
+      if (nodes.row(n).dot(down) > nodes.row(lowest).dot(down)) lowest = n;
+    }
     for (const SceneImpactor& imp : range.impactors) {
       for (double speed : {range.minSpeedMps, range.maxSpeedMps}) {
         ImpactDesc d;
-        d.pointWorld = (a + b + c) / 3.0;
-        d.normalWorld = (b - a).cross(c - a).normalized();
+        if (imp.ground()) {
+          d.pointWorld = nodes.row(lowest).transpose();
+          d.normalWorld = down;
+        } else {
+          d.pointWorld = (a + b + c) / 3.0;
+          d.normalWorld = (b - a).cross(c - a).normalized();
+        }
         d.speedMps = speed;
         d.impactorMassKg = imp.massKg;
         d.impactorRadiusM = imp.radiusM;
@@ -183,6 +106,7 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
   out.object = asset.name;
   out.impacts = static_cast<int>(impacts.size());
   std::vector<double> reference(impacts.size(), 0.0);
+  const std::string stage = "sizing " + asset.name;
   // Largest count first: its runs give the load the reference is solved under.
   for (auto k = ladder.rbegin(); k != ladder.rend(); ++k) {
     WorldSettings ws;
@@ -217,12 +141,17 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
           if (!ref) return ref.error();
           out.referenceS += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
           reference[i] = ref.value().peakPrincipalPa;
+          reportProgress(progress, stage + ": full-FEM reference",
+                         static_cast<double>(i + 1) / static_cast<double>(impacts.size()));
         }
       }
+      if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, stage + ": interrupted");
       const double err = reference[i] > 0.0 ? std::abs(peak / reference[i] - 1.0) : (peak > 0.0 ? kInf : 0.0);
       trial.worstError = std::max(trial.worstError, err);
     }
     trial.medianImpactMs = median(times);
+    reportProgress(progress, stage + ": mode counts",
+                   static_cast<double>(k - ladder.rbegin() + 1) / static_cast<double>(ladder.size()));
     out.trials.insert(out.trials.begin(), trial);
   }
   const auto met = std::find_if(out.trials.begin(), out.trials.end(),
@@ -309,9 +238,8 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
   std::vector<ObjectBakeSettings> sized;
   for (size_t k = 0; k < used.size(); ++k) {
     const ObjectAsset& asset = maxPack.value().objects[used[k]];
-    reportProgress(progress, "sizing " + asset.name, static_cast<double>(k) / static_cast<double>(used.size()));
     auto sizing = sizeObjectModes(asset, manifest[used[k]].material, requirements.objects[k], requirements.peakStressError,
-                                  settings);
+                                  settings, progress);
     if (!sizing) return sizing.error();
     report.maximumImpactMs += sizing.value().trials.back().medianImpactMs;
     for (const auto& t : sizing.value().trials) {
@@ -321,7 +249,6 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
     sized.back().modal.modeCount = sizing.value().chosenModes;
     report.objects.push_back(std::move(sizing).value());
   }
-  reportProgress(progress, "sizing", 1.0);
   const FragmentDatabase* keep = requirements.refracture && db ? &*db : nullptr;
   auto sizedPack = bakeAndWrite(sized, keep, paths.sizedPack, progress, &report.sizedBakeS, &report.sizedPackBytes);
   if (!sizedPack) return sizedPack.error();

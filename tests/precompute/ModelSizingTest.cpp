@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 
 #include "brittle/database/Pack.h"
 #include "brittle/precompute/MaterialLibrary.h"
@@ -132,6 +133,19 @@ TEST_F(ModelSizingTest, PicksTheSmallestCountThatMeetsTheTarget) {
   EXPECT_FALSE(strict.value().targetMet);
   EXPECT_EQ(strict.value().chosenModes, 40);
   for (size_t i = 0; i < trials.size(); ++i) EXPECT_EQ(strict.value().trials[i].worstError, trials[i].worstError);
+}
+
+TEST_F(ModelSizingTest, TheGroundMeetsTheBodyAtACorner) {
+  // Flat on flat has no Hertz contact: ground impacts must land on corners, never on a face.
+  SceneObjectRange drop = ballRange();
+  drop.impactors[0].massKg = std::numeric_limits<double>::infinity();
+  drop.impactors[0].radiusM = std::numeric_limits<double>::infinity();
+  ModelSizingSettings s = quick();
+  s.points = 3;
+  auto r = sizeObjectModes(*sAsset, materialPreset("glass").value(), drop, 0.3, s);
+  ASSERT_TRUE(r) << r.error().message;
+  EXPECT_EQ(r.value().impacts, 6);
+  for (const auto& t : r.value().trials) EXPECT_TRUE(std::isfinite(t.worstError)) << t.modes;
 }
 
 TEST_F(ModelSizingTest, RefusesBadSettings) {

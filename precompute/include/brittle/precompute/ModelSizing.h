@@ -14,8 +14,10 @@
 // ground (immovable and flat). Objects the file does not name are not baked.
 //
 // Sizing an object: it is baked once with the largest mode count of the ladder; impacts are drawn
-// from the scene's range (`points` seeded surface points by area, each impactor, the lowest and
-// the highest speed — the two ends of the contact time t_c ∝ v^(−1/5)); each is solved once by
+// from the scene's range (`points` seeded draws × each impactor × the lowest and the highest speed
+// — the two ends of the contact time t_c ∝ v^(−1/5)): a sphere hits a surface point drawn by
+// area along the face's normal; the ground meets the body at its lowest node for an orientation
+// drawn uniformly, as a body dropped at random lands on a corner. Each is solved once by
 // the full-FEM reference (FullFemReference.h) and, for every mode count of the ladder, by the
 // runtime with the static correction (the lowest r modes of the same basis). The chosen count is
 // the smallest whose worst error over the impacts meets the target; when none does, the largest
@@ -92,7 +94,8 @@ struct ObjectSizing {
 /// largest). Errors: InvalidArgument (settings, an asset with fewer modes than the ladder's first
 /// count), those of the runtime and of solveFullFemImpact.
 Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& material, const SceneObjectRange& range,
-                                     double targetError, const ModelSizingSettings& settings = {});
+                                     double targetError, const ModelSizingSettings& settings = {},
+                                     ProgressSink* progress = nullptr);
 
 /// A whole scene: what the sized pack saves against the all-maximum one (every manifest object
 /// at the ladder's largest count, and the manifest's database).
