@@ -20,7 +20,7 @@ struct BakeOptions {
   std::string out;
   int64_t tets = 5000;
   double cellSize = 0.0;
-  int modes = 20;
+  int modes = ModalSettings{}.modeCount;
   bool repair = false;
   double repairVoxel = 0.0;
   bool lumped = false;

@@ -27,7 +27,7 @@ enum class Factorization { Cholmod, EigenLdlt };
 std::string factorizationName(Factorization f);
 
 struct ModalSettings {
-  int modeCount = 20;                ///< r, number of elastic modes returned
+  int modeCount = 40;                ///< r, number of elastic modes returned (README: why 40)
   double shiftRad2PerS2 = 0.0;       ///< σ < 0, required by computeModes (see defaultShift())
   Factorization factorization = Factorization::Cholmod;
   int maxIterations = 500;           ///< ARPACK restarts (iparam[2])
