@@ -26,7 +26,7 @@ struct FractureStatsBenchSettings {
   int seeds = 32;
   int64_t plateTets = 3000;
   int64_t brickTets = 3000;
-  int modes = 20;
+  int modes = 40;  // the bake default (ModalSettings)
   double jitterM = 0.03;
   std::filesystem::path brickMesh = "assets/meshes/brick.off";
   std::filesystem::path csv = "bench/fracture.csv";
