@@ -3,8 +3,8 @@
 # and its chart script draws the PNG beside it and prints the figures the README quotes.
 #   tools/run-charts.sh          the modal-integrator, mode-count, tet-resolution and fracture-statistics
 #                                charts (~10 min)
-#   tools/run-charts.sh --all    also the modal-solver, search and impact-latency benchmarks
-#                                (about an hour on 2 cores)
+#   tools/run-charts.sh --all    also the modal-solver, search, impact-latency and descriptor-resolution
+#                                benchmarks (about an hour and a quarter on 2 cores)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 all=0
@@ -35,4 +35,19 @@ if [ "$all" = 1 ]; then
   plot plot_search.py bench/search.csv bench/descriptor_cost.csv
   $cli bench impact --csv bench/impact_latency.csv
   plot plot_impact.py bench/impact_latency.csv
+  # Descriptor resolution: moment order (1k and 10k entries) and voxels per axis (1k entries).
+  sweep=$(mktemp -d)
+  pairs=()
+  for order in 2 3 4 6 8; do
+    $cli bench search --sizes 1000,10000 --kinds moment --moment-order "$order" --index kd-forest:4:32 --queries 100 \
+      --physics-queries 24 --quiet --csv "$sweep/moment-$order.csv" --cost-csv "$sweep/moment-$order-cost.csv"
+    pairs+=("$sweep/moment-$order.csv" "$sweep/moment-$order-cost.csv")
+  done
+  for voxels in 8 16 24 32; do
+    $cli bench search --sizes 1000 --kinds voxel,voxel-improved --voxel-resolution "$voxels" --index kd-forest:4:32 \
+      --queries 100 --physics-queries 24 --quiet --csv "$sweep/voxel-$voxels.csv" --cost-csv "$sweep/voxel-$voxels-cost.csv"
+    pairs+=("$sweep/voxel-$voxels.csv" "$sweep/voxel-$voxels-cost.csv")
+  done
+  plot plot_search_resolution.py bench/search_resolution.csv "${pairs[@]}"
+  rm -rf "$sweep"
 fi

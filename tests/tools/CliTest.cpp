@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <string>
 #include <vector>
 #include <Eigen/Geometry>
@@ -182,6 +183,74 @@ TEST_F(CliTest, SpeedAccuracyBenchesWriteTheirCsv) {
   ASSERT_EQ(errors.size(), 6u);
   for (int j = 0; j < 3; ++j) EXPECT_GT(errors[static_cast<size_t>(j)], errors[static_cast<size_t>(3 + j)]) << j;
   EXPECT_EQ(run("bench resolution --tets 300 --csv " + path("one.csv")).exitCode, 2);
+}
+
+TEST_F(CliTest, FractureStatisticsBenchWritesOneRowPerSeedAndSpeed) {
+  const CliRun bench = run("bench fracture --plate-speeds 2,40 --brick-speeds 40 --seeds 3 --plate-tets 3000 --brick-tets 500 "
+                           "--modes 8 --quiet --brick-mesh \"" + (testing::sourceDir() / "assets" / "meshes" / "brick.off").string() +
+                           "\" --csv " + path("f.csv"));
+  ASSERT_EQ(bench.exitCode, 0) << bench.out;
+  std::ifstream csv(dir / "f.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "case,tets,modes,speed_mps,seed,broken,fragments,pieces,largest_mass_fraction,peak_pa,impact_ms");
+  int rows = 0;
+  double slow = 0.0, fast = 0.0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    std::vector<std::string> c;
+    std::stringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) c.push_back(cell);
+    ASSERT_EQ(c.size(), 11u) << line;
+    const int fragments = std::stoi(c[6]), pieces = std::stoi(c[7]);
+    const double largest = std::stod(c[8]);
+    EXPECT_GE(fragments, 1) << line;
+    EXPECT_LE(pieces, fragments) << line;
+    EXPECT_TRUE(largest > 0.0 && largest <= 1.0) << line;
+    EXPECT_EQ(c[5] == "1", fragments > 1) << line;
+    if (c[0] == "plate") (std::stod(c[3]) < 10.0 ? slow : fast) += fragments;
+  }
+  EXPECT_EQ(rows, 3 * 3);
+  EXPECT_GT(fast, slow);  // a 40 m/s ball breaks the plate into more pieces than a 2 m/s one
+  EXPECT_EQ(run("bench fracture --plate-speeds -1 --csv " + path("bad.csv")).exitCode, 2);
+}
+
+TEST_F(CliTest, SizeBakesTheSceneObjectsAtTheirModeCountsAndReports) {
+  testing::writeOff(testing::makeBoxSurface(0.1, 0.1, 0.012), dir / "tile.off");
+  testing::writeOff(testing::makeBoxSurface(0.2, 0.1, 0.06), dir / "block.off");
+  std::ofstream(dir / "m.json") << R"({ "objects": [
+      { "name": "tile", "mesh": "tile.off", "material": "glass", "tets": 600 },
+      { "name": "block", "mesh": "block.off", "material": "concrete", "tets": 500 } ] })";
+  std::ofstream(dir / "s.json") << R"({ "peak_stress_error": 0.5, "refracture": false, "objects": [
+      { "name": "tile", "speeds_mps": [2, 6], "impactors": [ { "mass_kg": 0.05, "radius_m": 0.01 } ] } ] })";
+  std::filesystem::create_directories(dir / "out");
+  const CliRun size = run("size --manifest " + path("m.json") + " --scene " + path("s.json") + " --out " + path("out/sized.h5") +
+                          " --ladder 4,8 --points 1 --repeats 1 --quiet --report " + path("out/report.json") +
+                          " --sized-manifest " + path("out/sized.json"));
+  ASSERT_EQ(size.exitCode, 0) << size.out;
+  EXPECT_NE(size.out.find("not used by the scene"), std::string::npos) << size.out;
+  const auto report = nlohmann::json::parse(fileBytes(dir / "out" / "report.json"));
+  ASSERT_EQ(report["objects"].size(), 1u);
+  const int chosen = report["objects"][0]["chosen_modes"].get<int>();
+  EXPECT_TRUE(chosen == 4 || chosen == 8) << report.dump();
+  EXPECT_EQ(report["objects"][0]["trials"].size(), 2u);
+  EXPECT_EQ(report["skipped_objects"], nlohmann::json::array({"block"}));
+  EXPECT_LT(report["sized"]["pack_bytes"].get<int64_t>(), report["maximum"]["pack_bytes"].get<int64_t>());
+  const auto inspect = nlohmann::json::parse(run("inspect " + path("out/sized.h5") + " --json").out);
+  ASSERT_EQ(inspect["objects"].size(), 1u);
+  EXPECT_EQ(inspect["objects"][0]["modes"]["count"].get<int>(), chosen);
+  // The sized manifest bakes the same object from its own directory.
+  ASSERT_EQ(run("bake --manifest " + path("out/sized.json") + " --quiet --out " + path("again.h5")).exitCode, 0);
+  // A scene object the manifest lacks, and a broken requirements file, are typed errors.
+  std::ofstream(dir / "vase.json") << R"({ "objects": [ { "name": "vase", "speeds_mps": [1, 2], "impactors": [ { "ground": true } ] } ] })";
+  const CliRun missing = run("size --manifest " + path("m.json") + " --scene " + path("vase.json") + " --quiet --out " + path("no.h5"));
+  EXPECT_NE(missing.exitCode, 0);
+  EXPECT_NE(missing.out.find("error [invalid_argument]"), std::string::npos) << missing.out;
+  std::ofstream(dir / "broken.json") << R"({ "objects": [ { "name": "tile", "speeds_mps": [3, 1], "impactors": [ { "ground": true } ] } ] })";
+  const CliRun broken = run("size --manifest " + path("m.json") + " --scene " + path("broken.json") + " --quiet --out " + path("no.h5"));
+  EXPECT_EQ(broken.exitCode, 3);
+  EXPECT_NE(broken.out.find("error [parse_error]"), std::string::npos) << broken.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "no.h5"));
 }
 
 TEST_F(CliTest, TwoProcessesBakeIdenticalDatasets) {

@@ -111,6 +111,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
   bake.seed = s.seed;
   bake.physics = false;
   bake.descriptors.voxel.resolution = bake.descriptors.voxelImproved.resolution = s.voxelResolution;
+  bake.descriptors.moment.maxOrder = s.momentOrder;
   bake.runtimeFragments.fraction = s.runtimeFraction;
 
   // Databases: every kind up to fullSize entries, moments only beyond (same seed: same fragments).
@@ -253,7 +254,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
   if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.searchCsv.string());
   csv << "entries,descriptor,index,trees,checks,build_s,memory_mb,query_median_us,query_p99_us,brute_median_us,"
          "speedup_vs_brute,recall_at_1,physics_queries,mass_err_median,inertia_err_median,frequency_err_median,"
-         "database_runtime_fraction,query_source\n";
+         "database_runtime_fraction,query_source,moment_order,voxel_resolution\n";
 
   for (int64_t n : s.sizes) {
     for (DescriptorKind kind : s.kinds) {
@@ -325,8 +326,8 @@ Status runSearchBench(const SearchBenchSettings& s) {
             << static_cast<double>(matcher.value().index(kind)->memoryBytes()) / 1048576.0 << "," << median << ","
             << percentile(times, 0.99) << "," << bruteMedian << "," << bruteMedian / median << "," << recall << ","
             << massErr.size() << "," << percentile(massErr, 0.5) << "," << percentile(inertiaErr, 0.5) << ","
-            << percentile(freqErr, 0.5) << "," << s.runtimeFraction << "," << (s.runtimeQueries ? "runtime" : "cut")
-            << "\n";
+            << percentile(freqErr, 0.5) << "," << s.runtimeFraction << "," << (s.runtimeQueries ? "runtime" : "cut") << ","
+            << s.momentOrder << "," << s.voxelResolution << "\n";
         csv.flush();
         log(s.quiet, "%7lld %-14s %-22s recall %.3f  median %8.1f us  p99 %8.1f us  (brute %8.1f us)  freq err %.3f\n",
             static_cast<long long>(n), descriptorKindName(kind), choice.label.c_str(), recall, median,

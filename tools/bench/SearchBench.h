@@ -48,6 +48,7 @@ struct SearchBenchSettings {
   /// (what the runtime asks the database about).
   bool runtimeQueries = false;
   int voxelResolution = 16;
+  int momentOrder = 4;             ///< highest order of the moment descriptor (database and queries)
   uint64_t seed = 1;
   std::filesystem::path searchCsv = "bench/search.csv";
   std::filesystem::path descriptorCsv = "bench/descriptor_cost.csv";

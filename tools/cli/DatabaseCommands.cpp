@@ -296,6 +296,7 @@ Runner addBenchCommand(CLI::App& app) {
   search->add_flag("--runtime-queries", s->runtimeQueries,
                    "Query with fragments broken off by the runtime instead of exact cuts");
   search->add_option("--voxel-resolution", s->voxelResolution, "Voxels per axis")->capture_default_str()->check(CLI::Range(2, 64));
+  search->add_option("--moment-order", s->momentOrder, "Highest order of the moment descriptor")->capture_default_str()->check(CLI::Range(2, 10));
   search->add_option("--seed", s->seed, "Seed of the database and the queries")->capture_default_str();
   search->add_option("--csv", s->searchCsv, "Search results CSV")->capture_default_str();
   search->add_option("--cost-csv", s->descriptorCsv, "Descriptor cost CSV")->capture_default_str();
