@@ -1,5 +1,5 @@
 // The player on the default scenes with a small pack baked once (the default manifest's objects
-// with few tets, and an 8-entry database): each scene breaks something, plays bit-identically
+// with fewer tets, and an 8-entry database): each scene breaks something, plays bit-identically
 // twice, keeps every body above the floor, and gains no mechanical energy outside fracture events.
 #include "brittle/player/Player.h"
 
@@ -23,8 +23,10 @@ class PlayerTest : public ::testing::TestWithParam<const char*> {
     auto manifest = loadBakeManifest(testing::sourceDir() / "assets" / "default-pack.json");
     ASSERT_TRUE(manifest) << manifest.error().message;
     std::vector<ObjectBakeSettings> objects = std::move(manifest).value();
+    // Fewer tets than the default pack, except the vase, whose thin wall needs its 8000.
     for (ObjectBakeSettings& o : objects) {
-      o.tetMesh.targetTets = o.name == "glass-plate" || o.name == "porcelain-vase" ? 1200 : 400;
+      if (o.name == "glass-plate") o.tetMesh.targetTets = 3000;
+      if (o.name == "brick" || o.name == "stone-ball") o.tetMesh.targetTets = 400;
       o.modal.modeCount = 12;
     }
     auto pack = bakePack(objects);
@@ -75,13 +77,14 @@ TEST_P(PlayerTest, BreaksDeterministicallyAboveTheFloorWithoutGainingEnergy) {
   const double floor = s.floor->heightM;
   for (const BodyState& body : a.bodies) EXPECT_GE(body.lowestPointM, floor - 0.01) << body.name;
 
-  // Energy: E = Σ ½mv² + ½ωᵀIω − m g·x over the dynamic bodies after each frame. Between two
-  // fracture events (a fracture replaces a body by fragments with new velocities, and may hand an
-  // impactor its velocity back), E may only fall, up to 2 % of the largest kinetic energy of the
-  // run (Bullet's contact solver is not exactly dissipative).
+  // Energy: E = Σ ½mv² + ½ωᵀIω − m g·x over the dynamic bodies after each frame (FrameStats).
+  // Between two fracture events (a fracture replaces a body by fragments with new velocities, and
+  // may hand an impactor its velocity back), E may never rise above its lowest value since the
+  // last fracture by more than 1 % of the largest kinetic energy of the run (Bullet's contact
+  // solver is not exactly dissipative; measured: ≤ 0.01 %).
   double peakKinetic = 0.0;
   for (const FrameStats& f : a.frameStats) peakKinetic = std::max(peakKinetic, f.kineticJ);
-  const double tolerance = 0.02 * peakKinetic + 1e-6;
+  const double tolerance = 0.01 * peakKinetic + 1e-6;
   double reference = a.frameStats.front().energyJ, worst = 0.0;
   for (size_t i = 1; i < a.frameStats.size(); ++i) {
     const FrameStats& f = a.frameStats[i];
@@ -98,8 +101,8 @@ TEST_P(PlayerTest, BreaksDeterministicallyAboveTheFloorWithoutGainingEnergy) {
 
 INSTANTIATE_TEST_SUITE_P(DefaultScenes, PlayerTest,
                          ::testing::Values("plate-drop", "ball-through-pane", "brick-stack", "vase-drop"),
-                         [](const auto& info) {
-                           std::string n = info.param;
+                         [](const auto& p) {
+                           std::string n = p.param;
                            std::replace(n.begin(), n.end(), '-', '_');
                            return n;
                          });

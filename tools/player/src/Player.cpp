@@ -11,6 +11,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <set>
 
 #include "brittle/precompute/MaterialLibrary.h"
 
@@ -97,6 +98,31 @@ struct Candidate {
   bool operator<(const Candidate& o) const { return speedMps != o.speedMps ? speedMps > o.speedMps : body < o.body; }
 };
 
+// Fragments born in the same step start interpenetrating (the convex hulls of concave fragments
+// overlap, and two bodies that broke against each other left their fragments in contact). Bullet
+// would push them apart with velocity, out of nothing. So a pair of such bodies whose boxes
+// overlap at birth does not collide until their boxes have separated once.
+struct SiblingFilter final : btOverlapFilterCallback {
+  std::set<std::pair<int, int>> blocked;
+  bool needBroadphaseCollision(btBroadphaseProxy* p0, btBroadphaseProxy* p1) const override {
+    if ((p0->m_collisionFilterGroup & p1->m_collisionFilterMask) == 0 || (p1->m_collisionFilterGroup & p0->m_collisionFilterMask) == 0) {
+      return false;
+    }
+    const int a = static_cast<const btCollisionObject*>(p0->m_clientObject)->getUserIndex();
+    const int b = static_cast<const btCollisionObject*>(p1->m_clientObject)->getUserIndex();
+    return a < 0 || b < 0 || !blocked.contains({std::min(a, b), std::max(a, b)});
+  }
+};
+
+bool aabbsOverlap(const btRigidBody& a, const btRigidBody& b) {
+  btVector3 amin, amax, bmin, bmax;
+  a.getAabb(amin, amax);
+  b.getAabb(bmin, bmax);
+  for (int k = 0; k < 3; ++k)
+    if (amax[k] < bmin[k] || bmax[k] < amin[k]) return false;
+  return true;
+}
+
 class Simulation {
  public:
   Simulation(World world, const Scene& scene, const PlayerSettings& settings)
@@ -106,6 +132,7 @@ class Simulation {
     mBullet = std::make_unique<btDiscreteDynamicsWorld>(mDispatcher.get(), mBroadphase.get(), &mSolver, &mConfig);
     mBullet->setGravity(bt(scene.gravityMps2));
     mBullet->getSolverInfo().m_splitImpulse = 1;  // penetration recovery adds no kinetic energy
+    mBullet->getPairCache()->setOverlapFilterCallback(&mFilter);
     mSolver.setRandSeed(0);
   }
 
@@ -325,7 +352,26 @@ class Simulation {
       }
       broke = impact(order[i], frame, timeS, out) || broke;
     }
+    updateSiblingPairs();
     return broke;
+  }
+
+  void updateSiblingPairs() {
+    for (auto it = mFilter.blocked.begin(); it != mFilter.blocked.end();) {
+      const Body& a = mBodies[static_cast<size_t>(it->first)];
+      const Body& b = mBodies[static_cast<size_t>(it->second)];
+      it = !a.alive || !b.alive || !aabbsOverlap(*a.rigid, *b.rigid) ? mFilter.blocked.erase(it) : std::next(it);
+    }
+    for (size_t i = 0; i < mBornThisStep.size(); ++i)
+      for (size_t j = i + 1; j < mBornThisStep.size(); ++j) {
+        const Body& a = mBodies[static_cast<size_t>(mBornThisStep[i])];
+        const Body& b = mBodies[static_cast<size_t>(mBornThisStep[j])];
+        if (!a.alive || !b.alive || !aabbsOverlap(*a.rigid, *b.rigid)) continue;
+        mFilter.blocked.insert({a.state.index, b.state.index});
+        // Adding a body already paired it with what it overlaps: drop that pair.
+        mBullet->getPairCache()->removeOverlappingPair(a.rigid->getBroadphaseHandle(), b.rigid->getBroadphaseHandle(), mDispatcher.get());
+      }
+    mBornThisStep.clear();
   }
 
   bool breakable(int index, double timeS) const {
@@ -378,7 +424,14 @@ class Simulation {
     e.speedMps = c.speedMps;
     e.otherMassKg = d.impactorMassKg;
     ++out.impacts;
-    if (Status st = mWorld.impact(d, mResult); !st) {
+    Status st = mWorld.impact(d, mResult);
+    if (!st && std::isinf(d.impactorRadiusM)) {
+      // A flat face on a flat impactor has no Hertz contact: take the body's size as its radius
+      // (an edge or corner of that size meets the flat).
+      d.bodyRadiusM = b.sizeM;
+      st = mWorld.impact(d, mResult);
+    }
+    if (!st) {
       e.error = st.error().message;
       ++out.failedImpacts;
       out.events.push_back(std::move(e));
@@ -443,6 +496,7 @@ class Simulation {
       b.rigid->setAngularVelocity(bt(w));
       b.preVelocity = eig(b.rigid->getLinearVelocity());
       b.preAngular = w;
+      mBornThisStep.push_back(b.state.index);
     }
   }
 
@@ -501,6 +555,7 @@ class Simulation {
   Material mFloorMaterial = materialPreset("concrete").value();
   btDefaultCollisionConfiguration mConfig;
   btSequentialImpulseConstraintSolver mSolver;
+  SiblingFilter mFilter;  // outlives mBullet, which points to it
   std::unique_ptr<btBroadphaseInterface> mBroadphase;
   std::unique_ptr<btCollisionDispatcher> mDispatcher;
   std::unique_ptr<btDiscreteDynamicsWorld> mBullet;
@@ -509,6 +564,7 @@ class Simulation {
   std::vector<Body> mBodies;
   std::vector<Candidate> mDeferred;
   int64_t mDeferredCount = 0;
+  std::vector<int32_t> mBornThisStep;
   ImpactResult mResult;
 };
 

@@ -9,7 +9,8 @@
 // a breakable body whose normal approach speed, from the velocities before the step, exceeds
 // impactThresholdMps becomes a World::impact at the contact point with the body's outward normal,
 // the other body's mass (+∞ if static), radius (sphere radius, +∞ for a box, plane or hull) and
-// material. At most maxImpactsPerStep are computed per step (fastest first, ties by body); the rest
+// material (a flat face on a flat impactor, which has no Hertz contact, is retried with the body's
+// size as its radius). At most maxImpactsPerStep are computed per step (fastest first, ties by body); the rest
 // wait for the next step and are counted as deferred. A body that was hit ignores contacts for
 // cooldownS. A broken body leaves Bullet, and each fragment enters as a new body with a convex hull
 // of its surface, its exact mass properties (principal axes) and the parent's velocity at its
@@ -42,9 +43,10 @@ struct PlayerSettings {
   int maxImpactsPerStep = 4;        ///< impacts computed per step; the others wait (deferred)
   double frictionCoefficient = 0.5;
   double collisionMarginM = 0.001;  ///< Bullet's margin around hulls and boxes
-  /// Fraction of a body's size the contact point may lie off its surface (Bullet's hull is convex,
-  /// the surface need not be).
-  double pointToleranceFraction = 0.25;
+  /// Fraction of a body's size the contact point may lie off its surface in the runtime: Bullet's
+  /// hull is convex and the surface need not be, and a matched fragment's runtime shape is its
+  /// database entry, not its exact surface.
+  double pointToleranceFraction = 0.5;
   bool recordTracks = false;        ///< keep every body's pose per frame (for a replay)
   WorldSettings world;              ///< world.seed is replaced by the scene's seed
 };
