@@ -6,8 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <set>
 #include <cstdio>
+#include <memory>
+#include <tiny_gltf.h>
 
+#include "brittle/player/GltfReplay.h"
 #include "brittle/player/Scene.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/BaseShapes.h"
@@ -17,11 +21,13 @@
 namespace brittle {
 namespace {
 
-class PlayerTest : public ::testing::TestWithParam<const char*> {
- protected:
-  static void SetUpTestSuite() {
+// The small pack, baked once for the process (both suites use it).
+const Pack* smallPack() {
+  static const std::unique_ptr<Pack> pack = [] {
+    std::unique_ptr<Pack> p;
     auto manifest = loadBakeManifest(testing::sourceDir() / "assets" / "default-pack.json");
-    ASSERT_TRUE(manifest) << manifest.error().message;
+    EXPECT_TRUE(manifest) << manifest.error().message;
+    if (!manifest) return p;
     std::vector<ObjectBakeSettings> objects = std::move(manifest).value();
     // Fewer tets than the default pack, except the vase, whose thin wall needs its 8000.
     for (ObjectBakeSettings& o : objects) {
@@ -29,9 +35,9 @@ class PlayerTest : public ::testing::TestWithParam<const char*> {
       if (o.name == "brick" || o.name == "stone-ball") o.tetMesh.targetTets = 400;
       o.modal.modeCount = 12;
     }
-    auto pack = bakePack(objects);
-    ASSERT_TRUE(pack) << pack.error().message;
-    sPack = new Pack(std::move(pack).value());
+    auto baked = bakePack(objects);
+    EXPECT_TRUE(baked) << baked.error().message;
+    if (!baked) return p;
     DatabaseBakeSettings db;
     db.shapes = selectBaseShapes(loadBaseShapes(testing::sourceDir() / "assets" / "shapes" / "base-shapes.json").value(),
                                  {"box", "plate", "wedge", "blob"})
@@ -40,28 +46,35 @@ class PlayerTest : public ::testing::TestWithParam<const char*> {
     db.tetMesh.targetTets = 300;
     db.modeCount = 6;
     auto database = bakeFragmentDatabase(db);
-    ASSERT_TRUE(database) << database.error().message;
-    sPack->database = std::move(database).value();
-  }
-  static void TearDownTestSuite() { delete sPack; }
-  static inline Pack* sPack = nullptr;
+    EXPECT_TRUE(database) << database.error().message;
+    if (!database) return p;
+    p = std::make_unique<Pack>(std::move(baked).value());
+    p->database = std::move(database).value();
+    return p;
+  }();
+  return pack.get();
+}
 
-  static Scene scene(const std::string& name) {
-    auto s = loadScene(testing::sourceDir() / "assets" / "scenes" / (name + ".json"));
-    EXPECT_TRUE(s) << s.error().message;
-    return s.value();
-  }
+Scene defaultScene(const std::string& name) {
+  auto s = loadScene(testing::sourceDir() / "assets" / "scenes" / (name + ".json"));
+  EXPECT_TRUE(s) << s.error().message;
+  return s.value();
+}
 
-  static PlayResult play(const Scene& s, PlayerSettings settings = {}) {
-    auto r = playScene(*sPack, s, settings);
-    EXPECT_TRUE(r) << r.error().message;
-    return std::move(r).value();
-  }
+PlayResult play(const Scene& s, PlayerSettings settings = {}) {
+  auto r = playScene(*smallPack(), s, settings);
+  EXPECT_TRUE(r) << r.error().message;
+  return std::move(r).value();
+}
+
+class PlayerTest : public ::testing::TestWithParam<const char*> {
+ protected:
+  static void SetUpTestSuite() { smallPack(); }
 };
 
 TEST_P(PlayerTest, BreaksDeterministicallyAboveTheFloorWithoutGainingEnergy) {
-  ASSERT_NE(sPack, nullptr);
-  const Scene s = scene(GetParam());
+  ASSERT_NE(smallPack(), nullptr);
+  const Scene s = defaultScene(GetParam());
   const PlayResult a = play(s), b = play(s);
   std::printf("%s: %lld impacts, %lld breaks, %lld deferred, %lld refused, %d bodies at end, hash %016llx\n", GetParam(),
               static_cast<long long>(a.impacts), static_cast<long long>(a.breaks), static_cast<long long>(a.deferredImpacts),
@@ -106,6 +119,62 @@ INSTANTIATE_TEST_SUITE_P(DefaultScenes, PlayerTest,
                            std::replace(n.begin(), n.end(), '-', '_');
                            return n;
                          });
+
+// The replay: every body is a node, and every node is animated over the whole run (translation,
+// rotation, scale); a fragment is scaled to zero before it exists, and its parent after it broke.
+TEST(PlayerReplayTest, EveryFragmentNodeIsAnimatedOverItsLifetime) {
+  ASSERT_NE(smallPack(), nullptr);
+  PlayerSettings settings;
+  settings.recordTracks = true;
+  const PlayResult r = play(defaultScene("ball-through-pane"), settings);
+  ASSERT_GE(r.breaks, 1);
+  EXPECT_EQ(r.poseHash, play(defaultScene("ball-through-pane")).poseHash);  // recording changes nothing
+  const auto path = testing::makeTempDir("replay") / "replay.glb";
+  const Status written = writeGltfReplay(r, path);
+  ASSERT_TRUE(written) << written.error().message;
+
+  tinygltf::Model model;
+  tinygltf::TinyGLTF loader;
+  std::string err, warn;
+  ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &err, &warn, path.string())) << err;
+  ASSERT_EQ(model.animations.size(), 1u);
+  const tinygltf::Animation& anim = model.animations[0];
+  const auto floats = [&](int accessor) {
+    const tinygltf::Accessor& a = model.accessors[static_cast<size_t>(accessor)];
+    const tinygltf::BufferView& v = model.bufferViews[static_cast<size_t>(a.bufferView)];
+    const auto* p = reinterpret_cast<const float*>(model.buffers[0].data.data() + v.byteOffset + a.byteOffset);
+    return std::vector<float>(p, p + v.byteLength / sizeof(float));
+  };
+  int fragments = 0;
+  for (const BodyState& b : r.bodies) {
+    int node = -1;
+    for (size_t n = 0; n < model.nodes.size(); ++n)
+      if (model.nodes[n].name == b.name) node = static_cast<int>(n);
+    ASSERT_GE(node, 0) << b.name;
+    std::set<std::string> paths;
+    for (const tinygltf::AnimationChannel& c : anim.channels) {
+      if (c.target_node != node) continue;
+      paths.insert(c.target_path);
+      const tinygltf::AnimationSampler& sampler = anim.samplers[static_cast<size_t>(c.sampler)];
+      EXPECT_EQ(model.accessors[static_cast<size_t>(sampler.input)].count, static_cast<size_t>(r.frames + 1));
+      if (c.target_path != "scale") continue;
+      const std::vector<float> scale = floats(sampler.output);
+      ASSERT_EQ(scale.size(), 3u * static_cast<size_t>(r.frames + 1));
+      const int64_t last = b.lastFrame < 0 ? r.frames : b.lastFrame;
+      for (int64_t k = 0; k <= r.frames; ++k) {
+        const bool alive = k >= b.firstFrame && k <= last;
+        EXPECT_EQ(scale[static_cast<size_t>(3 * k)], alive ? 1.0f : 0.0f) << b.name << " sample " << k;
+      }
+    }
+    EXPECT_EQ(paths, (std::set<std::string>{"translation", "rotation", "scale"})) << b.name;
+    if (b.kind == BodyKind::Fragment || b.kind == BodyKind::Debris) {
+      ++fragments;
+      EXPECT_GT(b.firstFrame, 0) << b.name;
+      EXPECT_GE(model.nodes[static_cast<size_t>(node)].mesh, 0) << b.name;
+    }
+  }
+  EXPECT_GE(fragments, 2);
+}
 
 TEST(PlayerErrorsTest, UnknownAssetAndBadSettingsAreTyped) {
   Pack empty;

@@ -6,6 +6,7 @@
 #include "CliSupport.h"
 #include "Commands.h"
 #include "brittle/database/Pack.h"
+#include "brittle/player/GltfReplay.h"
 #include "brittle/player/PlayReport.h"
 #include "brittle/player/Player.h"
 #include "brittle/player/Scene.h"
@@ -14,7 +15,7 @@ namespace brittle::cli {
 namespace {
 
 struct PlayOptions {
-  std::string pack, scene, outStats;
+  std::string pack, scene, outStats, outReplay;
   PlayerSettings settings;
   int framesEvery = 10;
   int modes = 0;
@@ -30,6 +31,7 @@ Runner addPlayCommand(CLI::App& app) {
   cmd->add_option("scene", o->scene, "Scene (.json, see assets/scenes/)")->required();
   cmd->add_flag("--json", o->json, "Print the statistics as JSON");
   cmd->add_option("--out-stats", o->outStats, "Also write the JSON statistics to this file");
+  cmd->add_option("--out", o->outReplay, "Write a glTF 2.0 binary replay (.glb): one node per body, animated per frame");
   cmd->add_option("--frames-every", o->framesEvery, "List every N-th frame in the JSON (frames with a break always; 0: none)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--threshold", o->settings.impactThresholdMps, "Normal approach speed that makes a contact an impact (m/s)")
@@ -48,6 +50,7 @@ Runner addPlayCommand(CLI::App& app) {
     auto pack = readPack(o->pack);
     if (!pack) return reportError(pack.error());
     o->settings.world.fracture.modeCount = o->modes;
+    o->settings.recordTracks = !o->outReplay.empty();
     auto played = playScene(std::move(pack).value(), scene.value(), o->settings);
     if (!played) return reportError(played.error());
     const nlohmann::json doc = playReportJson(played.value(), o->framesEvery);
@@ -55,6 +58,9 @@ Runner addPlayCommand(CLI::App& app) {
       std::ofstream file(o->outStats);
       file << doc.dump(2) << "\n";
       if (!file) return reportError(makeError(ErrorCode::PackIoError, "cannot write " + o->outStats));
+    }
+    if (!o->outReplay.empty()) {
+      if (Status st = writeGltfReplay(played.value(), o->outReplay); !st) return reportError(st.error());
     }
     if (o->json) std::cout << doc.dump(2) << "\n";
     else printPlaySummary(played.value(), std::cout);
