@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <map>
 #include <set>
 #include <cstdio>
 #include <memory>
@@ -174,6 +176,22 @@ TEST(PlayerReplayTest, EveryFragmentNodeIsAnimatedOverItsLifetime) {
     }
   }
   EXPECT_GE(fragments, 2);
+}
+
+// The cap on impacts per step: in the brick stack the ball and the top brick hit each other in
+// the same step; with one impact per step the slower waits (counted), and is computed next step.
+TEST(PlayerCapTest, ImpactsAboveTheCapWaitAndAreCounted) {
+  ASSERT_NE(smallPack(), nullptr);
+  const Scene s = defaultScene("brick-stack");
+  PlayerSettings capped;
+  capped.maxImpactsPerStep = 1;
+  const PlayResult free = play(s), one = play(s, capped);
+  EXPECT_EQ(free.deferredImpacts, 0);
+  EXPECT_GE(one.deferredImpacts, 1);
+  std::map<int64_t, int> perFrameStep;
+  for (const ImpactEvent& e : one.events) ++perFrameStep[static_cast<int64_t>(std::llround(e.timeS / (s.timeStepS / s.substeps)))];
+  for (const auto& [step, count] : perFrameStep) EXPECT_LE(count, 1) << "step " << step;
+  EXPECT_GE(one.breaks, 1);
 }
 
 TEST(PlayerErrorsTest, UnknownAssetAndBadSettingsAreTyped) {

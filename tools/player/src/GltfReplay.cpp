@@ -81,7 +81,7 @@ void surfaceArrays(const TriangleMesh& s, std::vector<float>& positions, std::ve
 }
 
 // A UV sphere (16 × 8) or a box, centred at the origin.
-void impactorArrays(const SceneImpactor& imp, std::vector<float>& positions, std::vector<uint32_t>& indices) {
+void impactorArrays(const RigidImpactor& imp, std::vector<float>& positions, std::vector<uint32_t>& indices) {
   if (imp.shape == ImpactorShape::Box) {
     for (int i = 0; i < 8; ++i)
       for (int k = 0; k < 3; ++k) positions.push_back(static_cast<float>(((i >> k) & 1 ? 1.0 : -1.0) * imp.halfExtentsM[k]));

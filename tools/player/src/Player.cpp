@@ -220,7 +220,7 @@ class Simulation {
     return Ok{};
   }
 
-  void addImpactor(const SceneImpactor& imp) {
+  void addImpactor(const RigidImpactor& imp) {
     Body& b = mBodies.emplace_back();
     b.state.index = static_cast<int32_t>(mBodies.size() - 1);
     b.state.name = imp.name;
@@ -525,7 +525,7 @@ class Simulation {
         z = std::min(z, (r * b.state.surface.vertices.row(v).transpose() + t).z());
       return z;
     }
-    const SceneImpactor& imp = b.state.impactor;
+    const RigidImpactor& imp = b.state.impactor;
     if (imp.shape == ImpactorShape::Sphere) return t.z() - imp.radiusM;
     return t.z() - (r.row(2).cwiseAbs() * imp.halfExtentsM)(0);
   }
@@ -608,7 +608,7 @@ Result<PlayResult> playScene(Pack pack, const Scene& scene, const PlayerSettings
   if (Status st = sim->addFloor(); !st) return st.error();
   for (const SceneObject& o : scene.objects)
     if (Status st = sim->addObject(o); !st) return st.error();
-  for (const SceneImpactor& imp : scene.impactors) sim->addImpactor(imp);
+  for (const RigidImpactor& imp : scene.impactors) sim->addImpactor(imp);
   const double loadS = seconds(t0, Clock::now());
   auto result = sim->run();
   if (result) result.value().loadS = loadS;

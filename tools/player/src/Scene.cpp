@@ -220,7 +220,7 @@ Result<Scene> parseScene(std::string_view text, std::string_view sourceName) {
     for (size_t i = 0; !in.failed() && i < impactors->size(); ++i) {
       const Json& o = (*impactors)[i];
       const std::string p = "impactors[" + std::to_string(i) + "]";
-      SceneImpactor imp;
+      RigidImpactor imp;
       imp.name = "impactor-" + std::to_string(i);
       if (!in.object(o, p, {"name", "shape", "radius", "half_extents", "mass", "material", "position", "rotation", "velocity",
                             "angular_velocity"})) {

@@ -101,7 +101,7 @@ struct BodyState {
   /// The body's surface in its own local frame (the pack mesh frame; for fragments the broken
   /// body's frame). Impactors: empty (shape described by impactor).
   TriangleMesh surface;
-  SceneImpactor impactor;        ///< for kind == Impactor
+  RigidImpactor impactor;        ///< for kind == Impactor
   /// Pose of the local frame: world = rotation · local + translation. With recordTracks, one per
   /// sample from firstFrame to lastFrame (or the last sample); otherwise the last pose only.
   std::vector<Eigen::Quaterniond> rotations;

@@ -43,7 +43,7 @@ struct SceneObject {
 
 enum class ImpactorShape { Sphere, Box };
 
-struct SceneImpactor {
+struct RigidImpactor {
   std::string name;
   ImpactorShape shape = ImpactorShape::Sphere;
   double radiusM = 0.05;                                 ///< sphere
@@ -70,7 +70,7 @@ struct Scene {
   uint64_t seed = 1;
   std::optional<SceneFloor> floor;
   std::vector<SceneObject> objects;
-  std::vector<SceneImpactor> impactors;
+  std::vector<RigidImpactor> impactors;
 };
 
 /// Parses a scene from JSON text; sourceName is used in messages. Errors: ParseError (bad JSON, a
