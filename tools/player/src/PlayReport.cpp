@@ -28,7 +28,7 @@ nlohmann::json playReportJson(const PlayResult& r, int framesEvery) {
   const FrameTimeSummary t = summarizeFrameTimes(r.frameStats);
   nlohmann::json doc;
   doc["scene"] = r.scene;
-  doc["frames"] = r.frames;
+  doc["frame_count"] = r.frames;
   doc["time_step_s"] = r.timeStepS;
   doc["load_s"] = r.loadS;
   const double total = t.bulletS + t.fractureS;

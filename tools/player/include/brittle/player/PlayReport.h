@@ -1,7 +1,7 @@
 // PlayReport.h — what `brittle play` prints: the JSON statistics document and the short summary.
 //
 // JSON (times in seconds, SI units):
-//   { "scene", "frames", "time_step_s", "load_s",
+//   { "scene", "frame_count", "time_step_s", "load_s",
 //     "summary": { "impacts", "breaks", "deferred_impacts", "failed_impacts", "bodies_at_end",
 //                  "bodies_max", "pose_hash" (16 hex digits),
 //                  "frame_time_s": { "median", "p99", "max" }, "bullet_s", "fracture_s",
