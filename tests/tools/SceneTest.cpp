@@ -64,6 +64,8 @@ TEST(SceneTest, MissingFileIsFileNotFound) {
 TEST(SceneTest, BadJsonIsParseError) {
   EXPECT_EQ(parseError("{\"duration\": 1,").code, ErrorCode::ParseError);
   EXPECT_EQ(parseError("[1, 2]").code, ErrorCode::ParseError);
+  // A number beyond double's range (found by fuzz_play_scene_json).
+  EXPECT_EQ(parseError(R"({"duration": 1, "time_step": 1e999, "objects": []})").code, ErrorCode::ParseError);
 }
 
 TEST(SceneTest, UnknownKeysAreRefusedByName) {

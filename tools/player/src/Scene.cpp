@@ -158,7 +158,7 @@ Result<Scene> parseScene(std::string_view text, std::string_view sourceName) {
   Json root;
   try {
     root = Json::parse(text.begin(), text.end());
-  } catch (const Json::parse_error& e) {
+  } catch (const Json::exception& e) {  // syntax, and numbers out of double's range (out_of_range)
     return makeError(ErrorCode::ParseError, std::string(sourceName) + ": invalid JSON: " + e.what());
   }
   Reader in{std::string(sourceName)};

@@ -4,20 +4,26 @@
 //   auto scene = loadScene("assets/scenes/plate-drop.json");
 //   auto played = playScene(std::move(pack), scene.value(), PlayerSettings{});   // Result<PlayResult>
 //
+// Bullet is the double-precision build (bullet-float64); no Bullet type appears in this header.
+//
 // Each frame runs `substeps` fixed Bullet steps (single thread, one internal step per call, so the
 // same pack, scene, settings and seed give bit-identical poses). After each step, every contact of
 // a breakable body whose normal approach speed, from the velocities before the step, exceeds
 // impactThresholdMps becomes a World::impact at the contact point with the body's outward normal,
 // the other body's mass (+∞ if static), radius (sphere radius, +∞ for a box, plane or hull) and
 // material (a flat face on a flat impactor, which has no Hertz contact, is retried with the body's
-// size as its radius). At most maxImpactsPerStep are computed per step (fastest first, ties by body); the rest
-// wait for the next step and are counted as deferred. A body that was hit ignores contacts for
-// cooldownS. A broken body leaves Bullet, and each fragment enters as a new body with a convex hull
+// size as its radius). One impact per body per step (its fastest contact); at most
+// maxImpactsPerStep per step (fastest first, ties by body); the rest wait for the next step and
+// each wait is counted in deferredImpacts. A body that was hit ignores contacts for cooldownS
+// (its fragments inherit what is left of it). A broken body leaves Bullet, and each fragment enters as a new body with a convex hull
 // of its surface, its exact mass properties (principal axes) and the parent's velocity at its
 // centre of mass (v + ω × r); matched fragments keep their new ObjectId and can break again, debris
 // never break. A static body cannot take an impactor's momentum: when one breaks, the body that hit
 // it gets its velocity from before the step back (it goes through; it meets the fragments next
 // step). A dynamic body that breaks keeps the collision Bullet solved (its fragments inherit it).
+// Bodies born in the same step whose bounding boxes overlap (convex hulls of concave fragments do)
+// do not collide with each other until their boxes have separated once: Bullet would otherwise
+// push them apart with energy out of nothing.
 //
 // Frames: the world's z axis is up; the floor is the plane z = height. Bodies are placed by their
 // asset's local origin (the pack's mesh frame); Bullet bodies live in principal axes at the centre
