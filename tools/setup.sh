@@ -10,6 +10,8 @@ PACKAGES=(cmake g++ pkg-config make
   libeigen3-dev libarpack2-dev libcgal-dev libopenvdb-dev libboost-iostreams-dev libhdf5-dev
   libflann-dev libceres-dev calculix-ccx libhnswlib-dev libopenmpi-dev openmpi-bin libsuitesparse-dev libtbb-dev libspectra-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev python3-matplotlib python3-numpy)
+# The player (brittle play): Bullet for the rigid bodies, tinygltf for the replays.
+PACKAGES+=(libbullet-dev libtinygltf-dev)
 
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi

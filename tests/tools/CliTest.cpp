@@ -91,6 +91,48 @@ TEST_F(CliTest, BakeThenInspectJson) {
   }
 }
 
+// play: a glass box dropped on a concrete floor with a steel ball thrown at it; the statistics on
+// stdout and in --out-stats, the replay, and the typed errors of a missing scene or asset.
+TEST_F(CliTest, PlayWritesStatisticsAndAReplayAndReportsBadScenes) {
+  testing::writeOff(testing::makeBoxSurface(0.2, 0.1, 0.05), dir / "box.off");
+  const CliRun bake = run("bake --mesh " + path("box.off") + " --material glass --tets 1200 --modes 8 --quiet --out " + path("box.h5"));
+  ASSERT_EQ(bake.exitCode, 0) << bake.out;
+  {
+    std::ofstream scene(dir / "scene.json");
+    scene << R"({"duration": 0.3, "time_step": 0.005, "substeps": 2, "floor": {"height": 0},
+      "objects": [{"asset": "box", "position": [0, 0, 0.3], "rotation": {"axis": [1, 0, 0], "angle_deg": 30}}],
+      "impactors": [{"shape": "sphere", "radius": 0.02, "mass": 0.3, "position": [0, -0.5, 0.3], "velocity": [0, 15, 0]}]})";
+  }
+  const CliRun play = run("play " + path("box.h5") + " " + path("scene.json") + " --json --frames-every 5 --out-stats " +
+                          path("stats.json") + " --out " + path("replay.glb"));
+  ASSERT_EQ(play.exitCode, 0) << play.out;
+  const auto doc = nlohmann::json::parse(play.out);
+  EXPECT_EQ(doc["scene"], "scene");
+  EXPECT_EQ(doc["frame_count"], 60);
+  for (const char* key : {"impacts", "breaks", "deferred_impacts", "failed_impacts", "bodies_at_end", "frame_time_s", "fracture_share"}) {
+    EXPECT_TRUE(doc["summary"].contains(key)) << key;
+  }
+  EXPECT_GE(doc["summary"]["impacts"].get<int>(), 1);
+  EXPECT_GE(doc["frames"].size(), 12u);
+  const auto stats = nlohmann::json::parse(fileBytes(dir / "stats.json"));
+  EXPECT_EQ(stats["summary"]["pose_hash"], doc["summary"]["pose_hash"]);
+  EXPECT_EQ(fileBytes(dir / "replay.glb").substr(0, 4), "glTF");
+  const CliRun text = run("play " + path("box.h5") + " " + path("scene.json"));
+  ASSERT_EQ(text.exitCode, 0) << text.out;
+  EXPECT_NE(text.out.find("frame time (ms)"), std::string::npos) << text.out;
+
+  const CliRun missing = run("play " + path("box.h5") + " " + path("no-scene.json"));
+  EXPECT_EQ(missing.exitCode, 3) << missing.out;
+  EXPECT_NE(missing.out.find("file_not_found"), std::string::npos) << missing.out;
+  {
+    std::ofstream scene(dir / "other.json");
+    scene << R"({"duration": 0.1, "time_step": 0.01, "objects": [{"asset": "vase", "position": [0, 0, 1]}]})";
+  }
+  const CliRun unknown = run("play " + path("box.h5") + " " + path("other.json"));
+  EXPECT_EQ(unknown.exitCode, 2) << unknown.out;
+  EXPECT_NE(unknown.out.find("'vase'"), std::string::npos) << unknown.out;
+}
+
 // calibrate: frequencies of the baked box as if its E were 80 % of glass's, at glass's ν and
 // density, give E = 0.8 × 70 GPa back; the written material file bakes.
 TEST_F(CliTest, CalibrateFitsTheMaterialAndWritesAFileThatBakes) {

@@ -17,6 +17,7 @@ Runner addBenchCommand(CLI::App& app);
 Runner addImpactCommand(CLI::App& app);
 Runner addCalibrateCommand(CLI::App& app);
 Runner addSizeCommand(CLI::App& app);
+Runner addPlayCommand(CLI::App& app);
 
 }  // namespace brittle::cli
 

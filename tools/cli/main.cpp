@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   add("impact", brittle::cli::addImpactCommand(app));
   add("calibrate", brittle::cli::addCalibrateCommand(app));
   add("size", brittle::cli::addSizeCommand(app));
+  add("play", brittle::cli::addPlayCommand(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,214 @@
+// The player on the default scenes with a small pack baked once (the default manifest's objects
+// with fewer tets, and an 8-entry database): each scene breaks something, plays bit-identically
+// twice, keeps every body above the floor, and gains no mechanical energy outside fracture events.
+#include "brittle/player/Player.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <cstdio>
+#include <memory>
+#include <tiny_gltf.h>
+
+#include "brittle/player/GltfReplay.h"
+#include "brittle/player/Scene.h"
+#include "brittle/precompute/BakePipeline.h"
+#include "brittle/precompute/BaseShapes.h"
+#include "brittle/precompute/FragmentDatabaseBake.h"
+#include "brittle/testing/Fixtures.h"
+
+namespace brittle {
+namespace {
+
+// The small pack, baked once for the process (both suites use it).
+const Pack* smallPack() {
+  static const std::unique_ptr<Pack> pack = [] {
+    std::unique_ptr<Pack> p;
+    auto manifest = loadBakeManifest(testing::sourceDir() / "assets" / "default-pack.json");
+    EXPECT_TRUE(manifest) << manifest.error().message;
+    if (!manifest) return p;
+    std::vector<ObjectBakeSettings> objects = std::move(manifest).value();
+    // Fewer tets than the default pack, except the vase, whose thin wall needs its 8000.
+    for (ObjectBakeSettings& o : objects) {
+      if (o.name == "glass-plate") o.tetMesh.targetTets = 3000;
+      if (o.name == "brick" || o.name == "stone-ball") o.tetMesh.targetTets = 400;
+      o.modal.modeCount = 12;
+    }
+    auto baked = bakePack(objects);
+    EXPECT_TRUE(baked) << baked.error().message;
+    if (!baked) return p;
+    DatabaseBakeSettings db;
+    db.shapes = selectBaseShapes(loadBaseShapes(testing::sourceDir() / "assets" / "shapes" / "base-shapes.json").value(),
+                                 {"box", "plate", "wedge", "blob"})
+                    .value();
+    db.entryCount = 8;
+    db.tetMesh.targetTets = 300;
+    db.modeCount = 6;
+    auto database = bakeFragmentDatabase(db);
+    EXPECT_TRUE(database) << database.error().message;
+    if (!database) return p;
+    p = std::make_unique<Pack>(std::move(baked).value());
+    p->database = std::move(database).value();
+    return p;
+  }();
+  return pack.get();
+}
+
+Scene defaultScene(const std::string& name) {
+  auto s = loadScene(testing::sourceDir() / "assets" / "scenes" / (name + ".json"));
+  EXPECT_TRUE(s) << s.error().message;
+  return s.value();
+}
+
+PlayResult play(const Scene& s, PlayerSettings settings = {}) {
+  auto r = playScene(*smallPack(), s, settings);
+  EXPECT_TRUE(r) << r.error().message;
+  return std::move(r).value();
+}
+
+class PlayerTest : public ::testing::TestWithParam<const char*> {
+ protected:
+  static void SetUpTestSuite() { smallPack(); }
+};
+
+TEST_P(PlayerTest, BreaksDeterministicallyAboveTheFloorWithoutGainingEnergy) {
+  ASSERT_NE(smallPack(), nullptr);
+  const Scene s = defaultScene(GetParam());
+  const PlayResult a = play(s), b = play(s);
+  std::printf("%s: %lld impacts, %lld breaks, %lld deferred, %lld refused, %d bodies at end, hash %016llx\n", GetParam(),
+              static_cast<long long>(a.impacts), static_cast<long long>(a.breaks), static_cast<long long>(a.deferredImpacts),
+              static_cast<long long>(a.failedImpacts), a.bodiesAtEnd, static_cast<unsigned long long>(a.poseHash));
+  EXPECT_GE(a.breaks, 1);
+  EXPECT_EQ(a.poseHash, b.poseHash);
+  EXPECT_EQ(a.bodiesAtEnd, b.bodiesAtEnd);
+  EXPECT_EQ(a.impacts, b.impacts);
+  EXPECT_GT(a.bodiesAtEnd, static_cast<int32_t>(s.objects.size() + s.impactors.size()));
+
+  // No tunnelling: every body, alive or broken, ends above the floor (less Bullet's penetration
+  // slop and the collision margin).
+  const double floor = s.floor->heightM;
+  for (const BodyState& body : a.bodies) EXPECT_GE(body.lowestPointM, floor - 0.01) << body.name;
+
+  // Energy: E = Σ ½mv² + ½ωᵀIω − m g·x over the dynamic bodies after each frame (FrameStats).
+  // Between two fracture events (a fracture replaces a body by fragments with new velocities, and
+  // may hand an impactor its velocity back), E may never rise above its lowest value since the
+  // last fracture by more than 1 % of the largest kinetic energy of the run (Bullet's contact
+  // solver is not exactly dissipative; measured: ≤ 0.01 %).
+  double peakKinetic = 0.0;
+  for (const FrameStats& f : a.frameStats) peakKinetic = std::max(peakKinetic, f.kineticJ);
+  const double tolerance = 0.01 * peakKinetic + 1e-6;
+  double reference = a.frameStats.front().energyJ, worst = 0.0;
+  for (size_t i = 1; i < a.frameStats.size(); ++i) {
+    const FrameStats& f = a.frameStats[i];
+    if (f.fractured) {
+      reference = f.energyJ;
+      continue;
+    }
+    worst = std::max(worst, f.energyJ - reference);
+    EXPECT_LE(f.energyJ, reference + tolerance) << "frame " << f.frame;
+    reference = std::min(reference, f.energyJ);
+  }
+  std::printf("  largest energy gain outside fractures %.3g J (tolerance %.3g J)\n", worst, tolerance);
+}
+
+INSTANTIATE_TEST_SUITE_P(DefaultScenes, PlayerTest,
+                         ::testing::Values("plate-drop", "ball-through-pane", "brick-stack", "vase-drop"),
+                         [](const auto& p) {
+                           std::string n = p.param;
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n;
+                         });
+
+// The replay: every body is a node, and every node is animated over the whole run (translation,
+// rotation, scale); a fragment is scaled to zero before it exists, and its parent after it broke.
+TEST(PlayerReplayTest, EveryFragmentNodeIsAnimatedOverItsLifetime) {
+  ASSERT_NE(smallPack(), nullptr);
+  PlayerSettings settings;
+  settings.recordTracks = true;
+  const PlayResult r = play(defaultScene("ball-through-pane"), settings);
+  ASSERT_GE(r.breaks, 1);
+  EXPECT_EQ(r.poseHash, play(defaultScene("ball-through-pane")).poseHash);  // recording changes nothing
+  const auto path = testing::makeTempDir("replay") / "replay.glb";
+  const Status written = writeGltfReplay(r, path);
+  ASSERT_TRUE(written) << written.error().message;
+
+  tinygltf::Model model;
+  tinygltf::TinyGLTF loader;
+  std::string err, warn;
+  ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &err, &warn, path.string())) << err;
+  ASSERT_EQ(model.animations.size(), 1u);
+  const tinygltf::Animation& anim = model.animations[0];
+  const auto floats = [&](int accessor) {
+    const tinygltf::Accessor& a = model.accessors[static_cast<size_t>(accessor)];
+    const tinygltf::BufferView& v = model.bufferViews[static_cast<size_t>(a.bufferView)];
+    const auto* p = reinterpret_cast<const float*>(model.buffers[0].data.data() + v.byteOffset + a.byteOffset);
+    return std::vector<float>(p, p + v.byteLength / sizeof(float));
+  };
+  int fragments = 0;
+  for (const BodyState& b : r.bodies) {
+    int node = -1;
+    for (size_t n = 0; n < model.nodes.size(); ++n)
+      if (model.nodes[n].name == b.name) node = static_cast<int>(n);
+    ASSERT_GE(node, 0) << b.name;
+    std::set<std::string> paths;
+    for (const tinygltf::AnimationChannel& c : anim.channels) {
+      if (c.target_node != node) continue;
+      paths.insert(c.target_path);
+      const tinygltf::AnimationSampler& sampler = anim.samplers[static_cast<size_t>(c.sampler)];
+      EXPECT_EQ(model.accessors[static_cast<size_t>(sampler.input)].count, static_cast<size_t>(r.frames + 1));
+      if (c.target_path != "scale") continue;
+      const std::vector<float> scale = floats(sampler.output);
+      ASSERT_EQ(scale.size(), 3u * static_cast<size_t>(r.frames + 1));
+      const int64_t last = b.lastFrame < 0 ? r.frames : b.lastFrame;
+      for (int64_t k = 0; k <= r.frames; ++k) {
+        const bool alive = k >= b.firstFrame && k <= last;
+        EXPECT_EQ(scale[static_cast<size_t>(3 * k)], alive ? 1.0f : 0.0f) << b.name << " sample " << k;
+      }
+    }
+    EXPECT_EQ(paths, (std::set<std::string>{"translation", "rotation", "scale"})) << b.name;
+    if (b.kind == BodyKind::Fragment || b.kind == BodyKind::Debris) {
+      ++fragments;
+      EXPECT_GT(b.firstFrame, 0) << b.name;
+      EXPECT_GE(model.nodes[static_cast<size_t>(node)].mesh, 0) << b.name;
+    }
+  }
+  EXPECT_GE(fragments, 2);
+}
+
+// The cap on impacts per step: in the brick stack the ball and the top brick hit each other in
+// the same step; with one impact per step the slower waits (counted), and is computed next step.
+TEST(PlayerCapTest, ImpactsAboveTheCapWaitAndAreCounted) {
+  ASSERT_NE(smallPack(), nullptr);
+  const Scene s = defaultScene("brick-stack");
+  PlayerSettings capped;
+  capped.maxImpactsPerStep = 1;
+  const PlayResult free = play(s), one = play(s, capped);
+  EXPECT_EQ(free.deferredImpacts, 0);
+  EXPECT_GE(one.deferredImpacts, 1);
+  std::map<int64_t, int> perFrameStep;
+  for (const ImpactEvent& e : one.events) ++perFrameStep[static_cast<int64_t>(std::llround(e.timeS / (s.timeStepS / s.substeps)))];
+  for (const auto& [step, count] : perFrameStep) EXPECT_LE(count, 1) << "step " << step;
+  EXPECT_GE(one.breaks, 1);
+}
+
+TEST(PlayerErrorsTest, UnknownAssetAndBadSettingsAreTyped) {
+  Pack empty;
+  Scene s;
+  s.objects.push_back({.name = "x", .asset = "no-such-object"});
+  auto r = playScene(empty, s);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code, ErrorCode::InvalidArgument);
+  EXPECT_NE(r.error().message.find("no-such-object"), std::string::npos);
+  PlayerSettings bad;
+  bad.maxImpactsPerStep = 0;
+  EXPECT_EQ(validatePlayerSettings(bad).error().code, ErrorCode::InvalidArgument);
+  bad = {};
+  bad.impactThresholdMps = -1.0;
+  EXPECT_FALSE(validatePlayerSettings(bad));
+}
+
+}  // namespace
+}  // namespace brittle

@@ -1,0 +1,71 @@
+// brittle play — play a scene with a pack's objects in Bullet; print and write the statistics.
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "CliSupport.h"
+#include "Commands.h"
+#include "brittle/database/Pack.h"
+#include "brittle/player/GltfReplay.h"
+#include "brittle/player/PlayReport.h"
+#include "brittle/player/Player.h"
+#include "brittle/player/Scene.h"
+
+namespace brittle::cli {
+namespace {
+
+struct PlayOptions {
+  std::string pack, scene, outStats, outReplay;
+  PlayerSettings settings;
+  int framesEvery = 10;
+  int modes = 0;
+  bool json = false;
+};
+
+}  // namespace
+
+Runner addPlayCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand("play", "Play a scene: a Bullet simulation whose hard contacts break the pack's objects");
+  auto o = std::make_shared<PlayOptions>();
+  cmd->add_option("pack", o->pack, "Pack (.h5)")->required();
+  cmd->add_option("scene", o->scene, "Scene (.json, see assets/scenes/)")->required();
+  cmd->add_flag("--json", o->json, "Print the statistics as JSON");
+  cmd->add_option("--out-stats", o->outStats, "Also write the JSON statistics to this file");
+  cmd->add_option("--out", o->outReplay, "Write a glTF 2.0 binary replay (.glb): one node per body, animated per frame");
+  cmd->add_option("--frames-every", o->framesEvery, "List every N-th frame in the JSON (frames with a break always; 0: none)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--threshold", o->settings.impactThresholdMps, "Normal approach speed that makes a contact an impact (m/s)")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  cmd->add_option("--cooldown", o->settings.cooldownS, "A body ignores contacts this long after an impact (s)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-impacts", o->settings.maxImpactsPerStep, "Impacts computed per step; the others wait")
+      ->capture_default_str()->check(CLI::Range(1, 1000000));
+  cmd->add_option("--modes", o->modes, "Modes used per impact (0: all stored)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--debris", o->settings.world.fracture.debrisVolumeFraction, "Fragments below this volume fraction are rigid debris")
+      ->capture_default_str()->check(CLI::Range(0.0, 0.99));
+
+  return [o]() -> int {
+    auto scene = loadScene(o->scene);
+    if (!scene) return reportError(scene.error());
+    auto pack = readPack(o->pack);
+    if (!pack) return reportError(pack.error());
+    o->settings.world.fracture.modeCount = o->modes;
+    o->settings.recordTracks = !o->outReplay.empty();
+    auto played = playScene(std::move(pack).value(), scene.value(), o->settings);
+    if (!played) return reportError(played.error());
+    const nlohmann::json doc = playReportJson(played.value(), o->framesEvery);
+    if (!o->outStats.empty()) {
+      std::ofstream file(o->outStats);
+      file << doc.dump(2) << "\n";
+      if (!file) return reportError(makeError(ErrorCode::PackIoError, "cannot write " + o->outStats));
+    }
+    if (!o->outReplay.empty()) {
+      if (Status st = writeGltfReplay(played.value(), o->outReplay); !st) return reportError(st.error());
+    }
+    if (o->json) std::cout << doc.dump(2) << "\n";
+    else printPlaySummary(played.value(), std::cout);
+    return kExitOk;
+  };
+}
+
+}  // namespace brittle::cli

@@ -1,0 +1,146 @@
+// Player.h — plays a scene: a Bullet rigid-body simulation whose hard contacts become runtime
+// impacts, and whose broken bodies are replaced by their fragments.
+//
+//   auto scene = loadScene("assets/scenes/plate-drop.json");
+//   auto played = playScene(std::move(pack), scene.value(), PlayerSettings{});   // Result<PlayResult>
+//
+// Bullet is the double-precision build (bullet-float64); no Bullet type appears in this header.
+//
+// Each frame runs `substeps` fixed Bullet steps (single thread, one internal step per call, so the
+// same pack, scene, settings and seed give bit-identical poses). After each step, every contact of
+// a breakable body whose normal approach speed, from the velocities before the step, exceeds
+// impactThresholdMps becomes a World::impact at the contact point with the body's outward normal,
+// the other body's mass (+∞ if static), radius (sphere radius, +∞ for a box, plane or hull) and
+// material (a flat face on a flat impactor, which has no Hertz contact, is retried with the body's
+// size as its radius). One impact per body per step (its fastest contact); at most
+// maxImpactsPerStep per step (fastest first, ties by body); the rest wait for the next step and
+// each wait is counted in deferredImpacts. A body that was hit ignores contacts for cooldownS
+// (its fragments inherit what is left of it). A broken body leaves Bullet, and each fragment enters as a new body with a convex hull
+// of its surface, its exact mass properties (principal axes) and the parent's velocity at its
+// centre of mass (v + ω × r); matched fragments keep their new ObjectId and can break again, debris
+// never break. A static body cannot take an impactor's momentum: when one breaks, the body that hit
+// it gets its velocity from before the step back (it goes through; it meets the fragments next
+// step). A dynamic body that breaks keeps the collision Bullet solved (its fragments inherit it).
+// Bodies born in the same step whose bounding boxes overlap (convex hulls of concave fragments do)
+// do not collide with each other until their boxes have separated once: Bullet would otherwise
+// push them apart with energy out of nothing.
+//
+// Frames: the world's z axis is up; the floor is the plane z = height. Bodies are placed by their
+// asset's local origin (the pack's mesh frame); Bullet bodies live in principal axes at the centre
+// of mass, and the player keeps the offset.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "brittle/database/Pack.h"
+#include "brittle/descriptors/Result.h"
+#include "brittle/player/Scene.h"
+#include "brittle/runtime/World.h"
+
+namespace brittle {
+
+struct PlayerSettings {
+  double impactThresholdMps = 0.5;  ///< a contact approaching faster than this is an impact
+  double cooldownS = 0.05;          ///< a body ignores contacts this long after an impact
+  int maxImpactsPerStep = 4;        ///< impacts computed per step; the others wait (deferred)
+  double frictionCoefficient = 0.5;
+  double collisionMarginM = 0.001;  ///< Bullet's margin around hulls and boxes
+  /// Fraction of a body's size the contact point may lie off its surface in the runtime: Bullet's
+  /// hull is convex and the surface need not be, and a matched fragment's runtime shape is its
+  /// database entry, not its exact surface.
+  double pointToleranceFraction = 0.5;
+  bool recordTracks = false;        ///< keep every body's pose per frame (for a replay)
+  WorldSettings world;              ///< world.seed is replaced by the scene's seed
+};
+
+/// Range checks: threshold > 0, cooldown ≥ 0, maxImpactsPerStep ≥ 1, friction ≥ 0, margin in
+/// (0, 0.05], tolerance fraction in (0, 1], and validateWorldSettings. Error: InvalidArgument.
+Status validatePlayerSettings(const PlayerSettings& settings);
+
+enum class BodyKind { Object, Fragment, Debris, Impactor };
+std::string_view bodyKindName(BodyKind kind);
+
+/// One impact handed to the runtime.
+struct ImpactEvent {
+  double timeS = 0.0;
+  int64_t frame = 0;
+  int32_t body = -1;             ///< player body index (BodyState::index)
+  std::string object;            ///< the body's name: the scene name, "+fN" per fragment generation
+  int32_t otherBody = -1;        ///< −1: the floor
+  double speedMps = 0.0;         ///< normal approach speed
+  double otherMassKg = 0.0;      ///< +∞: static
+  bool broken = false;
+  int32_t fragments = 0;         ///< 0 unless broken
+  int32_t debris = 0;            ///< how many of them are rigid debris
+  double peakPrincipalStressPa = 0.0;
+  StageTimes times;              ///< the runtime's stages
+  std::string error;             ///< non-empty: the runtime refused the impact (counted, not fatal)
+};
+
+struct FrameStats {
+  int64_t frame = 0;
+  double timeS = 0.0;            ///< at the end of the frame
+  int32_t bodies = 0;            ///< bodies in Bullet at the end of the frame (with impactors)
+  double bulletS = 0.0;          ///< wall time in Bullet stepping
+  double fractureS = 0.0;        ///< wall time in contact scanning, impacts and spawning fragments
+  double energyJ = 0.0;          ///< Σ ½mv² + ½ωᵀIω − m g·x over dynamic bodies (x: centre of mass)
+  double kineticJ = 0.0;         ///< Σ ½mv² + ½ωᵀIω alone
+  bool fractured = false;        ///< a body broke (or an impactor was reset) in this frame
+};
+
+/// A body at the end, or over time with PlayerSettings::recordTracks.
+struct BodyState {
+  int32_t index = -1;            ///< in order of creation
+  std::string name;
+  BodyKind kind = BodyKind::Object;
+  int32_t parent = -1;           ///< the body it broke from
+  /// Samples: sample 0 is the start, sample k the end of frame k − 1. A fragment born in frame F
+  /// exists from sample F + 1; a body broken in frame F exists until sample F.
+  int64_t firstFrame = 0;        ///< its first sample
+  int64_t lastFrame = -1;        ///< its last sample; −1: alive at the end
+  bool isStatic = false;
+  double massKg = 0.0;
+  /// The body's surface in its own local frame (the pack mesh frame; for fragments the broken
+  /// body's frame). Impactors: empty (shape described by impactor).
+  TriangleMesh surface;
+  RigidImpactor impactor;        ///< for kind == Impactor
+  /// Pose of the local frame: world = rotation · local + translation. With recordTracks, one per
+  /// sample from firstFrame to lastFrame (or the last sample); otherwise the last pose only.
+  std::vector<Eigen::Quaterniond> rotations;
+  std::vector<Eigen::Vector3d> translationsM;
+  double lowestPointM = 0.0;     ///< lowest world z of its surface (or shape) at the end
+};
+
+struct PlayResult {
+  std::string scene;
+  int64_t frames = 0;
+  double timeStepS = 0.0;
+  std::vector<ImpactEvent> events;
+  std::vector<FrameStats> frameStats;
+  std::vector<BodyState> bodies;  ///< every body that ever existed, by index
+  int64_t impacts = 0;           ///< handed to the runtime
+  int64_t breaks = 0;
+  int64_t deferredImpacts = 0;   ///< waited one or more steps because of maxImpactsPerStep
+  int64_t failedImpacts = 0;     ///< refused by the runtime (events with an error)
+  int32_t bodiesAtEnd = 0;
+  uint64_t poseHash = 0;         ///< FNV-1a over the final poses of live bodies, by index
+  double loadS = 0.0;            ///< building the World and the bodies
+};
+
+/// Plays scene with the objects of pack. Errors: InvalidArgument (settings; a scene object whose
+/// asset is not in the pack; a body Bullet cannot build), those of World::create and addObject.
+/// Impacts the runtime refuses are counted (failedImpacts) and the play goes on.
+Result<PlayResult> playScene(Pack pack, const Scene& scene, const PlayerSettings& settings = {});
+
+/// Frame time statistics (bullet + fracture per frame), in seconds.
+struct FrameTimeSummary {
+  double medianS = 0.0, p99S = 0.0, maxS = 0.0;
+  double bulletS = 0.0, fractureS = 0.0;  ///< totals
+};
+FrameTimeSummary summarizeFrameTimes(const std::vector<FrameStats>& frames);
+
+}  // namespace brittle

@@ -1,0 +1,636 @@
+// Player.cpp — Bullet bodies for pack objects, fragments and impactors; contacts → runtime impacts.
+#include "brittle/player/Player.h"
+
+#include <btBulletDynamicsCommon.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <memory>
+#include <set>
+
+#include "brittle/precompute/MaterialLibrary.h"
+
+namespace brittle {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+btVector3 bt(const Eigen::Vector3d& v) { return btVector3(v.x(), v.y(), v.z()); }
+Eigen::Vector3d eig(const btVector3& v) { return Eigen::Vector3d(v.x(), v.y(), v.z()); }
+Eigen::Matrix3d eig(const btMatrix3x3& m) {
+  Eigen::Matrix3d r;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r(i, j) = m[i][j];
+  return r;
+}
+btMatrix3x3 bt(const Eigen::Matrix3d& m) {
+  return btMatrix3x3(m(0, 0), m(0, 1), m(0, 2), m(1, 0), m(1, 1), m(1, 2), m(2, 0), m(2, 1), m(2, 2));
+}
+double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+// Principal axes: inertia = P diag(d) Pᵀ with P a rotation (det +1), d clamped away from zero so
+// that slivers of debris stay integrable.
+void principalAxes(const Eigen::Matrix3d& inertia, Eigen::Matrix3d& axes, Eigen::Vector3d& moments) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig3(0.5 * (inertia + inertia.transpose()));
+  axes = eig3.eigenvectors();
+  if (axes.determinant() < 0.0) axes.col(2) *= -1.0;
+  moments = eig3.eigenvalues().cwiseMax(1e-6 * std::max(eig3.eigenvalues().maxCoeff(), 1e-300));
+}
+
+// The surface of an asset: its tet mesh's boundary, nodes renumbered compactly.
+TriangleMesh assetSurface(const ObjectAsset& asset) {
+  std::vector<int32_t> remap(static_cast<size_t>(asset.tetMesh.nodes.rows()), -1);
+  int32_t count = 0;
+  for (Eigen::Index f = 0; f < asset.surfaceFaces.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      int32_t& r = remap[static_cast<size_t>(asset.surfaceFaces(f, k))];
+      if (r < 0) r = count++;
+    }
+  TriangleMesh s;
+  s.vertices.resize(count, 3);
+  s.faces.resize(asset.surfaceFaces.rows(), 3);
+  for (size_t n = 0; n < remap.size(); ++n)
+    if (remap[n] >= 0) s.vertices.row(remap[n]) = asset.tetMesh.nodes.row(static_cast<Eigen::Index>(n));
+  for (Eigen::Index f = 0; f < asset.surfaceFaces.rows(); ++f)
+    for (int k = 0; k < 3; ++k) s.faces(f, k) = remap[static_cast<size_t>(asset.surfaceFaces(f, k))];
+  return s;
+}
+
+struct Body {
+  BodyState state;
+  ObjectId object;                 ///< valid: breakable
+  Material material;
+  std::unique_ptr<btCollisionShape> shape;
+  std::unique_ptr<btRigidBody> rigid;
+  bool alive = true;
+  // Local (asset) frame relative to the Bullet body frame: x_local = comLocal + axes · x_body.
+  Eigen::Vector3d comLocal = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+  // The pose the runtime World holds for the object (it never moves there): impacts are mapped
+  // from the body's local frame into that pose.
+  Eigen::Matrix3d runtimeRotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d runtimeTranslation = Eigen::Vector3d::Zero();
+  double sizeM = 0.0;              ///< largest distance of a surface point from the centre of mass
+  double radiusForOthersM = kInf;  ///< what an impact on another body sees: sphere radius, else flat
+  double cooldownUntilS = -kInf;
+  Eigen::Vector3d preVelocity = Eigen::Vector3d::Zero(), preAngular = Eigen::Vector3d::Zero();
+
+  double massKg() const { return state.massKg; }
+  Eigen::Vector3d com() const { return eig(rigid->getCenterOfMassPosition()); }
+  // Pose of the local frame in the world.
+  void localPose(Eigen::Matrix3d& rotation, Eigen::Vector3d& translation) const {
+    const btTransform& t = rigid->getCenterOfMassTransform();
+    rotation = eig(t.getBasis()) * axes.transpose();
+    translation = eig(t.getOrigin()) - rotation * comLocal;
+  }
+};
+
+struct Candidate {
+  int32_t body = -1, other = -1;
+  double speedMps = 0.0;
+  Eigen::Vector3d pointLocal, normalLocal;
+  bool operator<(const Candidate& o) const { return speedMps != o.speedMps ? speedMps > o.speedMps : body < o.body; }
+};
+
+// Fragments born in the same step start interpenetrating (the convex hulls of concave fragments
+// overlap, and two bodies that broke against each other left their fragments in contact). Bullet
+// would push them apart with velocity, out of nothing. So a pair of such bodies whose boxes
+// overlap at birth does not collide until their boxes have separated once.
+struct SiblingFilter final : btOverlapFilterCallback {
+  std::set<std::pair<int, int>> blocked;
+  bool needBroadphaseCollision(btBroadphaseProxy* p0, btBroadphaseProxy* p1) const override {
+    if ((p0->m_collisionFilterGroup & p1->m_collisionFilterMask) == 0 || (p1->m_collisionFilterGroup & p0->m_collisionFilterMask) == 0) {
+      return false;
+    }
+    const int a = static_cast<const btCollisionObject*>(p0->m_clientObject)->getUserIndex();
+    const int b = static_cast<const btCollisionObject*>(p1->m_clientObject)->getUserIndex();
+    return a < 0 || b < 0 || !blocked.contains({std::min(a, b), std::max(a, b)});
+  }
+};
+
+bool aabbsOverlap(const btRigidBody& a, const btRigidBody& b) {
+  btVector3 amin, amax, bmin, bmax;
+  a.getAabb(amin, amax);
+  b.getAabb(bmin, bmax);
+  for (int k = 0; k < 3; ++k)
+    if (amax[k] < bmin[k] || bmax[k] < amin[k]) return false;
+  return true;
+}
+
+class Simulation {
+ public:
+  Simulation(World world, const Scene& scene, const PlayerSettings& settings)
+      : mWorld(std::move(world)), mScene(scene), mSettings(settings) {
+    mBroadphase = std::make_unique<btDbvtBroadphase>();
+    mDispatcher = std::make_unique<btCollisionDispatcher>(&mConfig);
+    mBullet = std::make_unique<btDiscreteDynamicsWorld>(mDispatcher.get(), mBroadphase.get(), &mSolver, &mConfig);
+    mBullet->setGravity(bt(scene.gravityMps2));
+    mBullet->getSolverInfo().m_splitImpulse = 1;  // penetration recovery adds no kinetic energy
+    mBullet->getPairCache()->setOverlapFilterCallback(&mFilter);
+    mSolver.setRandSeed(0);
+  }
+
+  ~Simulation() {
+    for (Body& b : mBodies)
+      if (b.alive) mBullet->removeRigidBody(b.rigid.get());
+    if (mFloor) mBullet->removeRigidBody(mFloor.get());
+  }
+
+  Status addFloor() {
+    if (!mScene.floor) return Ok{};
+    mFloorMaterial = materialPreset(mScene.floor->material).value();
+    mFloorShape = std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), mScene.floor->heightM);
+    btRigidBody::btRigidBodyConstructionInfo info(0.0, nullptr, mFloorShape.get());
+    mFloor = std::make_unique<btRigidBody>(info);
+    mFloor->setRestitution(mFloorMaterial.restitution);
+    mFloor->setFriction(mSettings.frictionCoefficient);
+    mFloor->setUserIndex(-1);
+    mBullet->addRigidBody(mFloor.get());
+    return Ok{};
+  }
+
+  // A hull body from a surface in its local frame, placed with the local frame at (rotation, translation).
+  Body& addHullBody(BodyState state, const TriangleMesh& surface, const MassProperties& mass, bool isStatic,
+                    const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {
+    Body& b = mBodies.emplace_back();
+    b.state = std::move(state);
+    b.state.index = static_cast<int32_t>(mBodies.size() - 1);
+    b.state.isStatic = isStatic;
+    b.state.massKg = mass.massKg;
+    b.state.surface = surface;
+    b.comLocal = mass.centerOfMassM;
+    Eigen::Vector3d moments;
+    principalAxes(mass.inertiaKgM2, b.axes, moments);
+    auto hull = std::make_unique<btConvexHullShape>();
+    for (Eigen::Index v = 0; v < surface.vertices.rows(); ++v) {
+      const Eigen::Vector3d x = b.axes.transpose() * (surface.vertices.row(v).transpose() - b.comLocal);
+      b.sizeM = std::max(b.sizeM, x.norm());
+      hull->addPoint(bt(x), false);
+    }
+    hull->recalcLocalAabb();
+    hull->optimizeConvexHull();
+    hull->setMargin(mSettings.collisionMarginM);
+    b.shape = std::move(hull);
+    finishBody(b, isStatic ? 0.0 : mass.massKg, moments, rotation * b.axes, rotation * b.comLocal + translation);
+    return b;
+  }
+
+  void finishBody(Body& b, double massKg, const Eigen::Vector3d& moments, const Eigen::Matrix3d& bodyRotation,
+                  const Eigen::Vector3d& comWorld) {
+    btRigidBody::btRigidBodyConstructionInfo info(massKg, nullptr, b.shape.get(), massKg > 0.0 ? bt(moments) : btVector3(0, 0, 0));
+    info.m_startWorldTransform = btTransform(bt(bodyRotation), bt(comWorld));
+    info.m_restitution = b.material.restitution;
+    info.m_friction = mSettings.frictionCoefficient;
+    b.rigid = std::make_unique<btRigidBody>(info);
+    b.rigid->setUserIndex(b.state.index);
+    b.rigid->setActivationState(DISABLE_DEACTIVATION);  // a support that breaks must wake what rests on it
+    if (massKg > 0.0) {
+      // Swept-sphere CCD for fast small bodies (through thin panes).
+      b.rigid->setCcdMotionThreshold(0.5 * b.sizeM);
+      b.rigid->setCcdSweptSphereRadius(0.2 * b.sizeM);
+    }
+    mBullet->addRigidBody(b.rigid.get());
+  }
+
+  Status addObject(const SceneObject& o) {
+    ObjectDesc desc{.asset = o.asset, .rotation = o.rotation.toRotationMatrix(), .translationM = o.positionWorldM};
+    auto id = mWorld.addObject(desc);
+    if (!id) return makeError(id.error().code, "scene object '" + o.name + "': " + id.error().message);
+    const ObjectAsset* asset = mWorld.objectAsset(id.value()).value();
+    BodyState state;
+    state.name = o.name;
+    state.kind = BodyKind::Object;
+    Body& b = addHullBody(std::move(state), assetSurface(*asset), asset->massProperties, o.isStatic, desc.rotation,
+                          desc.translationM);
+    b.object = id.value();
+    b.material = materialOf(asset->materialName);
+    b.rigid->setRestitution(b.material.restitution);
+    b.runtimeRotation = desc.rotation;
+    b.runtimeTranslation = desc.translationM;
+    if (!o.isStatic) {
+      b.rigid->setLinearVelocity(bt(o.velocityMps));
+      b.rigid->setAngularVelocity(bt(o.angularVelocityRadPerS));
+    }
+    return Ok{};
+  }
+
+  void addImpactor(const RigidImpactor& imp) {
+    Body& b = mBodies.emplace_back();
+    b.state.index = static_cast<int32_t>(mBodies.size() - 1);
+    b.state.name = imp.name;
+    b.state.kind = BodyKind::Impactor;
+    b.state.massKg = imp.massKg;
+    b.state.impactor = imp;
+    b.material = materialPreset(imp.material).value();
+    Eigen::Vector3d moments;
+    if (imp.shape == ImpactorShape::Sphere) {
+      b.shape = std::make_unique<btSphereShape>(imp.radiusM);
+      moments.setConstant(0.4 * imp.massKg * imp.radiusM * imp.radiusM);
+      b.sizeM = imp.radiusM;
+      b.radiusForOthersM = imp.radiusM;
+    } else {
+      b.shape = std::make_unique<btBoxShape>(bt(imp.halfExtentsM));
+      b.shape->setMargin(mSettings.collisionMarginM);
+      const Eigen::Vector3d e2 = (2.0 * imp.halfExtentsM).cwiseAbs2();
+      moments = imp.massKg / 12.0 * Eigen::Vector3d(e2.y() + e2.z(), e2.x() + e2.z(), e2.x() + e2.y());
+      b.sizeM = imp.halfExtentsM.norm();
+    }
+    finishBody(b, imp.massKg, moments, imp.rotation.toRotationMatrix(), imp.positionWorldM);
+    b.rigid->setLinearVelocity(bt(imp.velocityMps));
+    b.rigid->setAngularVelocity(bt(imp.angularVelocityRadPerS));
+  }
+
+  Material materialOf(const std::string& name) const {
+    for (const Material& m : mMaterials)
+      if (m.name == name) return m;
+    return materialPreset("glass").value();  // unreachable for a validated pack
+  }
+  void setMaterials(std::vector<Material> materials) { mMaterials = std::move(materials); }
+
+  Result<PlayResult> run() {
+    PlayResult out;
+    out.scene = mScene.name;
+    out.timeStepS = mScene.timeStepS;
+    out.frames = std::max<int64_t>(1, std::llround(mScene.durationS / mScene.timeStepS));
+    const double h = mScene.timeStepS / mScene.substeps;
+    double timeS = 0.0;
+    if (mSettings.recordTracks) recordPoses(0);
+    for (int64_t frame = 0; frame < out.frames; ++frame) {
+      FrameStats fs;
+      fs.frame = frame;
+      for (int s = 0; s < mScene.substeps; ++s) {
+        const auto t0 = Clock::now();
+        for (Body& b : mBodies) {
+          if (!b.alive) continue;
+          b.preVelocity = eig(b.rigid->getLinearVelocity());
+          b.preAngular = eig(b.rigid->getAngularVelocity());
+        }
+        mBullet->stepSimulation(h, 0);
+        timeS = (static_cast<double>(frame) + (s + 1.0) / mScene.substeps) * mScene.timeStepS;
+        const auto t1 = Clock::now();
+        fs.fractured = processContacts(frame, timeS, out) || fs.fractured;
+        const auto t2 = Clock::now();
+        fs.bulletS += seconds(t0, t1);
+        fs.fractureS += seconds(t1, t2);
+      }
+      fs.timeS = timeS;
+      fs.bodies = 0;
+      for (const Body& b : mBodies) fs.bodies += b.alive ? 1 : 0;
+      energy(fs.energyJ, fs.kineticJ);
+      out.frameStats.push_back(fs);
+      if (mSettings.recordTracks) recordPoses(frame + 1);
+    }
+    out.deferredImpacts = mDeferredCount;
+    uint64_t hash = 1469598103934665603ull;
+    auto eat = [&](double v) {
+      unsigned char bytes[sizeof v];
+      std::memcpy(bytes, &v, sizeof v);
+      for (unsigned char c : bytes) hash = (hash ^ c) * 1099511628211ull;
+    };
+    for (Body& b : mBodies) {
+      if (!b.alive) continue;
+      ++out.bodiesAtEnd;
+      const btTransform& t = b.rigid->getCenterOfMassTransform();
+      for (int i = 0; i < 3; ++i) eat(t.getOrigin()[i]);
+      const btQuaternion q = t.getRotation();
+      for (int i = 0; i < 4; ++i) eat(q[i]);
+    }
+    out.poseHash = hash;
+    for (Body& b : mBodies) {
+      if (b.alive && !mSettings.recordTracks) recordPose(b);
+      if (b.alive) b.state.lowestPointM = lowestPoint(b);
+      out.bodies.push_back(b.state);
+    }
+    return out;
+  }
+
+ private:
+  // Every breakable body's fastest new contact in this step (plus what waited), the fastest
+  // maxImpactsPerStep of them handed to the runtime. Returns whether a body broke.
+  bool processContacts(int64_t frame, double timeS, PlayResult& out) {
+    std::map<int32_t, Candidate> best;  // by body: deterministic order
+    auto consider = [&](const Candidate& c) {
+      auto [it, inserted] = best.try_emplace(c.body, c);
+      if (!inserted && c.speedMps > it->second.speedMps) it->second = c;
+    };
+    for (const Candidate& c : mDeferred)
+      if (mBodies[static_cast<size_t>(c.body)].alive) consider(c);
+    mDeferred.clear();
+
+    const int manifolds = mDispatcher->getNumManifolds();
+    for (int m = 0; m < manifolds; ++m) {
+      const btPersistentManifold* manifold = mDispatcher->getManifoldByIndexInternal(m);
+      const int a = manifold->getBody0()->getUserIndex(), b = manifold->getBody1()->getUserIndex();
+      for (int p = 0; p < manifold->getNumContacts(); ++p) {
+        const btManifoldPoint& pt = manifold->getContactPoint(p);
+        if (pt.getDistance() > 2.0 * mSettings.collisionMarginM) continue;
+        const Eigen::Vector3d n = eig(pt.m_normalWorldOnB);  // from B towards A
+        const Eigen::Vector3d pa = eig(pt.getPositionWorldOnA()), pb = eig(pt.getPositionWorldOnB());
+        const Eigen::Vector3d va = pointVelocity(a, pa), vb = pointVelocity(b, pb);
+        const double approach = -(va - vb).dot(n);
+        if (!(approach > mSettings.impactThresholdMps)) continue;
+        if (breakable(a, timeS)) consider(candidate(a, b, approach, pa, -n));
+        if (breakable(b, timeS)) consider(candidate(b, a, approach, pb, n));
+      }
+    }
+    std::vector<Candidate> order;
+    for (auto& [body, c] : best) order.push_back(c);
+    std::sort(order.begin(), order.end());
+    bool broke = false;
+    for (size_t i = 0; i < order.size(); ++i) {
+      if (!mBodies[static_cast<size_t>(order[i].body)].alive) continue;
+      if (static_cast<int>(i) >= mSettings.maxImpactsPerStep) {
+        mDeferred.push_back(order[i]);
+        ++mDeferredCount;
+        continue;
+      }
+      broke = impact(order[i], frame, timeS, out) || broke;
+    }
+    updateSiblingPairs();
+    return broke;
+  }
+
+  void updateSiblingPairs() {
+    for (auto it = mFilter.blocked.begin(); it != mFilter.blocked.end();) {
+      const Body& a = mBodies[static_cast<size_t>(it->first)];
+      const Body& b = mBodies[static_cast<size_t>(it->second)];
+      it = !a.alive || !b.alive || !aabbsOverlap(*a.rigid, *b.rigid) ? mFilter.blocked.erase(it) : std::next(it);
+    }
+    for (size_t i = 0; i < mBornThisStep.size(); ++i)
+      for (size_t j = i + 1; j < mBornThisStep.size(); ++j) {
+        const Body& a = mBodies[static_cast<size_t>(mBornThisStep[i])];
+        const Body& b = mBodies[static_cast<size_t>(mBornThisStep[j])];
+        if (!a.alive || !b.alive || !aabbsOverlap(*a.rigid, *b.rigid)) continue;
+        mFilter.blocked.insert({a.state.index, b.state.index});
+        // Adding a body already paired it with what it overlaps: drop that pair.
+        mBullet->getPairCache()->removeOverlappingPair(a.rigid->getBroadphaseHandle(), b.rigid->getBroadphaseHandle(), mDispatcher.get());
+      }
+    mBornThisStep.clear();
+  }
+
+  bool breakable(int index, double timeS) const {
+    if (index < 0) return false;
+    const Body& b = mBodies[static_cast<size_t>(index)];
+    return b.alive && b.object.valid() && timeS >= b.cooldownUntilS;
+  }
+
+  Eigen::Vector3d pointVelocity(int index, const Eigen::Vector3d& point) const {
+    if (index < 0) return Eigen::Vector3d::Zero();
+    const Body& b = mBodies[static_cast<size_t>(index)];
+    return b.preVelocity + b.preAngular.cross(point - b.com());
+  }
+
+  Candidate candidate(int body, int other, double speed, const Eigen::Vector3d& pointWorld, const Eigen::Vector3d& normalWorld) const {
+    Eigen::Matrix3d r;
+    Eigen::Vector3d t;
+    mBodies[static_cast<size_t>(body)].localPose(r, t);
+    return Candidate{body, other, speed, r.transpose() * (pointWorld - t), r.transpose() * normalWorld};
+  }
+
+  bool impact(const Candidate& c, int64_t frame, double timeS, PlayResult& out) {
+    Body& b = mBodies[static_cast<size_t>(c.body)];
+    ImpactDesc d;
+    d.object = b.object;
+    d.pointWorld = b.runtimeRotation * c.pointLocal + b.runtimeTranslation;
+    d.normalWorld = (b.runtimeRotation * c.normalLocal).normalized();
+    d.speedMps = c.speedMps;
+    d.pointToleranceM = mSettings.pointToleranceFraction * b.sizeM;
+    const Material* otherMaterial = &mFloorMaterial;
+    if (c.other >= 0) {
+      const Body& o = mBodies[static_cast<size_t>(c.other)];
+      d.impactorMassKg = o.rigid->getInvMass() > 0.0 ? o.massKg() : kInf;
+      d.impactorRadiusM = o.radiusForOthersM;
+      otherMaterial = &o.material;
+    } else {
+      d.impactorMassKg = kInf;
+      d.impactorRadiusM = kInf;
+    }
+    d.impactorYoungsModulusPa = otherMaterial->youngsModulusPa;
+    d.impactorPoissonRatio = otherMaterial->poissonRatio;
+    b.cooldownUntilS = timeS + mSettings.cooldownS;
+
+    ImpactEvent e;
+    e.timeS = timeS;
+    e.frame = frame;
+    e.body = c.body;
+    e.object = b.state.name;
+    e.otherBody = c.other;
+    e.speedMps = c.speedMps;
+    e.otherMassKg = d.impactorMassKg;
+    ++out.impacts;
+    Status st = mWorld.impact(d, mResult);
+    if (!st && std::isinf(d.impactorRadiusM)) {
+      // A flat face on a flat impactor has no Hertz contact: take the body's size as its radius
+      // (an edge or corner of that size meets the flat).
+      d.bodyRadiusM = b.sizeM;
+      st = mWorld.impact(d, mResult);
+    }
+    if (!st) {
+      e.error = st.error().message;
+      ++out.failedImpacts;
+      out.events.push_back(std::move(e));
+      return false;
+    }
+    e.broken = mResult.broken;
+    e.peakPrincipalStressPa = mResult.peakPrincipalStressPa;
+    e.times = mResult.times;
+    if (mResult.broken) {
+      ++out.breaks;
+      e.fragments = static_cast<int32_t>(mResult.fragments.size());
+      for (const FragmentResult& f : mResult.fragments) e.debris += f.debris ? 1 : 0;
+      spawnFragments(c, frame);
+    }
+    out.events.push_back(std::move(e));
+    return mResult.broken;
+  }
+
+  void spawnFragments(const Candidate& c, int64_t frame) {
+    // Index, not reference: adding bodies grows mBodies.
+    const size_t parentIndex = static_cast<size_t>(c.body);
+    Eigen::Matrix3d rotation;
+    Eigen::Vector3d translation;
+    mBodies[parentIndex].localPose(rotation, translation);
+    const Eigen::Vector3d v = eig(mBodies[parentIndex].rigid->getLinearVelocity());
+    const Eigen::Vector3d w = eig(mBodies[parentIndex].rigid->getAngularVelocity());
+    const Eigen::Vector3d com = mBodies[parentIndex].com();
+    const bool parentStatic = mBodies[parentIndex].state.isStatic;
+    mBullet->removeRigidBody(mBodies[parentIndex].rigid.get());
+    mBodies[parentIndex].alive = false;
+    mBodies[parentIndex].state.lastFrame = frame;  // its last sample: the start of this frame
+    if (!mSettings.recordTracks) recordPose(mBodies[parentIndex]);
+    mBodies[parentIndex].state.lowestPointM = lowestPoint(mBodies[parentIndex]);
+    // A static body cannot take the impactor's momentum: the impactor goes on as before the step.
+    if (parentStatic && c.other >= 0) {
+      Body& o = mBodies[static_cast<size_t>(c.other)];
+      if (o.alive && o.rigid->getInvMass() > 0.0) {
+        o.rigid->setLinearVelocity(bt(o.preVelocity));
+        o.rigid->setAngularVelocity(bt(o.preAngular));
+      }
+    }
+    for (size_t i = 0; i < mResult.fragments.size(); ++i) {
+      const FragmentResult& f = mResult.fragments[i];
+      const Body& parent = mBodies[parentIndex];
+      BodyState state;
+      state.name = parent.state.name + "/" + std::to_string(i);
+      state.kind = f.object.valid() ? BodyKind::Fragment : BodyKind::Debris;
+      state.parent = static_cast<int32_t>(parentIndex);
+      state.firstFrame = frame + 1;  // first sample: the end of this frame
+      const Material material = parent.material;
+      const Eigen::Matrix3d runtimeRotation = parent.runtimeRotation;
+      const Eigen::Vector3d runtimeTranslation = parent.runtimeTranslation;
+      const double cooldown = parent.cooldownUntilS;
+      Body& b = addHullBody(std::move(state), f.surface, f.massProperties, false, rotation, translation);
+      b.object = f.object;
+      b.material = material;
+      b.rigid->setRestitution(material.restitution);
+      b.runtimeRotation = runtimeRotation;
+      b.runtimeTranslation = runtimeTranslation;
+      b.cooldownUntilS = cooldown;
+      b.rigid->setLinearVelocity(bt(Eigen::Vector3d(v + w.cross(b.com() - com))));
+      b.rigid->setAngularVelocity(bt(w));
+      b.preVelocity = eig(b.rigid->getLinearVelocity());
+      b.preAngular = w;
+      mBornThisStep.push_back(b.state.index);
+    }
+  }
+
+  void energy(double& total, double& kinetic) const {
+    total = kinetic = 0.0;
+    for (const Body& b : mBodies) {
+      if (!b.alive || b.rigid->getInvMass() == 0.0) continue;
+      const double m = b.massKg();
+      const Eigen::Vector3d v = eig(b.rigid->getLinearVelocity()), w = eig(b.rigid->getAngularVelocity());
+      const Eigen::Matrix3d r = eig(b.rigid->getCenterOfMassTransform().getBasis());
+      const Eigen::Vector3d iw = r.transpose() * w;
+      const Eigen::Vector3d inertia = eig(b.rigid->getLocalInertia());
+      const double k = 0.5 * m * v.squaredNorm() + 0.5 * iw.dot(inertia.cwiseProduct(iw));
+      kinetic += k;
+      total += k - m * mScene.gravityMps2.dot(b.com());
+    }
+  }
+
+  double lowestPoint(const Body& b) const {
+    Eigen::Matrix3d r;
+    Eigen::Vector3d t;
+    b.localPose(r, t);
+    if (b.state.kind != BodyKind::Impactor) {
+      double z = kInf;
+      for (Eigen::Index v = 0; v < b.state.surface.vertices.rows(); ++v)
+        z = std::min(z, (r * b.state.surface.vertices.row(v).transpose() + t).z());
+      return z;
+    }
+    const RigidImpactor& imp = b.state.impactor;
+    if (imp.shape == ImpactorShape::Sphere) return t.z() - imp.radiusM;
+    return t.z() - (r.row(2).cwiseAbs() * imp.halfExtentsM)(0);
+  }
+
+  void recordPose(Body& b) {
+    Eigen::Matrix3d r;
+    Eigen::Vector3d t;
+    b.localPose(r, t);
+    if (!mSettings.recordTracks) {
+      b.state.rotations.clear();
+      b.state.translationsM.clear();
+    }
+    b.state.rotations.emplace_back(Eigen::Quaterniond(r).normalized());
+    b.state.translationsM.push_back(t);
+  }
+
+  // Track samples: one per frame boundary, sample k = pose at the end of frame k − 1 (k = 0: start).
+  void recordPoses(int64_t sample) {
+    for (Body& b : mBodies)
+      if (b.alive && b.state.firstFrame <= sample) recordPose(b);
+  }
+
+  World mWorld;
+  const Scene& mScene;
+  PlayerSettings mSettings;
+  std::vector<Material> mMaterials;
+  Material mFloorMaterial = materialPreset("concrete").value();
+  btDefaultCollisionConfiguration mConfig;
+  btSequentialImpulseConstraintSolver mSolver;
+  SiblingFilter mFilter;  // outlives mBullet, which points to it
+  std::unique_ptr<btBroadphaseInterface> mBroadphase;
+  std::unique_ptr<btCollisionDispatcher> mDispatcher;
+  std::unique_ptr<btDiscreteDynamicsWorld> mBullet;
+  std::unique_ptr<btCollisionShape> mFloorShape;
+  std::unique_ptr<btRigidBody> mFloor;
+  std::vector<Body> mBodies;
+  std::vector<Candidate> mDeferred;
+  int64_t mDeferredCount = 0;
+  std::vector<int32_t> mBornThisStep;
+  ImpactResult mResult;
+};
+
+}  // namespace
+
+std::string_view bodyKindName(BodyKind kind) {
+  switch (kind) {
+    case BodyKind::Object: return "object";
+    case BodyKind::Fragment: return "fragment";
+    case BodyKind::Debris: return "debris";
+    case BodyKind::Impactor: return "impactor";
+  }
+  return "object";
+}
+
+Status validatePlayerSettings(const PlayerSettings& s) {
+  auto bad = [](const std::string& what) { return makeError(ErrorCode::InvalidArgument, "player settings: " + what); };
+  if (!(s.impactThresholdMps > 0.0) || !std::isfinite(s.impactThresholdMps)) return bad("impactThresholdMps must be finite and > 0");
+  if (!(s.cooldownS >= 0.0) || !std::isfinite(s.cooldownS)) return bad("cooldownS must be finite and ≥ 0");
+  if (s.maxImpactsPerStep < 1) return bad("maxImpactsPerStep must be ≥ 1");
+  if (!(s.frictionCoefficient >= 0.0) || !std::isfinite(s.frictionCoefficient)) return bad("frictionCoefficient must be finite and ≥ 0");
+  if (!(s.collisionMarginM > 0.0 && s.collisionMarginM <= 0.05)) return bad("collisionMarginM must be in (0, 0.05]");
+  if (!(s.pointToleranceFraction > 0.0 && s.pointToleranceFraction <= 1.0)) return bad("pointToleranceFraction must be in (0, 1]");
+  return validateWorldSettings(s.world);
+}
+
+Result<PlayResult> playScene(Pack pack, const Scene& scene, const PlayerSettings& settings) {
+  if (Status st = validatePlayerSettings(settings); !st) return st.error();
+  for (const SceneObject& o : scene.objects) {
+    const bool known = std::any_of(pack.objects.begin(), pack.objects.end(), [&](const ObjectAsset& a) { return a.name == o.asset; });
+    if (!known) return makeError(ErrorCode::InvalidArgument, "scene '" + scene.name + "': object '" + o.name + "' names asset '" + o.asset + "', which the pack does not have");
+  }
+  const auto t0 = Clock::now();
+  std::vector<Material> materials = pack.materials;
+  WorldSettings ws = settings.world;
+  ws.seed = scene.seed;
+  auto world = World::create(std::move(pack), ws);
+  if (!world) return world.error();
+  auto sim = std::make_unique<Simulation>(std::move(world).value(), scene, settings);
+  sim->setMaterials(std::move(materials));
+  if (Status st = sim->addFloor(); !st) return st.error();
+  for (const SceneObject& o : scene.objects)
+    if (Status st = sim->addObject(o); !st) return st.error();
+  for (const RigidImpactor& imp : scene.impactors) sim->addImpactor(imp);
+  const double loadS = seconds(t0, Clock::now());
+  auto result = sim->run();
+  if (result) result.value().loadS = loadS;
+  return result;
+}
+
+FrameTimeSummary summarizeFrameTimes(const std::vector<FrameStats>& frames) {
+  FrameTimeSummary s;
+  if (frames.empty()) return s;
+  std::vector<double> t;
+  t.reserve(frames.size());
+  for (const FrameStats& f : frames) {
+    t.push_back(f.bulletS + f.fractureS);
+    s.bulletS += f.bulletS;
+    s.fractureS += f.fractureS;
+  }
+  std::sort(t.begin(), t.end());
+  auto quantile = [&](double q) { return t[std::min(t.size() - 1, static_cast<size_t>(std::ceil(q * static_cast<double>(t.size())) - 1))]; };
+  s.medianS = quantile(0.5);
+  s.p99S = quantile(0.99);
+  s.maxS = t.back();
+  return s;
+}
+
+}  // namespace brittle
