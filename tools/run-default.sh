@@ -1,14 +1,16 @@
 #!/usr/bin/env bash
 # The main job, end to end on the bundled default assets: install, build, bake the default pack
-# (four objects and a 70-entry fragment database), break each object with one impact, print the
-# results and write the fragments and their pictures.
+# (four objects and a 70-entry fragment database), break each object with one impact, play the
+# default scenes (assets/scenes/) in the Bullet player, print the results and write the fragments,
+# the replays and their pictures.
 # Output: out/default.h5 (+ out/default.json, its inspection), out/impacts/<object>.json,
-# out/fragments/<object>/fragment-NN.off, out/pictures/<object>.png.
+# out/fragments/<object>/fragment-NN.off, out/pictures/<object>.png, out/replays/<scene>.glb,
+# out/play/<scene>.json (statistics per event and frame), out/pictures/<scene>.png.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh
-rm -rf out/impacts out/fragments out/pictures
-mkdir -p out/impacts out/fragments
+rm -rf out/impacts out/fragments out/pictures out/replays out/play
+mkdir -p out/impacts out/fragments out/replays out/play
 build/bin/brittle bake --manifest assets/default-pack.json --out out/default.h5
 build/bin/brittle inspect out/default.h5 --json > out/default.json
 echo "inspection JSON: out/default.json"
@@ -30,3 +32,12 @@ impact brick --point 0.1075,0.05125,0.0325 --normal 0.7,0.5,0.5 --speed 10 --imp
 impact stone-ball --point 0,0,-0.1 --normal 0,0,-1 --speed 15 --impactor-mass inf --impactor-radius inf
 echo
 /usr/bin/python3 tools/scripts/plot_fragments.py out/fragments/* --out out/pictures
+
+# The default scenes: impacts come from Bullet's contacts, fragments become bodies and break again.
+for scene in assets/scenes/*.json; do
+  name=$(basename "$scene" .json)
+  echo
+  build/bin/brittle play out/default.h5 "$scene" --out "out/replays/$name.glb" --out-stats "out/play/$name.json"
+done
+echo
+/usr/bin/python3 tools/scripts/plot_replay.py out/replays/*.glb --out out/pictures
