@@ -1,32 +1,13 @@
-// FragmentTestSupport.h — small databases and random similarity transforms for the fragment tests.
+// FragmentTestSupport.h — random similarity transforms for the fragment tests (small databases:
+// DatabaseFixtures.h).
 #pragma once
 
 #include <Eigen/Geometry>
 #include <random>
 
-#include "brittle/precompute/FragmentDatabaseBake.h"
-#include "brittle/testing/Fixtures.h"
+#include "brittle/testing/DatabaseFixtures.h"
 
 namespace brittle::testing {
-
-/// The base shapes the project ships (assets/shapes/base-shapes.json).
-inline std::vector<BaseShapeDefinition> shippedBaseShapes() {
-  auto shapes = loadBaseShapes(sourceDir() / "assets" / "shapes" / "base-shapes.json");
-  return shapes ? shapes.value() : std::vector<BaseShapeDefinition>{};
-}
-
-/// Settings for a small, fast database: coarse tets and few modes.
-inline DatabaseBakeSettings smallDatabaseSettings(int64_t entries, bool physics) {
-  DatabaseBakeSettings s;
-  s.shapes = shippedBaseShapes();
-  s.entryCount = entries;
-  s.seed = 7;
-  s.physics = physics;
-  s.tetMesh.targetTets = 400;
-  s.modeCount = 6;
-  s.descriptors.voxel.resolution = s.descriptors.voxelImproved.resolution = 12;
-  return s;
-}
 
 /// A uniformly random rotation (det +1) from a seeded generator.
 inline Eigen::Matrix3d randomRotation(std::mt19937_64& rng) {

@@ -52,6 +52,14 @@ inline std::filesystem::path writeScratchFile(const std::string& name, std::stri
   return writeScratchFile(name, reinterpret_cast<const uint8_t*>(text.data()), text.size());
 }
 
+/// Writes "custom.json", a valid material file, into scratchDir(): the readers that name material
+/// files relative to their own file (manifests, scene requirements) can then reach that branch.
+inline void writeCustomMaterialFile() {
+  writeScratchFile("custom.json", R"({"name": "custom", "youngs_modulus_pa": 7.2e10, "poisson_ratio": 0.22,
+  "density_kg_per_m3": 2500, "tensile_strength_pa": 5e7, "fracture_energy_j_per_m2": 7.4,
+  "rayleigh_alpha_per_s": 0, "rayleigh_beta_s": 1.6e-7, "restitution": 0.5, "source": "fuzz fixture"})");
+}
+
 /// A finding, not a rejection: prints why and aborts, so that libFuzzer keeps the input.
 [[noreturn]] inline void finding(const std::string& what) {
   std::fprintf(stderr, "fuzz finding: %s\n", what.c_str());

@@ -8,16 +8,8 @@
 #include "FuzzSupport.h"
 #include "brittle/precompute/BakePipeline.h"
 
-namespace {
-
-constexpr const char* kCustomMaterial = R"({"name": "custom", "youngs_modulus_pa": 7.2e10, "poisson_ratio": 0.22,
-  "density_kg_per_m3": 2500, "tensile_strength_pa": 5e7, "fracture_energy_j_per_m2": 7.4,
-  "rayleigh_alpha_per_s": 0, "rayleigh_beta_s": 1.6e-7, "restitution": 0.5, "source": "fuzz fixture"})";
-
-}  // namespace
-
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  brittle::fuzz::writeScratchFile("custom.json", kCustomMaterial);
+  brittle::fuzz::writeCustomMaterialFile();
   return 0;
 }
 

@@ -10,16 +10,8 @@
 #include "FuzzSupport.h"
 #include "brittle/precompute/ModelSizing.h"
 
-namespace {
-
-constexpr const char* kCustomMaterial = R"({"name": "custom", "youngs_modulus_pa": 2.1e11, "poisson_ratio": 0.3,
-  "density_kg_per_m3": 7850, "tensile_strength_pa": 5e8, "fracture_energy_j_per_m2": 1e4,
-  "rayleigh_alpha_per_s": 0, "rayleigh_beta_s": 0, "restitution": 0.6, "source": "fuzz fixture"})";
-
-}  // namespace
-
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  brittle::fuzz::writeScratchFile("custom.json", kCustomMaterial);
+  brittle::fuzz::writeCustomMaterialFile();
   return 0;
 }
 

@@ -14,6 +14,7 @@
 #include "brittle/precompute/ModalAnalysis.h"
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/World.h"
+#include "brittle/testing/DatabaseFixtures.h"
 #include "brittle/testing/Fixtures.h"
 
 namespace brittle {
@@ -47,14 +48,7 @@ class StabilityTest : public ::testing::Test {
     add("stiff", testing::makeBoxSurface(0.1, 0.1, 0.1), variant("stiff", 7e15), 1500);
     add("soft", testing::makeBoxSurface(0.1, 0.1, 0.1), variant("soft", 7e4), 1500);
     add("needle", testing::makeBoxSurface(0.2, 0.006, 0.006), variant("needle-glass", 70e9), 1500);
-    DatabaseBakeSettings db;
-    db.shapes = selectBaseShapes(loadBaseShapes(testing::sourceDir() / "assets" / "shapes" / "base-shapes.json").value(),
-                                 {"box", "plate", "rod"})
-                    .value();
-    db.entryCount = 8;
-    db.tetMesh.targetTets = 300;
-    db.modeCount = 6;
-    auto database = bakeFragmentDatabase(db);
+    auto database = bakeFragmentDatabase(testing::shippedShapesDatabase({"box", "plate", "rod"}, 8, 300, 6));
     ASSERT_TRUE(database) << database.error().message;
     sPack->database = std::move(database).value();
   }

@@ -12,6 +12,7 @@
 #include "brittle/precompute/FragmentDatabaseBake.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshValidation.h"
+#include "brittle/testing/DatabaseFixtures.h"
 #include "brittle/testing/Fixtures.h"
 
 namespace brittle {
@@ -47,14 +48,7 @@ class WorldTest : public ::testing::Test {
     sPack = new Pack;
     sPack->materials.push_back(glass);
     sPack->objects.push_back(std::move(plate).value());
-    DatabaseBakeSettings db;
-    db.shapes = selectBaseShapes(loadBaseShapes(testing::sourceDir() / "assets" / "shapes" / "base-shapes.json").value(),
-                                 {"box", "plate", "wedge", "blob"})
-                    .value();
-    db.entryCount = 16;
-    db.tetMesh.targetTets = 400;
-    db.modeCount = 12;
-    auto database = bakeFragmentDatabase(db);
+    auto database = bakeFragmentDatabase(testing::shippedShapesDatabase({"box", "plate", "wedge", "blob"}, 16, 400, 12));
     ASSERT_TRUE(database) << database.error().message;
     sPack->database = std::move(database).value();
   }

@@ -18,6 +18,7 @@
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/BaseShapes.h"
 #include "brittle/precompute/FragmentDatabaseBake.h"
+#include "brittle/testing/DatabaseFixtures.h"
 #include "brittle/testing/Fixtures.h"
 
 namespace brittle {
@@ -40,14 +41,7 @@ const Pack* smallPack() {
     auto baked = bakePack(objects);
     EXPECT_TRUE(baked) << baked.error().message;
     if (!baked) return p;
-    DatabaseBakeSettings db;
-    db.shapes = selectBaseShapes(loadBaseShapes(testing::sourceDir() / "assets" / "shapes" / "base-shapes.json").value(),
-                                 {"box", "plate", "wedge", "blob"})
-                    .value();
-    db.entryCount = 8;
-    db.tetMesh.targetTets = 300;
-    db.modeCount = 6;
-    auto database = bakeFragmentDatabase(db);
+    auto database = bakeFragmentDatabase(testing::shippedShapesDatabase({"box", "plate", "wedge", "blob"}, 8, 300, 6));
     EXPECT_TRUE(database) << database.error().message;
     if (!database) return p;
     p = std::make_unique<Pack>(std::move(baked).value());

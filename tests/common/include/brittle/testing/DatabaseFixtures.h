@@ -1,0 +1,45 @@
+// DatabaseFixtures.h — small fragment databases from the shipped base shapes, for the suites that
+// bake one (fragments, runtime, player). Header-only: its users link brittle::precompute.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "brittle/precompute/FragmentDatabaseBake.h"
+#include "brittle/testing/Fixtures.h"
+
+namespace brittle::testing {
+
+/// The base shapes the project ships (assets/shapes/base-shapes.json).
+inline std::vector<BaseShapeDefinition> shippedBaseShapes() {
+  auto shapes = loadBaseShapes(sourceDir() / "assets" / "shapes" / "base-shapes.json");
+  return shapes ? shapes.value() : std::vector<BaseShapeDefinition>{};
+}
+
+/// Settings for a small, fast database: coarse tets and few modes.
+inline DatabaseBakeSettings smallDatabaseSettings(int64_t entries, bool physics) {
+  DatabaseBakeSettings s;
+  s.shapes = shippedBaseShapes();
+  s.entryCount = entries;
+  s.seed = 7;
+  s.physics = physics;
+  s.tetMesh.targetTets = 400;
+  s.modeCount = 6;
+  s.descriptors.voxel.resolution = s.descriptors.voxelImproved.resolution = 12;
+  return s;
+}
+
+/// The default settings on the named shipped shapes, with `entries` entries of about `tets` tets
+/// and `modes` modes each. An unknown name leaves the shapes empty (the bake then refuses).
+inline DatabaseBakeSettings shippedShapesDatabase(const std::vector<std::string>& names, int64_t entries, int64_t tets,
+                                                  int modes) {
+  DatabaseBakeSettings s;
+  auto shapes = selectBaseShapes(shippedBaseShapes(), names);
+  if (shapes) s.shapes = std::move(shapes).value();
+  s.entryCount = entries;
+  s.tetMesh.targetTets = tets;
+  s.modeCount = modes;
+  return s;
+}
+
+}  // namespace brittle::testing
