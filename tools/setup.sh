@@ -12,6 +12,9 @@ PACKAGES=(cmake g++ pkg-config make
   libgtest-dev libbenchmark-dev python3-matplotlib python3-numpy)
 # The player (brittle play): Bullet for the rigid bodies, tinygltf for the replays.
 PACKAGES+=(libbullet-dev libtinygltf-dev)
+# The viewer (brittle view) and rendered frames: GLFW, OpenGL, Dear ImGui, stb for PNG; Xvfb and
+# Mesa's software renderer run it without a display (tests, CI).
+PACKAGES+=(libglfw3-dev libgl-dev libimgui-dev libstb-dev xvfb xauth libgl1-mesa-dri)
 
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi

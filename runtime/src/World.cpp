@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "brittle/database/ScalingLaws.h"
+#include "brittle/runtime/FragmentModes.h"
 #include "brittle/runtime/FragmentSurfaces.h"
 #include "brittle/runtime/ModalResponse.h"
 #include "brittle/runtime/TetTopology.h"
@@ -227,9 +228,10 @@ Status validateWorldSettings(const WorldSettings& s) {
   const FractureSettings& f = s.fracture;
   if (s.maxObjects < 1) return bad("WorldSettings: maxObjects must be ≥ 1");
   if (f.modeCount < 0 || f.pulseSteps < 2 || f.ringDownSteps < 0 || !(f.ringDownPeriods >= 0.0) ||
-      !std::isfinite(f.ringDownPeriods) || !(f.debrisVolumeFraction >= 0.0 && f.debrisVolumeFraction < 1.0)) {
+      !std::isfinite(f.ringDownPeriods) || !(f.debrisVolumeFraction >= 0.0 && f.debrisVolumeFraction < 1.0) ||
+      f.exactModesMaxTets < 0) {
     return bad("FractureSettings: modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0, ringDownPeriods ≥ 0 and finite, "
-               "debrisVolumeFraction in [0, 1)");
+               "debrisVolumeFraction in [0, 1), exactModesMaxTets ≥ 0");
   }
   if (f.crack.maxCracks < 0 || std::isnan(f.crack.propagationStressRatio) || !(f.crack.directionBlend >= 0.0) ||
       !(f.crack.directionBlend <= 1.0) || !(f.crack.noiseRad >= 0.0) || !std::isfinite(f.crack.noiseRad)) {
@@ -532,15 +534,38 @@ Status World::Impl::impact(const ImpactDesc& desc, ImpactResult& result) {
   }
   result.times.surfacesS = since(t0);
 
-  // --- Matching: each fragment that is not debris becomes an object from its nearest entry.
+  // --- New objects: each fragment that is not debris gets its own modal analysis when it is small
+  // enough (the exact path), otherwise its nearest database entry.
   t0 = Clock::now();
   const Eigen::Matrix3d rotation = s.rotation;
   const Eigen::Vector3d translation = s.translation;
   remove(desc.object);
   result.broken = true;
+  if (fs.exactModesMaxTets > 0) {
+    ExactModesSettings es;
+    es.modeCount = fs.modeCount > 0 ? fs.modeCount : static_cast<int>(asset.modal.modes.cols());
+    const std::vector<int64_t> sizes =
+        fragmentTetCounts(asset.tetMesh, result.fracture.nodeLabels, static_cast<int>(result.fragments.size()));
+    for (size_t i = 0; i < result.fragments.size(); ++i) {
+      FragmentResult& fr = result.fragments[i];
+      if (fr.debris || sizes[i] > fs.exactModesMaxTets) continue;
+      auto sub = fragmentSubMesh(asset.tetMesh, body.topology, result.fracture.nodeLabels, result.fracture.edgeCuts,
+                                 static_cast<int>(i));
+      if (!sub) continue;
+      // A fragment the exact path cannot analyse (e.g. hanging by an edge) falls back to the match.
+      auto own = exactFragmentAsset(sub.value(), body.material, es, asset.name + ".f" + std::to_string(i));
+      if (!own) continue;
+      auto child = makeBody(std::move(own).value(), body.material, fs.modeCount);
+      if (!child) continue;
+      auto id = place(std::move(child).value(), rotation, translation);
+      if (!id) return id.error();
+      fr.object = id.value();
+      fr.exactModes = true;
+    }
+  }
   if (matcher) {
     for (FragmentResult& fr : result.fragments) {
-      if (fr.debris) continue;
+      if (fr.debris || fr.exactModes) continue;
       auto match = matcher->match(fr.surface, fs.descriptor, 1);
       if (!match) continue;  // e.g. a sliver whose frame is undefined: left unmatched, reported as such
       const FragmentMatch& m = match.value().front();

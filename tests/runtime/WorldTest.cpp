@@ -246,6 +246,47 @@ TEST_F(WorldTest, MatchedFragmentsBreakAgain) {
   EXPECT_GE(second.value().fragments.size(), 2u);
 }
 
+TEST_F(WorldTest, ExactPathFragmentsHaveTheirOwnModesAndBreakAgainWithoutADatabase) {
+  WorldSettings settings;
+  settings.fracture.exactModesMaxTets = 1000000;  // every fragment that is not debris
+  World world = makeWorld(settings, false);
+  auto first = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
+  ASSERT_TRUE(first && first.value().broken);
+  const FragmentResult* target = nullptr;
+  int exact = 0;
+  for (const FragmentResult& f : first.value().fragments) {
+    EXPECT_EQ(f.exactModes, !f.debris && f.object.valid());
+    EXPECT_EQ(f.matchedEntry, -1);
+    if (!f.exactModes) continue;
+    ++exact;
+    // Its own mesh is the fragment's solid: the volume its surface encloses.
+    const ObjectAsset& a = *world.objectAsset(f.object).value();
+    EXPECT_NEAR(a.massProperties.volumeM3, f.massProperties.volumeM3, 1e-9 * f.massProperties.volumeM3);
+    EXPECT_GT(a.modal.frequenciesHz[0], 0.0);
+    EXPECT_LT(a.modal.residuals.maxCoeff(), 1e-6);
+    if (!target || f.massProperties.volumeM3 > target->massProperties.volumeM3) target = &f;
+  }
+  ASSERT_GE(exact, 2);
+  const Eigen::VectorXd targetHz = world.objectAsset(target->object).value()->modal.frequenciesHz;
+  // The largest breaks again when hit hard at its highest node.
+  const Points& nodes = world.objectAsset(target->object).value()->tetMesh.nodes;
+  Eigen::Index top;
+  nodes.col(2).maxCoeff(&top);
+  ImpactDesc again = ball(target->object, 200.0);
+  again.pointWorld = nodes.row(top).transpose();
+  auto second = world.impact(again);
+  ASSERT_TRUE(second) << second.error().message;
+  EXPECT_TRUE(second.value().broken);
+
+  // Deterministic: the same world gives the same fragments and the same modes.
+  World other = makeWorld(settings, false);
+  auto repeat = other.impact(ball(other.addObject({.asset = "plate"}).value(), 60.0));
+  ASSERT_TRUE(repeat);
+  EXPECT_EQ(hashFragments(repeat.value()), hashFragments(first.value()));
+  const auto same = static_cast<size_t>(target - first.value().fragments.data());
+  EXPECT_EQ(other.objectAsset(repeat.value().fragments[same].object).value()->modal.frequenciesHz, targetHz);
+}
+
 TEST_F(WorldTest, BadInputsGiveTypedErrorsNeverCrashes) {
   World world = makeWorld({}, false);
   auto id = world.addObject({.asset = "plate"});

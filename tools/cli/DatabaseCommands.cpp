@@ -4,6 +4,7 @@
 #include <iostream>
 #include <memory>
 
+#include "../bench/ExactModesBench.h"
 #include "../bench/FractureStatsBench.h"
 #include "../bench/ImpactBench.h"
 #include "../bench/IntegratorBench.h"
@@ -354,7 +355,27 @@ Runner addBenchCommand(CLI::App& app) {
   fracture->add_option("--brick-mesh", fb->brickMesh, "Surface mesh of the brick")->capture_default_str();
   fracture->add_option("--csv", fb->csv, "Output CSV")->capture_default_str();
   fracture->add_flag("--quiet", fb->quiet, "No progress lines");
-  return [s, shapes, kinds, indices, impact, is, integrators, ib, modes, mb, resolution, rb, fracture, fb]() -> int {
+  auto* exact = cmd->add_subcommand(
+      "exact-modes", "A fragment's database match against its own modal analysis at runtime, per fragment size");
+  auto xb = std::make_shared<bench::ExactModesBenchSettings>();
+  exact->add_option("pack", xb->pack, "A pack with a fragment database")->capture_default_str();
+  exact->add_option("--objects", xb->objects, "Objects to break (default: all)")->delimiter(',');
+  exact->add_option("--speeds", xb->speedsMps, "Ball speeds (m/s)")->delimiter(',')->capture_default_str();
+  exact->add_option("--seeds", xb->seeds, "Seeds per speed (impact point and cracks)")->capture_default_str()->check(CLI::Range(1, 10000));
+  exact->add_option("--max-fragments", xb->maxFragmentsPerImpact, "Largest fragments measured per impact")
+      ->capture_default_str()->check(CLI::Range(1, 1000));
+  exact->add_option("--reference-tets", xb->referenceTets, "Target tets of each fragment's reference bake")
+      ->capture_default_str()->check(CLI::Range(int64_t{100}, int64_t{1000000}));
+  exact->add_option("--repeats", xb->repeats, "Timing repeats (median)")->capture_default_str()->check(CLI::Range(1, 100));
+  exact->add_option("--csv", xb->csv, "Output CSV")->capture_default_str();
+  exact->add_flag("--quiet", xb->quiet, "No progress lines");
+  return [s, shapes, kinds, indices, impact, is, integrators, ib, modes, mb, resolution, rb, fracture, fb, exact, xb]() -> int {
+    if (exact->parsed()) {
+      if (xb->csv.has_parent_path()) std::filesystem::create_directories(xb->csv.parent_path());
+      if (Status st = bench::runExactModesBench(*xb); !st) return reportError(st.error());
+      std::cout << "wrote " << xb->csv.string() << "\n";
+      return kExitOk;
+    }
     if (fracture->parsed()) {
       if (fb->csv.has_parent_path()) std::filesystem::create_directories(fb->csv.parent_path());
       if (Status st = bench::runFractureStatsBench(*fb); !st) return reportError(st.error());

@@ -21,6 +21,7 @@ struct ImpactOptions {
   double speed = 0.0, impactorMass = 0.1, impactorRadius = 0.02, impulse = 0.0, bodyRadius = 0.0;
   uint64_t seed = 1;
   int modes = 0;
+  int exactMaxTets = FractureSettings{}.exactModesMaxTets;
   double crackBlend = CrackSettings{}.directionBlend, crackNoise = CrackSettings{}.noiseRad;
   double debris = 0.01, propagationRatio = CrackSettings{}.propagationStressRatio;
   int pulseSteps = FractureSettings{}.pulseSteps, ringDownSteps = FractureSettings{}.ringDownSteps;
@@ -47,6 +48,9 @@ Runner addImpactCommand(CLI::App& app) {
   cmd->add_option("--impulse", o->impulse, "Impulse the host resolved (N s); default (1 + e) m* v")->capture_default_str();
   cmd->add_option("--body-radius", o->bodyRadius, "Local radius of curvature (m); 0: estimated from the surface")->capture_default_str();
   cmd->add_option("--modes", o->modes, "Modes used (0: all stored)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--exact-max-tets", o->exactMaxTets,
+                  "Fragments of at most this many tets get their own modal analysis instead of a database match (0: never)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--debris", o->debris, "Fragments below this volume fraction are rigid debris")->capture_default_str()->check(CLI::Range(0.0, 0.99));
   cmd->add_option("--descriptor", o->descriptor, "Descriptor used to match fragments")
       ->check(CLI::IsMember({"moment", "voxel", "voxel-improved"}))->capture_default_str();
@@ -79,6 +83,7 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.reportUncorrectedPeak = true;
     settings.fracture.matchFragments = !o->noMatch;
     settings.fracture.debrisVolumeFraction = o->debris;
+    settings.fracture.exactModesMaxTets = o->exactMaxTets;
     settings.fracture.crack.propagationStressRatio = o->propagationRatio;
     settings.fracture.crack.maxCracks = o->maxCracks;
     settings.fracture.crack.directionBlend = o->crackBlend;
@@ -137,7 +142,8 @@ Runner addImpactCommand(CLI::App& app) {
       doc["fragments"].push_back({{"volume_m3", f.massProperties.volumeM3}, {"mass_kg", f.massProperties.massKg},
                                   {"center_of_mass_m", vec(f.massProperties.centerOfMassM)},
                                   {"triangles", f.surface.faces.rows()}, {"debris", f.debris},
-                                  {"matched_entry", f.matchedEntry}, {"match_distance", f.matchDistance}});
+                                  {"matched_entry", f.matchedEntry}, {"match_distance", f.matchDistance},
+                                  {"exact_modes", f.exactModes}});
     }
     doc["times_s"] = {{"contact", r.times.contactS}, {"prepare", r.times.prepareS}, {"modal", r.times.modalS}, {"stress", r.times.stressS},
                       {"propagation", r.times.propagationS}, {"surfaces", r.times.surfacesS},
@@ -160,6 +166,7 @@ Runner addImpactCommand(CLI::App& app) {
         std::cout << "  fragment " << std::setw(2) << i << "  " << std::setw(10) << f.massProperties.volumeM3 * 1e6
                   << " cm3  " << std::setw(10) << f.massProperties.massKg * 1e3 << " g  ";
         if (f.debris) std::cout << "debris";
+        else if (f.exactModes) std::cout << "own modes (exact path)";
         else if (f.matchedEntry >= 0) std::cout << "entry " << f.matchedEntry << " (distance " << f.matchDistance << ")";
         else std::cout << "unmatched";
         std::cout << "\n";

@@ -15,7 +15,8 @@
 // (ModalResponse.h), plus the static correction of the truncated modes (StaticCorrection.h) → stress scan with pruning and Rankine initiation → crack growth with the
 // Griffith stop (CrackPropagation.h) → fragment surfaces (FragmentSurfaces.h) → per fragment: exact
 // mass properties, and unless it is debris, the nearest database entry rescaled to it
-// (FragmentMatcher.h, ScalingLaws.h), which becomes a new object that can break again.
+// (FragmentMatcher.h, ScalingLaws.h) or, for small fragments, its own modal analysis
+// (FragmentModes.h, exactModesMaxTets), which becomes a new object that can break again.
 #pragma once
 
 #include <Eigen/Core>
@@ -57,6 +58,11 @@ struct FractureSettings {
   CrackSettings crack;             ///< crack.seed is combined with the world seed and an impact counter
   double debrisVolumeFraction = 0.01;  ///< fragments below this fraction of the broken body are rigid debris
   bool matchFragments = true;      ///< look fragments up in the pack's database (when it has one)
+  /// The exact path (FragmentModes.h): a fragment that holds a part of at most this many of the
+  /// broken body's tets gets its own modal analysis at runtime instead of the database match (and
+  /// can break again even without a database). 0: never. The default is where chart 5
+  /// (README) has the exact path cost about as much as one matched fragment's later impact.
+  int exactModesMaxTets = 0;
   DescriptorKind descriptor = DescriptorKind::Moment;
 };
 
@@ -99,13 +105,15 @@ struct FragmentResult {
   TriangleMesh surface;         ///< closed, outward; the broken object's local frame (m)
   MassProperties massProperties;  ///< exact, from the surface; local frame
   int64_t matchedEntry = -1;    ///< database entry, −1 if none
+  bool exactModes = false;      ///< object built by the exact path (its own modal analysis), not matched
   double matchDistance = 0.0;
 };
 
 struct StageTimes {
   double contactS = 0.0;
   double prepareS = 0.0;  ///< first impact on a fragment only: assembling and factorising its K (static correction)
-  double modalS = 0.0, stressS = 0.0, propagationS = 0.0, surfacesS = 0.0, matchingS = 0.0;
+  double modalS = 0.0, stressS = 0.0, propagationS = 0.0, surfacesS = 0.0;
+  double matchingS = 0.0;  ///< new objects for the fragments: database matches and exact modal analyses
   double totalS() const { return contactS + prepareS + modalS + stressS + propagationS + surfacesS + matchingS; }
 };
 

@@ -1,0 +1,66 @@
+// FragmentModes.h — the exact path for a new fragment: its own modal analysis, computed at runtime
+// from the broken body's tet mesh, instead of the nearest database entry rescaled to it.
+//
+//   auto sub = fragmentSubMesh(parent.tetMesh, topology, state.nodeLabels, state.edgeCuts, 2);  // Result<FragmentSubMesh>
+//   auto asset = exactFragmentAsset(sub.value(), material, ExactModesSettings{}, "plate.f2");  // Result<ObjectAsset>
+//
+// The fragment's mesh is its exact solid, the same partition FragmentSurfaces.h draws: the parent's
+// tets whose four nodes carry the label, as they are, and in each tet the crack crosses, the
+// label's corner cells cut into tets (from the tet's centre point to the label's part of each
+// face, fanned from the face's centre point). Points on a crossed edge or face are shared by every
+// tet around it, so the mesh is conforming, and its volume is the fragment surface's volume.
+//
+// Modes: K and M of the sub-mesh (FemAssembly.h), then the lowest modeCount + 6 eigenpairs of
+// K φ = λ M φ by Spectra's shift-invert Lanczos on an Eigen SimplicialLDLT of K − σM (σ < 0, so
+// the factor is positive definite; no ARPACK or CHOLMOD in the runtime), or by Eigen's dense
+// generalised solver when 3N ≤ denseMaxDof. The six rigid modes are dropped, the others are
+// mass-normalised, and the stress modes follow (computeStressModes). The cost grows with the
+// fragment's size, which is why the World takes this path only below a tet count
+// (FractureSettings::exactModesMaxTets; chart 5 in the README picks its default).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "brittle/database/Material.h"
+#include "brittle/database/ObjectAsset.h"
+#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/descriptors/Result.h"
+#include "brittle/runtime/TetTopology.h"
+
+namespace brittle {
+
+struct FragmentSubMesh {
+  TetMesh mesh;                  ///< in the parent's frame (m)
+  int64_t wholeTets = 0;         ///< parent tets entirely in the fragment, kept as they are
+  int64_t splitTets = 0;         ///< parent tets the crack crosses, of which the fragment's part was split into tets
+  double droppedVolumeM3 = 0.0;  ///< parts not face-connected to the largest one (normally none)
+};
+
+/// Per label in [0, labelCount): how many parent tets hold a part of it (whole or split), the size
+/// the World compares with exactModesMaxTets before building anything. Labels out of range are
+/// not counted.
+std::vector<int64_t> fragmentTetCounts(const TetMesh& parent, const Eigen::VectorXi& nodeLabels, int labelCount);
+
+/// The fragment `label` of a cracked parent (labels and cuts as FractureState holds them) as a tet
+/// mesh. Errors: InvalidArgument (sizes, a crossed edge without a finite cut, a label that owns no
+/// node).
+Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology& topology,
+                                        const Eigen::VectorXi& nodeLabels, const Eigen::VectorXd& edgeCuts, int label);
+
+struct ExactModesSettings {
+  int modeCount = 40;        ///< elastic modes kept (fewer if the mesh has fewer degrees of freedom)
+  int denseMaxDof = 240;     ///< at or below this 3N, Eigen's dense solver; above, Spectra
+  double tolerance = 1e-10;  ///< Spectra's relative tolerance on the Ritz values
+};
+
+/// The fragment as an object the runtime can break: the sub-mesh, its modes and stress modes,
+/// with `material`. massProperties are those of the sub-mesh's boundary. The asset's name is
+/// `name`. Errors: InvalidArgument (settings, a sub-mesh with fewer than 4 nodes),
+/// DegenerateElement, FactorizationFailed, EigenNotConverged, RigidModeMismatch (not exactly six
+/// near-zero modes: the sub-mesh hangs together by an edge or a node).
+Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Material& material,
+                                       const ExactModesSettings& settings, const std::string& name);
+
+}  // namespace brittle

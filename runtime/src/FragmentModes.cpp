@@ -1,0 +1,320 @@
+#include "brittle/runtime/FragmentModes.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
+#include <Spectra/MatOp/SparseSymMatProd.h>
+#include <Spectra/SymGEigsShiftSolver.h>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <numbers>
+
+#include "brittle/descriptors/MassProperties.h"
+#include "brittle/runtime/FemAssembly.h"
+#include "brittle/runtime/TetTopology.h"
+
+namespace brittle {
+namespace {
+
+Error bad(const std::string& message) { return makeError(ErrorCode::InvalidArgument, message); }
+
+// Spectra's shift-invert operator on a factorisation of K − σM made once.
+class ShiftInvertOp {
+ public:
+  using Scalar = double;
+  explicit ShiftInvertOp(const Eigen::SimplicialLDLT<SparseMatrixd>& factor) : mFactor(factor) {}
+  Eigen::Index rows() const { return mFactor.rows(); }
+  Eigen::Index cols() const { return mFactor.cols(); }
+  void set_shift(double) {}  // the factor already holds σ
+  void perform_op(const double* x, double* y) const {
+    Eigen::Map<const Eigen::VectorXd> in(x, rows());
+    Eigen::Map<Eigen::VectorXd> out(y, rows());
+    out = mFactor.solve(in);
+  }
+
+ private:
+  const Eigen::SimplicialLDLT<SparseMatrixd>& mFactor;
+};
+
+// Lowest `count` eigenpairs of K φ = λ M φ, ascending, M-normalised.
+Status lowestEigenpairs(const FemSystem& fem, int count, double sigma, const ExactModesSettings& s,
+                        Eigen::VectorXd& values, Eigen::MatrixXd& vectors) {
+  const Eigen::Index n = fem.stiffness.rows();
+  if (n <= s.denseMaxDof) {
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> dense(Eigen::MatrixXd(fem.stiffness),
+                                                                    Eigen::MatrixXd(fem.mass));
+    if (dense.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "dense eigensolver failed");
+    values = dense.eigenvalues().head(count);
+    vectors = dense.eigenvectors().leftCols(count);
+    return Ok{};
+  }
+  Eigen::SimplicialLDLT<SparseMatrixd> factor(fem.stiffness - sigma * fem.mass);
+  if (factor.info() != Eigen::Success) return makeError(ErrorCode::FactorizationFailed, "K − σM did not factorise");
+  ShiftInvertOp op(factor);
+  Spectra::SparseSymMatProd<double> massOp(fem.mass);
+  const Eigen::Index ncv = std::min<Eigen::Index>(n, std::max<Eigen::Index>(2 * count + 1, count + 20));
+  Spectra::SymGEigsShiftSolver<ShiftInvertOp, Spectra::SparseSymMatProd<double>, Spectra::GEigsMode::ShiftInvert>
+      solver(op, massOp, count, ncv, sigma);
+  solver.init();
+  solver.compute(Spectra::SortRule::LargestMagn, 1000, s.tolerance, Spectra::SortRule::SmallestAlge);
+  if (solver.info() != Spectra::CompInfo::Successful) {
+    return makeError(ErrorCode::EigenNotConverged, "Spectra did not converge on " + std::to_string(count) + " modes");
+  }
+  values = solver.eigenvalues();
+  vectors = solver.eigenvectors();
+  return Ok{};
+}
+
+}  // namespace
+
+std::vector<int64_t> fragmentTetCounts(const TetMesh& parent, const Eigen::VectorXi& nodeLabels, int labelCount) {
+  std::vector<int64_t> counts(static_cast<size_t>(std::max(labelCount, 0)), 0);
+  if (nodeLabels.size() != parent.nodes.rows()) return counts;
+  for (Eigen::Index e = 0; e < parent.tets.rows(); ++e) {
+    std::array<int, 4> l{};
+    for (int k = 0; k < 4; ++k) l[static_cast<size_t>(k)] = nodeLabels[parent.tets(e, k)];
+    std::sort(l.begin(), l.end());
+    for (int k = 0; k < 4; ++k)
+      if ((k == 0 || l[static_cast<size_t>(k)] != l[static_cast<size_t>(k - 1)]) && l[static_cast<size_t>(k)] >= 0 && l[static_cast<size_t>(k)] < labelCount) {
+        ++counts[static_cast<size_t>(l[static_cast<size_t>(k)])];
+      }
+  }
+  return counts;
+}
+
+Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology& topology,
+                                        const Eigen::VectorXi& nodeLabels, const Eigen::VectorXd& edgeCuts, int label) {
+  const Eigen::Index n = parent.nodes.rows(), t = parent.tets.rows();
+  if (nodeLabels.size() != n || edgeCuts.size() != topology.edges.rows() || topology.tetEdges.rows() != t) {
+    return bad("fragmentSubMesh: one label per node, one cut per edge and the mesh's topology expected");
+  }
+  auto mixed = [&](int32_t edge) { return nodeLabels[topology.edges(edge, 0)] != nodeLabels[topology.edges(edge, 1)]; };
+  auto edgeOf = [&](Eigen::Index e, int i, int j) {
+    for (int k = 0; k < 6; ++k)
+      if ((kTetEdges[k][0] == i && kTetEdges[k][1] == j) || (kTetEdges[k][0] == j && kTetEdges[k][1] == i)) return topology.tetEdges(e, k);
+    return int32_t{-1};
+  };
+
+  // Points of the sub-mesh, created on first use: parent nodes, crack points on mixed edges (at
+  // FragmentSurfaces.h's clamped parameter), face points (mean of the face's crack points, keyed
+  // by the sorted node ids so that both tets of a face share it) and tet points.
+  std::vector<Eigen::Vector3d> points;
+  std::map<std::pair<int, int64_t>, int32_t> ids;  // (kind, key) → point; kinds: 0 node, 1 edge, 2 tet
+  std::map<std::array<int32_t, 3>, int32_t> faceIds;
+  auto point = [&](int kind, int64_t key, const Eigen::Vector3d& x) {
+    auto [it, inserted] = ids.try_emplace({kind, key}, static_cast<int32_t>(points.size()));
+    if (inserted) points.push_back(x);
+    return it->second;
+  };
+  auto node = [&](int32_t v) { return point(0, v, parent.nodes.row(v).transpose()); };
+  auto edgePoint = [&](int32_t edge) {
+    const double s = std::clamp(edgeCuts[edge], 0.05, 0.95);
+    const Eigen::Vector3d a = parent.nodes.row(topology.edges(edge, 0)), b = parent.nodes.row(topology.edges(edge, 1));
+    return std::pair{point(1, edge, a + s * (b - a)), Eigen::Vector3d(a + s * (b - a))};
+  };
+  std::vector<std::array<int32_t, 4>> tets;
+  auto addTet = [&](int32_t a, int32_t b, int32_t c, int32_t d) {
+    const Eigen::Vector3d pa = points[static_cast<size_t>(a)];
+    const double v = (points[static_cast<size_t>(b)] - pa).dot((points[static_cast<size_t>(c)] - pa).cross(points[static_cast<size_t>(d)] - pa));
+    if (v > 0.0) tets.push_back({a, b, c, d});
+    else if (v < 0.0) tets.push_back({a, c, b, d});
+  };
+
+  FragmentSubMesh sub;
+  for (Eigen::Index e = 0; e < t; ++e) {
+    std::array<int, 4> l{};
+    int own = 0;
+    for (int k = 0; k < 4; ++k) {
+      const int32_t v = parent.tets(e, k);
+      if (v < 0 || v >= n) return bad("fragmentSubMesh: tet " + std::to_string(e) + " has a node out of range");
+      l[static_cast<size_t>(k)] = nodeLabels[v];
+      own += l[static_cast<size_t>(k)] == label ? 1 : 0;
+    }
+    if (own == 0) continue;
+    if (own == 4) {
+      tets.push_back({node(parent.tets(e, 0)), node(parent.tets(e, 1)), node(parent.tets(e, 2)), node(parent.tets(e, 3))});
+      ++sub.wholeTets;
+      continue;
+    }
+    // A tet the crack crosses: the label's corner cells (FragmentSurfaces.h), as tets from the tet
+    // point to the label's part of each face, fanned from the face point.
+    ++sub.splitTets;
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    int crossings = 0;
+    for (int k = 0; k < 6; ++k) {
+      const int32_t edge = topology.tetEdges(e, k);
+      if (!mixed(edge)) continue;
+      if (!std::isfinite(edgeCuts[edge])) return bad("fragmentSubMesh: a crossed edge without a finite cut");
+      centre += edgePoint(edge).second;
+      ++crossings;
+    }
+    const int32_t tetPoint = point(2, e, centre / crossings);
+    for (int f = 0; f < 4; ++f) {
+      const auto local = tetFaceNodes(f);
+      std::array<int32_t, 3> v{}, fl{};
+      int mine = 0;
+      for (int k = 0; k < 3; ++k) {
+        v[static_cast<size_t>(k)] = parent.tets(e, local[static_cast<size_t>(k)]);
+        fl[static_cast<size_t>(k)] = l[static_cast<size_t>(local[static_cast<size_t>(k)])];
+        mine += fl[static_cast<size_t>(k)] == label ? 1 : 0;
+      }
+      if (mine == 0) continue;
+      if (mine == 3) {
+        addTet(tetPoint, node(v[0]), node(v[1]), node(v[2]));
+        continue;
+      }
+      std::array<int32_t, 3> key = v;
+      std::sort(key.begin(), key.end());
+      auto [it, inserted] = faceIds.try_emplace(key, -1);
+      if (inserted) {
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        int count = 0;
+        for (int k = 0; k < 3; ++k) {
+          const int32_t edge = edgeOf(e, local[static_cast<size_t>(k)], local[static_cast<size_t>((k + 1) % 3)]);
+          if (mixed(edge)) sum += edgePoint(edge).second, ++count;
+        }
+        it->second = static_cast<int32_t>(points.size());
+        points.push_back(sum / count);
+      }
+      const int32_t facePoint = it->second;
+      // The label's corners are consecutive around the face: the crack point before the run, the
+      // run, the crack point after it; with the face point, that closes the label's part.
+      int startK = 0;
+      while (!(fl[static_cast<size_t>(startK)] == label && fl[static_cast<size_t>((startK + 2) % 3)] != label)) ++startK;
+      std::vector<int32_t> polygon;
+      polygon.push_back(edgePoint(edgeOf(e, local[static_cast<size_t>((startK + 2) % 3)], local[static_cast<size_t>(startK)])).first);
+      int k = startK;
+      while (true) {
+        polygon.push_back(node(v[static_cast<size_t>(k)]));
+        const int next = (k + 1) % 3;
+        if (fl[static_cast<size_t>(next)] != label) {
+          polygon.push_back(edgePoint(edgeOf(e, local[static_cast<size_t>(k)], local[static_cast<size_t>(next)])).first);
+          break;
+        }
+        k = next;
+      }
+      // Fan from the face point: the same triangles from both tets of the face.
+      for (size_t j = 0; j + 1 < polygon.size(); ++j) addTet(tetPoint, facePoint, polygon[j], polygon[j + 1]);
+    }
+  }
+  if (tets.empty()) return bad("fragmentSubMesh: label " + std::to_string(label) + " owns no part of the mesh");
+
+  // Largest face-connected set (a label's nodes are joined by uncut edges, so this is normally all).
+  std::vector<int32_t> root(tets.size());
+  for (size_t i = 0; i < tets.size(); ++i) root[i] = static_cast<int32_t>(i);
+  auto find = [&](int32_t i) {
+    while (root[static_cast<size_t>(i)] != i) i = root[static_cast<size_t>(i)] = root[static_cast<size_t>(root[static_cast<size_t>(i)])];
+    return i;
+  };
+  std::vector<std::pair<std::array<int32_t, 3>, int32_t>> faces;
+  faces.reserve(4 * tets.size());
+  for (size_t i = 0; i < tets.size(); ++i)
+    for (int f = 0; f < 4; ++f) {
+      std::array<int32_t, 3> key{};
+      for (int k = 0, j = 0; k < 4; ++k)
+        if (k != f) key[static_cast<size_t>(j++)] = tets[i][static_cast<size_t>(k)];
+      std::sort(key.begin(), key.end());
+      faces.emplace_back(key, static_cast<int32_t>(i));
+    }
+  std::sort(faces.begin(), faces.end());
+  for (size_t i = 1; i < faces.size(); ++i)
+    if (faces[i].first == faces[i - 1].first) root[static_cast<size_t>(find(faces[i].second))] = find(faces[i - 1].second);
+  auto volume = [&](const std::array<int32_t, 4>& q) {
+    const Eigen::Vector3d a = points[static_cast<size_t>(q[0])];
+    return (points[static_cast<size_t>(q[1])] - a).dot((points[static_cast<size_t>(q[2])] - a).cross(points[static_cast<size_t>(q[3])] - a)) / 6.0;
+  };
+  std::vector<double> setVolume(tets.size(), 0.0);
+  for (size_t i = 0; i < tets.size(); ++i) setVolume[static_cast<size_t>(find(static_cast<int32_t>(i)))] += volume(tets[i]);
+  const auto keep = static_cast<int32_t>(std::max_element(setVolume.begin(), setVolume.end()) - setVolume.begin());
+
+  std::vector<int32_t> renumber(points.size(), -1);
+  std::vector<int32_t> kept;
+  for (size_t i = 0; i < tets.size(); ++i) {
+    if (find(static_cast<int32_t>(i)) != keep) {
+      sub.droppedVolumeM3 += volume(tets[i]);
+      continue;
+    }
+    kept.push_back(static_cast<int32_t>(i));
+    for (int32_t p : tets[i])
+      if (renumber[static_cast<size_t>(p)] < 0) renumber[static_cast<size_t>(p)] = 0;
+  }
+  int32_t next = 0;
+  for (int32_t& r : renumber)
+    if (r == 0) r = next++;
+  sub.mesh.nodes.resize(next, 3);
+  for (size_t p = 0; p < points.size(); ++p)
+    if (renumber[p] >= 0) sub.mesh.nodes.row(renumber[p]) = points[p].transpose();
+  sub.mesh.tets.resize(static_cast<Eigen::Index>(kept.size()), 4);
+  for (size_t i = 0; i < kept.size(); ++i)
+    for (int k = 0; k < 4; ++k) sub.mesh.tets(static_cast<Eigen::Index>(i), k) = renumber[static_cast<size_t>(tets[static_cast<size_t>(kept[i])][static_cast<size_t>(k)])];
+  return sub;
+}
+
+Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Material& material,
+                                       const ExactModesSettings& settings, const std::string& name) {
+  if (settings.modeCount < 1 || settings.denseMaxDof < 0 || !(settings.tolerance > 0.0 && settings.tolerance < 1.0)) {
+    return bad("ExactModesSettings: modeCount ≥ 1, denseMaxDof ≥ 0, tolerance in (0, 1)");
+  }
+  const Eigen::Index nodes = sub.mesh.nodes.rows();
+  if (nodes < 4 || sub.mesh.tets.rows() < 1) return bad("fragment '" + name + "': fewer than 4 nodes");
+  auto topology = buildTetTopology(sub.mesh);
+  if (!topology) return topology.error();
+  auto fem = assembleFem(sub.mesh, material, FemSettings{});
+  if (!fem) return fem.error();
+
+  // Six rigid modes plus the elastic ones; a mesh too small for that keeps what it has.
+  const auto dof = static_cast<int>(3 * nodes);
+  const int wanted = std::min(settings.modeCount + 6, dof - 1);
+  if (wanted <= 6) return bad("fragment '" + name + "': too few degrees of freedom for an elastic mode");
+  ExactModesSettings s = settings;
+  if (wanted >= dof - 1 || dof <= 2 * wanted + 1) s.denseMaxDof = std::max(s.denseMaxDof, dof);  // Lanczos needs room
+  // σ = −10⁻³ (c/L)², as the bake's shift (ModalAnalysis.h): K − σM is positive definite, and σ
+  // lies well below the first elastic eigenvalue of any compact body.
+  const double length = (sub.mesh.nodes.colwise().maxCoeff() - sub.mesh.nodes.colwise().minCoeff()).norm();
+  const double sigma = -1e-3 * material.youngsModulusPa / material.densityKgPerM3 / (length * length);
+  Eigen::VectorXd values;
+  Eigen::MatrixXd vectors;
+  if (Status st = lowestEigenpairs(fem.value(), wanted, sigma, s, values, vectors); !st) {
+    return Error{st.error().code, "fragment '" + name + "': " + st.error().message};
+  }
+  // Exactly six near-zero modes for one connected solid.
+  const double largest = values.cwiseAbs().maxCoeff();
+  int rigid = 0;
+  while (rigid < values.size() && std::abs(values[rigid]) < 1e-8 * largest) ++rigid;
+  if (rigid != 6) {
+    return makeError(ErrorCode::RigidModeMismatch,
+                     "fragment '" + name + "': " + std::to_string(rigid) + " near-zero modes instead of 6");
+  }
+  const auto r = static_cast<Eigen::Index>(values.size() - 6);
+  ObjectAsset a;
+  a.name = name;
+  a.materialName = material.name;
+  a.tetMesh = sub.mesh;
+  a.surfaceFaces = topology.value().boundaryTriangles;
+  a.quality.nodeCount = nodes;
+  a.quality.tetCount = sub.mesh.tets.rows();
+  a.quality.surfaceFaceCount = a.surfaceFaces.rows();
+  a.quality.minTetVolumeM3 = topology.value().tetVolumesM3.minCoeff();
+  a.massProperties = computeSurfaceMassProperties(TriangleMesh{sub.mesh.nodes, a.surfaceFaces}, material.densityKgPerM3);
+  ModalBasis& m = a.modal;
+  m.eigenvaluesRad2PerS2 = values.tail(r);
+  m.frequenciesHz = m.eigenvaluesRad2PerS2.cwiseMax(0.0).cwiseSqrt() / (2.0 * std::numbers::pi);
+  m.modes.resize(dof, r);
+  m.residuals.resize(r);
+  for (Eigen::Index j = 0; j < r; ++j) {
+    Eigen::VectorXd phi = vectors.col(6 + j);
+    phi /= std::sqrt(phi.dot(fem.value().mass * phi));
+    m.modes.col(j) = phi;
+    const Eigen::VectorXd kphi = fem.value().stiffness * phi;
+    m.residuals[j] = (kphi - values[6 + j] * (fem.value().mass * phi)).norm() / kphi.norm();
+  }
+  const Eigen::MatrixXd gram = Eigen::MatrixXd(m.modes).transpose() * (fem.value().mass * Eigen::MatrixXd(m.modes));
+  m.orthonormalityError = (gram - Eigen::MatrixXd::Identity(r, r)).cwiseAbs().maxCoeff();
+  a.stressModes = computeStressModes(sub.mesh, material, m.modes);
+  a.bake.requestedModes = settings.modeCount;
+  a.bake.factorization = dof <= s.denseMaxDof ? "dense" : "eigen-ldlt";
+  return a;
+}
+
+}  // namespace brittle

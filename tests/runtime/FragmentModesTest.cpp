@@ -1,0 +1,186 @@
+// The exact path for fragments (FragmentModes.h): sub-meshes of whole tets, and the fragment's own
+// modes against the bake's ARPACK solve, against Eigen's dense solver, and against beam theory.
+#include "brittle/runtime/FragmentModes.h"
+
+#include <gtest/gtest.h>
+
+#include "brittle/precompute/MaterialLibrary.h"
+#include "brittle/precompute/ModalAnalysis.h"
+#include "brittle/descriptors/MassProperties.h"
+#include "brittle/runtime/FemAssembly.h"
+#include "brittle/runtime/FragmentSurfaces.h"
+#include "brittle/runtime/TetTopology.h"
+#include "brittle/testing/Fixtures.h"
+
+namespace brittle {
+namespace {
+
+const Material& glass() {
+  static const Material m = materialPreset("glass").value();
+  return m;
+}
+
+// The sub-mesh of `label`, with every crossed edge cut at `cut`.
+Result<FragmentSubMesh> subMesh(const TetMesh& mesh, const Eigen::VectorXi& labels, int label, double cut = 0.5) {
+  const TetTopology topology = buildTetTopology(mesh).value();
+  return fragmentSubMesh(mesh, topology, labels, Eigen::VectorXd::Constant(topology.edges.rows(), cut), label);
+}
+
+double meshVolume(const TetMesh& mesh) {
+  double v = 0.0;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    const Eigen::Vector3d a = mesh.nodes.row(mesh.tets(t, 0));
+    v += (Eigen::Vector3d(mesh.nodes.row(mesh.tets(t, 1))) - a)
+             .dot((Eigen::Vector3d(mesh.nodes.row(mesh.tets(t, 2))) - a).cross(Eigen::Vector3d(mesh.nodes.row(mesh.tets(t, 3))) - a)) /
+         6.0;
+  }
+  return v;
+}
+
+TEST(FragmentModes, OneLabelIsTheWholeMeshAndItsModesAreTheBakedOnes) {
+  const TetMesh bar = testing::makeBoxTetMesh(0.2, 0.05, 0.03, 10, 3, 2);
+  auto sub = subMesh(bar, Eigen::VectorXi::Zero(bar.nodes.rows()), 0);
+  ASSERT_TRUE(sub) << sub.error().message;
+  EXPECT_EQ(sub.value().mesh.tets.rows(), bar.tets.rows());
+  EXPECT_EQ(sub.value().wholeTets, bar.tets.rows());
+  EXPECT_EQ(sub.value().splitTets, 0);
+  EXPECT_EQ(sub.value().mesh.nodes.rows(), bar.nodes.rows());
+  EXPECT_DOUBLE_EQ(sub.value().droppedVolumeM3, 0.0);
+
+  // The bake's path: ARPACK on the same K and M.
+  const FemSystem fem = assembleFem(bar, glass(), FemSettings{}).value();
+  ModalSettings ms;
+  ms.modeCount = 12;
+  ms.shiftRad2PerS2 = defaultShift(bar.nodes, glass());
+  auto baked = computeModes(fem, bar.nodes, ms);
+  ASSERT_TRUE(baked) << baked.error().message;
+
+  for (int denseMaxDof : {0, 100000}) {  // Spectra, then Eigen's dense solver
+    ExactModesSettings es;
+    es.modeCount = 12;
+    es.denseMaxDof = denseMaxDof;
+    auto own = exactFragmentAsset(sub.value(), glass(), es, "bar");
+    ASSERT_TRUE(own) << own.error().message;
+    const ModalBasis& m = own.value().modal;
+    ASSERT_EQ(m.frequenciesHz.size(), 12);
+    for (int j = 0; j < 12; ++j) {
+      EXPECT_NEAR(m.frequenciesHz[j], baked.value().basis.frequenciesHz[j], 1e-7 * baked.value().basis.frequenciesHz[j]) << j;
+    }
+    EXPECT_LT(m.residuals.maxCoeff(), 1e-8);
+    EXPECT_LT(m.orthonormalityError, 1e-8);
+    EXPECT_EQ(own.value().stressModes.rows(), 6 * bar.tets.rows());
+    EXPECT_EQ(own.value().stressModes.cols(), 12);
+    EXPECT_NEAR(own.value().massProperties.volumeM3, 0.2 * 0.05 * 0.03, 1e-12);
+    EXPECT_EQ(own.value().bake.factorization, denseMaxDof > 0 ? "dense" : "eigen-ldlt");
+  }
+}
+
+TEST(FragmentModes, TwoHalvesPartitionTheBarAndRingLikeHalfBeams) {
+  // A slender free-free bar cut across at x = 0.195 m (the crossed edges at their middle): the
+  // halves hold exactly their volumes, and the first bending frequency of the shorter beam is about
+  // (0.4 / 0.195)² = 4.2× the whole's (f ∝ 1/L²; shear and rotary inertia bring a stubby part a
+  // little below).
+  const TetMesh bar = testing::makeBoxTetMesh(0.4, 0.02, 0.02, 40, 2, 2);
+  Eigen::VectorXi labels(bar.nodes.rows());
+  for (Eigen::Index i = 0; i < bar.nodes.rows(); ++i) labels[i] = bar.nodes(i, 0) < 0.19 + 1e-9 ? 0 : 1;
+  auto left = subMesh(bar, labels, 0), right = subMesh(bar, labels, 1);
+  ASSERT_TRUE(left && right);
+  EXPECT_GT(left.value().splitTets, 0);
+  EXPECT_EQ(left.value().splitTets, right.value().splitTets);
+  EXPECT_EQ(left.value().wholeTets + right.value().wholeTets + left.value().splitTets, bar.tets.rows());
+  EXPECT_NEAR(meshVolume(left.value().mesh), 0.195 * 0.02 * 0.02, 1e-15);
+  EXPECT_NEAR(meshVolume(right.value().mesh), 0.205 * 0.02 * 0.02, 1e-15);
+
+  ExactModesSettings es;
+  es.modeCount = 4;
+  auto whole = exactFragmentAsset(subMesh(bar, Eigen::VectorXi::Zero(bar.nodes.rows()), 0).value(), glass(), es, "bar");
+  auto half = exactFragmentAsset(left.value(), glass(), es, "half");
+  ASSERT_TRUE(whole && half) << (whole ? half.error().message : whole.error().message);
+  const double ratio = half.value().modal.frequenciesHz[0] / whole.value().modal.frequenciesHz[0];
+  EXPECT_GT(ratio, 3.4);
+  EXPECT_LT(ratio, 4.3);
+}
+
+TEST(FragmentModes, SubMeshesHoldTheVolumesOfTheFragmentSurfaces) {
+  // Three fragments from two slanted cuts with uneven crack parameters: each sub-mesh is conforming
+  // (its boundary is closed: the topology builds) and encloses what the fragment surface encloses.
+  const TetMesh box = testing::makeBoxTetMesh(0.2, 0.1, 0.08, 6, 4, 3);
+  const TetTopology topology = buildTetTopology(box).value();
+  Eigen::VectorXi labels(box.nodes.rows());
+  for (Eigen::Index i = 0; i < box.nodes.rows(); ++i) {
+    const Eigen::Vector3d x = box.nodes.row(i);
+    labels[i] = x.x() + 0.4 * x.z() < 0.07 ? 0 : (x.y() - 0.3 * x.x() < 0.04 ? 1 : 2);
+  }
+  Eigen::VectorXd cuts(topology.edges.rows());
+  for (Eigen::Index e = 0; e < cuts.size(); ++e) cuts[e] = 0.1 + 0.8 * std::fmod(0.618034 * static_cast<double>(e), 1.0);
+  auto surfaces = buildFragmentSurfaces(box, topology, labels, 3, cuts);
+  ASSERT_TRUE(surfaces) << surfaces.error().message;
+  double total = 0.0;
+  for (int label = 0; label < 3; ++label) {
+    auto sub = fragmentSubMesh(box, topology, labels, cuts, label);
+    ASSERT_TRUE(sub) << sub.error().message;
+    EXPECT_DOUBLE_EQ(sub.value().droppedVolumeM3, 0.0);
+    EXPECT_TRUE(buildTetTopology(sub.value().mesh));
+    const double v = meshVolume(sub.value().mesh);
+    EXPECT_NEAR(v, computeSurfaceMassProperties(surfaces.value()[static_cast<size_t>(label)], 1.0).volumeM3, 1e-14) << label;
+    total += v;
+    ExactModesSettings es;
+    es.modeCount = 6;
+    auto own = exactFragmentAsset(sub.value(), glass(), es, "piece");
+    ASSERT_TRUE(own) << own.error().message;
+    EXPECT_LT(own.value().modal.residuals.maxCoeff(), 1e-8);
+  }
+  EXPECT_NEAR(total, 0.2 * 0.1 * 0.08, 1e-14);
+}
+
+TEST(FragmentModes, BadInputsGiveTypedErrors) {
+  const TetMesh bar = testing::makeBoxTetMesh(0.1, 0.05, 0.05, 2, 1, 1);
+  const TetTopology topology = buildTetTopology(bar).value();
+  const Eigen::VectorXd cuts = Eigen::VectorXd::Constant(topology.edges.rows(), 0.5);
+  EXPECT_EQ(fragmentSubMesh(bar, topology, Eigen::VectorXi::Zero(3), cuts, 0).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(fragmentSubMesh(bar, topology, Eigen::VectorXi::Zero(bar.nodes.rows()), Eigen::VectorXd::Zero(2), 0).error().code,
+            ErrorCode::InvalidArgument);
+  EXPECT_EQ(subMesh(bar, Eigen::VectorXi::Zero(bar.nodes.rows()), 1).error().code, ErrorCode::InvalidArgument);
+  Eigen::VectorXi split = Eigen::VectorXi::Zero(bar.nodes.rows());
+  split[0] = 1;
+  EXPECT_EQ(fragmentSubMesh(bar, topology, split, Eigen::VectorXd::Constant(cuts.size(), std::nan("")), 1).error().code,
+            ErrorCode::InvalidArgument);  // a crossed edge without a cut
+
+  auto sub = subMesh(bar, Eigen::VectorXi::Zero(bar.nodes.rows()), 0).value();
+  ExactModesSettings bad;
+  bad.modeCount = 0;
+  EXPECT_EQ(exactFragmentAsset(sub, glass(), bad, "x").error().code, ErrorCode::InvalidArgument);
+
+  // Two tets that share one node only: nine zero modes, not six.
+  FragmentSubMesh hinge;
+  hinge.mesh.nodes.resize(7, 3);
+  hinge.mesh.nodes << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1;
+  hinge.mesh.tets.resize(2, 4);
+  hinge.mesh.tets << 0, 1, 2, 3, 0, 4, 6, 5;
+  ASSERT_GT(meshVolume(hinge.mesh), 0.0);
+  ExactModesSettings es;
+  es.modeCount = 3;
+  EXPECT_EQ(exactFragmentAsset(hinge, glass(), es, "hinge").error().code, ErrorCode::RigidModeMismatch);
+
+}
+
+TEST(FragmentModes, ALabelInTwoPiecesKeepsTheLargerConnectedOne) {
+  // Label 0 at both ends of a bar, label 1 in between: the two end pieces share no face.
+  const TetMesh bar = testing::makeBoxTetMesh(0.5, 0.1, 0.1, 5, 1, 1);
+  Eigen::VectorXi labels(bar.nodes.rows());
+  for (Eigen::Index i = 0; i < bar.nodes.rows(); ++i) {
+    const double x = bar.nodes(i, 0);
+    labels[i] = x < 0.25 || x > 0.45 ? 0 : 1;
+  }
+  auto sub = subMesh(bar, labels, 0);
+  ASSERT_TRUE(sub) << sub.error().message;
+  EXPECT_NEAR(sub.value().droppedVolumeM3, 0.05 * 0.1 * 0.1, 1e-15);
+  EXPECT_NEAR(meshVolume(sub.value().mesh), 0.25 * 0.1 * 0.1, 1e-15);
+  for (Eigen::Index i = 0; i < sub.value().mesh.nodes.rows(); ++i) EXPECT_LT(sub.value().mesh.nodes(i, 0), 0.251);
+  ExactModesSettings es;
+  es.modeCount = 3;
+  EXPECT_TRUE(exactFragmentAsset(sub.value(), glass(), es, "end"));  // one connected solid: six rigid modes
+}
+
+}  // namespace
+}  // namespace brittle

@@ -1,0 +1,168 @@
+#include "ExactModesBench.h"
+
+#include "BenchSupport.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <string>
+
+#include "brittle/database/FragmentMatcher.h"
+#include "brittle/database/ScalingLaws.h"
+#include "brittle/precompute/BakePipeline.h"
+#include "brittle/runtime/FragmentModes.h"
+#include "brittle/runtime/World.h"
+
+namespace brittle::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+template <typename F>
+double medianSeconds(int repeats, F&& f) {
+  std::vector<double> t;
+  for (int i = 0; i < repeats; ++i) {
+    const auto s = Clock::now();
+    f();
+    t.push_back(std::chrono::duration<double>(Clock::now() - s).count());
+  }
+  return percentile(t, 0.5);
+}
+
+double maxRelative3(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  if (a.size() < 3 || b.size() < 3) return std::numeric_limits<double>::quiet_NaN();
+  return ((a.head<3>() - b.head<3>()).array().abs() / b.head<3>().array().abs()).maxCoeff();
+}
+
+// A steel ball on the centroid of a boundary face drawn by the seed, along the face's normal.
+ImpactDesc impactFor(const ObjectAsset& a, ObjectId id, uint64_t seed, double speed) {
+  std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 11);
+  const Eigen::Index f = static_cast<Eigen::Index>(rng() % static_cast<uint64_t>(a.surfaceFaces.rows()));
+  const Eigen::Vector3d p0 = a.tetMesh.nodes.row(a.surfaceFaces(f, 0)), p1 = a.tetMesh.nodes.row(a.surfaceFaces(f, 1)),
+                        p2 = a.tetMesh.nodes.row(a.surfaceFaces(f, 2));
+  ImpactDesc d;
+  d.object = id;
+  d.pointWorld = (p0 + p1 + p2) / 3.0;
+  d.normalWorld = (p1 - p0).cross(p2 - p0).normalized();
+  d.speedMps = speed;
+  d.impactorMassKg = 0.2 * a.massProperties.massKg;
+  d.impactorRadiusM = 0.05 * (a.tetMesh.nodes.colwise().maxCoeff() - a.tetMesh.nodes.colwise().minCoeff()).norm();
+  return d;
+}
+
+}  // namespace
+
+Status runExactModesBench(const ExactModesBenchSettings& s) {
+  if (s.speedsMps.empty() || s.seeds < 1 || s.maxFragmentsPerImpact < 1 || s.repeats < 1 || s.referenceTets < 100) {
+    return makeError(ErrorCode::InvalidArgument,
+                     "bench exact-modes: speeds, seeds ≥ 1, max fragments ≥ 1, repeats ≥ 1 and reference tets ≥ 100 needed");
+  }
+  auto pack = readPack(s.pack);
+  if (!pack) return pack.error();
+  const Pack& p = pack.value();
+  if (p.database.empty() || !p.database.hasPhysics()) {
+    return makeError(ErrorCode::InvalidArgument, "bench exact-modes: the pack " + s.pack.filename().string() + " has no fragment database");
+  }
+  std::vector<std::string> objects = s.objects;
+  if (objects.empty())
+    for (const ObjectAsset& a : p.objects) objects.push_back(a.name);
+  for (const std::string& name : objects)
+    if (std::none_of(p.objects.begin(), p.objects.end(), [&](const ObjectAsset& a) { return a.name == name; })) {
+      return makeError(ErrorCode::InvalidArgument, "bench exact-modes: no object '" + name + "' in the pack");
+    }
+  FragmentMatcherSettings ms;
+  for (DescriptorKind k : kAllDescriptorKinds) ms.enabled[static_cast<size_t>(k)] = k == DescriptorKind::Moment;
+  auto matcher = FragmentMatcher::build(p.database, ms);
+  if (!matcher) return matcher.error();
+
+  std::ofstream csv(s.csv);
+  if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.csv.string());
+  csv << "object,speed_mps,seed,fragment,volume_fraction,sub_tets,dropped_volume_fraction,modes,match_s,exact_s,"
+         "reference_s,match_distance,match_freq_err,exact_freq_err,reference_f1_hz,exact_f1_hz,match_f1_hz\n";
+  csv.precision(9);
+  for (const std::string& name : objects) {
+    const ObjectAsset& asset = *std::find_if(p.objects.begin(), p.objects.end(), [&](const ObjectAsset& a) { return a.name == name; });
+    const Material& material = *std::find_if(p.materials.begin(), p.materials.end(),
+                                             [&](const Material& m) { return m.name == asset.materialName; });
+    for (double speed : s.speedsMps)
+      for (int seed = 1; seed <= s.seeds; ++seed) {
+        WorldSettings ws;
+        ws.seed = static_cast<uint64_t>(seed);
+        ws.fracture.matchFragments = false;  // both paths are timed here, one fragment at a time
+        Pack one;
+        one.materials = p.materials;
+        one.objects.push_back(asset);
+        auto world = World::create(std::move(one), ws);
+        if (!world) return world.error();
+        auto id = world.value().addObject({.asset = name});
+        if (!id) return id.error();
+        auto hit = world.value().impact(impactFor(asset, id.value(), static_cast<uint64_t>(seed), speed));
+        if (!hit) return hit.error();
+        if (!hit.value().broken) continue;
+        const ImpactResult& r = hit.value();
+        std::vector<size_t> order;
+        for (size_t i = 0; i < r.fragments.size(); ++i)
+          if (!r.fragments[i].debris) order.push_back(i);
+        std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+          return r.fragments[a].massProperties.volumeM3 > r.fragments[b].massProperties.volumeM3;
+        });
+        if (order.size() > static_cast<size_t>(s.maxFragmentsPerImpact)) order.resize(static_cast<size_t>(s.maxFragmentsPerImpact));
+        for (size_t i : order) {
+          const FragmentResult& fr = r.fragments[i];
+          // Database path.
+          Result<ObjectAsset> matched = makeError(ErrorCode::InvalidArgument, "no match");
+          double distance = std::numeric_limits<double>::quiet_NaN();
+          const double matchS = medianSeconds(s.repeats, [&] {
+            auto m = matcher.value().match(fr.surface, DescriptorKind::Moment, 1);
+            if (!m) return;
+            distance = m.value().front().distance;
+            matched = instantiateEntry(p.database.entries[static_cast<size_t>(m.value().front().entry)],
+                                       p.database.referenceMaterial, material, m.value().front().queryFrame);
+          });
+          // Exact path.
+          ExactModesSettings es;
+          es.modeCount = static_cast<int>(asset.modal.modes.cols());
+          Result<FragmentSubMesh> sub = makeError(ErrorCode::InvalidArgument, "no sub-mesh");
+          Result<ObjectAsset> exact = makeError(ErrorCode::InvalidArgument, "no sub-mesh");
+          const double exactS = medianSeconds(s.repeats, [&] {
+            sub = fragmentSubMesh(asset.tetMesh, r.fracture.nodeLabels, static_cast<int>(i));
+            if (sub) exact = exactFragmentAsset(sub.value(), material, es, name + ".f" + std::to_string(i));
+          });
+          // Reference: the exact surface through the bake.
+          ObjectBakeSettings b;
+          b.name = name + ".f" + std::to_string(i);
+          b.material = material;
+          b.tetMesh.targetTets = s.referenceTets;
+          b.modal.modeCount = 3;
+          const auto t0 = Clock::now();
+          auto reference = bakeSurface(fr.surface, b);
+          const double referenceS = std::chrono::duration<double>(Clock::now() - t0).count();
+          const double nan = std::numeric_limits<double>::quiet_NaN();
+          const Eigen::VectorXd none;
+          const Eigen::VectorXd& refHz = reference ? reference.value().modal.frequenciesHz : none;
+          const Eigen::VectorXd& exactHz = exact ? exact.value().modal.frequenciesHz : none;
+          const Eigen::VectorXd& matchHz = matched ? matched.value().modal.frequenciesHz : none;
+          csv << name << "," << speed << "," << seed << "," << i << ","
+              << fr.massProperties.volumeM3 / asset.massProperties.volumeM3 << ","
+              << (sub ? sub.value().mesh.tets.rows() : 0) << ","
+              << (sub ? sub.value().droppedVolumeM3 / asset.massProperties.volumeM3 : nan) << ","
+              << (exact ? exact.value().modal.modes.cols() : 0) << "," << matchS << "," << (exact ? exactS : nan) << ","
+              << referenceS << "," << distance << "," << (reference && matched ? maxRelative3(matchHz, refHz) : nan) << ","
+              << (reference && exact ? maxRelative3(exactHz, refHz) : nan) << "," << (reference ? refHz[0] : nan) << ","
+              << (exact ? exactHz[0] : nan) << "," << (matched ? matchHz[0] : nan) << "\n";
+          if (!s.quiet) {
+            std::fprintf(stderr, "%s v=%g seed=%d fragment %zu: %ld tets, match %.2f ms, exact %.2f ms%s\n", name.c_str(), speed,
+                         seed, i, sub ? static_cast<long>(sub.value().mesh.tets.rows()) : 0L, 1e3 * matchS, 1e3 * exactS,
+                         reference ? "" : " (reference bake failed)");
+          }
+        }
+      }
+  }
+  if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.csv.string());
+  return Ok{};
+}
+
+}  // namespace brittle::bench

@@ -1,0 +1,100 @@
+#!/usr/bin/python3
+"""Chart 5, for `brittle bench exact-modes` (bench/exact_modes.csv): per fragment, the database
+match against the fragment's own modal analysis at runtime (the exact path), both against the
+reference bake of the fragment's exact surface. Left: time per fragment against its size (tets of
+its own mesh). Right: the error of the first three frequencies against the same size. Medians per
+size bin as lines. Writes bench/exact_modes.png next to the CSV and prints the figures the README
+quotes, with the largest size bin whose median exact time stays within the budget
+(--budget-ms, default 10 ms)."""
+import argparse
+import csv
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def number(text):
+    try:
+        value = float(text)
+    except ValueError:
+        return math.nan
+    return value
+
+
+def binned(x, y, edges):
+    centres, medians = [], []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        sel = [v for u, v in zip(x, y) if lo <= u < hi and math.isfinite(v)]
+        if sel:
+            centres.append(math.sqrt(lo * hi))
+            medians.append(float(np.median(sel)))
+    return centres, medians
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("csv", nargs="?", default="bench/exact_modes.csv")
+    parser.add_argument("--budget-ms", type=float, default=10.0)
+    args = parser.parse_args()
+    rows = [r for r in csv.DictReader(open(args.csv, newline="")) if int(r["sub_tets"]) > 0]
+    if not rows:
+        raise SystemExit("no fragment rows in " + args.csv)
+    tets = [int(r["sub_tets"]) for r in rows]
+    match_ms = [1e3 * number(r["match_s"]) for r in rows]
+    exact_ms = [1e3 * number(r["exact_s"]) for r in rows]
+    match_err = [100 * number(r["match_freq_err"]) for r in rows]
+    exact_err = [100 * number(r["exact_freq_err"]) for r in rows]
+    edges = np.geomspace(max(1, min(tets)) * 0.999, max(tets) * 1.001, 9)
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.5))
+    for values, label, colour in ((match_ms, "database match", "tab:blue"), (exact_ms, "exact path (own modes)", "tab:red")):
+        left.scatter(tets, values, s=10, alpha=0.35, color=colour)
+        left.plot(*binned(tets, values, edges), "o-", color=colour, label=label)
+    left.axhline(args.budget_ms, color="grey", ls="--", lw=1, label=f"budget {args.budget_ms:g} ms")
+    left.set_xscale("log")
+    left.set_yscale("log")
+    left.set_xlabel("fragment size (tets of its own mesh)")
+    left.set_ylabel("time per fragment (ms)")
+    left.legend(fontsize=8)
+    for values, label, colour in ((match_err, "database match", "tab:blue"), (exact_err, "exact path (own modes)", "tab:red")):
+        left_ok = [(t, v) for t, v in zip(tets, values) if math.isfinite(v)]
+        right.scatter([t for t, _ in left_ok], [max(v, 1e-3) for _, v in left_ok], s=10, alpha=0.35, color=colour)
+        right.plot(*binned(tets, values, edges), "o-", color=colour, label=label)
+    right.set_xscale("log")
+    right.set_yscale("log")
+    right.set_xlabel("fragment size (tets of its own mesh)")
+    right.set_ylabel("first-3-frequency error vs reference bake (%)")
+    right.legend(fontsize=8)
+    modes = sorted({r["modes"] for r in rows})
+    fig.suptitle(f"Chart 5: database match against the fragment's own modal analysis ({len(rows)} fragments, "
+                 f"{'/'.join(modes)} modes)")
+    fig.tight_layout()
+    out = Path(args.csv).with_suffix(".png")
+    fig.savefig(out, dpi=100)
+    print(f"chart: {out}")
+
+    def med(v):
+        v = [x for x in v if math.isfinite(x)]
+        return float(np.median(v)) if v else math.nan
+
+    print(f"fragments: {len(rows)}, tets {min(tets)}..{max(tets)}")
+    print(f"median time: match {med(match_ms):.2f} ms, exact {med(exact_ms):.2f} ms")
+    print(f"median frequency error: match {med(match_err):.1f} %, exact {med(exact_err):.1f} %")
+    centres, medians = binned(tets, exact_ms, edges)
+    for c, m, me in zip(centres, medians, binned(tets, match_ms, edges)[1]):
+        print(f"  ~{c:7.0f} tets: exact {m:8.2f} ms, match {me:6.2f} ms")
+    within = [t for t, m in zip(tets, exact_ms) if math.isfinite(m) and m <= args.budget_ms]
+    fit = np.polyfit(np.log([t for t, m in zip(tets, exact_ms) if math.isfinite(m)]),
+                     np.log([m for m in exact_ms if math.isfinite(m)]), 1)
+    crossing = math.exp((math.log(args.budget_ms) - fit[1]) / fit[0])
+    print(f"exact time ~ tets^{fit[0]:.2f}; the fit crosses {args.budget_ms:g} ms at {crossing:.0f} tets "
+          f"(largest fragment within the budget: {max(within) if within else 0} tets)")
+
+
+if __name__ == "__main__":
+    main()
