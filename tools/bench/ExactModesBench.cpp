@@ -7,12 +7,12 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <random>
 #include <string>
 
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/ScalingLaws.h"
-#include "brittle/precompute/BakePipeline.h"
 #include "brittle/runtime/FragmentModes.h"
 #include "brittle/runtime/World.h"
 
@@ -53,12 +53,50 @@ ImpactDesc impactFor(const ObjectAsset& a, ObjectId id, uint64_t seed, double sp
   return d;
 }
 
+// Each tet split into eight (edge midpoints, shared by the tets around an edge; the inner
+// octahedron along its m02–m13 diagonal): the same solid at half the element size.
+TetMesh refine(const TetMesh& mesh) {
+  std::map<std::pair<int32_t, int32_t>, int32_t> midpoint;
+  std::vector<Eigen::Vector3d> points;
+  for (Eigen::Index i = 0; i < mesh.nodes.rows(); ++i) points.emplace_back(mesh.nodes.row(i).transpose());
+  auto mid = [&](int32_t a, int32_t b) {
+    auto [it, inserted] = midpoint.try_emplace({std::min(a, b), std::max(a, b)}, static_cast<int32_t>(points.size()));
+    if (inserted) points.push_back(0.5 * (points[static_cast<size_t>(a)] + points[static_cast<size_t>(b)]));
+    return it->second;
+  };
+  std::vector<std::array<int32_t, 4>> tets;
+  auto add = [&](int32_t a, int32_t b, int32_t c, int32_t d) {
+    const Eigen::Vector3d pa = points[static_cast<size_t>(a)];
+    const double v = (points[static_cast<size_t>(b)] - pa).dot((points[static_cast<size_t>(c)] - pa).cross(points[static_cast<size_t>(d)] - pa));
+    tets.push_back(v > 0.0 ? std::array<int32_t, 4>{a, b, c, d} : std::array<int32_t, 4>{a, c, b, d});
+  };
+  for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) {
+    const int32_t n0 = mesh.tets(e, 0), n1 = mesh.tets(e, 1), n2 = mesh.tets(e, 2), n3 = mesh.tets(e, 3);
+    const int32_t m01 = mid(n0, n1), m02 = mid(n0, n2), m03 = mid(n0, n3), m12 = mid(n1, n2), m13 = mid(n1, n3), m23 = mid(n2, n3);
+    add(n0, m01, m02, m03);
+    add(m01, n1, m12, m13);
+    add(m02, m12, n2, m23);
+    add(m03, m13, m23, n3);
+    add(m02, m13, m01, m03);
+    add(m02, m13, m03, m23);
+    add(m02, m13, m23, m12);
+    add(m02, m13, m12, m01);
+  }
+  TetMesh out;
+  out.nodes.resize(static_cast<Eigen::Index>(points.size()), 3);
+  for (size_t i = 0; i < points.size(); ++i) out.nodes.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
+  out.tets.resize(static_cast<Eigen::Index>(tets.size()), 4);
+  for (size_t i = 0; i < tets.size(); ++i)
+    for (int k = 0; k < 4; ++k) out.tets(static_cast<Eigen::Index>(i), k) = tets[i][static_cast<size_t>(k)];
+  return out;
+}
+
 }  // namespace
 
 Status runExactModesBench(const ExactModesBenchSettings& s) {
-  if (s.speedsMps.empty() || s.seeds < 1 || s.maxFragmentsPerImpact < 1 || s.repeats < 1 || s.referenceTets < 100) {
+  if (s.speedsMps.empty() || s.seeds < 1 || s.maxFragmentsPerImpact < 1 || s.repeats < 1 || s.referenceMaxTets < 0) {
     return makeError(ErrorCode::InvalidArgument,
-                     "bench exact-modes: speeds, seeds ≥ 1, max fragments ≥ 1, repeats ≥ 1 and reference tets ≥ 100 needed");
+                     "bench exact-modes: speeds, seeds ≥ 1, max fragments ≥ 1, repeats ≥ 1 and reference max tets ≥ 0 needed");
   }
   auto pack = readPack(s.pack);
   if (!pack) return pack.error();
@@ -80,13 +118,15 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
 
   std::ofstream csv(s.csv);
   if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.csv.string());
-  csv << "object,speed_mps,seed,fragment,volume_fraction,sub_tets,dropped_volume_fraction,modes,match_s,exact_s,"
+  csv << "object,speed_mps,seed,fragment,volume_fraction,parent_tets,sub_tets,dropped_volume_fraction,modes,match_s,exact_s,"
          "reference_s,match_distance,match_freq_err,exact_freq_err,reference_f1_hz,exact_f1_hz,match_f1_hz\n";
   csv.precision(9);
   for (const std::string& name : objects) {
     const ObjectAsset& asset = *std::find_if(p.objects.begin(), p.objects.end(), [&](const ObjectAsset& a) { return a.name == name; });
     const Material& material = *std::find_if(p.materials.begin(), p.materials.end(),
                                              [&](const Material& m) { return m.name == asset.materialName; });
+    auto topology = buildTetTopology(asset.tetMesh);
+    if (!topology) return topology.error();
     for (double speed : s.speedsMps)
       for (int seed = 1; seed <= s.seeds; ++seed) {
         WorldSettings ws;
@@ -128,18 +168,21 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
           Result<FragmentSubMesh> sub = makeError(ErrorCode::InvalidArgument, "no sub-mesh");
           Result<ObjectAsset> exact = makeError(ErrorCode::InvalidArgument, "no sub-mesh");
           const double exactS = medianSeconds(s.repeats, [&] {
-            sub = fragmentSubMesh(asset.tetMesh, r.fracture.nodeLabels, static_cast<int>(i));
+            sub = fragmentSubMesh(asset.tetMesh, topology.value(), r.fracture.nodeLabels, r.fracture.edgeCuts, static_cast<int>(i));
             if (sub) exact = exactFragmentAsset(sub.value(), material, es, name + ".f" + std::to_string(i));
           });
-          // Reference: the exact surface through the bake.
-          ObjectBakeSettings b;
-          b.name = name + ".f" + std::to_string(i);
-          b.material = material;
-          b.tetMesh.targetTets = s.referenceTets;
-          b.modal.modeCount = 3;
-          const auto t0 = Clock::now();
-          auto reference = bakeSurface(fr.surface, b);
-          const double referenceS = std::chrono::duration<double>(Clock::now() - t0).count();
+          // Reference: the fragment's solid at half the element size, three modes.
+          Result<ObjectAsset> reference = makeError(ErrorCode::InvalidArgument, "no sub-mesh");
+          double referenceS = std::numeric_limits<double>::quiet_NaN();
+          if (sub && sub.value().mesh.tets.rows() <= s.referenceMaxTets) {
+            const auto t0 = Clock::now();
+            FragmentSubMesh fine;
+            fine.mesh = refine(sub.value().mesh);
+            ExactModesSettings rs;
+            rs.modeCount = 3;
+            reference = exactFragmentAsset(fine, material, rs, name + ".f" + std::to_string(i) + ".fine");
+            referenceS = std::chrono::duration<double>(Clock::now() - t0).count();
+          }
           const double nan = std::numeric_limits<double>::quiet_NaN();
           const Eigen::VectorXd none;
           const Eigen::VectorXd& refHz = reference ? reference.value().modal.frequenciesHz : none;
@@ -147,16 +190,16 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
           const Eigen::VectorXd& matchHz = matched ? matched.value().modal.frequenciesHz : none;
           csv << name << "," << speed << "," << seed << "," << i << ","
               << fr.massProperties.volumeM3 / asset.massProperties.volumeM3 << ","
-              << (sub ? sub.value().mesh.tets.rows() : 0) << ","
+              << (sub ? sub.value().wholeTets + sub.value().splitTets : 0) << "," << (sub ? sub.value().mesh.tets.rows() : 0) << ","
               << (sub ? sub.value().droppedVolumeM3 / asset.massProperties.volumeM3 : nan) << ","
               << (exact ? exact.value().modal.modes.cols() : 0) << "," << matchS << "," << (exact ? exactS : nan) << ","
               << referenceS << "," << distance << "," << (reference && matched ? maxRelative3(matchHz, refHz) : nan) << ","
               << (reference && exact ? maxRelative3(exactHz, refHz) : nan) << "," << (reference ? refHz[0] : nan) << ","
               << (exact ? exactHz[0] : nan) << "," << (matched ? matchHz[0] : nan) << "\n";
           if (!s.quiet) {
-            std::fprintf(stderr, "%s v=%g seed=%d fragment %zu: %ld tets, match %.2f ms, exact %.2f ms%s\n", name.c_str(), speed,
+            std::fprintf(stderr, "%s v=%g seed=%d fragment %zu: %ld tets, match %.2f ms, exact %.2f ms%s%s\n", name.c_str(), speed,
                          seed, i, sub ? static_cast<long>(sub.value().mesh.tets.rows()) : 0L, 1e3 * matchS, 1e3 * exactS,
-                         reference ? "" : " (reference bake failed)");
+                         reference ? "" : " (no reference: ", reference ? "" : (reference.error().message + ")").c_str());
           }
         }
       }

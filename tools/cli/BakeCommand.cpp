@@ -71,6 +71,13 @@ Runner addBakeCommand(CLI::App& app) {
   }
 
   return [o, cmd]() -> int {
+    // The output's directory is made before the bake, so that a long bake never ends on a path
+    // that cannot be written.
+    if (const std::filesystem::path dir = std::filesystem::path(o->out).parent_path(); !dir.empty()) {
+      std::error_code ec;
+      std::filesystem::create_directories(dir, ec);
+      if (ec) return reportError(makeError(ErrorCode::PackIoError, "cannot create the directory of " + o->out + ": " + ec.message()));
+    }
     std::vector<ObjectBakeSettings> objects;
     if (!o->manifest.empty()) {
       auto loaded = loadBakeManifest(o->manifest);

@@ -364,8 +364,9 @@ Runner addBenchCommand(CLI::App& app) {
   exact->add_option("--seeds", xb->seeds, "Seeds per speed (impact point and cracks)")->capture_default_str()->check(CLI::Range(1, 10000));
   exact->add_option("--max-fragments", xb->maxFragmentsPerImpact, "Largest fragments measured per impact")
       ->capture_default_str()->check(CLI::Range(1, 1000));
-  exact->add_option("--reference-tets", xb->referenceTets, "Target tets of each fragment's reference bake")
-      ->capture_default_str()->check(CLI::Range(int64_t{100}, int64_t{1000000}));
+  exact->add_option("--reference-max-tets", xb->referenceMaxTets,
+                    "Largest exact mesh that also gets the reference (the same mesh split 1:8)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   exact->add_option("--repeats", xb->repeats, "Timing repeats (median)")->capture_default_str()->check(CLI::Range(1, 100));
   exact->add_option("--csv", xb->csv, "Output CSV")->capture_default_str();
   exact->add_flag("--quiet", xb->quiet, "No progress lines");

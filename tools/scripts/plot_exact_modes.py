@@ -41,10 +41,10 @@ def main():
     parser.add_argument("csv", nargs="?", default="bench/exact_modes.csv")
     parser.add_argument("--budget-ms", type=float, default=10.0)
     args = parser.parse_args()
-    rows = [r for r in csv.DictReader(open(args.csv, newline="")) if int(r["sub_tets"]) > 0]
+    rows = [r for r in csv.DictReader(open(args.csv, newline="")) if int(r["parent_tets"]) > 0]
     if not rows:
         raise SystemExit("no fragment rows in " + args.csv)
-    tets = [int(r["sub_tets"]) for r in rows]
+    tets = [int(r["parent_tets"]) for r in rows]
     match_ms = [1e3 * number(r["match_s"]) for r in rows]
     exact_ms = [1e3 * number(r["exact_s"]) for r in rows]
     match_err = [100 * number(r["match_freq_err"]) for r in rows]
@@ -58,7 +58,7 @@ def main():
     left.axhline(args.budget_ms, color="grey", ls="--", lw=1, label=f"budget {args.budget_ms:g} ms")
     left.set_xscale("log")
     left.set_yscale("log")
-    left.set_xlabel("fragment size (tets of its own mesh)")
+    left.set_xlabel("fragment size (tets of the broken body it holds a part of)")
     left.set_ylabel("time per fragment (ms)")
     left.legend(fontsize=8)
     for values, label, colour in ((match_err, "database match", "tab:blue"), (exact_err, "exact path (own modes)", "tab:red")):
@@ -67,7 +67,7 @@ def main():
         right.plot(*binned(tets, values, edges), "o-", color=colour, label=label)
     right.set_xscale("log")
     right.set_yscale("log")
-    right.set_xlabel("fragment size (tets of its own mesh)")
+    right.set_xlabel("fragment size (tets of the broken body it holds a part of)")
     right.set_ylabel("first-3-frequency error vs reference bake (%)")
     right.legend(fontsize=8)
     modes = sorted({r["modes"] for r in rows})
