@@ -229,9 +229,9 @@ Status validateWorldSettings(const WorldSettings& s) {
   if (s.maxObjects < 1) return bad("WorldSettings: maxObjects must be ≥ 1");
   if (f.modeCount < 0 || f.pulseSteps < 2 || f.ringDownSteps < 0 || !(f.ringDownPeriods >= 0.0) ||
       !std::isfinite(f.ringDownPeriods) || !(f.debrisVolumeFraction >= 0.0 && f.debrisVolumeFraction < 1.0) ||
-      f.exactModesMaxTets < 0) {
+      f.exactModesMaxTets < 0 || f.exactModeCount < 1) {
     return bad("FractureSettings: modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0, ringDownPeriods ≥ 0 and finite, "
-               "debrisVolumeFraction in [0, 1), exactModesMaxTets ≥ 0");
+               "debrisVolumeFraction in [0, 1), exactModesMaxTets ≥ 0, exactModeCount ≥ 1");
   }
   if (f.crack.maxCracks < 0 || std::isnan(f.crack.propagationStressRatio) || !(f.crack.directionBlend >= 0.0) ||
       !(f.crack.directionBlend <= 1.0) || !(f.crack.noiseRad >= 0.0) || !std::isfinite(f.crack.noiseRad)) {
@@ -541,9 +541,9 @@ Status World::Impl::impact(const ImpactDesc& desc, ImpactResult& result) {
   const Eigen::Vector3d translation = s.translation;
   remove(desc.object);
   result.broken = true;
-  if (fs.exactModesMaxTets > 0) {
+  if (fs.matchFragments && fs.exactModesMaxTets > 0) {
     ExactModesSettings es;
-    es.modeCount = fs.modeCount > 0 ? fs.modeCount : static_cast<int>(asset.modal.modes.cols());
+    es.modeCount = fs.modeCount > 0 ? std::min(fs.modeCount, fs.exactModeCount) : fs.exactModeCount;
     const std::vector<int64_t> sizes =
         fragmentTetCounts(asset.tetMesh, result.fracture.nodeLabels, static_cast<int>(result.fragments.size()));
     for (size_t i = 0; i < result.fragments.size(); ++i) {

@@ -94,7 +94,7 @@ TetMesh refine(const TetMesh& mesh) {
 }  // namespace
 
 Status runExactModesBench(const ExactModesBenchSettings& s) {
-  if (s.speedsMps.empty() || s.seeds < 1 || s.maxFragmentsPerImpact < 1 || s.repeats < 1 || s.referenceMaxTets < 0) {
+  if (s.speedsMps.empty() || s.seeds < 1 || s.maxFragmentsPerImpact < 1 || s.exactModes < 1 || s.repeats < 1 || s.referenceMaxTets < 0) {
     return makeError(ErrorCode::InvalidArgument,
                      "bench exact-modes: speeds, seeds ≥ 1, max fragments ≥ 1, repeats ≥ 1 and reference max tets ≥ 0 needed");
   }
@@ -164,7 +164,7 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
           });
           // Exact path.
           ExactModesSettings es;
-          es.modeCount = static_cast<int>(asset.modal.modes.cols());
+          es.modeCount = s.exactModes;
           Result<FragmentSubMesh> sub = makeError(ErrorCode::InvalidArgument, "no sub-mesh");
           Result<ObjectAsset> exact = makeError(ErrorCode::InvalidArgument, "no sub-mesh");
           const double exactS = medianSeconds(s.repeats, [&] {

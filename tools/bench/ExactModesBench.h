@@ -8,7 +8,7 @@
 //   * the database path: descriptor match and rescaling of the entry (FragmentMatcher, ScalingLaws),
 //     its time and its first three frequencies;
 //   * the exact path: the fragment's tets in the broken body, K and M, modes and stress modes
-//     (as many modes as the object has), its time and its first three frequencies;
+//     (exactModes modes, as the World's exactModeCount), its time and its first three frequencies;
 //   * the reference: the same solid at half the element size (every tet of the exact path's mesh
 //     split into eight), and the error of each path's first three frequencies against it (the
 //     largest relative error of the three, as in the search benchmark). A bake of the fragment's
@@ -33,6 +33,7 @@ struct ExactModesBenchSettings {
   int seeds = 3;
   int maxFragmentsPerImpact = 6;
   int64_t referenceMaxTets = 20000;              ///< no reference above this size of the exact mesh (×8 refined)
+  int exactModes = 20;                           ///< modes of the exact path (FractureSettings::exactModeCount)
   int repeats = 3;                               ///< timings: the median of this many runs
   std::filesystem::path csv = "bench/exact_modes.csv";
   bool quiet = false;

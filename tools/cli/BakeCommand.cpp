@@ -71,12 +71,11 @@ Runner addBakeCommand(CLI::App& app) {
   }
 
   return [o, cmd]() -> int {
-    // The output's directory is made before the bake, so that a long bake never ends on a path
-    // that cannot be written.
-    if (const std::filesystem::path dir = std::filesystem::path(o->out).parent_path(); !dir.empty()) {
-      std::error_code ec;
-      std::filesystem::create_directories(dir, ec);
-      if (ec) return reportError(makeError(ErrorCode::PackIoError, "cannot create the directory of " + o->out + ": " + ec.message()));
+    // The output's directory must exist (bake creates none); checked first, so that a long bake
+    // never ends on a path it cannot write.
+    if (const std::filesystem::path dir = std::filesystem::path(o->out).parent_path();
+        !dir.empty() && !std::filesystem::is_directory(dir)) {
+      return reportError(makeError(ErrorCode::PackIoError, "cannot write pack '" + o->out + "': no directory " + dir.string()));
     }
     std::vector<ObjectBakeSettings> objects;
     if (!o->manifest.empty()) {

@@ -367,6 +367,7 @@ Runner addBenchCommand(CLI::App& app) {
   exact->add_option("--reference-max-tets", xb->referenceMaxTets,
                     "Largest exact mesh that also gets the reference (the same mesh split 1:8)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  exact->add_option("--exact-modes", xb->exactModes, "Modes of the exact path")->capture_default_str()->check(CLI::Range(1, 500));
   exact->add_option("--repeats", xb->repeats, "Timing repeats (median)")->capture_default_str()->check(CLI::Range(1, 100));
   exact->add_option("--csv", xb->csv, "Output CSV")->capture_default_str();
   exact->add_flag("--quiet", xb->quiet, "No progress lines");
