@@ -32,24 +32,7 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
-Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& material, const SceneObjectRange& range,
-                                     double targetError, const ModelSizingSettings& settings, ProgressSink* progress) {
-  std::vector<int> ladder = settings.modeLadder;
-  std::sort(ladder.begin(), ladder.end());
-  ladder.erase(std::unique(ladder.begin(), ladder.end()), ladder.end());
-  if (ladder.empty() || ladder.front() < 1 || settings.points < 1 || settings.timingRepeats < 1 ||
-      settings.referenceStepsPerContact < 2 || !(targetError > 0.0) || range.impactors.empty() ||
-      !(range.minSpeedMps > 0.0 && range.minSpeedMps <= range.maxSpeedMps)) {
-    return makeError(ErrorCode::InvalidArgument, "model sizing: bad settings or scene range for " + asset.name);
-  }
-  const int stored = static_cast<int>(asset.modal.eigenvaluesRad2PerS2.size());
-  if (stored < ladder.front()) {
-    return makeError(ErrorCode::InvalidArgument, "model sizing: " + asset.name + " holds " + std::to_string(stored) +
-                                                     " modes, fewer than the ladder's first count");
-  }
-  ladder.erase(std::remove_if(ladder.begin(), ladder.end(), [&](int k) { return k > stored; }), ladder.end());
-
-  // The scene's impacts: seeded surface points by area × impactors × the two ends of the speeds.
+std::vector<ImpactDesc> drawSceneImpacts(const ObjectAsset& asset, const SceneObjectRange& range, int points, uint64_t seed) {
   const auto& nodes = asset.tetMesh.nodes;
   const auto& faces = asset.surfaceFaces;
   std::vector<double> cumulative(static_cast<size_t>(faces.rows()));
@@ -59,9 +42,9 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
     area += 0.5 * (b - a).cross(c - a).norm();
     cumulative[static_cast<size_t>(f)] = area;
   }
-  std::mt19937_64 rng(settings.seed ^ 0x5CE7E5151ull);
+  std::mt19937_64 rng(seed ^ 0x5CE7E5151ull);
   std::vector<ImpactDesc> impacts;
-  for (int p = 0; p < settings.points; ++p) {
+  for (int p = 0; p < points; ++p) {
     // A sphere hits a point drawn by area, along the face's normal.
     const double u = unit(rng) * area;
     const auto f = static_cast<Eigen::Index>(
@@ -97,6 +80,27 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
       }
     }
   }
+  return impacts;
+}
+
+Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& material, const SceneObjectRange& range,
+                                     double targetError, const ModelSizingSettings& settings, ProgressSink* progress) {
+  std::vector<int> ladder = settings.modeLadder;
+  std::sort(ladder.begin(), ladder.end());
+  ladder.erase(std::unique(ladder.begin(), ladder.end()), ladder.end());
+  if (ladder.empty() || ladder.front() < 1 || settings.points < 1 || settings.timingRepeats < 1 ||
+      settings.referenceStepsPerContact < 2 || !(targetError > 0.0) || range.impactors.empty() ||
+      !(range.minSpeedMps > 0.0 && range.minSpeedMps <= range.maxSpeedMps)) {
+    return makeError(ErrorCode::InvalidArgument, "model sizing: bad settings or scene range for " + asset.name);
+  }
+  const int stored = static_cast<int>(asset.modal.eigenvaluesRad2PerS2.size());
+  if (stored < ladder.front()) {
+    return makeError(ErrorCode::InvalidArgument, "model sizing: " + asset.name + " holds " + std::to_string(stored) +
+                                                     " modes, fewer than the ladder's first count");
+  }
+  ladder.erase(std::remove_if(ladder.begin(), ladder.end(), [&](int k) { return k > stored; }), ladder.end());
+
+  const std::vector<ImpactDesc> impacts = drawSceneImpacts(asset, range, settings.points, settings.seed);
 
   Pack pack;
   pack.materials.push_back(material);
@@ -196,6 +200,7 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
   const int largest = *std::max_element(settings.modeLadder.begin(), settings.modeLadder.end());
   SceneSizingReport report;
   report.targetError = requirements.peakStressError;
+  report.matchTargetError = requirements.matchFrequencyError;
   report.refracture = requirements.refracture;
   std::vector<size_t> used;  // manifest index of each scene object
   for (const auto& range : requirements.objects) {
@@ -249,7 +254,36 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
     sized.back().modal.modeCount = sizing.value().chosenModes;
     report.objects.push_back(std::move(sizing).value());
   }
-  const FragmentDatabase* keep = requirements.refracture && db ? &*db : nullptr;
+  // What the fragments need: the debris threshold, and the descriptor and search precision the
+  // sized pack's database stores.
+  const auto fragmentStart = std::chrono::steady_clock::now();
+  std::vector<FragmentRecord> fragments;
+  std::vector<Material> materials;
+  for (size_t k = 0; k < used.size(); ++k) {
+    const ObjectAsset& asset = maxPack.value().objects[used[k]];
+    const Material& material = manifest[used[k]].material;
+    auto records = sceneFragments(asset, material, requirements.objects[k], report.objects[k].chosenModes, settings, progress);
+    if (!records) return records.error();
+    report.debris.push_back(chooseDebrisThreshold(asset.name, records.value()));
+    fragments.insert(fragments.end(), records.value().begin(), records.value().end());
+    if (std::none_of(materials.begin(), materials.end(), [&](const Material& m) { return m.name == material.name; })) {
+      materials.push_back(material);
+    }
+  }
+  report.debrisVolumeFraction = 0.5;
+  for (const auto& d : report.debris) report.debrisVolumeFraction = std::min(report.debrisVolumeFraction, d.debrisVolumeFraction);
+  std::optional<FragmentDatabase> sizedDb;
+  if (requirements.refracture && db) {
+    sizedDb = *db;
+    if (!fragments.empty()) {
+      auto search = chooseSearch(*db, fragments, materials, requirements.matchFrequencyError, settings);
+      if (!search) return search.error();
+      sizedDb->indexSettings[static_cast<size_t>(search.value().kind)] = search.value().indexSettings();
+      report.search = std::move(search).value();
+    }
+  }
+  report.fragmentSizingS = secondsSince(fragmentStart);
+  const FragmentDatabase* keep = sizedDb ? &*sizedDb : nullptr;
   auto sizedPack = bakeAndWrite(sized, keep, paths.sizedPack, progress, &report.sizedBakeS, &report.sizedPackBytes);
   if (!sizedPack) return sizedPack.error();
   if (keep) report.sizedBakeS += report.databaseBakeS;

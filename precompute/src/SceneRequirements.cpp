@@ -41,7 +41,16 @@ Result<SceneRequirements> loadSceneRequirements(const std::filesystem::path& pat
   }
   SceneRequirements r;
   try {
-    if (Status st = checkKeys(doc, {"peak_stress_error", "refracture", "objects"}, file); !st) return st.error();
+    if (Status st = checkKeys(doc, {"peak_stress_error", "match_frequency_error", "refracture", "objects"}, file); !st) {
+      return st.error();
+    }
+    if (doc.contains("match_frequency_error")) {
+      if (!doc["match_frequency_error"].is_number()) return parseError(file, "\"match_frequency_error\" must be a number");
+      r.matchFrequencyError = doc["match_frequency_error"].get<double>();
+      if (!(r.matchFrequencyError > 0.0 && r.matchFrequencyError < 100.0)) {
+        return parseError(file, "\"match_frequency_error\" must be in (0, 100)");
+      }
+    }
     if (doc.contains("peak_stress_error")) {
       if (!doc["peak_stress_error"].is_number()) return parseError(file, "\"peak_stress_error\" must be a number");
       r.peakStressError = doc["peak_stress_error"].get<double>();

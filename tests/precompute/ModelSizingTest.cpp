@@ -8,6 +8,7 @@
 
 #include "brittle/database/Pack.h"
 #include "brittle/precompute/MaterialLibrary.h"
+#include "brittle/testing/DatabaseFixtures.h"
 #include "brittle/testing/Fixtures.h"
 
 namespace brittle {
@@ -162,6 +163,79 @@ TEST_F(ModelSizingTest, RefusesBadSettings) {
   EXPECT_EQ(noImpactor.error().code, ErrorCode::InvalidArgument);
 }
 
+TEST_F(ModelSizingTest, FragmentsGiveTheDebrisThresholdAndTheSearch) {
+  const Material glass = materialPreset("glass").value();
+  SceneObjectRange range = ballRange();
+  range.maxSpeedMps = 40.0;  // breaks the plate at both points
+  ModelSizingSettings s = quick();
+  s.fragmentsPerImpact = 6;
+  auto fragments = sceneFragments(*sAsset, glass, range, 20, s);
+  ASSERT_TRUE(fragments) << fragments.error().message;
+  ASSERT_GE(fragments.value().size(), 4u);
+  int broke = 0;
+  for (const FragmentRecord& f : fragments.value()) {
+    EXPECT_EQ(f.object, "plate");
+    EXPECT_GT(f.volumeFraction, 0.0);
+    EXPECT_LT(f.volumeFraction, 1.0);
+    EXPECT_GT(f.frequenciesHz[0], 0.0);
+    EXPECT_LE(f.frequenciesHz[0], f.frequenciesHz[1]);
+    EXPECT_LE(f.frequenciesHz[1], f.frequenciesHz[2]);
+    broke += f.brokeAgain ? 1 : 0;
+  }
+  // Deterministic: the same seed gives the same fragments and the same outcomes.
+  auto again = sceneFragments(*sAsset, glass, range, 20, s);
+  ASSERT_TRUE(again);
+  ASSERT_EQ(again.value().size(), fragments.value().size());
+  for (size_t i = 0; i < again.value().size(); ++i) {
+    EXPECT_EQ(again.value()[i].volumeFraction, fragments.value()[i].volumeFraction);
+    EXPECT_EQ(again.value()[i].brokeAgain, fragments.value()[i].brokeAgain);
+  }
+
+  // Debris: half the smallest fraction that broke again; nothing that broke lies below it.
+  const DebrisSizing debris = chooseDebrisThreshold("plate", fragments.value());
+  EXPECT_EQ(debris.fragments, static_cast<int>(fragments.value().size()));
+  EXPECT_EQ(debris.brokeAgain, broke);
+  if (broke > 0) {
+    EXPECT_DOUBLE_EQ(debris.debrisVolumeFraction, std::clamp(0.5 * debris.smallestBrokenFraction, 0.001, 0.5));
+    for (const FragmentRecord& f : fragments.value()) {
+      if (f.brokeAgain) EXPECT_GE(f.volumeFraction, 2.0 * debris.debrisVolumeFraction - 1e-15);
+    }
+  } else {
+    EXPECT_EQ(debris.debrisVolumeFraction, 0.5);
+  }
+  FragmentRecord big;
+  big.object = "x";
+  big.volumeFraction = 0.3;
+  big.brokeAgain = true;
+  FragmentRecord small = big;
+  small.volumeFraction = 0.01;
+  small.brokeAgain = false;
+  EXPECT_DOUBLE_EQ(chooseDebrisThreshold("x", {big, small}).debrisVolumeFraction, 0.15);
+  EXPECT_DOUBLE_EQ(chooseDebrisThreshold("x", {small}).debrisVolumeFraction, 0.5);
+
+  // Search: every kind × precision is tried; the fastest that meets the target is chosen, else
+  // the most accurate.
+  auto database = bakeFragmentDatabase(testing::shippedShapesDatabase({"box", "plate", "wedge", "blob"}, 12, 400, 6));
+  ASSERT_TRUE(database) << database.error().message;
+  s.searchChecks = {2, 32, 0};
+  auto loose = chooseSearch(database.value(), fragments.value(), {glass}, 100.0, s);
+  ASSERT_TRUE(loose) << loose.error().message;
+  ASSERT_EQ(loose.value().trials.size(), 3u * kDescriptorKindCount);
+  EXPECT_TRUE(loose.value().targetMet);
+  for (const SearchTrial& t : loose.value().trials) {
+    EXPECT_GT(t.matched, 0);
+    EXPECT_GE(t.medianMatchMs, loose.value().medianMatchMs);
+  }
+  auto strict = chooseSearch(database.value(), fragments.value(), {glass}, 1e-9, s);
+  ASSERT_TRUE(strict);
+  EXPECT_FALSE(strict.value().targetMet);
+  for (const SearchTrial& t : strict.value().trials) EXPECT_GE(t.medianFrequencyError, strict.value().medianFrequencyError);
+  EXPECT_EQ(strict.value().indexSettings().kind, strict.value().checks > 0 ? DescriptorIndexSettings::Kind::KdForest
+                                                                          : DescriptorIndexSettings::Kind::BruteForce);
+  EXPECT_EQ(chooseSearch(database.value(), {}, {glass}, 0.2, s).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(chooseSearch(database.value(), fragments.value(), {}, 0.2, s).error().code, ErrorCode::InvalidArgument);
+}
+
 TEST(SceneSizingTest, BakesOnlyWhatTheSceneUsesAndReportsTheSavings) {
   const auto dir = testing::makeTempDir("scene-sizing");
   std::filesystem::create_directories(dir / "meshes");
@@ -191,6 +265,11 @@ TEST(SceneSizingTest, BakesOnlyWhatTheSceneUsesAndReportsTheSavings) {
   EXPECT_GT(r.maximumBakeS, 0.0);
   EXPECT_GT(r.sizedBakeS, 0.0);
   EXPECT_FALSE(std::filesystem::exists(out.string() + ".maximum.h5"));  // measured, then removed
+  // The tile's fragments were sized too (no database: no search).
+  ASSERT_EQ(r.debris.size(), 1u);
+  EXPECT_EQ(r.debris[0].object, "tile");
+  EXPECT_EQ(r.debrisVolumeFraction, r.debris[0].debrisVolumeFraction);
+  EXPECT_FALSE(r.search);
   auto sized = readPack(out);
   ASSERT_TRUE(sized) << sized.error().message;
   ASSERT_EQ(sized.value().objects.size(), 1u);

@@ -283,6 +283,19 @@ TEST_F(CliTest, SizeBakesTheSceneObjectsAtTheirModeCountsAndReports) {
   EXPECT_EQ(inspect["objects"][0]["modes"]["count"].get<int>(), chosen);
   // The sized manifest bakes the same object from its own directory.
   ASSERT_EQ(run("bake --manifest " + path("out/sized.json") + " --quiet --out " + path("again.h5")).exitCode, 0);
+  // The runtime settings beside the sized pack carry the scene's debris threshold; impacts read
+  // them, and a flag given on the command line wins.
+  const auto settings = nlohmann::json::parse(fileBytes(dir / "out" / "sized.settings.json"));
+  EXPECT_EQ(settings["debris_volume_fraction"].get<double>(), report["debris_volume_fraction"].get<double>());
+  EXPECT_EQ(report["debris"].size(), 1u);
+  const std::string hit = "impact " + path("out/sized.h5") + " --object tile --point 0,0,0.006 --normal 0,0,1 --speed 3 --json";
+  EXPECT_EQ(run(hit + " --settings " + path("out/sized.settings.json")).exitCode, 0);
+  EXPECT_EQ(run(hit + " --settings " + path("out/sized.settings.json") + " --debris 0.2").exitCode, 0);
+  std::ofstream(dir / "typo.settings.json") << R"({ "debris": 0.1 })";
+  const CliRun typo = run(hit + " --settings " + path("typo.settings.json"));
+  EXPECT_EQ(typo.exitCode, 3);
+  EXPECT_NE(typo.out.find("error [parse_error]"), std::string::npos) << typo.out;
+  EXPECT_NE(run(hit + " --settings " + path("none.settings.json")).exitCode, 0);
   // A scene object the manifest lacks, and a broken requirements file, are typed errors.
   std::ofstream(dir / "vase.json") << R"({ "objects": [ { "name": "vase", "speeds_mps": [1, 2], "impactors": [ { "ground": true } ] } ] })";
   const CliRun missing = run("size --manifest " + path("m.json") + " --scene " + path("vase.json") + " --quiet --out " + path("no.h5"));

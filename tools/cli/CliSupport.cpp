@@ -1,5 +1,7 @@
 #include "CliSupport.h"
 
+#include "brittle/precompute/RuntimeSettingsFile.h"
+
 #include <unistd.h>
 
 #include <cstdio>
@@ -67,6 +69,19 @@ void TerminalProgress::report(std::string_view stage, double fraction) {
 void TerminalProgress::finish() {
   if (mTty && !mQuiet && !mStage.empty()) std::fprintf(stderr, "\n");
   mStage.clear();
+}
+
+Status applyRuntimeSettingsFile(const std::string& path, const CLI::App& cmd, FractureSettings& fracture) {
+  auto loaded = loadRuntimeSettings(path, fracture);
+  if (!loaded) return loaded.error();
+  FractureSettings merged = loaded.value();
+  auto given = [&](const char* flag) { return cmd.get_option_no_throw(flag) && cmd.count(flag) > 0; };
+  if (given("--modes")) merged.modeCount = fracture.modeCount;
+  if (given("--debris")) merged.debrisVolumeFraction = fracture.debrisVolumeFraction;
+  if (given("--descriptor")) merged.descriptor = fracture.descriptor;
+  if (given("--exact-max-tets")) merged.exactModesMaxTets = fracture.exactModesMaxTets;
+  fracture = merged;
+  return Ok{};
 }
 
 }  // namespace brittle::cli

@@ -4,8 +4,11 @@
 #include <chrono>
 #include <string>
 
+#include <CLI/CLI.hpp>
+
 #include "brittle/descriptors/Result.h"
 #include "brittle/precompute/Progress.h"
+#include "brittle/runtime/World.h"
 
 namespace brittle::cli {
 
@@ -24,6 +27,11 @@ ExitCode exitCodeFor(ErrorCode code);
 
 /// Prints "error [code_name]: message" to stderr and returns the exit code.
 int reportError(const Error& error);
+
+/// `--settings FILE` (RuntimeSettingsFile.h) for a command that breaks objects: the file's values
+/// replace `fracture`'s, except those the user gave as flags on `cmd` (--modes, --debris,
+/// --descriptor, --exact-max-tets), which win. Errors: those of loadRuntimeSettings.
+Status applyRuntimeSettingsFile(const std::string& path, const CLI::App& cmd, FractureSettings& fracture);
 
 /// Progress on stderr: a single rewritten line on a terminal, one line per stage otherwise.
 class TerminalProgress final : public ProgressSink {

@@ -22,6 +22,7 @@ struct ImpactOptions {
   uint64_t seed = 1;
   int modes = 0;
   int exactMaxTets = FractureSettings{}.exactModesMaxTets;
+  std::string runtimeSettings;
   double crackBlend = CrackSettings{}.directionBlend, crackNoise = CrackSettings{}.noiseRad;
   double debris = 0.01, propagationRatio = CrackSettings{}.propagationStressRatio;
   int pulseSteps = FractureSettings{}.pulseSteps, ringDownSteps = FractureSettings{}.ringDownSteps;
@@ -48,6 +49,7 @@ Runner addImpactCommand(CLI::App& app) {
   cmd->add_option("--impulse", o->impulse, "Impulse the host resolved (N s); default (1 + e) m* v")->capture_default_str();
   cmd->add_option("--body-radius", o->bodyRadius, "Local radius of curvature (m); 0: estimated from the surface")->capture_default_str();
   cmd->add_option("--modes", o->modes, "Modes used (0: all stored)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--settings", o->runtimeSettings, "Runtime settings (JSON, as brittle size writes them); flags given here win");
   cmd->add_option("--exact-max-tets", o->exactMaxTets,
                   "Fragments of at most this many tets get their own modal analysis instead of a database match (0: never)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
@@ -68,7 +70,7 @@ Runner addImpactCommand(CLI::App& app) {
   cmd->add_option("--out", o->out, "Directory for the fragment meshes (fragment-NN.off)");
   cmd->add_flag("--json", o->json, "Print the result as JSON");
 
-  return [o]() -> int {
+  return [o, cmd]() -> int {
     auto pack = readPack(o->pack);
     if (!pack) return reportError(pack.error());
     auto impactor = resolveMaterial(o->impactorMaterial);
@@ -84,6 +86,9 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.matchFragments = !o->noMatch;
     settings.fracture.debrisVolumeFraction = o->debris;
     settings.fracture.exactModesMaxTets = o->exactMaxTets;
+    if (!o->runtimeSettings.empty()) {
+      if (Status st = applyRuntimeSettingsFile(o->runtimeSettings, *cmd, settings.fracture); !st) return reportError(st.error());
+    }
     settings.fracture.crack.propagationStressRatio = o->propagationRatio;
     settings.fracture.crack.maxCracks = o->maxCracks;
     settings.fracture.crack.directionBlend = o->crackBlend;

@@ -19,6 +19,7 @@ struct PlayOptions {
   PlayerSettings settings;
   int framesEvery = 10;
   int modes = 0;
+  std::string runtimeSettings;
   bool json = false;
 };
 
@@ -43,13 +44,17 @@ Runner addPlayCommand(CLI::App& app) {
   cmd->add_option("--modes", o->modes, "Modes used per impact (0: all stored)")->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--debris", o->settings.world.fracture.debrisVolumeFraction, "Fragments below this volume fraction are rigid debris")
       ->capture_default_str()->check(CLI::Range(0.0, 0.99));
+  cmd->add_option("--settings", o->runtimeSettings, "Runtime settings (JSON, as brittle size writes them); flags given here win");
 
-  return [o]() -> int {
+  return [o, cmd]() -> int {
     auto scene = loadScene(o->scene);
     if (!scene) return reportError(scene.error());
     auto pack = readPack(o->pack);
     if (!pack) return reportError(pack.error());
     o->settings.world.fracture.modeCount = o->modes;
+    if (!o->runtimeSettings.empty()) {
+      if (Status st = applyRuntimeSettingsFile(o->runtimeSettings, *cmd, o->settings.world.fracture); !st) return reportError(st.error());
+    }
     o->settings.recordTracks = !o->outReplay.empty();
     auto played = playScene(std::move(pack).value(), scene.value(), o->settings);
     if (!played) return reportError(played.error());

@@ -1,6 +1,7 @@
 // brittle size — the cheapest model that meets a scene's accuracy target (ModelSizing.h): bakes
 // the all-maximum pack, measures every mode count of the ladder against the full-FEM reference
 // over the scene's impacts, bakes the sized pack and reports what it saves.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -10,12 +11,13 @@
 #include "Commands.h"
 #include "brittle/precompute/AtomicFile.h"
 #include "brittle/precompute/ModelSizing.h"
+#include "brittle/precompute/RuntimeSettingsFile.h"
 
 namespace brittle::cli {
 namespace {
 
 struct SizeOptions {
-  std::string manifest, scene, out, sizedManifest, report, keepMaximum;
+  std::string manifest, scene, out, sizedManifest, report, keepMaximum, settingsOut;
   double target = 0.0;
   ModelSizingSettings settings;
   bool quiet = false, json = false;
@@ -32,7 +34,30 @@ nlohmann::json reportJson(const SceneSizingReport& r) {
                        {"worst_error", o.chosenError}, {"impacts", o.impacts}, {"reference_s", o.referenceS},
                        {"trials", trials}});
   }
+  nlohmann::json debris = nlohmann::json::array();
+  for (const auto& d : r.debris) {
+    debris.push_back({{"name", d.object}, {"fragments", d.fragments}, {"broke_again", d.brokeAgain},
+                      {"smallest_broken_fraction", std::isfinite(d.smallestBrokenFraction) ? nlohmann::json(d.smallestBrokenFraction) : nlohmann::json()},
+                      {"debris_volume_fraction", d.debrisVolumeFraction}});
+  }
+  nlohmann::json search;
+  if (r.search) {
+    nlohmann::json trials = nlohmann::json::array();
+    for (const auto& t : r.search->trials) {
+      trials.push_back({{"descriptor", descriptorKindName(t.kind)}, {"checks", t.checks}, {"matched", t.matched},
+                        {"median_frequency_error", std::isfinite(t.medianFrequencyError) ? nlohmann::json(t.medianFrequencyError) : nlohmann::json()},
+                        {"median_match_ms", t.medianMatchMs}});
+    }
+    search = {{"descriptor", descriptorKindName(r.search->kind)}, {"checks", r.search->checks},
+              {"target_met", r.search->targetMet}, {"median_frequency_error", r.search->medianFrequencyError},
+              {"median_match_ms", r.search->medianMatchMs}, {"fragments", r.search->fragments}, {"trials", trials}};
+  }
   return {{"target_peak_stress_error", r.targetError},
+          {"target_match_frequency_error", r.matchTargetError},
+          {"debris", debris},
+          {"debris_volume_fraction", r.debrisVolumeFraction},
+          {"search", search},
+          {"fragment_sizing_s", r.fragmentSizingS},
           {"refracture", r.refracture},
           {"all_met", r.allMet()},
           {"objects", objects},
@@ -52,6 +77,24 @@ void printReport(const SceneSizingReport& r) {
     }
   }
   for (const auto& s : r.skippedObjects) std::printf("  %-18s not used by the scene: not baked\n", s.c_str());
+  std::printf("fragments: debris below %.3g of a body's volume (the scene's top-speed impacts, each fragment hit again)\n",
+              r.debrisVolumeFraction);
+  for (const auto& d : r.debris) {
+    std::printf("  %-18s %3d fragments, %3d broke again", d.object.c_str(), d.fragments, d.brokeAgain);
+    if (d.brokeAgain > 0) std::printf(", the smallest at %.3g of the body", d.smallestBrokenFraction);
+    std::printf(": threshold %.3g\n", d.debrisVolumeFraction);
+  }
+  if (r.search) {
+    std::printf("search: %s, %s, median frequency error %.1f %% (target %.1f %%%s), %.2f ms per match, %d fragments\n",
+                descriptorKindName(r.search->kind),
+                r.search->checks > 0 ? ("kd-forest " + std::to_string(r.search->checks) + " checks").c_str() : "exact search",
+                100.0 * r.search->medianFrequencyError, 100.0 * r.matchTargetError,
+                r.search->targetMet ? "" : ": NOT met, the most accurate kept", r.search->medianMatchMs, r.search->fragments);
+    for (const auto& t : r.search->trials) {
+      std::printf("      %-15s %4s: %6.1f %%  %6.2f ms  (%d matched)\n", descriptorKindName(t.kind),
+                  t.checks > 0 ? std::to_string(t.checks).c_str() : "all", 100.0 * t.medianFrequencyError, t.medianMatchMs, t.matched);
+    }
+  }
   std::printf("database: %s\n", r.refracture ? "kept (fragments break again)" : "dropped (the scene does not refracture)");
   auto ratio = [](double a, double b) { return b > 0.0 ? a / b : 0.0; };
   std::printf("%-12s %14s %14s %8s\n", "", "all-maximum", "sized", "ratio");
@@ -85,6 +128,9 @@ Runner addSizeCommand(CLI::App& app) {
   cmd->add_option("--seed", o->settings.seed, "Seed of the impact points")->capture_default_str();
   cmd->add_option("--sized-manifest", o->sizedManifest, "Also write the sized pack's bake manifest here");
   cmd->add_option("--report", o->report, "Also write the report as JSON here");
+  cmd->add_option("--settings-out", o->settingsOut,
+                  "Runtime settings for the scene (descriptor, debris threshold; JSON for play/impact --settings); "
+                  "default: the sized pack's name with .settings.json");
   cmd->add_option("--keep-maximum", o->keepMaximum, "Keep the all-maximum pack here (default: measured, then removed)");
   cmd->add_flag("--quiet", o->quiet, "No progress display");
   cmd->add_flag("--json", o->json, "Print the report as JSON");
@@ -106,6 +152,12 @@ Runner addSizeCommand(CLI::App& app) {
     if (!o->report.empty()) {
       if (Status st = writeFileAtomically(o->report, json.dump(2) + "\n"); !st) return reportError(st.error());
     }
+    FractureSettings chosen;
+    chosen.debrisVolumeFraction = report.value().debrisVolumeFraction;
+    if (report.value().search) chosen.descriptor = report.value().search->kind;
+    const std::string settingsPath =
+        o->settingsOut.empty() ? std::filesystem::path(o->out).replace_extension(".settings.json").string() : o->settingsOut;
+    if (Status st = writeFileAtomically(settingsPath, runtimeSettingsJson(chosen)); !st) return reportError(st.error());
     if (!o->sizedManifest.empty()) {
       if (Status st = writeSizedManifest(o->manifest, report.value(), o->sizedManifest); !st) return reportError(st.error());
     }
@@ -113,7 +165,7 @@ Runner addSizeCommand(CLI::App& app) {
       std::cout << json.dump(2) << "\n";
     } else {
       printReport(report.value());
-      std::cout << "\nwrote " << o->out << "\n";
+      std::cout << "\nwrote " << o->out << " and " << settingsPath << "\n";
     }
     return kExitOk;
   };

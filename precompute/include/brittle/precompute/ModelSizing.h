@@ -4,6 +4,7 @@
 // takes (speeds and impactors) and the accuracy it needs:
 //
 //   { "peak_stress_error": 0.15,        // worst |σ_modal / σ_reference − 1| allowed
+//     "match_frequency_error": 0.25,     // median error of a matched fragment's first 3 frequencies
 //     "refracture": true,                // fragments must break again: the pack needs a database
 //     "objects": [
 //       { "name": "glass-plate", "speeds_mps": [2, 10],
@@ -23,11 +24,26 @@
 // the smallest whose worst error over the impacts meets the target; when none does, the largest
 // is kept and the result says so. The peak stress is linear in the load, so the error does not
 // depend on the speed except through the pulse's length and shape, which the two ends bracket.
+//
+// Sizing what the fragments need (sceneFragments, chooseDebrisThreshold, chooseSearch): every
+// impact of the scene at its top speed breaks the object (at its chosen modes, no debris
+// threshold); each fragment gets its own modes by the runtime's exact path (FragmentModes.h) and
+// is hit again, at one drawn point, by each of the scene's impactors at the top speed.
+//   * Debris threshold: half the volume fraction of the smallest fragment that broke again
+//     (nothing smaller would break in this scene, so it can be rigid), within [0.001, 0.5]; 0.5
+//     when none broke. The scene's threshold is the smallest over its objects.
+//   * Descriptor and search precision: each descriptor kind of the database × each precision of
+//     the ladder (kd-forest checks, and the exact search) matches every fragment; the error is the
+//     largest relative error of the match's first three frequencies against the fragment's own
+//     modes, and the time covers descriptors, search and rescaling. The choice is the fastest
+//     (median) trial whose median error meets matchFrequencyError, else the most accurate, and
+//     the result says which. The sized pack's database stores the chosen index settings.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,6 +53,7 @@
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/FragmentDatabaseBake.h"
 #include "brittle/precompute/Progress.h"
+#include "brittle/runtime/World.h"
 
 namespace brittle {
 
@@ -55,6 +72,9 @@ struct SceneObjectRange {
 
 struct SceneRequirements {
   double peakStressError = 0.15;
+  /// Median error allowed on a matched fragment's first three frequencies, against the fragment's
+  /// own modes ("match_frequency_error"; what picks the descriptor and the search precision).
+  double matchFrequencyError = 0.25;
   bool refracture = true;
   std::vector<SceneObjectRange> objects;
 };
@@ -68,6 +88,8 @@ Result<SceneRequirements> loadSceneRequirements(const std::filesystem::path& pat
 struct ModelSizingSettings {
   std::vector<int> modeLadder = {5, 10, 15, 20, 30, 40, 60, 80, 100};  ///< ascending after validation
   int points = 3;                    ///< surface points per impactor and speed
+  std::vector<int> searchChecks = {4, 16, 64, 0};  ///< kd-forest checks tried (0: the exact search)
+  int fragmentsPerImpact = 12;       ///< largest fragments of each top-speed impact that are studied
   int referenceStepsPerContact = 60; ///< Newmark steps per contact time
   int timingRepeats = 3;             ///< impacts timed per mode count and impact (median)
   uint64_t seed = 1;
@@ -97,10 +119,67 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
                                      double targetError, const ModelSizingSettings& settings = {},
                                      ProgressSink* progress = nullptr);
 
+/// The impacts sizeObjectModes measures: `points` seeded draws × each impactor × the lowest and the
+/// highest speed (one speed when they are equal), in the asset's frame. For a sphere, a point
+/// drawn by area along its face's normal; for the ground, the lowest node for a uniformly drawn
+/// direction. The object id is left unset.
+std::vector<ImpactDesc> drawSceneImpacts(const ObjectAsset& asset, const SceneObjectRange& range, int points, uint64_t seed);
+
+/// One fragment of the scene (see the header comment).
+struct FragmentRecord {
+  std::string object;                 ///< the scene object it came from
+  std::string material;
+  double volumeFraction = 0.0;        ///< of the object
+  bool brokeAgain = false;
+  TriangleMesh surface;               ///< closed, outward, object frame (m)
+  Eigen::Vector3d frequenciesHz = Eigen::Vector3d::Zero();  ///< first three of its own modes
+};
+
+/// Errors: InvalidArgument (settings, range), those of the runtime.
+Result<std::vector<FragmentRecord>> sceneFragments(const ObjectAsset& asset, const Material& material,
+                                                   const SceneObjectRange& range, int modes,
+                                                   const ModelSizingSettings& settings = {},
+                                                   ProgressSink* progress = nullptr);
+
+struct DebrisSizing {
+  std::string object;
+  int fragments = 0, brokeAgain = 0;
+  double smallestBrokenFraction = std::numeric_limits<double>::quiet_NaN();  ///< NaN: none broke again
+  double debrisVolumeFraction = 0.5;  ///< chosen
+};
+DebrisSizing chooseDebrisThreshold(const std::string& object, const std::vector<FragmentRecord>& fragments);
+
+struct SearchTrial {
+  DescriptorKind kind = DescriptorKind::Moment;
+  int checks = 0;                     ///< kd-forest checks; 0: the exact search
+  int matched = 0;                    ///< fragments matched (a frame can be undefined)
+  double medianFrequencyError = std::numeric_limits<double>::quiet_NaN();
+  double medianMatchMs = 0.0;
+};
+
+struct SearchSizing {
+  DescriptorKind kind = DescriptorKind::Moment;
+  int checks = 0;
+  bool targetMet = false;
+  double medianFrequencyError = std::numeric_limits<double>::quiet_NaN();
+  double medianMatchMs = 0.0;
+  int fragments = 0;
+  std::vector<SearchTrial> trials;
+  /// The index settings the sized pack stores for the chosen kind.
+  DescriptorIndexSettings indexSettings() const;
+};
+
+/// Errors: InvalidArgument (empty database or fragment list, a fragment whose material is not in
+/// `materials`), those of FragmentMatcher::build.
+Result<SearchSizing> chooseSearch(const FragmentDatabase& database, const std::vector<FragmentRecord>& fragments,
+                                  const std::vector<Material>& materials, double targetError,
+                                  const ModelSizingSettings& settings = {});
+
 /// A whole scene: what the sized pack saves against the all-maximum one (every manifest object
 /// at the ladder's largest count, and the manifest's database).
 struct SceneSizingReport {
   double targetError = 0.0;
+  double matchTargetError = 0.0;           ///< SceneRequirements::matchFrequencyError
   bool refracture = true;
   std::vector<ObjectSizing> objects;       ///< the scene's, in its order
   std::vector<std::string> skippedObjects; ///< manifest objects the scene does not use
@@ -108,6 +187,10 @@ struct SceneSizingReport {
   double databaseBakeS = 0.0;                   ///< the database's share (once; reused by the sized side)
   int64_t maximumPackBytes = 0, sizedPackBytes = 0;
   double maximumImpactMs = 0.0, sizedImpactMs = 0.0;  ///< sums over the scene's objects of the median impact
+  std::vector<DebrisSizing> debris;        ///< per scene object
+  double debrisVolumeFraction = 0.01;      ///< the scene's: the smallest over its objects
+  std::optional<SearchSizing> search;      ///< when the sized pack keeps a database
+  double fragmentSizingS = 0.0;            ///< time spent on sceneFragments and chooseSearch
   bool allMet() const {
     for (const auto& o : objects) {
       if (!o.targetMet) return false;

@@ -1,0 +1,36 @@
+// RuntimeSettingsFile.h — the runtime settings a scene was sized for (`brittle size` writes them
+// beside the sized pack), read back by `brittle play --settings` and `brittle impact --settings`:
+//
+//   { "descriptor": "moment",            // the kind fragments are matched with
+//     "debris_volume_fraction": 0.004,   // fragments below this share of their body stay rigid
+//     "exact_modes_max_tets": 150,       // the exact path's size limit (0: never)
+//     "exact_mode_count": 20,
+//     "modes": 0 }                       // modes per impact (0: all the pack stores)
+//
+// Every key is optional (a missing one keeps the value it replaces); unknown keys are refused, so
+// a typo never passes silently. The search precision is not here: the sized pack's database
+// stores its index settings.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include "brittle/descriptors/Result.h"
+#include "brittle/runtime/World.h"
+
+namespace brittle {
+
+/// The settings of `json` over `base`. Errors: ParseError (bad JSON, a mistyped or unknown key,
+/// naming it; an unknown descriptor), InvalidArgument (a value out of range: debris fraction
+/// outside [0, 1), negative counts, exact_mode_count < 1).
+Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string_view sourceName,
+                                              const FractureSettings& base = {});
+
+/// Reads a settings file. Errors: FileNotFound, then those of parseRuntimeSettings.
+Result<FractureSettings> loadRuntimeSettings(const std::filesystem::path& path, const FractureSettings& base = {});
+
+/// The document above for `settings` (all five keys).
+std::string runtimeSettingsJson(const FractureSettings& settings);
+
+}  // namespace brittle

@@ -1,0 +1,192 @@
+// FragmentSizing.cpp — what a scene's fragments need: sceneFragments, chooseDebrisThreshold and
+// chooseSearch (ModelSizing.h).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "brittle/database/FragmentMatcher.h"
+#include "brittle/database/ScalingLaws.h"
+#include "brittle/precompute/ModelSizing.h"
+
+namespace brittle {
+namespace {
+
+double median(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+}  // namespace
+
+Result<std::vector<FragmentRecord>> sceneFragments(const ObjectAsset& asset, const Material& material,
+                                                   const SceneObjectRange& range, int modes,
+                                                   const ModelSizingSettings& settings, ProgressSink* progress) {
+  if (modes < 1 || settings.points < 1 || settings.fragmentsPerImpact < 1 || range.impactors.empty() ||
+      !(range.minSpeedMps > 0.0 && range.minSpeedMps <= range.maxSpeedMps)) {
+    return makeError(ErrorCode::InvalidArgument, "fragment sizing: bad settings or scene range for " + asset.name);
+  }
+  SceneObjectRange top = range;
+  top.minSpeedMps = range.maxSpeedMps;
+  const std::vector<ImpactDesc> impacts = drawSceneImpacts(asset, top, settings.points, settings.seed);
+  WorldSettings ws;
+  ws.seed = settings.seed;
+  ws.fracture.modeCount = modes;
+  ws.fracture.debrisVolumeFraction = 0.0;                 // every fragment is studied
+  ws.fracture.exactModesMaxTets = std::numeric_limits<int>::max();  // each gets its own modes: no database needed
+  Pack pack;
+  pack.materials.push_back(material);
+  pack.objects.push_back(asset);
+  pack.objects.back().materialName = material.name;
+  auto world = World::create(std::move(pack), ws);
+  if (!world) return world.error();
+  World& w = world.value();
+  const double volume = asset.massProperties.volumeM3;
+  std::vector<FragmentRecord> out;
+  const std::string stage = "fragments of " + asset.name;
+  for (size_t i = 0; i < impacts.size(); ++i) {
+    reportProgress(progress, stage, static_cast<double>(i) / static_cast<double>(impacts.size()));
+    if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, stage + ": interrupted");
+    auto id = w.addObject({.asset = asset.name});
+    if (!id) return id.error();
+    ImpactDesc d = impacts[i];
+    d.object = id.value();
+    auto hit = w.impact(d);
+    if (!hit) return hit.error();
+    if (!hit.value().broken) {
+      (void)w.removeObject(id.value());
+      continue;
+    }
+    // The largest fragments that became objects (the exact path can refuse a sliver).
+    std::vector<const FragmentResult*> pieces;
+    for (const FragmentResult& f : hit.value().fragments)
+      if (f.object.valid()) pieces.push_back(&f);
+    std::stable_sort(pieces.begin(), pieces.end(), [](const FragmentResult* a, const FragmentResult* b) {
+      return a->massProperties.volumeM3 > b->massProperties.volumeM3;
+    });
+    if (pieces.size() > static_cast<size_t>(settings.fragmentsPerImpact)) pieces.resize(static_cast<size_t>(settings.fragmentsPerImpact));
+    for (const FragmentResult* f : pieces) {
+      auto fragmentAsset = w.objectAsset(f->object);
+      if (!fragmentAsset) continue;
+      const ObjectAsset& fa = *fragmentAsset.value();
+      if (fa.modal.frequenciesHz.size() < 3) continue;
+      FragmentRecord r;
+      r.object = asset.name;
+      r.material = material.name;
+      r.volumeFraction = f->massProperties.volumeM3 / volume;
+      r.surface = f->surface;
+      r.frequenciesHz = fa.modal.frequenciesHz.head<3>();
+      // Hit again by each impactor at the top speed, at one drawn point of the fragment's own
+      // mesh, in a world of its own whose fragments stay surfaces.
+      Pack alone;
+      alone.materials.push_back(material);
+      alone.objects.push_back(fa);
+      WorldSettings again = ws;
+      again.fracture.matchFragments = false;
+      auto single = World::create(std::move(alone), again);
+      if (!single) return single.error();
+      for (const ImpactDesc& a : drawSceneImpacts(fa, top, 1, settings.seed + i)) {
+        auto piece = single.value().addObject({.asset = fa.name});
+        if (!piece) return piece.error();
+        ImpactDesc e = a;
+        e.object = piece.value();
+        auto second = single.value().impact(e);
+        if (second && second.value().broken) r.brokeAgain = true;
+        if (single.value().isAlive(piece.value())) (void)single.value().removeObject(piece.value());
+      }
+      out.push_back(std::move(r));
+    }
+    // Remove what is left of this impact: the next one starts from a fresh object.
+    for (const FragmentResult& f : hit.value().fragments)
+      if (f.object.valid() && w.isAlive(f.object)) (void)w.removeObject(f.object);
+  }
+  reportProgress(progress, stage, 1.0);
+  return out;
+}
+
+DebrisSizing chooseDebrisThreshold(const std::string& object, const std::vector<FragmentRecord>& fragments) {
+  DebrisSizing d;
+  d.object = object;
+  for (const FragmentRecord& f : fragments) {
+    if (f.object != object) continue;
+    ++d.fragments;
+    if (!f.brokeAgain) continue;
+    ++d.brokeAgain;
+    if (!(f.volumeFraction >= d.smallestBrokenFraction)) d.smallestBrokenFraction = f.volumeFraction;
+  }
+  d.debrisVolumeFraction = d.brokeAgain > 0 ? std::clamp(0.5 * d.smallestBrokenFraction, 0.001, 0.5) : 0.5;
+  return d;
+}
+
+DescriptorIndexSettings SearchSizing::indexSettings() const {
+  DescriptorIndexSettings s;
+  s.kind = checks > 0 ? DescriptorIndexSettings::Kind::KdForest : DescriptorIndexSettings::Kind::BruteForce;
+  if (checks > 0) s.checks = checks;
+  return s;
+}
+
+Result<SearchSizing> chooseSearch(const FragmentDatabase& database, const std::vector<FragmentRecord>& fragments,
+                                  const std::vector<Material>& materials, double targetError,
+                                  const ModelSizingSettings& settings) {
+  if (database.empty() || !database.hasPhysics() || fragments.empty() || settings.searchChecks.empty()) {
+    return makeError(ErrorCode::InvalidArgument, "search sizing: needs a database with physics, fragments and a checks ladder");
+  }
+  std::vector<const Material*> material;
+  for (const FragmentRecord& f : fragments) {
+    auto m = std::find_if(materials.begin(), materials.end(), [&](const Material& x) { return x.name == f.material; });
+    if (m == materials.end()) return makeError(ErrorCode::InvalidArgument, "search sizing: no material '" + f.material + "'");
+    material.push_back(&*m);
+  }
+  SearchSizing out;
+  out.fragments = static_cast<int>(fragments.size());
+  for (DescriptorKind kind : kAllDescriptorKinds) {
+    if (database.descriptorsOf(kind).cols() == 0) continue;
+    for (int checks : settings.searchChecks) {
+      if (checks < 0) return makeError(ErrorCode::InvalidArgument, "search sizing: checks must be ≥ 0 (0: exact)");
+      FragmentMatcherSettings ms;
+      for (DescriptorKind k : kAllDescriptorKinds) ms.enabled[static_cast<size_t>(k)] = k == kind;
+      SearchSizing probe;
+      probe.checks = checks;
+      ms.indexOverride[static_cast<size_t>(kind)] = probe.indexSettings();
+      auto matcher = FragmentMatcher::build(database, ms);
+      if (!matcher) return matcher.error();
+      SearchTrial t;
+      t.kind = kind;
+      t.checks = checks;
+      std::vector<double> errors, times;
+      for (size_t i = 0; i < fragments.size(); ++i) {
+        const auto start = std::chrono::steady_clock::now();
+        auto m = matcher.value().match(fragments[i].surface, kind, 1);
+        if (!m) continue;
+        auto placed = instantiateEntry(database.entries[static_cast<size_t>(m.value().front().entry)],
+                                       database.referenceMaterial, *material[i], m.value().front().queryFrame);
+        times.push_back(1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        if (!placed || placed.value().modal.frequenciesHz.size() < 3) continue;
+        const Eigen::Vector3d hz = placed.value().modal.frequenciesHz.head<3>();
+        errors.push_back(((hz - fragments[i].frequenciesHz).array().abs() / fragments[i].frequenciesHz.array()).maxCoeff());
+        ++t.matched;
+      }
+      t.medianFrequencyError = median(errors);
+      t.medianMatchMs = median(times);
+      out.trials.push_back(t);
+    }
+  }
+  if (out.trials.empty()) return makeError(ErrorCode::InvalidArgument, "search sizing: the database has no descriptors");
+  // The fastest that meets the target; else the most accurate.
+  const SearchTrial* best = nullptr;
+  for (const SearchTrial& t : out.trials)
+    if (t.medianFrequencyError <= targetError && (!best || t.medianMatchMs < best->medianMatchMs)) best = &t;
+  out.targetMet = best != nullptr;
+  if (!best)
+    for (const SearchTrial& t : out.trials)
+      if (std::isfinite(t.medianFrequencyError) && (!best || t.medianFrequencyError < best->medianFrequencyError)) best = &t;
+  if (!best) best = &out.trials.front();
+  out.kind = best->kind;
+  out.checks = best->checks;
+  out.medianFrequencyError = best->medianFrequencyError;
+  out.medianMatchMs = best->medianMatchMs;
+  return out;
+}
+
+}  // namespace brittle

@@ -1,0 +1,83 @@
+// RuntimeSettingsFile.cpp — the runtime settings file (RuntimeSettingsFile.h). Header-only use of
+// the runtime (World.h's settings structs), so the fuzz targets build it without the runtime.
+#include "brittle/precompute/RuntimeSettingsFile.h"
+
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "brittle/descriptors/ShapeDescriptors.h"
+
+namespace brittle {
+namespace {
+
+Error parseError(std::string_view source, const std::string& what) {
+  return makeError(ErrorCode::ParseError, "runtime settings " + std::string(source) + ": " + what);
+}
+
+}  // namespace
+
+Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string_view sourceName,
+                                              const FractureSettings& base) {
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(json);
+  } catch (const std::exception& e) {
+    return parseError(sourceName, e.what());
+  }
+  if (!doc.is_object()) return parseError(sourceName, "not a JSON object");
+  FractureSettings s = base;
+  auto integer = [&](const std::string& key, int& out) -> Status {
+    const auto& v = doc[key];
+    if (!v.is_number_integer()) return parseError(sourceName, "\"" + key + "\" must be an integer");
+    const auto x = v.get<int64_t>();
+    if (x < 0 || x > std::numeric_limits<int>::max()) return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"" + key + "\" out of range");
+    out = static_cast<int>(x);
+    return Ok{};
+  };
+  for (const auto& [key, value] : doc.items()) {
+    if (key == "descriptor") {
+      if (!value.is_string()) return parseError(sourceName, "\"descriptor\" must be a string");
+      auto kind = parseDescriptorKind(value.get<std::string>());
+      if (!kind) return parseError(sourceName, kind.error().message);
+      s.descriptor = kind.value();
+    } else if (key == "debris_volume_fraction") {
+      if (!value.is_number()) return parseError(sourceName, "\"debris_volume_fraction\" must be a number");
+      const double f = value.get<double>();
+      if (!(f >= 0.0 && f < 1.0)) {
+        return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"debris_volume_fraction\" must be in [0, 1)");
+      }
+      s.debrisVolumeFraction = f;
+    } else if (key == "exact_modes_max_tets") {
+      if (Status st = integer(key, s.exactModesMaxTets); !st) return st.error();
+    } else if (key == "exact_mode_count") {
+      if (Status st = integer(key, s.exactModeCount); !st) return st.error();
+      if (s.exactModeCount < 1) return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"exact_mode_count\" must be ≥ 1");
+    } else if (key == "modes") {
+      if (Status st = integer(key, s.modeCount); !st) return st.error();
+    } else {
+      return parseError(sourceName, "unknown key \"" + key + "\"");
+    }
+  }
+  return s;
+}
+
+Result<FractureSettings> loadRuntimeSettings(const std::filesystem::path& path, const FractureSettings& base) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return makeError(ErrorCode::FileNotFound, "runtime settings not found: " + path.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseRuntimeSettings(text.str(), path.filename().string(), base);
+}
+
+std::string runtimeSettingsJson(const FractureSettings& s) {
+  const nlohmann::json doc = {{"descriptor", descriptorKindName(s.descriptor)},
+                              {"debris_volume_fraction", s.debrisVolumeFraction},
+                              {"exact_modes_max_tets", s.exactModesMaxTets},
+                              {"exact_mode_count", s.exactModeCount},
+                              {"modes", s.modeCount}};
+  return doc.dump(2) + "\n";
+}
+
+}  // namespace brittle
