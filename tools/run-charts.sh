@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The speed/accuracy charts, regenerated from scratch: each benchmark writes its CSV into bench/
 # and its chart script draws the PNG beside it and prints the figures the README quotes.
-#   tools/run-charts.sh          the modal-integrator, mode-count, tet-resolution and fracture-statistics
-#                                charts (~10 min)
+#   tools/run-charts.sh          the modal-integrator, mode-count, tet-resolution, fracture-statistics,
+#                                exact-path (chart 5) and frame-time charts (~15 min)
 #   tools/run-charts.sh --all    also the modal-solver, search, impact-latency and descriptor-resolution
 #                                benchmarks (about an hour and a quarter on 2 cores)
 set -euo pipefail
@@ -26,6 +26,19 @@ $cli bench resolution --csv bench/resolution.csv
 plot plot_resolution.py bench/resolution.csv
 $cli bench fracture --csv bench/fracture.csv
 plot plot_fracture.py bench/fracture.csv
+
+# Charts on the default pack (baked here when the main job has not made it).
+mkdir -p out
+[ -f out/default.h5 ] || $cli bake --manifest assets/default-pack.json --out out/default.h5 --quiet
+# Chart 5: a fragment's database match against its own modal analysis (the exact path).
+$cli bench exact-modes out/default.h5 --speeds 10,30 --seeds 2 --max-fragments 5 --repeats 1 --csv bench/exact_modes.csv --quiet
+plot plot_exact_modes.py bench/exact_modes.csv
+# Frame time of the default scenes: every frame's Bullet and fracture time, bodies over time.
+mkdir -p bench/play
+for scene in assets/scenes/*.json; do
+  $cli play out/default.h5 "$scene" --frames-every 1 --out-stats "bench/play/$(basename "$scene")" > /dev/null
+done
+plot plot_frame_times.py bench/play/*.json --out bench/frame_times.png
 
 if [ "$all" = 1 ]; then
   build/bin/brittle_bench_modal --tets 300 1000 3000 10000 30000 80000 --modes 20 40 --skip-eigen-ldlt \

@@ -213,6 +213,7 @@ void resetResult(ImpactResult& r) {
   r.peakElement = -1;
   r.peakTimeS = 0.0;
   r.modesUsed = 0;
+  r.staticCorrectionUsed = false;
   r.loadWeights.clear();
   r.forceDirectionLocal.setZero();
   r.ringDownS = 0.0;
@@ -442,12 +443,16 @@ Status World::Impl::impact(const ImpactDesc& desc, ImpactResult& result) {
 
   // --- First impact on this body: factorise K for the static correction.
   t0 = Clock::now();
-  if (fs.staticCorrection && !body.correction) {
+  // A fast impact (a host over its frame budget) does not factorise K: it takes the correction
+  // only when the body already has it.
+  const bool correct = fs.staticCorrection && (!desc.fast || body.correction.has_value());
+  if (correct && !body.correction) {
     auto correction = StaticCorrection::build(asset, body.material, body.modes);
     if (!correction) return Error{correction.error().code, "object '" + asset.name + "': " + correction.error().message};
     body.correction.emplace(std::move(correction).value());
   }
   result.times.prepareS = since(t0);
+  result.staticCorrectionUsed = correct;
 
   // --- Modal response over the pulse and the ring-down.
   t0 = Clock::now();
@@ -477,24 +482,24 @@ Status World::Impl::impact(const ImpactDesc& desc, ImpactResult& result) {
   const Eigen::VectorXd noStatic;
   Eigen::VectorXd& staticStress = work.staticStress;
   double compliance = 0.0;
-  if (fs.staticCorrection) {
+  if (correct) {
     if (Status st = body.correction->stressPerNewton(result.loadWeights, -n, staticStress, compliance, work.correction);
         !st) {
       return st.error();
     }
   }
   StressScan& scan = work.scan;
-  if (fs.staticCorrection && fs.reportUncorrectedPeak) {
+  if (correct && fs.reportUncorrectedPeak) {
     // The truncated modes alone, for the report (peak only: no seeds needed).
     scanStresses(asset.stressModes, body.stressBounds, q, noStatic, force, std::numeric_limits<double>::infinity(),
                  fs.pruneStresses, work.scanBuffers, scan);
     result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
   }
-  const Eigen::VectorXd& scanStatic = fs.staticCorrection ? staticStress : noStatic;
+  const Eigen::VectorXd& scanStatic = correct ? staticStress : noStatic;
   scanStresses(asset.stressModes, body.stressBounds, q, scanStatic, force, body.material.tensileStrengthPa,
                fs.pruneStresses, work.scanBuffers, scan);
   result.peakPrincipalStressPa = scan.peakPrincipalPa;
-  if (!fs.staticCorrection) result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
+  if (!correct) result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
   result.peakElement = scan.peakElement;
   result.peakTimeS = scan.peakInstant >= 0 ? times[static_cast<size_t>(scan.peakInstant)] : 0.0;
   result.stressEvaluations = scan.evaluations;
@@ -507,7 +512,7 @@ Status World::Impl::impact(const ImpactDesc& desc, ImpactResult& result) {
   field.stressModes = &asset.stressModes;
   field.q = q.row(scan.peakInstant).transpose();
   field.forceN = force[static_cast<size_t>(scan.peakInstant)];
-  if (fs.staticCorrection) field.staticStress = &staticStress;
+  if (correct) field.staticStress = &staticStress;
   // Elastic energy at the peak: the kept modes' ½Σω²q², plus the truncated modes' static ½F²f·u_t.
   const double energy = 0.5 * (body.omega.array().square() * field.q.array().square()).sum() +
                         0.5 * field.forceN * field.forceN * compliance;

@@ -287,6 +287,33 @@ TEST_F(WorldTest, ExactPathFragmentsHaveTheirOwnModesAndBreakAgainWithoutADataba
   EXPECT_EQ(other.objectAsset(repeat.value().fragments[same].object).value()->modal.frequenciesHz, targetHz);
 }
 
+TEST_F(WorldTest, FastImpactsSkipTheFactorisationButUseACorrectionThatExists) {
+  // Below the threshold, so the plate stays whole and takes every impact.
+  WorldSettings noCorrection;
+  noCorrection.fracture.staticCorrection = false;
+  World plain = makeWorld(noCorrection);
+  auto truncated = plain.impact(ball(plain.addObject({.asset = "plate"}).value(), 0.5));
+  ASSERT_TRUE(truncated);
+
+  World world = makeWorld();
+  const ObjectId plate = world.addObject({.asset = "plate"}).value();
+  ImpactDesc fast = ball(plate, 0.5);
+  fast.fast = true;
+  auto first = world.impact(fast);
+  ASSERT_TRUE(first) << first.error().message;
+  ASSERT_FALSE(first.value().broken);
+  EXPECT_FALSE(first.value().staticCorrectionUsed);
+  EXPECT_EQ(first.value().peakPrincipalStressPa, truncated.value().peakPrincipalStressPa);  // the modes alone
+  auto full = world.impact(ball(plate, 0.5));  // factorises K
+  ASSERT_TRUE(full);
+  EXPECT_TRUE(full.value().staticCorrectionUsed);
+  EXPECT_NE(full.value().peakPrincipalStressPa, first.value().peakPrincipalStressPa);
+  auto later = world.impact(fast);  // the correction exists now: a fast impact uses it
+  ASSERT_TRUE(later);
+  EXPECT_TRUE(later.value().staticCorrectionUsed);
+  EXPECT_EQ(later.value().peakPrincipalStressPa, full.value().peakPrincipalStressPa);
+}
+
 TEST_F(WorldTest, BadInputsGiveTypedErrorsNeverCrashes) {
   World world = makeWorld({}, false);
   auto id = world.addObject({.asset = "plate"});

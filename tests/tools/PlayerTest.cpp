@@ -188,6 +188,37 @@ TEST(PlayerCapTest, ImpactsAboveTheCapWaitAndAreCounted) {
   EXPECT_GE(one.breaks, 1);
 }
 
+// The frame budget: with a budget no impact can meet, every impact after a frame's first waits
+// (counted) until it has waited maxBudgetWaits steps, then runs simplified; none is dropped, so
+// every body that was hit still gets its impact.
+TEST(PlayerBudgetTest, ImpactsBeyondTheBudgetWaitThenRunSimplified) {
+  ASSERT_NE(smallPack(), nullptr);
+  const Scene s = defaultScene("brick-stack");
+  PlayerSettings tight;
+  tight.fractureBudgetS = 1e-12;
+  tight.maxBudgetWaits = 2;
+  const PlayResult free = play(s), budget = play(s, tight);
+  EXPECT_EQ(free.budgetDeferredImpacts, 0);
+  EXPECT_EQ(free.simplifiedImpacts, 0);
+  EXPECT_GE(budget.budgetDeferredImpacts, 2);
+  EXPECT_GE(budget.simplifiedImpacts, 1);
+  int simplified = 0;
+  for (const ImpactEvent& e : budget.events) {
+    if (!e.simplified) continue;
+    ++simplified;
+    EXPECT_GE(e.waitedSteps, tight.maxBudgetWaits);
+  }
+  EXPECT_EQ(simplified, budget.simplifiedImpacts);
+  EXPECT_GE(budget.impacts, 1);
+  EXPECT_GE(budget.breaks, 1);
+  PlayerSettings bad;
+  bad.fractureBudgetS = -1.0;
+  EXPECT_EQ(validatePlayerSettings(bad).error().code, ErrorCode::InvalidArgument);
+  bad = {};
+  bad.maxBudgetWaits = -1;
+  EXPECT_EQ(validatePlayerSettings(bad).error().code, ErrorCode::InvalidArgument);
+}
+
 TEST(PlayerErrorsTest, UnknownAssetAndBadSettingsAreTyped) {
   Pack empty;
   Scene s;

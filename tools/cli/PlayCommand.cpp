@@ -20,6 +20,7 @@ struct PlayOptions {
   int framesEvery = 10;
   int modes = 0;
   std::string runtimeSettings;
+  double frameBudgetMs = 0.0;
   bool json = false;
 };
 
@@ -44,6 +45,12 @@ Runner addPlayCommand(CLI::App& app) {
   cmd->add_option("--modes", o->modes, "Modes used per impact (0: all stored)")->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--debris", o->settings.world.fracture.debrisVolumeFraction, "Fragments below this volume fraction are rigid debris")
       ->capture_default_str()->check(CLI::Range(0.0, 0.99));
+  cmd->add_option("--frame-budget-ms", o->frameBudgetMs,
+                  "Wall-clock fracture time per frame; impacts beyond it wait, and run simplified after --max-budget-waits "
+                  "steps (0: no budget; a budget makes the play depend on the machine's speed)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-budget-waits", o->settings.maxBudgetWaits, "Steps an impact may wait for the frame budget")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--settings", o->runtimeSettings, "Runtime settings (JSON, as brittle size writes them); flags given here win");
 
   return [o, cmd]() -> int {
@@ -52,6 +59,7 @@ Runner addPlayCommand(CLI::App& app) {
     auto pack = readPack(o->pack);
     if (!pack) return reportError(pack.error());
     o->settings.world.fracture.modeCount = o->modes;
+    o->settings.fractureBudgetS = 1e-3 * o->frameBudgetMs;
     if (!o->runtimeSettings.empty()) {
       if (Status st = applyRuntimeSettingsFile(o->runtimeSettings, *cmd, o->settings.world.fracture); !st) return reportError(st.error());
     }

@@ -35,6 +35,8 @@ nlohmann::json playReportJson(const PlayResult& r, int framesEvery) {
   doc["summary"] = {{"impacts", r.impacts},
                     {"breaks", r.breaks},
                     {"deferred_impacts", r.deferredImpacts},
+                    {"budget_deferred_impacts", r.budgetDeferredImpacts},
+                    {"simplified_impacts", r.simplifiedImpacts},
                     {"failed_impacts", r.failedImpacts},
                     {"bodies_at_end", r.bodiesAtEnd},
                     {"bodies_max", maxBodies(r)},
@@ -56,6 +58,9 @@ nlohmann::json playReportJson(const PlayResult& r, int framesEvery) {
                         {"fragments", e.fragments},
                         {"debris", e.debris},
                         {"peak_principal_stress_pa", e.peakPrincipalStressPa},
+                        {"waited_steps", e.waitedSteps},
+                        {"simplified", e.simplified},
+                        {"static_correction", e.staticCorrection},
                         {"times_s",
                          {{"contact", e.times.contactS},
                           {"prepare", e.times.prepareS},
@@ -100,6 +105,10 @@ void printPlaySummary(const PlayResult& r, std::ostream& out) {
   out << std::setprecision(4) << r.scene << ": " << r.frames << " frames of " << 1e3 * r.timeStepS << " ms, "
       << r.impacts << " impacts (" << r.failedImpacts << " refused, " << r.deferredImpacts << " deferred), "
       << r.breaks << " breaks\n";
+  if (r.budgetDeferredImpacts > 0 || r.simplifiedImpacts > 0) {
+    out << "  frame budget: " << r.budgetDeferredImpacts << " step waits, " << r.simplifiedImpacts
+        << " impacts simplified (no factorisation of K) after waiting\n";
+  }
   out << "  bodies: " << (r.frameStats.empty() ? 0 : r.frameStats.front().bodies) << " at start, " << maxBodies(r)
       << " at most, " << r.bodiesAtEnd << " at end\n";
   out << "  frame time (ms): median " << 1e3 * t.medianS << ", p99 " << 1e3 * t.p99S << ", max " << 1e3 * t.maxS

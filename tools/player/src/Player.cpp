@@ -95,6 +95,7 @@ struct Candidate {
   int32_t body = -1, other = -1;
   double speedMps = 0.0;
   Eigen::Vector3d pointLocal, normalLocal;
+  int32_t waited = 0;  ///< steps waited (impact cap or frame budget)
   bool operator<(const Candidate& o) const { return speedMps != o.speedMps ? speedMps > o.speedMps : body < o.body; }
 };
 
@@ -274,7 +275,7 @@ class Simulation {
         mBullet->stepSimulation(h, 0);
         timeS = (static_cast<double>(frame) + (s + 1.0) / mScene.substeps) * mScene.timeStepS;
         const auto t1 = Clock::now();
-        fs.fractured = processContacts(frame, timeS, out) || fs.fractured;
+        fs.fractured = processContacts(frame, timeS, fs.fractureS, out) || fs.fractured;
         const auto t2 = Clock::now();
         fs.bulletS += seconds(t0, t1);
         fs.fractureS += seconds(t1, t2);
@@ -287,6 +288,8 @@ class Simulation {
       if (mSettings.recordTracks) recordPoses(frame + 1);
     }
     out.deferredImpacts = mDeferredCount;
+    out.budgetDeferredImpacts = mBudgetDeferredCount;
+    out.simplifiedImpacts = mSimplifiedCount;
     uint64_t hash = 1469598103934665603ull;
     auto eat = [&](double v) {
       unsigned char bytes[sizeof v];
@@ -312,12 +315,18 @@ class Simulation {
 
  private:
   // Every breakable body's fastest new contact in this step (plus what waited), the fastest
-  // maxImpactsPerStep of them handed to the runtime. Returns whether a body broke.
-  bool processContacts(int64_t frame, double timeS, PlayResult& out) {
+  // maxImpactsPerStep of them handed to the runtime, within the frame's fracture budget (spentS:
+  // fracture time this frame before this step). Returns whether a body broke.
+  bool processContacts(int64_t frame, double timeS, double spentS, PlayResult& out) {
+    const auto start = Clock::now();
     std::map<int32_t, Candidate> best;  // by body: deterministic order
     auto consider = [&](const Candidate& c) {
       auto [it, inserted] = best.try_emplace(c.body, c);
-      if (!inserted && c.speedMps > it->second.speedMps) it->second = c;
+      if (!inserted && c.speedMps > it->second.speedMps) {
+        const int32_t waited = it->second.waited;
+        it->second = c;
+        it->second.waited = std::max(waited, c.waited);  // a body's wait is not reset by a new contact
+      }
     };
     for (const Candidate& c : mDeferred)
       if (mBodies[static_cast<size_t>(c.body)].alive) consider(c);
@@ -345,12 +354,25 @@ class Simulation {
     bool broke = false;
     for (size_t i = 0; i < order.size(); ++i) {
       if (!mBodies[static_cast<size_t>(order[i].body)].alive) continue;
+      Candidate c = order[i];
       if (static_cast<int>(i) >= mSettings.maxImpactsPerStep) {
-        mDeferred.push_back(order[i]);
+        ++c.waited;
+        mDeferred.push_back(c);
         ++mDeferredCount;
         continue;
       }
-      broke = impact(order[i], frame, timeS, out) || broke;
+      bool fast = false;
+      if (mSettings.fractureBudgetS > 0.0 && spentS + seconds(start, Clock::now()) >= mSettings.fractureBudgetS) {
+        if (c.waited < mSettings.maxBudgetWaits) {
+          ++c.waited;
+          mDeferred.push_back(c);
+          ++mBudgetDeferredCount;
+          continue;
+        }
+        fast = true;  // waited long enough: runs now, simplified
+        ++mSimplifiedCount;
+      }
+      broke = impact(c, frame, timeS, fast, out) || broke;
     }
     updateSiblingPairs();
     return broke;
@@ -393,7 +415,7 @@ class Simulation {
     return Candidate{body, other, speed, r.transpose() * (pointWorld - t), r.transpose() * normalWorld};
   }
 
-  bool impact(const Candidate& c, int64_t frame, double timeS, PlayResult& out) {
+  bool impact(const Candidate& c, int64_t frame, double timeS, bool fast, PlayResult& out) {
     Body& b = mBodies[static_cast<size_t>(c.body)];
     ImpactDesc d;
     d.object = b.object;
@@ -401,6 +423,7 @@ class Simulation {
     d.normalWorld = (b.runtimeRotation * c.normalLocal).normalized();
     d.speedMps = c.speedMps;
     d.pointToleranceM = mSettings.pointToleranceFraction * b.sizeM;
+    d.fast = fast;
     const Material* otherMaterial = &mFloorMaterial;
     if (c.other >= 0) {
       const Body& o = mBodies[static_cast<size_t>(c.other)];
@@ -423,6 +446,8 @@ class Simulation {
     e.otherBody = c.other;
     e.speedMps = c.speedMps;
     e.otherMassKg = d.impactorMassKg;
+    e.waitedSteps = c.waited;
+    e.simplified = fast;
     ++out.impacts;
     Status st = mWorld.impact(d, mResult);
     if (!st && std::isinf(d.impactorRadiusM)) {
@@ -438,6 +463,7 @@ class Simulation {
       return false;
     }
     e.broken = mResult.broken;
+    e.staticCorrection = mResult.staticCorrectionUsed;
     e.peakPrincipalStressPa = mResult.peakPrincipalStressPa;
     e.times = mResult.times;
     if (mResult.broken) {
@@ -564,6 +590,8 @@ class Simulation {
   std::vector<Body> mBodies;
   std::vector<Candidate> mDeferred;
   int64_t mDeferredCount = 0;
+  int64_t mBudgetDeferredCount = 0;
+  int64_t mSimplifiedCount = 0;
   std::vector<int32_t> mBornThisStep;
   ImpactResult mResult;
 };
@@ -585,6 +613,8 @@ Status validatePlayerSettings(const PlayerSettings& s) {
   if (!(s.impactThresholdMps > 0.0) || !std::isfinite(s.impactThresholdMps)) return bad("impactThresholdMps must be finite and > 0");
   if (!(s.cooldownS >= 0.0) || !std::isfinite(s.cooldownS)) return bad("cooldownS must be finite and ≥ 0");
   if (s.maxImpactsPerStep < 1) return bad("maxImpactsPerStep must be ≥ 1");
+  if (!(s.fractureBudgetS >= 0.0) || !std::isfinite(s.fractureBudgetS)) return bad("fractureBudgetS must be finite and ≥ 0");
+  if (s.maxBudgetWaits < 0) return bad("maxBudgetWaits must be ≥ 0");
   if (!(s.frictionCoefficient >= 0.0) || !std::isfinite(s.frictionCoefficient)) return bad("frictionCoefficient must be finite and ≥ 0");
   if (!(s.collisionMarginM > 0.0 && s.collisionMarginM <= 0.05)) return bad("collisionMarginM must be in (0, 0.05]");
   if (!(s.pointToleranceFraction > 0.0 && s.pointToleranceFraction <= 1.0)) return bad("pointToleranceFraction must be in (0, 1]");

@@ -105,6 +105,10 @@ struct ImpactDesc {
   double bodyRadiusM = 0.0;              ///< local radius of curvature; 0: estimated from the surface
   /// How far the point may lie from the body's surface (m); 0: 5 % of the body's size.
   double pointToleranceM = 0.0;
+  /// A host over its frame budget: skip the static correction unless the body already has it, so
+  /// that a first hit does not factorise K (StageTimes::prepareS, the largest cost of a first hit
+  /// on a fragment). Less accurate (the truncated modes alone; see chart 1); the result says so.
+  bool fast = false;
 };
 
 struct FragmentResult {
@@ -136,6 +140,7 @@ struct ImpactResult {
   int32_t peakElement = -1;
   double peakTimeS = 0.0;
   int modesUsed = 0;
+  bool staticCorrectionUsed = false;   ///< false when it is off, or skipped by a fast impact
   /// The contact load: nodes with weights summing to 1, force along forceDirectionLocal (the
   /// object's frame). What FullFemReference.h needs to solve the same impact.
   std::vector<std::pair<int32_t, double>> loadWeights;

@@ -2,13 +2,15 @@
 //
 // JSON (times in seconds, SI units):
 //   { "scene", "frame_count", "time_step_s", "load_s",
-//     "summary": { "impacts", "breaks", "deferred_impacts", "failed_impacts", "bodies_at_end",
+//     "summary": { "impacts", "breaks", "deferred_impacts", "budget_deferred_impacts",
+//                  "simplified_impacts", "failed_impacts", "bodies_at_end",
 //                  "bodies_max", "pose_hash" (16 hex digits),
 //                  "frame_time_s": { "median", "p99", "max" }, "bullet_s", "fracture_s",
 //                  "fracture_share" (fracture / (bullet + fracture)) },
 //     "events": [ { "time_s", "frame", "body", "object", "other_body" (−1: the floor), "speed_mps",
 //                   "other_mass_kg" ("inf" if static), "broken", "fragments", "debris",
-//                   "peak_principal_stress_pa", "times_s": { "contact", "prepare", "modal",
+//                   "peak_principal_stress_pa", "waited_steps", "simplified", "static_correction",
+//                   "times_s": { "contact", "prepare", "modal",
 //                   "stress", "propagation", "surfaces", "matching", "total" }, "error"? } ],
 //     "frames": [ { "frame", "time_s", "bodies", "bullet_s", "fracture_s", "energy_j", "kinetic_j",
 //                   "fractured" } ]   // every N-th frame and every frame with a break

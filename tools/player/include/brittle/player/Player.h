@@ -47,6 +47,14 @@ struct PlayerSettings {
   double impactThresholdMps = 0.5;  ///< a contact approaching faster than this is an impact
   double cooldownS = 0.05;          ///< a body ignores contacts this long after an impact
   int maxImpactsPerStep = 4;        ///< impacts computed per step; the others wait (deferred)
+  /// Wall-clock budget per frame for fracture (contact scan, impacts, new bodies), s; 0: none.
+  /// Once a frame has spent it, its remaining impacts wait for the next step, fastest first
+  /// (counted in budgetDeferredImpacts). An impact that has waited maxBudgetWaits steps runs
+  /// anyway, simplified: ImpactDesc::fast, no factorisation of K on a first hit (counted in
+  /// simplifiedImpacts). Nothing is dropped. A wall-clock budget makes the play depend on the
+  /// machine's speed; without it (the default) a play is deterministic.
+  double fractureBudgetS = 0.0;
+  int maxBudgetWaits = 4;
   double frictionCoefficient = 0.5;
   double collisionMarginM = 0.001;  ///< Bullet's margin around hulls and boxes
   /// Fraction of a body's size the contact point may lie off its surface in the runtime: Bullet's
@@ -57,7 +65,8 @@ struct PlayerSettings {
   WorldSettings world;              ///< world.seed is replaced by the scene's seed
 };
 
-/// Range checks: threshold > 0, cooldown ≥ 0, maxImpactsPerStep ≥ 1, friction ≥ 0, margin in
+/// Range checks: threshold > 0, cooldown ≥ 0, maxImpactsPerStep ≥ 1, fractureBudgetS ≥ 0,
+/// maxBudgetWaits ≥ 0, friction ≥ 0, margin in
 /// (0, 0.05], tolerance fraction in (0, 1], and validateWorldSettings. Error: InvalidArgument.
 Status validatePlayerSettings(const PlayerSettings& settings);
 
@@ -79,6 +88,9 @@ struct ImpactEvent {
   double peakPrincipalStressPa = 0.0;
   StageTimes times;              ///< the runtime's stages
   std::string error;             ///< non-empty: the runtime refused the impact (counted, not fatal)
+  int32_t waitedSteps = 0;       ///< steps it waited (impact cap or frame budget)
+  bool simplified = false;       ///< run fast (ImpactDesc::fast) after waiting maxBudgetWaits steps
+  bool staticCorrection = false; ///< the runtime used the static correction
 };
 
 struct FrameStats {
@@ -124,7 +136,9 @@ struct PlayResult {
   std::vector<BodyState> bodies;  ///< every body that ever existed, by index
   int64_t impacts = 0;           ///< handed to the runtime
   int64_t breaks = 0;
-  int64_t deferredImpacts = 0;   ///< waited one or more steps because of maxImpactsPerStep
+  int64_t deferredImpacts = 0;   ///< waits of one step because of maxImpactsPerStep
+  int64_t budgetDeferredImpacts = 0;  ///< waits of one step because the frame's fracture budget was spent
+  int64_t simplifiedImpacts = 0; ///< impacts run fast after waiting maxBudgetWaits steps
   int64_t failedImpacts = 0;     ///< refused by the runtime (events with an error)
   int32_t bodiesAtEnd = 0;
   uint64_t poseHash = 0;         ///< FNV-1a over the final poses of live bodies, by index
