@@ -106,8 +106,9 @@ struct ImpactDesc {
   /// How far the point may lie from the body's surface (m); 0: 5 % of the body's size.
   double pointToleranceM = 0.0;
   /// A host over its frame budget: skip the static correction unless the body already has it, so
-  /// that a first hit does not factorise K (StageTimes::prepareS, the largest cost of a first hit
-  /// on a fragment). Less accurate (the truncated modes alone; see chart 1); the result says so.
+  /// that a fragment's first hit does not factorise its K (StageTimes::prepareS, the largest cost
+  /// of that hit; a pack object's K is factorised when it is placed). Less accurate (the truncated
+  /// modes alone; see chart 1); ImpactResult::staticCorrectionUsed says which it was.
   bool fast = false;
 };
 
