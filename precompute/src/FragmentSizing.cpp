@@ -65,7 +65,14 @@ Result<std::vector<FragmentRecord>> sceneFragments(const ObjectAsset& asset, con
     std::stable_sort(pieces.begin(), pieces.end(), [](const FragmentResult* a, const FragmentResult* b) {
       return a->massProperties.volumeM3 > b->massProperties.volumeM3;
     });
-    if (pieces.size() > static_cast<size_t>(settings.fragmentsPerImpact)) pieces.resize(static_cast<size_t>(settings.fragmentsPerImpact));
+    // Spread over the sizes, the largest and the smallest included: the debris threshold is
+    // decided among the small ones.
+    if (pieces.size() > static_cast<size_t>(settings.fragmentsPerImpact)) {
+      std::vector<const FragmentResult*> spread;
+      const size_t n = pieces.size(), k = static_cast<size_t>(settings.fragmentsPerImpact);
+      for (size_t j = 0; j < k; ++j) spread.push_back(pieces[k == 1 ? 0 : j * (n - 1) / (k - 1)]);
+      pieces = std::move(spread);
+    }
     for (const FragmentResult* f : pieces) {
       auto fragmentAsset = w.objectAsset(f->object);
       if (!fragmentAsset) continue;

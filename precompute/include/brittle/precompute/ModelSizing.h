@@ -89,7 +89,7 @@ struct ModelSizingSettings {
   std::vector<int> modeLadder = {5, 10, 15, 20, 30, 40, 60, 80, 100};  ///< ascending after validation
   int points = 3;                    ///< surface points per impactor and speed
   std::vector<int> searchChecks = {4, 16, 64, 0};  ///< kd-forest checks tried (0: the exact search)
-  int fragmentsPerImpact = 12;       ///< largest fragments of each top-speed impact that are studied
+  int fragmentsPerImpact = 12;       ///< fragments studied per top-speed impact, spread over their sizes
   int referenceStepsPerContact = 60; ///< Newmark steps per contact time
   int timingRepeats = 3;             ///< impacts timed per mode count and impact (median)
   uint64_t seed = 1;
