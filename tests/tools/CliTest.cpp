@@ -227,6 +227,36 @@ TEST_F(CliTest, SpeedAccuracyBenchesWriteTheirCsv) {
   EXPECT_EQ(run("bench resolution --tets 300 --csv " + path("one.csv")).exitCode, 2);
 }
 
+// Chart 5 on a small pack: a tile and a six-entry database.
+TEST_F(CliTest, ExactModesBenchComparesTheMatchWithTheFragmentsOwnModes) {
+  testing::writeOff(testing::makeBoxSurface(0.1, 0.1, 0.012), dir / "tile.off");
+  const CliRun tile = run("bake --mesh " + path("tile.off") + " --material glass --tets 1500 --modes 10 --quiet --out " + path("tile.h5"));
+  ASSERT_EQ(tile.exitCode, 0) << tile.out;
+  const CliRun noDatabase = run("bench exact-modes " + path("tile.h5") + " --quiet --csv " + path("no.csv"));
+  EXPECT_NE(noDatabase.exitCode, 0);
+  EXPECT_NE(noDatabase.out.find("no fragment database"), std::string::npos) << noDatabase.out;
+  std::ofstream(dir / "m.json") << R"({ "objects": [ { "name": "tile", "mesh": "tile.off", "material": "glass", "tets": 1500, "modes": 10 } ],
+      "database": { "shapes": ")" + (testing::sourceDir() / "assets" / "shapes" / "base-shapes.json").generic_string() +
+                                       R"(", "only": ["box", "plate"], "entries": 6, "tets": 300, "modes": 6 } })";
+  const CliRun bake = run("bake --manifest " + path("m.json") + " --quiet --out " + path("p.h5"));
+  ASSERT_EQ(bake.exitCode, 0) << bake.out;
+  const CliRun bench = run("bench exact-modes " + path("p.h5") + " --speeds 40 --seeds 1 --max-fragments 3 --exact-modes 6 "
+                           "--repeats 1 --quiet --csv " + path("x.csv"));
+  ASSERT_EQ(bench.exitCode, 0) << bench.out;
+  std::ifstream in(dir / "x.csv");
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line.substr(0, 62), "object,speed_mps,seed,fragment,volume_fraction,parent_tets,sub");
+  int rows = 0;
+  while (std::getline(in, line)) {
+    ++rows;
+    EXPECT_EQ(line.substr(0, 8), "tile,40,") << line;
+    EXPECT_EQ(line.find("nan"), std::string::npos) << line;  // both paths and the reference ran
+  }
+  EXPECT_GE(rows, 2);
+  EXPECT_LE(rows, 3);
+}
+
 TEST_F(CliTest, FractureStatisticsBenchWritesOneRowPerSeedAndSpeed) {
   const CliRun bench = run("bench fracture --plate-speeds 2,40 --brick-speeds 40 --seeds 3 --plate-tets 3000 --brick-tets 500 "
                            "--modes 8 --quiet --brick-mesh \"" + (testing::sourceDir() / "assets" / "meshes" / "brick.off").string() +

@@ -149,7 +149,12 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
         std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
           return r.fragments[a].massProperties.volumeM3 > r.fragments[b].massProperties.volumeM3;
         });
-        if (order.size() > static_cast<size_t>(s.maxFragmentsPerImpact)) order.resize(static_cast<size_t>(s.maxFragmentsPerImpact));
+        if (order.size() > static_cast<size_t>(s.maxFragmentsPerImpact)) {  // spread over the sizes
+          std::vector<size_t> spread;
+          const size_t n = order.size(), k = static_cast<size_t>(s.maxFragmentsPerImpact);
+          for (size_t j = 0; j < k; ++j) spread.push_back(order[k == 1 ? 0 : j * (n - 1) / (k - 1)]);
+          order = std::move(spread);
+        }
         for (size_t i : order) {
           const FragmentResult& fr = r.fragments[i];
           // Database path.

@@ -4,7 +4,7 @@
 //
 // Each object of a pack (a database is needed) is hit `seeds` times at each speed by a steel ball
 // at a surface point drawn by the seed. For each fragment that is not debris (up to
-// maxFragmentsPerImpact, largest first), the CSV records:
+// maxFragmentsPerImpact, spread over their sizes from the largest to the smallest), the CSV records:
 //   * the database path: descriptor match and rescaling of the entry (FragmentMatcher, ScalingLaws),
 //     its time and its first three frequencies;
 //   * the exact path: the fragment's tets in the broken body, K and M, modes and stress modes
@@ -31,7 +31,7 @@ struct ExactModesBenchSettings {
   std::vector<std::string> objects;              ///< empty: every object of the pack
   std::vector<double> speedsMps = {10, 30};
   int seeds = 3;
-  int maxFragmentsPerImpact = 6;
+  int maxFragmentsPerImpact = 8;
   int64_t referenceMaxTets = 20000;              ///< no reference above this size of the exact mesh (×8 refined)
   int exactModes = 20;                           ///< modes of the exact path (FractureSettings::exactModeCount)
   int repeats = 3;                               ///< timings: the median of this many runs
