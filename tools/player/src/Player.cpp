@@ -254,42 +254,59 @@ class Simulation {
   }
   void setMaterials(std::vector<Material> materials) { mMaterials = std::move(materials); }
 
-  Result<PlayResult> run() {
-    PlayResult out;
-    out.scene = mScene.name;
-    out.timeStepS = mScene.timeStepS;
-    out.frames = std::max<int64_t>(1, std::llround(mScene.durationS / mScene.timeStepS));
+  // The play, one frame at a time: begin(), stepFrame() until frameCount(), finish().
+  void begin() {
+    mOut = PlayResult{};
+    mOut.scene = mScene.name;
+    mOut.timeStepS = mScene.timeStepS;
+    mOut.frames = std::max<int64_t>(1, std::llround(mScene.durationS / mScene.timeStepS));
+    mFrame = 0;
+    if (mSettings.recordTracks) recordPoses(0);
+  }
+  int64_t frameCount() const { return mOut.frames; }
+  int64_t frame() const { return mFrame; }
+  double timeS() const { return static_cast<double>(mFrame) * mScene.timeStepS; }
+  const PlayResult& progress() const { return mOut; }
+
+  FrameStats stepFrame() {
+    PlayResult& out = mOut;
+    const int64_t frame = mFrame;
     const double h = mScene.timeStepS / mScene.substeps;
     double timeS = 0.0;
-    if (mSettings.recordTracks) recordPoses(0);
-    for (int64_t frame = 0; frame < out.frames; ++frame) {
-      FrameStats fs;
-      fs.frame = frame;
-      for (int s = 0; s < mScene.substeps; ++s) {
-        const auto t0 = Clock::now();
-        for (Body& b : mBodies) {
-          if (!b.alive) continue;
-          b.preVelocity = eig(b.rigid->getLinearVelocity());
-          b.preAngular = eig(b.rigid->getAngularVelocity());
-        }
-        mBullet->stepSimulation(h, 0);
-        timeS = (static_cast<double>(frame) + (s + 1.0) / mScene.substeps) * mScene.timeStepS;
-        const auto t1 = Clock::now();
-        fs.fractured = processContacts(frame, timeS, fs.fractureS, out) || fs.fractured;
-        const auto t2 = Clock::now();
-        fs.bulletS += seconds(t0, t1);
-        fs.fractureS += seconds(t1, t2);
+    FrameStats fs;
+    fs.frame = frame;
+    for (int s = 0; s < mScene.substeps; ++s) {
+      const auto t0 = Clock::now();
+      for (Body& b : mBodies) {
+        if (!b.alive) continue;
+        b.preVelocity = eig(b.rigid->getLinearVelocity());
+        b.preAngular = eig(b.rigid->getAngularVelocity());
       }
-      fs.timeS = timeS;
-      fs.bodies = 0;
-      for (const Body& b : mBodies) fs.bodies += b.alive ? 1 : 0;
-      energy(fs.energyJ, fs.kineticJ);
-      out.frameStats.push_back(fs);
-      if (mSettings.recordTracks) recordPoses(frame + 1);
+      mBullet->stepSimulation(h, 0);
+      timeS = (static_cast<double>(frame) + (s + 1.0) / mScene.substeps) * mScene.timeStepS;
+      const auto t1 = Clock::now();
+      fs.fractured = processContacts(frame, timeS, fs.fractureS, out) || fs.fractured;
+      const auto t2 = Clock::now();
+      fs.bulletS += seconds(t0, t1);
+      fs.fractureS += seconds(t1, t2);
     }
+    fs.timeS = timeS;
+    fs.bodies = 0;
+    for (const Body& b : mBodies) fs.bodies += b.alive ? 1 : 0;
+    energy(fs.energyJ, fs.kineticJ);
+    out.frameStats.push_back(fs);
+    ++mFrame;
+    if (mSettings.recordTracks) recordPoses(frame + 1);
     out.deferredImpacts = mDeferredCount;
     out.budgetDeferredImpacts = mBudgetDeferredCount;
     out.simplifiedImpacts = mSimplifiedCount;
+    return fs;
+  }
+
+  PlayResult finish() {
+    PlayResult out = std::move(mOut);
+    mOut = PlayResult{};
+    out.frames = mFrame;  // frames actually played
     uint64_t hash = 1469598103934665603ull;
     auto eat = [&](double v) {
       unsigned char bytes[sizeof v];
@@ -311,6 +328,36 @@ class Simulation {
       out.bodies.push_back(b.state);
     }
     return out;
+  }
+
+  Result<PlayResult> run() {
+    begin();
+    while (mFrame < mOut.frames) stepFrame();
+    return finish();
+  }
+
+  // The live bodies as the viewer draws them.
+  std::vector<BodyView> liveBodies() const {
+    std::vector<BodyView> views;
+    for (const Body& b : mBodies) {
+      if (!b.alive) continue;
+      BodyView v;
+      v.index = b.state.index;
+      v.kind = b.state.kind;
+      v.name = b.state.name;
+      v.surface = b.state.kind == BodyKind::Impactor ? nullptr : &b.state.surface;
+      v.impactor = b.state.kind == BodyKind::Impactor ? &b.state.impactor : nullptr;
+      b.localPose(v.rotation, v.translationM);
+      views.push_back(std::move(v));
+    }
+    return views;
+  }
+
+  // An impactor thrown in during the play: it exists from the next sample on.
+  void throwImpactor(const RigidImpactor& imp) {
+    addImpactor(imp);
+    mBodies.back().state.firstFrame = mFrame;
+    if (mSettings.recordTracks) recordPose(mBodies.back());
   }
 
  private:
@@ -589,6 +636,8 @@ class Simulation {
   std::unique_ptr<btRigidBody> mFloor;
   std::vector<Body> mBodies;
   std::vector<Candidate> mDeferred;
+  PlayResult mOut;
+  int64_t mFrame = 0;
   int64_t mDeferredCount = 0;
   int64_t mBudgetDeferredCount = 0;
   int64_t mSimplifiedCount = 0;
@@ -621,28 +670,73 @@ Status validatePlayerSettings(const PlayerSettings& s) {
   return validateWorldSettings(s.world);
 }
 
-Result<PlayResult> playScene(Pack pack, const Scene& scene, const PlayerSettings& settings) {
+struct PlaySession::Impl {
+  Scene scene;  // the Simulation keeps a reference to it
+  std::unique_ptr<Simulation> sim;
+  double loadS = 0.0;
+};
+
+PlaySession::PlaySession(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
+PlaySession::~PlaySession() = default;
+
+Result<std::unique_ptr<PlaySession>> PlaySession::create(Pack pack, const Scene& scene, const PlayerSettings& settings) {
   if (Status st = validatePlayerSettings(settings); !st) return st.error();
   for (const SceneObject& o : scene.objects) {
     const bool known = std::any_of(pack.objects.begin(), pack.objects.end(), [&](const ObjectAsset& a) { return a.name == o.asset; });
     if (!known) return makeError(ErrorCode::InvalidArgument, "scene '" + scene.name + "': object '" + o.name + "' names asset '" + o.asset + "', which the pack does not have");
   }
   const auto t0 = Clock::now();
+  auto impl = std::make_unique<Impl>();
+  impl->scene = scene;
   std::vector<Material> materials = pack.materials;
   WorldSettings ws = settings.world;
   ws.seed = scene.seed;
   auto world = World::create(std::move(pack), ws);
   if (!world) return world.error();
-  auto sim = std::make_unique<Simulation>(std::move(world).value(), scene, settings);
-  sim->setMaterials(std::move(materials));
-  if (Status st = sim->addFloor(); !st) return st.error();
-  for (const SceneObject& o : scene.objects)
-    if (Status st = sim->addObject(o); !st) return st.error();
-  for (const RigidImpactor& imp : scene.impactors) sim->addImpactor(imp);
-  const double loadS = seconds(t0, Clock::now());
-  auto result = sim->run();
-  if (result) result.value().loadS = loadS;
-  return result;
+  impl->sim = std::make_unique<Simulation>(std::move(world).value(), impl->scene, settings);
+  impl->sim->setMaterials(std::move(materials));
+  if (Status st = impl->sim->addFloor(); !st) return st.error();
+  for (const SceneObject& o : impl->scene.objects)
+    if (Status st = impl->sim->addObject(o); !st) return st.error();
+  for (const RigidImpactor& imp : impl->scene.impactors) impl->sim->addImpactor(imp);
+  impl->sim->begin();
+  impl->loadS = seconds(t0, Clock::now());
+  return std::unique_ptr<PlaySession>(new PlaySession(std::move(impl)));
+}
+
+FrameStats PlaySession::stepFrame() { return mImpl->sim->stepFrame(); }
+int64_t PlaySession::frame() const { return mImpl->sim->frame(); }
+int64_t PlaySession::frameCount() const { return mImpl->sim->frameCount(); }
+double PlaySession::timeS() const { return mImpl->sim->timeS(); }
+const Scene& PlaySession::scene() const { return mImpl->scene; }
+const PlayResult& PlaySession::progress() const { return mImpl->sim->progress(); }
+std::vector<BodyView> PlaySession::bodies() const { return mImpl->sim->liveBodies(); }
+
+Status PlaySession::throwSphere(const RigidImpactor& impactor) {
+  auto bad = [](const std::string& what) { return makeError(ErrorCode::InvalidArgument, "throw: " + what); };
+  if (impactor.shape != ImpactorShape::Sphere) return bad("only spheres are thrown");
+  if (!(impactor.radiusM > 0.0 && std::isfinite(impactor.radiusM))) return bad("radius must be finite and > 0");
+  if (!(impactor.massKg > 0.0 && std::isfinite(impactor.massKg))) return bad("mass must be finite and > 0");
+  if (!impactor.positionWorldM.allFinite() || !impactor.velocityMps.allFinite() || !impactor.angularVelocityRadPerS.allFinite()) {
+    return bad("position and velocities must be finite");
+  }
+  if (!materialPreset(impactor.material)) return makeError(ErrorCode::UnknownMaterial, "throw: unknown material '" + impactor.material + "'");
+  mImpl->sim->throwImpactor(impactor);
+  return Ok{};
+}
+
+PlayResult PlaySession::finish() {
+  PlayResult r = mImpl->sim->finish();
+  r.loadS = mImpl->loadS;
+  return r;
+}
+
+Result<PlayResult> playScene(Pack pack, const Scene& scene, const PlayerSettings& settings) {
+  auto session = PlaySession::create(std::move(pack), scene, settings);
+  if (!session) return session.error();
+  PlaySession& s = *session.value();
+  while (s.frame() < s.frameCount()) s.stepFrame();
+  return s.finish();
 }
 
 FrameTimeSummary summarizeFrameTimes(const std::vector<FrameStats>& frames) {

@@ -33,6 +33,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -143,6 +144,53 @@ struct PlayResult {
   int32_t bodiesAtEnd = 0;
   uint64_t poseHash = 0;         ///< FNV-1a over the final poses of live bodies, by index
   double loadS = 0.0;            ///< building the World and the bodies
+};
+
+/// A live body, as a viewer draws it.
+struct BodyView {
+  int32_t index = -1;
+  BodyKind kind = BodyKind::Object;
+  std::string name;
+  const TriangleMesh* surface = nullptr;     ///< local frame; null for impactors (valid until the next step)
+  const RigidImpactor* impactor = nullptr;   ///< for impactors
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< local → world
+  Eigen::Vector3d translationM = Eigen::Vector3d::Zero();
+};
+
+/// A scene played one frame at a time (what playScene runs to the end, and what a viewer drives):
+///
+///   auto session = PlaySession::create(std::move(pack), scene, settings);   // Result<unique_ptr>
+///   while (session.value()->frame() < session.value()->frameCount()) session.value()->stepFrame();
+///   PlayResult r = session.value()->finish();
+///
+/// Stepping past frameCount() goes on (a viewer may run longer than the scene's duration).
+class PlaySession {
+ public:
+  /// Errors: as playScene.
+  static Result<std::unique_ptr<PlaySession>> create(Pack pack, const Scene& scene, const PlayerSettings& settings = {});
+  ~PlaySession();
+  PlaySession(const PlaySession&) = delete;
+  PlaySession& operator=(const PlaySession&) = delete;
+
+  FrameStats stepFrame();
+  int64_t frame() const;        ///< frames played
+  int64_t frameCount() const;   ///< the scene's duration in frames
+  double timeS() const;         ///< frame() × the time step
+  const Scene& scene() const;
+  /// Counts and events so far (bodies and the pose hash come with finish()).
+  const PlayResult& progress() const;
+  std::vector<BodyView> bodies() const;
+  /// Adds a sphere during the play (it takes part from the next frame). Errors: InvalidArgument
+  /// (not a sphere, radius or mass not finite and > 0, non-finite pose or velocities),
+  /// UnknownMaterial.
+  Status throwSphere(const RigidImpactor& impactor);
+  /// The result over the frames played; the session is spent afterwards.
+  PlayResult finish();
+
+ private:
+  struct Impl;
+  explicit PlaySession(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> mImpl;
 };
 
 /// Plays scene with the objects of pack. Errors: InvalidArgument (settings; a scene object whose
