@@ -219,6 +219,50 @@ TEST(PlayerBudgetTest, ImpactsBeyondTheBudgetWaitThenRunSimplified) {
   EXPECT_EQ(validatePlayerSettings(bad).error().code, ErrorCode::InvalidArgument);
 }
 
+// The session the viewer drives: frame by frame it gives playScene's poses, and a thrown sphere
+// becomes a body (bad throws are typed errors).
+TEST(PlaySessionTest, SteppingGivesPlaySceneAndThrowsAddBodies) {
+  ASSERT_NE(smallPack(), nullptr);
+  const Scene s = defaultScene("plate-drop");
+  const PlayResult whole = play(s);
+  auto session = PlaySession::create(*smallPack(), s);
+  ASSERT_TRUE(session) << session.error().message;
+  PlaySession& p = *session.value();
+  EXPECT_EQ(p.frameCount(), whole.frames);
+  while (p.frame() < p.frameCount()) p.stepFrame();
+  EXPECT_EQ(p.progress().impacts, whole.impacts);
+  const PlayResult stepped = p.finish();
+  EXPECT_EQ(stepped.poseHash, whole.poseHash);
+  EXPECT_EQ(stepped.breaks, whole.breaks);
+
+  auto again = PlaySession::create(*smallPack(), s);
+  ASSERT_TRUE(again);
+  PlaySession& q = *again.value();
+  const size_t before = q.bodies().size();
+  RigidImpactor ball;
+  ball.radiusM = 0.02;
+  ball.massKg = 0.2;
+  ball.positionWorldM = Eigen::Vector3d(0.0, 0.0, 1.5);
+  ball.velocityMps = Eigen::Vector3d(0.0, 0.0, -10.0);
+  ASSERT_TRUE(q.throwSphere(ball));
+  EXPECT_EQ(q.bodies().size(), before + 1);
+  EXPECT_EQ(q.bodies().back().kind, BodyKind::Impactor);
+  q.stepFrame();
+  RigidImpactor bad = ball;
+  bad.radiusM = 0.0;
+  EXPECT_EQ(q.throwSphere(bad).error().code, ErrorCode::InvalidArgument);
+  bad = ball;
+  bad.velocityMps.x() = std::nan("");
+  EXPECT_EQ(q.throwSphere(bad).error().code, ErrorCode::InvalidArgument);
+  bad = ball;
+  bad.shape = ImpactorShape::Box;
+  EXPECT_EQ(q.throwSphere(bad).error().code, ErrorCode::InvalidArgument);
+  bad = ball;
+  bad.material = "cheese";
+  EXPECT_EQ(q.throwSphere(bad).error().code, ErrorCode::UnknownMaterial);
+  EXPECT_EQ(q.bodies().size(), before + 1);
+}
+
 TEST(PlayerErrorsTest, UnknownAssetAndBadSettingsAreTyped) {
   Pack empty;
   Scene s;

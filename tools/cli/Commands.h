@@ -18,6 +18,7 @@ Runner addImpactCommand(CLI::App& app);
 Runner addCalibrateCommand(CLI::App& app);
 Runner addSizeCommand(CLI::App& app);
 Runner addPlayCommand(CLI::App& app);
+Runner addViewCommand(CLI::App& app);
 
 }  // namespace brittle::cli
 

@@ -12,6 +12,10 @@
 #include "brittle/player/Scene.h"
 
 namespace brittle::cli {
+
+// play --frames: the play frame by frame, every N-th frame drawn into a PNG (ViewCommand.cpp).
+Result<PlayResult> playWithFrames(Pack pack, const Scene& scene, const PlayerSettings& settings,
+                                  const std::string& dir, int every, const std::string& size);
 namespace {
 
 struct PlayOptions {
@@ -21,6 +25,8 @@ struct PlayOptions {
   int modes = 0;
   std::string runtimeSettings;
   double frameBudgetMs = 0.0;
+  std::string framesDir, frameSize = "960x540";
+  int frameEvery = 1;
   bool json = false;
 };
 
@@ -52,6 +58,9 @@ Runner addPlayCommand(CLI::App& app) {
   cmd->add_option("--max-budget-waits", o->settings.maxBudgetWaits, "Steps an impact may wait for the frame budget")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--settings", o->runtimeSettings, "Runtime settings (JSON, as brittle size writes them); flags given here win");
+  cmd->add_option("--frames", o->framesDir, "Also draw frames into this directory (frame_NNNNNN.png; needs a display: xvfb-run)");
+  cmd->add_option("--frame-every", o->frameEvery, "Draw every N-th frame")->capture_default_str()->check(CLI::PositiveNumber);
+  cmd->add_option("--frame-size", o->frameSize, "Size of the drawn frames, WxH")->capture_default_str();
 
   return [o, cmd]() -> int {
     auto scene = loadScene(o->scene);
@@ -64,7 +73,14 @@ Runner addPlayCommand(CLI::App& app) {
       if (Status st = applyRuntimeSettingsFile(o->runtimeSettings, *cmd, o->settings.world.fracture); !st) return reportError(st.error());
     }
     o->settings.recordTracks = !o->outReplay.empty();
-    auto played = playScene(std::move(pack).value(), scene.value(), o->settings);
+    Result<PlayResult> played = makeError(ErrorCode::InvalidArgument, "not played");
+    if (o->framesDir.empty()) {
+      played = playScene(std::move(pack).value(), scene.value(), o->settings);
+    } else {
+      auto frames = playWithFrames(std::move(pack).value(), scene.value(), o->settings, o->framesDir, o->frameEvery, o->frameSize);
+      if (!frames) return reportError(frames.error());
+      played = std::move(frames).value();
+    }
     if (!played) return reportError(played.error());
     const nlohmann::json doc = playReportJson(played.value(), o->framesEvery);
     if (!o->outStats.empty()) {

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   add("calibrate", brittle::cli::addCalibrateCommand(app));
   add("size", brittle::cli::addSizeCommand(app));
   add("play", brittle::cli::addPlayCommand(app));
+  add("view", brittle::cli::addViewCommand(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

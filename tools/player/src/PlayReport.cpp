@@ -61,6 +61,7 @@ nlohmann::json playReportJson(const PlayResult& r, int framesEvery) {
                         {"waited_steps", e.waitedSteps},
                         {"simplified", e.simplified},
                         {"static_correction", e.staticCorrection},
+                        {"modes_used", e.modesUsed},
                         {"times_s",
                          {{"contact", e.times.contactS},
                           {"prepare", e.times.prepareS},

@@ -511,6 +511,7 @@ class Simulation {
     }
     e.broken = mResult.broken;
     e.staticCorrection = mResult.staticCorrectionUsed;
+    e.modesUsed = mResult.modesUsed;
     e.peakPrincipalStressPa = mResult.peakPrincipalStressPa;
     e.times = mResult.times;
     if (mResult.broken) {

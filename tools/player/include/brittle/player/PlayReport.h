@@ -10,6 +10,7 @@
 //     "events": [ { "time_s", "frame", "body", "object", "other_body" (−1: the floor), "speed_mps",
 //                   "other_mass_kg" ("inf" if static), "broken", "fragments", "debris",
 //                   "peak_principal_stress_pa", "waited_steps", "simplified", "static_correction",
+//                   "modes_used",
 //                   "times_s": { "contact", "prepare", "modal",
 //                   "stress", "propagation", "surfaces", "matching", "total" }, "error"? } ],
 //     "frames": [ { "frame", "time_s", "bodies", "bullet_s", "fracture_s", "energy_j", "kinetic_j",

@@ -92,6 +92,7 @@ struct ImpactEvent {
   int32_t waitedSteps = 0;       ///< steps it waited (impact cap or frame budget)
   bool simplified = false;       ///< run fast (ImpactDesc::fast) after waiting maxBudgetWaits steps
   bool staticCorrection = false; ///< the runtime used the static correction
+  int32_t modesUsed = 0;         ///< the runtime's modes for this impact
 };
 
 struct FrameStats {
