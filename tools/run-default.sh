@@ -5,12 +5,14 @@
 # the replays and their pictures.
 # Output: out/default.h5 (+ out/default.json, its inspection), out/impacts/<object>.json,
 # out/fragments/<object>/fragment-NN.off, out/pictures/<object>.png, out/replays/<scene>.glb,
-# out/play/<scene>.json (statistics per event and frame), out/pictures/<scene>.png.
+# out/play/<scene>.json (statistics per event and frame), out/pictures/<scene>.png, and frames of
+# the pane drawn by the viewer's renderer (out/frames/ball-through-pane/frame_NNNNNN.png, under
+# xvfb-run when there is no display).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh
-rm -rf out/impacts out/fragments out/pictures out/replays out/play
-mkdir -p out/impacts out/fragments out/replays out/play
+rm -rf out/impacts out/fragments out/pictures out/replays out/play out/frames
+mkdir -p out/impacts out/fragments out/replays out/play out/frames
 build/bin/brittle bake --manifest assets/default-pack.json --out out/default.h5
 build/bin/brittle inspect out/default.h5 --json > out/default.json
 echo "inspection JSON: out/default.json"
@@ -41,3 +43,11 @@ for scene in assets/scenes/*.json; do
 done
 echo
 /usr/bin/python3 tools/scripts/plot_replay.py out/replays/*.glb --out out/pictures
+
+# Frames of one scene drawn by the renderer (every 24th frame, 0.1 s apart); Xvfb and Mesa when
+# there is no display.
+draw=()
+if [ -z "${DISPLAY:-}" ]; then draw=(xvfb-run -a -s "-screen 0 1280x800x24"); fi
+"${draw[@]}" build/bin/brittle play out/default.h5 assets/scenes/ball-through-pane.json --frames out/frames/ball-through-pane \
+  --frame-every 24 --frame-size 960x540 > /dev/null
+echo "frames: $(ls out/frames/ball-through-pane | wc -l) pictures in out/frames/ball-through-pane/"
