@@ -21,17 +21,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-template <typename F>
-double medianSeconds(int repeats, F&& f) {
-  std::vector<double> t;
-  for (int i = 0; i < repeats; ++i) {
-    const auto s = Clock::now();
-    f();
-    t.push_back(std::chrono::duration<double>(Clock::now() - s).count());
-  }
-  return percentile(t, 0.5);
-}
-
 double maxRelative3(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   if (a.size() < 3 || b.size() < 3) return std::numeric_limits<double>::quiet_NaN();
   return ((a.head<3>() - b.head<3>()).array().abs() / b.head<3>().array().abs()).maxCoeff();

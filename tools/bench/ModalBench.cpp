@@ -21,6 +21,7 @@
 #include <fstream>
 #include <iostream>
 
+#include "BenchSupport.h"
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshIO.h"
@@ -31,7 +32,6 @@ namespace {
 
 using namespace brittle;
 using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // Spectra's shift-invert operator backed by our factorisation of K − σM.
 class FactorOp {
@@ -51,18 +51,6 @@ class FactorOp {
 double maxRelDiff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   if (a.size() != b.size() || a.size() == 0) return std::numeric_limits<double>::quiet_NaN();
   return ((a - b).cwiseAbs().array() / b.cwiseAbs().array()).maxCoeff();
-}
-
-template <typename F>
-double median(int repeats, F&& f) {
-  std::vector<double> t;
-  for (int i = 0; i < repeats; ++i) {
-    const auto s = Clock::now();
-    f();
-    t.push_back(since(s));
-  }
-  std::sort(t.begin(), t.end());
-  return t[t.size() / 2];
 }
 
 }  // namespace
@@ -103,26 +91,26 @@ int main(int argc, char** argv) {
     TetMeshSettings ts;
     ts.targetTets = target;
     TetMeshResult tets;
-    const double meshS = median(repeats, [&] { tets = tetrahedralize(surface.value(), ts).value(); });
+    const double meshS = bench::medianSeconds(repeats, [&] { tets = tetrahedralize(surface.value(), ts).value(); });
     auto sys = assembleFem(tets.mesh, material.value(), {}).value();
     const Eigen::Index dof = sys.stiffness.rows();
     const double shift = defaultShift(tets.mesh.nodes, material.value());
-    const double cholF = median(repeats, [&] { (void)ShiftInvertFactor::create(sys.stiffness, sys.mass, shift, Factorization::Cholmod); });
+    const double cholF = bench::medianSeconds(repeats, [&] { (void)ShiftInvertFactor::create(sys.stiffness, sys.mass, shift, Factorization::Cholmod); });
     const bool runEigen = !(skipEigen && dof > 30000);
-    const double eigF = runEigen ? median(repeats, [&] { (void)ShiftInvertFactor::create(sys.stiffness, sys.mass, shift, Factorization::EigenLdlt); }) : NAN;
+    const double eigF = runEigen ? bench::medianSeconds(repeats, [&] { (void)ShiftInvertFactor::create(sys.stiffness, sys.mass, shift, Factorization::EigenLdlt); }) : NAN;
     for (int r : modeCounts) {
       ModalSettings ms;
       ms.modeCount = r;
       ms.shiftRad2PerS2 = shift;
       ms.tolerance = tolerance;
       ModalResult arpack;
-      const double arpackChol = median(repeats, [&] { arpack = computeModes(sys, tets.mesh.nodes, ms).value(); });
+      const double arpackChol = bench::medianSeconds(repeats, [&] { arpack = computeModes(sys, tets.mesh.nodes, ms).value(); });
       ms.factorization = Factorization::EigenLdlt;
-      const double arpackEig = runEigen ? median(repeats, [&] { (void)computeModes(sys, tets.mesh.nodes, ms).value(); }) : NAN;
+      const double arpackEig = runEigen ? bench::medianSeconds(repeats, [&] { (void)computeModes(sys, tets.mesh.nodes, ms).value(); }) : NAN;
       // Spectra: same factor, same nev (r + 6 rigid) and ncv as ARPACK.
       Eigen::VectorXd spectraLambda;
       long spectraSolves = 0;
-      const double spectraS = median(repeats, [&] {
+      const double spectraS = bench::medianSeconds(repeats, [&] {
         auto factor = ShiftInvertFactor::create(sys.stiffness, sys.mass, shift, Factorization::Cholmod).value();
         FactorOp op(*factor, dof);
         Spectra::SparseSymMatProd<double> bop(sys.mass);
@@ -143,7 +131,7 @@ int main(int argc, char** argv) {
       if (dof <= denseMaxDof) {
         ms.factorization = Factorization::Cholmod;
         ModalResult dense;
-        denseS = median(repeats, [&] { dense = computeModesDense(sys, tets.mesh.nodes, ms).value(); });
+        denseS = bench::medianSeconds(repeats, [&] { dense = computeModesDense(sys, tets.mesh.nodes, ms).value(); });
         denseDiff = maxRelDiff(dense.basis.eigenvaluesRad2PerS2, arpack.basis.eigenvaluesRad2PerS2);
       }
       const double spectraDiff = maxRelDiff(spectraLambda, arpack.basis.eigenvaluesRad2PerS2);
