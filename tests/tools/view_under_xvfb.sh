@@ -12,6 +12,11 @@ src=$2
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 export LIBGL_ALWAYS_SOFTWARE=1
+# The processes that open a GL context run without LeakSanitizer in the sanitized build: Mesa's
+# driver is unloaded at exit, so LSan reports its process-lifetime allocations from an unknown
+# module that no suppression can name. AddressSanitizer and UBSan stay on; the bake and the play
+# without frames keep leak checking. (Harmless in the Release build.)
+gl=(env "ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0")
 "$cli" bake --mesh "$src/assets/meshes/plate.off" --material glass --name glass-plate --tets 3000 --modes 12 --quiet \
   --out "$work/plate.h5" >/dev/null
 cat > "$work/pane.json" <<'JSON'
@@ -27,7 +32,7 @@ cat > "$work/script.json" <<JSON
   { "frame": 100, "action": "screenshot", "file": "$work/after.png" },
   { "frame": 101, "action": "quit" } ] }
 JSON
-xvfb-run -a -s "-screen 0 1024x768x24" "$cli" view "$work/plate.h5" "$work/pane.json" --script "$work/script.json" \
+xvfb-run -a -s "-screen 0 1024x768x24" "${gl[@]}" "$cli" view "$work/plate.h5" "$work/pane.json" --script "$work/script.json" \
   --report "$work/report.json" --size 640x400
 /usr/bin/python3 - "$work" <<'PY'
 import json, sys
@@ -56,7 +61,7 @@ assert change > 1.0, "the picture did not change after the impact"
 PY
 # Frames of a play: frame 0 and every 20th of 120.
 "$cli" play "$work/plate.h5" "$work/pane.json" --json > /dev/null  # no display needed without --frames
-xvfb-run -a -s "-screen 0 1024x768x24" "$cli" play "$work/plate.h5" "$src/assets/scenes/plate-drop.json" \
+xvfb-run -a -s "-screen 0 1024x768x24" "${gl[@]}" "$cli" play "$work/plate.h5" "$src/assets/scenes/plate-drop.json" \
   --frames "$work/frames" --frame-every 20 --frame-size 320x200 > /dev/null
 count=$(ls "$work/frames" | grep -c '^frame_[0-9]\{6\}\.png$')
 echo "frames: $count"
@@ -71,7 +76,7 @@ for path in sorted(pathlib.Path(sys.argv[1]).glob("frame_*.png")):
     assert float((image[..., :3] * 255).std()) > 5, f"{path.name} looks blank"
 PY
 # No display: a clear error, not a crash.
-if out=$(env -u DISPLAY -u WAYLAND_DISPLAY "$cli" view "$work/plate.h5" "$work/pane.json" 2>&1); then
+if out=$(env -u DISPLAY -u WAYLAND_DISPLAY "${gl[@]}" "$cli" view "$work/plate.h5" "$work/pane.json" 2>&1); then
   echo "view without a display should fail"; exit 1
 fi
 echo "$out" | grep -q "xvfb-run" || { echo "no hint at xvfb-run: $out"; exit 1; }
