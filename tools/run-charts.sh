@@ -4,7 +4,7 @@
 #   tools/run-charts.sh          the modal-integrator, mode-count, tet-resolution, fracture-statistics,
 #                                exact-path (chart 5) and frame-time charts (~15 min)
 #   tools/run-charts.sh --all    also the modal-solver, search, impact-latency and descriptor-resolution
-#                                benchmarks (about an hour and a quarter on 2 cores)
+#                                benchmarks, the last at 1k and 10k entries (about two hours on 2 cores)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 all=0
@@ -63,5 +63,18 @@ if [ "$all" = 1 ]; then
     pairs+=("$sweep/voxel-$voxels.csv" "$sweep/voxel-$voxels-cost.csv")
   done
   plot plot_search_resolution.py bench/search_resolution.csv "${pairs[@]}"
+  # The same at 10 000 entries (~8 min per setting; voxels at 32 per axis left out: 1.3 GB).
+  pairs=()
+  for order in 2 4 6 8; do
+    $cli bench search --sizes 10000 --kinds moment --moment-order "$order" --index kd-forest:4:32 --queries 100 \
+      --physics-queries 24 --quiet --csv "$sweep/moment-$order-10k.csv" --cost-csv "$sweep/moment-$order-10k-cost.csv"
+    pairs+=("$sweep/moment-$order-10k.csv" "$sweep/moment-$order-10k-cost.csv")
+  done
+  for voxels in 8 16; do
+    $cli bench search --sizes 10000 --kinds voxel,voxel-improved --voxel-resolution "$voxels" --index kd-forest:4:32 \
+      --queries 100 --physics-queries 24 --quiet --csv "$sweep/voxel-$voxels-10k.csv" --cost-csv "$sweep/voxel-$voxels-10k-cost.csv"
+    pairs+=("$sweep/voxel-$voxels-10k.csv" "$sweep/voxel-$voxels-10k-cost.csv")
+  done
+  plot plot_search_resolution.py bench/search_resolution_10k.csv "${pairs[@]}"
   rm -rf "$sweep"
 fi
