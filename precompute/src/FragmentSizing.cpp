@@ -7,18 +7,9 @@
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/precompute/ModelSizing.h"
+#include "Median.h"
 
 namespace brittle {
-namespace {
-
-double median(std::vector<double> v) {
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-}  // namespace
 
 Result<std::vector<FragmentRecord>> sceneFragments(const ObjectAsset& asset, const Material& material,
                                                    const SceneObjectRange& range, int modes,

@@ -14,6 +14,7 @@
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/runtime/FullFemReference.h"
 #include "brittle/runtime/World.h"
+#include "Median.h"
 
 namespace brittle {
 namespace {
@@ -22,13 +23,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 /// A uniform double in [0, 1) from 53 bits of the generator (the same on every platform).
 double unit(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 }  // namespace
 

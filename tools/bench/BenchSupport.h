@@ -25,6 +25,11 @@ inline double percentile(std::vector<double> v, double p) {
   return v[static_cast<size_t>(std::min<double>(static_cast<double>(v.size() - 1), p * static_cast<double>(v.size() - 1) + 0.5))];
 }
 
+/// The largest relative difference of a from b over three components (b the reference).
+inline double maxRelative(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return ((a - b).array().abs() / b.array().abs()).maxCoeff();
+}
+
 /// The median wall time of `repeats` calls of f (s).
 template <typename F>
 double medianSeconds(int repeats, F&& f) {

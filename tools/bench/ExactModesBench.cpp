@@ -23,7 +23,7 @@ using Clock = std::chrono::steady_clock;
 
 double maxRelative3(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   if (a.size() < 3 || b.size() < 3) return std::numeric_limits<double>::quiet_NaN();
-  return ((a.head<3>() - b.head<3>()).array().abs() / b.head<3>().array().abs()).maxCoeff();
+  return maxRelative(a.head<3>(), b.head<3>());
 }
 
 // A steel ball on the centroid of a boundary face drawn by the seed, along the face's normal.

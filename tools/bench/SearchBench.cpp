@@ -1,5 +1,7 @@
 #include "SearchBench.h"
 
+#include "BenchSupport.h"
+
 #include "brittle/descriptors/MeshRefinement.h"
 
 #include <Eigen/Eigenvalues>
@@ -25,13 +27,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t i = std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5));
-  return v[i];
-}
-
 struct Query {
   TriangleMesh surface;
   CanonicalFrames frames;
@@ -52,9 +47,6 @@ Physics physicsOf(const ObjectAsset& a) {
   return p;
 }
 
-double maxRelative(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return ((a - b).array().abs() / b.array().abs()).maxCoeff();
-}
 
 void log(bool quiet, const char* format, auto... args) {
   if (quiet) return;

@@ -261,6 +261,7 @@ Result<ViewerReport> runViewer(const Pack& pack, const Scene& scene, const Playe
           auto fresh = PlaySession::create(Pack(pack), scene, settings);
           if (!fresh) return fresh.error();
           session = std::move(fresh);
+          renderer.forget();  // the new play numbers its bodies from 0 again
           continue;
         }
       }

@@ -37,6 +37,8 @@ class Renderer {
   /// Draws the bodies (and the floor at floorHeightM, if any) into the current framebuffer.
   void draw(const std::vector<BodyView>& bodies, const OrbitCamera& camera, std::optional<double> floorHeightM,
             int width, int height);
+  /// Drops the cached body meshes (they are kept by body index): call when a new play starts.
+  void forget() { mMeshes.clear(); }
   /// The current framebuffer as RGBA, top row first.
   std::vector<uint8_t> readPixels(int width, int height) const;
   /// Error: PackIoError (the PNG cannot be written).
