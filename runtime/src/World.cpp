@@ -1,24 +1,23 @@
 #include "brittle/runtime/World.h"
 
-#include <Eigen/Dense>
+#include <oneapi/tbb/task_arena.h>
+#include <oneapi/tbb/task_group.h>
+
 #include <algorithm>
-#include <chrono>
+#include <atomic>
 #include <cmath>
 #include <exception>
-#include <numbers>
+#include <map>
 #include <optional>
 
-#include "brittle/database/ScalingLaws.h"
-#include "brittle/runtime/FragmentModes.h"
-#include "brittle/runtime/FragmentSurfaces.h"
-#include "brittle/runtime/ModalResponse.h"
-#include "brittle/runtime/TetTopology.h"
+#include "Body.h"
+#include "ImpactStages.h"
 
 namespace brittle {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+using detail::Body;
+using detail::makeBody;
 
 Error bad(const std::string& message) { return makeError(ErrorCode::InvalidArgument, message); }
 
@@ -29,112 +28,37 @@ uint64_t mix(uint64_t x) {
   return x ^ (x >> 31);
 }
 
-// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection, §5.1.5), with its
-// barycentric weights.
-Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                  const Eigen::Vector3d& c, Eigen::Vector3d& bary) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) { bary = {1, 0, 0}; return a; }
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) { bary = {0, 1, 0}; return b; }
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const double v = d1 / (d1 - d3);
-    bary = {1 - v, v, 0};
-    return a + v * ab;
-  }
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) { bary = {0, 0, 1}; return c; }
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const double w = d2 / (d2 - d6);
-    bary = {1 - w, 0, w};
-    return a + w * ac;
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    bary = {0, 1 - w, w};
-    return b + w * (c - b);
-  }
-  const double denom = 1.0 / (va + vb + vc);
-  const double v = vb * denom, w = vc * denom;
-  bary = {1 - v - w, v, w};
-  return a + ab * v + ac * w;
-}
-
-// What the runtime keeps per distinct asset: the asset, its material, and what is precomputed
-// from them once (topology, stress bounds, surface normals and neighbours).
-struct Body {
-  ObjectAsset asset;
-  Material material;
-  TetTopology topology;
-  int modes = 0;
-  Eigen::VectorXd omega, zeta;
-  Eigen::MatrixXd stressBounds;  // T by modes
-  // Built on the body's first impact, not when it is created: most fragments are never hit again,
-  // and factorising K for each of them would dominate the impact that made them.
-  mutable std::optional<StaticCorrection> correction;
-  Points nodeNormals;                    // #N, area-weighted outward normals (boundary nodes)
-  std::vector<std::vector<int32_t>> ring;  // boundary neighbours per node
-  std::vector<int32_t> boundaryNodes;
-  double sizeM = 0.0;                    // bounding-box diagonal
-};
-
-Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount) {
-  if (asset.modal.modes.cols() == 0 || asset.stressModes.rows() != 6 * asset.tetMesh.tets.rows()) {
-    return bad("object '" + asset.name + "' has no modal data or stress modes of the wrong size");
-  }
-  auto topo = buildTetTopology(asset.tetMesh);
-  if (!topo) return Error{topo.error().code, "object '" + asset.name + "': " + topo.error().message};
-  auto body = std::make_shared<Body>();
-  body->topology = std::move(topo).value();
-  body->material = material;
-  const auto available = static_cast<int>(asset.modal.modes.cols());
-  body->modes = modeCount > 0 ? std::min(modeCount, available) : available;
-  body->omega = asset.modal.eigenvaluesRad2PerS2.head(body->modes).cwiseMax(0.0).cwiseSqrt();
-  if (!(body->omega.minCoeff() > 0.0)) return bad("object '" + asset.name + "' has a zero-frequency elastic mode");
-  body->zeta.resize(body->modes);
-  for (int j = 0; j < body->modes; ++j) body->zeta[j] = rayleighDampingRatio(material, body->omega[j]);
-  body->stressBounds = stressModeBounds(asset.stressModes, body->modes);
-  const auto n = asset.tetMesh.nodes.rows();
-  body->nodeNormals.setZero(n, 3);
-  body->ring.assign(static_cast<size_t>(n), {});
-  const Triangles& tri = body->topology.boundaryTriangles;
-  for (Eigen::Index f = 0; f < tri.rows(); ++f) {
-    const Eigen::Vector3d a = asset.tetMesh.nodes.row(tri(f, 0)), b = asset.tetMesh.nodes.row(tri(f, 1)),
-                          c = asset.tetMesh.nodes.row(tri(f, 2));
-    const Eigen::Vector3d areaNormal = 0.5 * (b - a).cross(c - a);
-    for (int k = 0; k < 3; ++k) {
-      body->nodeNormals.row(tri(f, k)) += areaNormal.transpose();
-      auto& r = body->ring[static_cast<size_t>(tri(f, k))];
-      for (int m = 1; m < 3; ++m) {
-        const int32_t other = tri(f, (k + m) % 3);
-        if (std::find(r.begin(), r.end(), other) == r.end()) r.push_back(other);
-      }
-    }
-  }
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double len = body->nodeNormals.row(i).norm();
-    if (len > 0.0) {
-      body->nodeNormals.row(i) /= len;
-      body->boundaryNodes.push_back(static_cast<int32_t>(i));
-    }
-  }
-  body->sizeM = (asset.tetMesh.nodes.colwise().maxCoeff() - asset.tetMesh.nodes.colwise().minCoeff()).norm();
-  body->asset = std::move(asset);
-  return std::shared_ptr<const Body>(std::move(body));
-}
-
 struct Slot {
   uint32_t generation = 0;
   bool alive = false;
+  bool pending = false;  // a submitted impact on it is not collected yet
   std::shared_ptr<const Body> body;
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+};
+
+// The checks on an impact's values that need no body.
+Status validateImpactDesc(const ImpactDesc& desc) {
+  if (!desc.pointWorld.allFinite() || !desc.normalWorld.allFinite() || std::abs(desc.normalWorld.norm() - 1.0) > 1e-6) {
+    return bad("impact: the point must be finite and the normal a finite unit vector");
+  }
+  if (!(desc.speedMps > 0.0) || !std::isfinite(desc.speedMps)) return bad("impact: speed must be finite and > 0");
+  if (!(desc.bodyRadiusM >= 0.0) || !(desc.pointToleranceM >= 0.0)) {
+    return bad("impact: bodyRadiusM and pointToleranceM must be ≥ 0");
+  }
+  return Ok{};
+}
+
+// A submitted impact: its inputs, its own buffers, and what the worker wrote.
+struct PendingImpact {
+  ObjectId object;
+  detail::ImpactJob job;
+  std::unique_ptr<detail::ImpactWorkspace> workspace;
+  ImpactResult result;
+  std::vector<std::shared_ptr<const Body>> born;
+  std::optional<Status> status;  // set by the worker, before done
+  std::atomic<bool> done{false};
+  tbb::task_group group;
 };
 
 }  // namespace
@@ -148,16 +72,31 @@ struct World::Impl {
   std::vector<uint32_t> freeSlots;
   uint64_t impacts = 0;
   int32_t live = 0;
-  // The buffers of an impact, kept between impacts: once they have grown to the largest body hit,
-  // an impact that does not break its body allocates nothing.
-  struct Workspace {
-    std::vector<double> times, force;
-    Eigen::VectorXd modalLoad, staticStress;
-    Eigen::MatrixXd q;
-    StaticCorrection::Workspace correction;
-    StressScanWorkspace scanBuffers;
-    StressScan scan;
-  } work;
+  detail::ImpactWorkspace work;  // the synchronous impact()'s buffers
+  std::vector<std::shared_ptr<const Body>> born;
+  // Asynchronous work: submitted impacts by ticket, spare workspaces, background preparation.
+  std::unique_ptr<tbb::task_arena> arena;
+  tbb::task_group background;
+  std::map<uint64_t, std::unique_ptr<PendingImpact>> pending;
+  std::vector<std::unique_ptr<detail::ImpactWorkspace>> spareWorkspaces;
+  uint64_t nextTicket = 1;
+
+  ~Impl() {
+    // Work still running reads this World's pack and bodies: wait for it.
+    if (!arena) return;
+    arena->execute([&] {
+      for (auto& [ticket, p] : pending) p->group.wait();
+      background.wait();
+    });
+  }
+
+  tbb::task_arena& workers() {
+    if (!arena) {
+      arena = settings.workerThreads > 0 ? std::make_unique<tbb::task_arena>(settings.workerThreads)
+                                         : std::make_unique<tbb::task_arena>();
+    }
+    return *arena;
+  }
 
   Result<Slot*> slot(ObjectId id) {
     if (!id.valid() || id.index >= slots.size()) return bad("invalid object id");
@@ -166,6 +105,11 @@ struct World::Impl {
       return bad("stale object id (slot " + std::to_string(id.index) + ", generation " + std::to_string(id.generation) + ")");
     }
     return &s;
+  }
+
+  // Slots free for new objects, counting the ones a removal of `freed` objects would give back.
+  size_t freeCapacity(size_t freed) const {
+    return freeSlots.size() + freed + (static_cast<size_t>(settings.maxObjects) - std::min(slots.size(), static_cast<size_t>(settings.maxObjects)));
   }
 
   Result<ObjectId> place(std::shared_ptr<const Body> body, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& t) {
@@ -182,6 +126,7 @@ struct World::Impl {
     }
     Slot& s = slots[index];
     s.alive = true;
+    s.pending = false;
     s.body = std::move(body);
     s.rotation = rotation;
     s.translation = t;
@@ -192,42 +137,71 @@ struct World::Impl {
   void remove(ObjectId id) {
     Slot& s = slots[id.index];
     s.alive = false;
+    s.pending = false;
     s.body.reset();
     ++s.generation;
     freeSlots.push_back(id.index);
     --live;
   }
 
-  Status impact(const ImpactDesc& desc, ImpactResult& result);
+  // The inputs of an impact on a live, non-pending object; numbers it (the crack seed).
+  Result<detail::ImpactJob> makeJob(const ImpactDesc& desc) {
+    auto found = slot(desc.object);
+    if (!found) return found.error();
+    const Slot& s = *found.value();
+    if (s.pending) return bad("impact: an impact on this object is pending (collect it first)");
+    if (Status st = validateImpactDesc(desc); !st) return st.error();
+    detail::ImpactJob job;
+    job.body = s.body;
+    job.rotation = s.rotation;
+    job.translation = s.translation;
+    job.desc = desc;
+    job.crackSeed = mix(settings.seed ^ mix(settings.fracture.crack.seed + impacts++));
+    job.settings = &settings.fracture;
+    job.matcher = matcher ? &*matcher : nullptr;
+    job.database = &pack.database;
+    return job;
+  }
+
+  // Applies a computed impact: a broken object is replaced by its fragments, all or nothing.
+  Status apply(ObjectId object, const detail::ImpactJob& job, ImpactResult& result,
+               std::vector<std::shared_ptr<const Body>>& newBodies) {
+    Slot& s = slots[object.index];
+    s.pending = false;
+    if (!result.broken) return Ok{};
+    const auto count = static_cast<size_t>(std::count_if(newBodies.begin(), newBodies.end(), [](const auto& b) { return b != nullptr; }));
+    if (count > freeCapacity(1)) {
+      return bad("impact: " + std::to_string(count) + " fragments do not fit in maxObjects = " +
+                 std::to_string(settings.maxObjects) + " (the object is left unbroken)");
+    }
+    remove(object);
+    for (size_t i = 0; i < newBodies.size(); ++i) {
+      if (!newBodies[i]) continue;
+      auto id = place(std::move(newBodies[i]), job.rotation, job.translation);
+      if (!id) return id.error();  // unreachable: capacity checked above
+      result.fragments[i].object = id.value();
+    }
+    newBodies.clear();
+    return Ok{};
+  }
 };
 
-namespace {
-
-// Back to a default result, keeping the storage of loadWeights.
-void resetResult(ImpactResult& r) {
-  r.broken = false;
-  r.contact = HertzContact{};
-  r.bodyRadiusM = 0.0;
-  r.peakPrincipalStressPa = 0.0;
-  r.peakWithoutCorrectionPa = std::numeric_limits<double>::quiet_NaN();
-  r.peakElement = -1;
-  r.peakTimeS = 0.0;
-  r.modesUsed = 0;
-  r.staticCorrectionUsed = false;
-  r.loadWeights.clear();
-  r.forceDirectionLocal.setZero();
-  r.ringDownS = 0.0;
-  r.stressEvaluations = 0;
-  r.fracture = FractureState{};
-  r.fragments.clear();
-  r.times = StageTimes{};
+std::string_view fragmentPathName(FragmentPath path) {
+  switch (path) {
+    case FragmentPath::Debris: return "debris";
+    case FragmentPath::ExactModes: return "exact_modes";
+    case FragmentPath::Matched: return "matched";
+    case FragmentPath::SurfaceOnly: return "surface_only";
+  }
+  return "unknown";
 }
-
-}  // namespace
 
 Status validateWorldSettings(const WorldSettings& s) {
   const FractureSettings& f = s.fracture;
   if (s.maxObjects < 1) return bad("WorldSettings: maxObjects must be ≥ 1");
+  if (s.maxPendingImpacts < 1 || s.workerThreads < 0) {
+    return bad("WorldSettings: maxPendingImpacts must be ≥ 1 and workerThreads ≥ 0");
+  }
   if (f.modeCount < 0 || f.pulseSteps < 2 || f.ringDownSteps < 0 || !(f.ringDownPeriods >= 0.0) ||
       !std::isfinite(f.ringDownPeriods) || !(f.debrisVolumeFraction >= 0.0 && f.debrisVolumeFraction < 1.0) ||
       f.exactModesMaxTets < 0 || f.exactModeCount < 1) {
@@ -286,13 +260,15 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
       if (mat == w.pack.materials.end()) return bad("object '" + desc.asset + "' names a missing material");
       auto body = makeBody(*it, *mat, w.settings.fracture.modeCount);
       if (!body) return body.error();
-      if (w.settings.fracture.staticCorrection) {  // pack objects pay the factorisation at load
-        const Body& b = *body.value();
-        auto correction = StaticCorrection::build(b.asset, b.material, b.modes);
-        if (!correction) return Error{correction.error().code, "object '" + desc.asset + "': " + correction.error().message};
-        b.correction.emplace(std::move(correction).value());
+      std::shared_ptr<const Body> made = std::move(body).value();
+      if (w.settings.fracture.staticCorrection) {  // pack objects are prepared before their first impact
+        if (w.settings.prepareInBackground) {
+          w.workers().execute([&] { w.background.run([made] { (void)made->staticCorrection(); }); });
+        } else if (const auto& correction = made->staticCorrection(); !correction) {
+          return correction.error();
+        }
       }
-      w.packBodies[index] = std::move(body).value();
+      w.packBodies[index] = std::move(made);
     }
     return w.place(w.packBodies[index], desc.rotation, desc.translationM);
   } catch (const std::exception& e) {
@@ -303,6 +279,7 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
 Status World::removeObject(ObjectId id) {
   auto s = mImpl->slot(id);
   if (!s) return s.error();
+  if (s.value()->pending) return bad("removeObject: an impact on this object is pending (collect it first)");
   mImpl->remove(id);
   return Ok{};
 }
@@ -334,260 +311,80 @@ Result<ImpactResult> World::impact(const ImpactDesc& desc) {
 
 Status World::impact(const ImpactDesc& desc, ImpactResult& result) {
   try {
-    return mImpl->impact(desc, result);
+    Impl& w = *mImpl;
+    detail::resetImpactResult(result);
+    auto job = w.makeJob(desc);
+    if (!job) return job.error();
+    if (Status st = detail::computeImpact(job.value(), w.work, result, w.born); !st) return st;
+    return w.apply(desc.object, job.value(), result, w.born);
   } catch (const std::exception& e) {
     return bad(std::string("impact failed: ") + e.what());
   }
 }
 
-Status World::Impl::impact(const ImpactDesc& desc, ImpactResult& result) {
-  resetResult(result);
-  auto found = slot(desc.object);
-  if (!found) return found.error();
-  const Slot& s = *found.value();
-  const std::shared_ptr<const Body> bodyRef = s.body;  // keeps the body alive past remove()
-  const Body& body = *bodyRef;
-  const ObjectAsset& asset = body.asset;
-  const FractureSettings& fs = settings.fracture;
-  if (!desc.pointWorld.allFinite() || !desc.normalWorld.allFinite() || std::abs(desc.normalWorld.norm() - 1.0) > 1e-6) {
-    return bad("impact: the point must be finite and the normal a finite unit vector");
-  }
-  if (!(desc.speedMps > 0.0) || !std::isfinite(desc.speedMps)) return bad("impact: speed must be finite and > 0");
-  if (!(desc.bodyRadiusM >= 0.0) || !(desc.pointToleranceM >= 0.0)) {
-    return bad("impact: bodyRadiusM and pointToleranceM must be ≥ 0");
-  }
-  const uint64_t impactIndex = impacts++;
-
-  // --- Contact: where, how curved, Hertz.
-  auto t0 = Clock::now();
-  const Eigen::Vector3d p = s.rotation.transpose() * (desc.pointWorld - s.translation);
-  const Eigen::Vector3d n = s.rotation.transpose() * desc.normalWorld;
-  const Points& x = asset.tetMesh.nodes;
-  const Triangles& tri = body.topology.boundaryTriangles;
-  double bestDistance = std::numeric_limits<double>::infinity();
-  Eigen::Index bestFace = -1;
-  Eigen::Vector3d bestBary;
-  for (Eigen::Index f = 0; f < tri.rows(); ++f) {
-    Eigen::Vector3d bary;
-    const Eigen::Vector3d c = closestOnTriangle(p, x.row(tri(f, 0)), x.row(tri(f, 1)), x.row(tri(f, 2)), bary);
-    const double d = (c - p).squaredNorm();
-    if (d < bestDistance) {
-      bestDistance = d;
-      bestFace = f;
-      bestBary = bary;
+Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
+  try {
+    Impl& w = *mImpl;
+    if (w.pending.size() >= static_cast<size_t>(w.settings.maxPendingImpacts)) {
+      return bad("submitImpact: maxPendingImpacts = " + std::to_string(w.settings.maxPendingImpacts) + " reached");
     }
-  }
-  bestDistance = std::sqrt(bestDistance);
-  const double tolerance = desc.pointToleranceM > 0.0 ? desc.pointToleranceM : 0.05 * body.sizeM;
-  if (bestFace < 0 || bestDistance > tolerance) {
-    return bad("impact: the point is " + std::to_string(bestDistance) + " m from the surface of '" + asset.name +
-               "' (tolerance " + std::to_string(tolerance) + " m)");
-  }
-  Eigen::Index corner;
-  bestBary.maxCoeff(&corner);
-  const int32_t nearest = tri(bestFace, corner);
-  double radius = desc.bodyRadiusM;
-  if (radius == 0.0) {
-    // Normal curvature along each surface edge at the nearest node, κ = 2 n·(x_i − x_j)/|x_i − x_j|²,
-    // averaged; flat or concave: ∞.
-    const Eigen::Vector3d xi = x.row(nearest), ni = body.nodeNormals.row(nearest);
-    double kappa = 0.0;
-    for (int32_t j : body.ring[static_cast<size_t>(nearest)]) {
-      const Eigen::Vector3d d = xi - x.row(j).transpose();
-      kappa += 2.0 * ni.dot(d) / d.squaredNorm();
+    auto job = w.makeJob(desc);
+    if (!job) return job.error();
+    auto p = std::make_unique<PendingImpact>();
+    p->object = desc.object;
+    p->job = std::move(job).value();
+    if (!w.spareWorkspaces.empty()) {
+      p->workspace = std::move(w.spareWorkspaces.back());
+      w.spareWorkspaces.pop_back();
+    } else {
+      p->workspace = std::make_unique<detail::ImpactWorkspace>();
     }
-    kappa /= std::max<size_t>(1, body.ring[static_cast<size_t>(nearest)].size());
-    radius = kappa > 1e-3 / body.sizeM ? 1.0 / kappa : std::numeric_limits<double>::infinity();
+    w.slots[desc.object.index].pending = true;
+    const ImpactTicket ticket{w.nextTicket++};
+    PendingImpact* raw = p.get();
+    w.pending.emplace(ticket.id, std::move(p));
+    w.workers().execute([&] {
+      raw->group.run([raw] {
+        try {
+          raw->status = detail::computeImpact(raw->job, *raw->workspace, raw->result, raw->born);
+        } catch (const std::exception& e) {
+          raw->status = bad(std::string("impact failed on a worker: ") + e.what());
+        }
+        raw->done.store(true, std::memory_order_release);
+      });
+    });
+    return ticket;
+  } catch (const std::exception& e) {
+    return bad(std::string("submitImpact failed: ") + e.what());
   }
-  result.bodyRadiusM = radius;
-  HertzInput hi;
-  hi.impactorMassKg = desc.impactorMassKg;
-  hi.impactorRadiusM = desc.impactorRadiusM;
-  hi.impactorYoungsModulusPa = desc.impactorYoungsModulusPa;
-  hi.impactorPoissonRatio = desc.impactorPoissonRatio;
-  hi.bodyMassKg = asset.massProperties.massKg;
-  hi.bodyInertiaKgM2 = asset.massProperties.inertiaKgM2;
-  hi.contactOffsetM = p - asset.massProperties.centerOfMassM;
-  hi.normal = n.normalized();
-  hi.bodyRadiusM = radius;
-  hi.bodyYoungsModulusPa = body.material.youngsModulusPa;
-  hi.bodyPoissonRatio = body.material.poissonRatio;
-  hi.speedMps = desc.speedMps;
-  hi.impulseNs = desc.impulseNs;
-  hi.restitution = body.material.restitution;
-  auto contact = computeHertzContact(hi);
-  if (!contact) return contact.error();
-  result.contact = contact.value();
-  const HertzContact& hc = result.contact;
-
-  // Load pattern: Hertz pressure √(1 − r²/a²) on the nodes inside the patch, weighted by their
-  // area; a patch smaller than the mesh loads the nearest face's nodes barycentrically.
-  auto& load = result.loadWeights;  // normalised below
-  double total = 0.0;
-  for (int32_t i : body.boundaryNodes) {
-    const double r2 = (x.row(i).transpose() - p).squaredNorm() / (hc.patchRadiusM * hc.patchRadiusM);
-    if (r2 >= 1.0) continue;
-    const double w = std::sqrt(1.0 - r2) * body.topology.nodeAreasM2[i];
-    load.emplace_back(i, w);
-    total += w;
-  }
-  if (!(total > 0.0)) {
-    load.clear();
-    total = 0.0;
-    for (int k = 0; k < 3; ++k) {
-      load.emplace_back(tri(bestFace, k), bestBary[k]);
-      total += bestBary[k];
-    }
-  }
-  result.times.contactS = since(t0);
-
-  // --- First impact on this body: factorise K for the static correction.
-  t0 = Clock::now();
-  // A fast impact (a host over its frame budget) does not factorise K: it takes the correction
-  // only when the body already has it.
-  const bool correct = fs.staticCorrection && (!desc.fast || body.correction.has_value());
-  if (correct && !body.correction) {
-    auto correction = StaticCorrection::build(asset, body.material, body.modes);
-    if (!correction) return Error{correction.error().code, "object '" + asset.name + "': " + correction.error().message};
-    body.correction.emplace(std::move(correction).value());
-  }
-  result.times.prepareS = since(t0);
-  result.staticCorrectionUsed = correct;
-
-  // --- Modal response over the pulse and the ring-down.
-  t0 = Clock::now();
-  const int r = body.modes;
-  result.modesUsed = r;
-  for (auto& [i, w] : load) w /= total;
-  Eigen::VectorXd& g = work.modalLoad;
-  g.setZero(r);
-  for (const auto& [i, w] : load) {
-    g.noalias() -= w * (asset.modal.modes.block(3 * i, 0, 3, r).transpose() * n);  // force along −n
-  }
-  const double lowestPeriod = 2.0 * std::numbers::pi / body.omega[0];
-  result.forceDirectionLocal = -n;
-  result.ringDownS = fs.ringDownPeriods * lowestPeriod;
-  std::vector<double>& times = work.times;
-  impactTimeGrid(hc.durationS, fs.pulseSteps, fs.ringDownPeriods * lowestPeriod,
-                 fs.ringDownPeriods > 0.0 ? fs.ringDownSteps : 0, times);
-  std::vector<double>& force = work.force;
-  force.resize(times.size());
-  for (size_t k = 0; k < times.size(); ++k) force[k] = hertzPulseForceN(hc, times[k]);
-  Eigen::MatrixXd& q = work.q;
-  if (Status st = integrateModalResponse(body.omega, body.zeta, g, times, force, q); !st) return st.error();
-  result.times.modalS = since(t0);
-
-  // --- Stresses, Rankine.
-  t0 = Clock::now();
-  const Eigen::VectorXd noStatic;
-  Eigen::VectorXd& staticStress = work.staticStress;
-  double compliance = 0.0;
-  if (correct) {
-    if (Status st = body.correction->stressPerNewton(result.loadWeights, -n, staticStress, compliance, work.correction);
-        !st) {
-      return st.error();
-    }
-  }
-  StressScan& scan = work.scan;
-  if (correct && fs.reportUncorrectedPeak) {
-    // The truncated modes alone, for the report (peak only: no seeds needed).
-    scanStresses(asset.stressModes, body.stressBounds, q, noStatic, force, std::numeric_limits<double>::infinity(),
-                 fs.pruneStresses, work.scanBuffers, scan);
-    result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
-  }
-  const Eigen::VectorXd& scanStatic = correct ? staticStress : noStatic;
-  scanStresses(asset.stressModes, body.stressBounds, q, scanStatic, force, body.material.tensileStrengthPa,
-               fs.pruneStresses, work.scanBuffers, scan);
-  result.peakPrincipalStressPa = scan.peakPrincipalPa;
-  if (!correct) result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
-  result.peakElement = scan.peakElement;
-  result.peakTimeS = scan.peakInstant >= 0 ? times[static_cast<size_t>(scan.peakInstant)] : 0.0;
-  result.stressEvaluations = scan.evaluations;
-  result.times.stressS = since(t0);
-  if (scan.seeds.empty()) return Ok{};
-
-  // --- Cracks.
-  t0 = Clock::now();
-  StressField field;
-  field.stressModes = &asset.stressModes;
-  field.q = q.row(scan.peakInstant).transpose();
-  field.forceN = force[static_cast<size_t>(scan.peakInstant)];
-  if (correct) field.staticStress = &staticStress;
-  // Elastic energy at the peak: the kept modes' ½Σω²q², plus the truncated modes' static ½F²f·u_t.
-  const double energy = 0.5 * (body.omega.array().square() * field.q.array().square()).sum() +
-                        0.5 * field.forceN * field.forceN * compliance;
-  CrackSettings cs = fs.crack;
-  cs.seed = mix(settings.seed ^ mix(fs.crack.seed + impactIndex));
-  auto state = propagateCracks(asset.tetMesh, body.topology, scan, field, body.material.tensileStrengthPa,
-                               body.material.fractureEnergyJPerM2, energy, cs);
-  if (!state) return state.error();
-  result.fracture = std::move(state).value();
-  result.times.propagationS = since(t0);
-  if (result.fracture.fragmentCount < 2) return Ok{};
-
-  // --- Fragment surfaces and mass properties.
-  t0 = Clock::now();
-  auto surfaces = buildFragmentSurfaces(asset.tetMesh, body.topology, result.fracture.nodeLabels,
-                                        result.fracture.fragmentCount, result.fracture.edgeCuts);
-  if (!surfaces) return surfaces.error();
-  result.fragments.resize(surfaces.value().size());
-  for (size_t i = 0; i < surfaces.value().size(); ++i) {
-    FragmentResult& fr = result.fragments[i];
-    fr.surface = std::move(surfaces.value()[i]);
-    fr.massProperties = computeSurfaceMassProperties(fr.surface, body.material.densityKgPerM3);
-    fr.debris = fr.massProperties.volumeM3 < fs.debrisVolumeFraction * body.topology.volumeM3;
-  }
-  result.times.surfacesS = since(t0);
-
-  // --- New objects: each fragment that is not debris gets its own modal analysis when it is small
-  // enough (the exact path), otherwise its nearest database entry.
-  t0 = Clock::now();
-  const Eigen::Matrix3d rotation = s.rotation;
-  const Eigen::Vector3d translation = s.translation;
-  remove(desc.object);
-  result.broken = true;
-  if (fs.matchFragments && fs.exactModesMaxTets > 0) {
-    ExactModesSettings es;
-    es.modeCount = fs.modeCount > 0 ? std::min(fs.modeCount, fs.exactModeCount) : fs.exactModeCount;
-    const std::vector<int64_t> sizes =
-        fragmentTetCounts(asset.tetMesh, result.fracture.nodeLabels, static_cast<int>(result.fragments.size()));
-    for (size_t i = 0; i < result.fragments.size(); ++i) {
-      FragmentResult& fr = result.fragments[i];
-      if (fr.debris || sizes[i] > fs.exactModesMaxTets) continue;
-      auto sub = fragmentSubMesh(asset.tetMesh, body.topology, result.fracture.nodeLabels, result.fracture.edgeCuts,
-                                 static_cast<int>(i));
-      if (!sub) continue;
-      // A fragment the exact path cannot analyse (e.g. hanging by an edge) falls back to the match.
-      auto own = exactFragmentAsset(sub.value(), body.material, es, asset.name + ".f" + std::to_string(i));
-      if (!own) continue;
-      auto child = makeBody(std::move(own).value(), body.material, fs.modeCount);
-      if (!child) continue;
-      auto id = place(std::move(child).value(), rotation, translation);
-      if (!id) return id.error();
-      fr.object = id.value();
-      fr.exactModes = true;
-    }
-  }
-  if (matcher) {
-    for (FragmentResult& fr : result.fragments) {
-      if (fr.debris || fr.exactModes) continue;
-      auto match = matcher->match(fr.surface, fs.descriptor, 1);
-      if (!match) continue;  // e.g. a sliver whose frame is undefined: left unmatched, reported as such
-      const FragmentMatch& m = match.value().front();
-      auto placed = instantiateEntry(pack.database.entries[static_cast<size_t>(m.entry)], pack.database.referenceMaterial,
-                                     body.material, m.queryFrame);
-      if (!placed) continue;
-      fr.matchedEntry = m.entry;
-      fr.matchDistance = m.distance;
-      auto child = makeBody(std::move(placed).value(), body.material, fs.modeCount);
-      if (!child) continue;
-      auto id = place(std::move(child).value(), rotation, translation);
-      if (!id) return id.error();
-      fr.object = id.value();
-    }
-  }
-  result.times.matchingS = since(t0);
-  return Ok{};
 }
+
+bool World::impactReady(ImpactTicket ticket) const {
+  const auto it = mImpl->pending.find(ticket.id);
+  return it != mImpl->pending.end() && it->second->done.load(std::memory_order_acquire);
+}
+
+Status World::collectImpact(ImpactTicket ticket, ImpactResult& result) {
+  try {
+    Impl& w = *mImpl;
+    const auto it = w.pending.find(ticket.id);
+    if (it == w.pending.end()) return bad("collectImpact: unknown or already collected ticket " + std::to_string(ticket.id));
+    std::unique_ptr<PendingImpact> p = std::move(it->second);
+    w.pending.erase(it);
+    w.workers().execute([&] { p->group.wait(); });
+    w.spareWorkspaces.push_back(std::move(p->workspace));
+    std::swap(result, p->result);
+    Status status = p->status.value_or(Status(bad("collectImpact: the impact did not run")));
+    if (!status) {
+      w.slots[p->object.index].pending = false;
+      return status;
+    }
+    return w.apply(p->object, p->job, result, p->born);
+  } catch (const std::exception& e) {
+    return bad(std::string("collectImpact failed: ") + e.what());
+  }
+}
+
+int32_t World::pendingImpacts() const { return static_cast<int32_t>(mImpl->pending.size()); }
 
 }  // namespace brittle

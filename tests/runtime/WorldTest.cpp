@@ -375,5 +375,158 @@ TEST_F(WorldTest, PosesMoveTheImpactWithTheObject) {
   EXPECT_NEAR(ra.value().peakPrincipalStressPa, rb.value().peakPrincipalStressPa, 1e-9 * ra.value().peakPrincipalStressPa);
 }
 
+TEST_F(WorldTest, SubmittedImpactsGiveTheSameFractureAsImpactOnAnyWorkerCount) {
+  // Three plates hit in turn: synchronously, then submitted all at once and collected in the same
+  // order, on one and on two workers. Same seed and calls: same fragments, same new ids.
+  const double speeds[] = {60.0, 2.0, 40.0};
+  struct Run {
+    std::vector<uint64_t> hashes;
+    std::vector<std::vector<ObjectId>> ids;
+    std::vector<double> peaks;
+  };
+  auto record = [](Run& run, const ImpactResult& r) {
+    run.hashes.push_back(hashFragments(r));
+    run.peaks.push_back(r.peakPrincipalStressPa);
+    run.ids.emplace_back();
+    for (const FragmentResult& f : r.fragments) run.ids.back().push_back(f.object);
+  };
+  Run sync;
+  {
+    World world = makeWorld();
+    std::vector<ObjectId> plates;
+    for (int i = 0; i < 3; ++i) plates.push_back(world.addObject({.asset = "plate"}).value());
+    for (int i = 0; i < 3; ++i) {
+      auto r = world.impact(ball(plates[static_cast<size_t>(i)], speeds[i]));
+      ASSERT_TRUE(r) << r.error().message;
+      record(sync, r.value());
+    }
+  }
+  ASSERT_TRUE(sync.ids[0].size() >= 2 && sync.ids[2].size() >= 2);
+  for (int workers : {1, 2}) {
+    WorldSettings settings;
+    settings.workerThreads = workers;
+    World world = makeWorld(settings);
+    std::vector<ObjectId> plates;
+    for (int i = 0; i < 3; ++i) plates.push_back(world.addObject({.asset = "plate"}).value());
+    std::vector<ImpactTicket> tickets;
+    for (int i = 0; i < 3; ++i) {
+      auto t = world.submitImpact(ball(plates[static_cast<size_t>(i)], speeds[i]));
+      ASSERT_TRUE(t) << t.error().message;
+      tickets.push_back(t.value());
+    }
+    EXPECT_EQ(world.pendingImpacts(), 3);
+    Run async;
+    ImpactResult result;
+    for (ImpactTicket t : tickets) {
+      ASSERT_TRUE(world.collectImpact(t, result));
+      EXPECT_TRUE(world.impactReady(t) == false);  // collected: unknown now
+      record(async, result);
+    }
+    EXPECT_EQ(world.pendingImpacts(), 0);
+    EXPECT_EQ(async.hashes, sync.hashes) << workers << " workers";
+    EXPECT_EQ(async.peaks, sync.peaks) << workers << " workers";
+    EXPECT_EQ(async.ids, sync.ids) << workers << " workers";
+  }
+}
+
+TEST_F(WorldTest, APendingObjectStaysAsItWasAndRefusesOtherCalls) {
+  World world = makeWorld();
+  const ObjectId id = world.addObject({.asset = "plate"}).value();
+  auto ticket = world.submitImpact(ball(id, 60.0));
+  ASSERT_TRUE(ticket) << ticket.error().message;
+  EXPECT_TRUE(world.isAlive(id));
+  EXPECT_EQ(world.impact(ball(id, 5.0)).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(world.submitImpact(ball(id, 5.0)).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(world.removeObject(id).error().code, ErrorCode::InvalidArgument);
+  ImpactResult r;
+  ASSERT_TRUE(world.collectImpact(ticket.value(), r));
+  EXPECT_TRUE(r.broken);
+  EXPECT_FALSE(world.isAlive(id));
+  EXPECT_EQ(world.collectImpact(ticket.value(), r).error().code, ErrorCode::InvalidArgument);  // collected once
+  EXPECT_EQ(world.collectImpact(ImpactTicket{}, r).error().code, ErrorCode::InvalidArgument);
+  EXPECT_FALSE(world.impactReady(ImpactTicket{12345}));
+  WorldSettings one;
+  one.maxPendingImpacts = 1;
+  World limited = makeWorld(one);
+  const ObjectId a = limited.addObject({.asset = "plate"}).value(), b = limited.addObject({.asset = "plate"}).value();
+  ASSERT_TRUE(limited.submitImpact(ball(a, 1.0)));
+  EXPECT_EQ(limited.submitImpact(ball(b, 1.0)).error().code, ErrorCode::InvalidArgument);  // capacity
+}
+
+TEST_F(WorldTest, AFailedImpactLeavesTheWorldAsItWas) {
+  // On a worker: a point off the surface is found by the contact stage; the error reaches the
+  // caller and the object is no longer pending.
+  World world = makeWorld();
+  const ObjectId id = world.addObject({.asset = "plate"}).value();
+  ImpactDesc off = ball(id, 60.0);
+  off.pointWorld = Eigen::Vector3d(3, 0, 0);
+  auto ticket = world.submitImpact(off);
+  ASSERT_TRUE(ticket);
+  ImpactResult r;
+  const Status failed = world.collectImpact(ticket.value(), r);
+  ASSERT_FALSE(failed);
+  EXPECT_EQ(failed.error().code, ErrorCode::InvalidArgument);
+  EXPECT_TRUE(world.isAlive(id));
+  EXPECT_TRUE(world.impact(ball(id, 1.0)));
+  // Fragments that do not fit in maxObjects: the impact fails as a whole, the plate stays.
+  WorldSettings tiny;
+  tiny.maxObjects = 1;
+  World small = makeWorld(tiny);
+  const ObjectId plate = small.addObject({.asset = "plate"}).value();
+  const Status full = small.impact(ball(plate, 60.0), r);
+  ASSERT_FALSE(full);
+  EXPECT_EQ(full.error().code, ErrorCode::InvalidArgument);
+  EXPECT_NE(full.error().message.find("maxObjects"), std::string::npos) << full.error().message;
+  EXPECT_TRUE(small.isAlive(plate));
+  EXPECT_EQ(small.objectCount(), 1);
+  EXPECT_TRUE(small.impact(ball(plate, 1.0)));
+}
+
+TEST_F(WorldTest, EveryFragmentSaysWhatItBecameAndWhy) {
+  auto check = [&](World world, FragmentPath expected, const char* reason) {
+    auto r = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
+    ASSERT_TRUE(r && r.value().broken);
+    int debris = 0;
+    for (const FragmentResult& f : r.value().fragments) {
+      if (f.debris) {
+        EXPECT_EQ(f.path, FragmentPath::Debris);
+        ++debris;
+        continue;
+      }
+      if (expected == FragmentPath::SurfaceOnly) {
+        EXPECT_EQ(f.path, FragmentPath::SurfaceOnly);
+        EXPECT_FALSE(f.object.valid());
+        EXPECT_NE(f.reason.find(reason), std::string::npos) << f.reason;
+      } else {
+        EXPECT_TRUE(f.path == FragmentPath::ExactModes || f.path == FragmentPath::Matched) << fragmentPathName(f.path);
+        EXPECT_TRUE(f.object.valid());
+        EXPECT_EQ(f.path == FragmentPath::ExactModes, f.exactModes);
+        EXPECT_EQ(f.path == FragmentPath::Matched, f.matchedEntry >= 0);
+      }
+    }
+    EXPECT_LT(debris, static_cast<int>(r.value().fragments.size()));
+  };
+  check(makeWorld(), FragmentPath::Matched, "");
+  WorldSettings noExact;
+  noExact.fracture.exactModesMaxTets = 0;
+  check(makeWorld(noExact, false), FragmentPath::SurfaceOnly, "no database");
+  WorldSettings off;
+  off.fracture.matchFragments = false;
+  check(makeWorld(off), FragmentPath::SurfaceOnly, "matchFragments is off");
+  EXPECT_EQ(fragmentPathName(FragmentPath::ExactModes), "exact_modes");
+}
+
+TEST_F(WorldTest, BackgroundPreparationChangesNothingButWhereTheWorkRuns) {
+  auto peak = [&](bool background) {
+    WorldSettings s;
+    s.prepareInBackground = background;
+    World world = makeWorld(s, false);
+    auto r = world.impact(ball(world.addObject({.asset = "plate"}).value(), 2.0));
+    EXPECT_TRUE(r && r.value().staticCorrectionUsed);
+    return r ? r.value().peakPrincipalStressPa : 0.0;
+  };
+  EXPECT_EQ(peak(true), peak(false));
+}
+
 }  // namespace
 }  // namespace brittle

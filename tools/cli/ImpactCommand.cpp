@@ -148,7 +148,8 @@ Runner addImpactCommand(CLI::App& app) {
                                   {"center_of_mass_m", vec(f.massProperties.centerOfMassM)},
                                   {"triangles", f.surface.faces.rows()}, {"debris", f.debris},
                                   {"matched_entry", f.matchedEntry}, {"match_distance", f.matchDistance},
-                                  {"exact_modes", f.exactModes}});
+                                  {"exact_modes", f.exactModes}, {"path", fragmentPathName(f.path)},
+                                  {"reason", f.reason}});
     }
     doc["times_s"] = {{"contact", r.times.contactS}, {"prepare", r.times.prepareS}, {"modal", r.times.modalS}, {"stress", r.times.stressS},
                       {"propagation", r.times.propagationS}, {"surfaces", r.times.surfacesS},
@@ -173,7 +174,7 @@ Runner addImpactCommand(CLI::App& app) {
         if (f.debris) std::cout << "debris";
         else if (f.exactModes) std::cout << "own modes (exact path)";
         else if (f.matchedEntry >= 0) std::cout << "entry " << f.matchedEntry << " (distance " << f.matchDistance << ")";
-        else std::cout << "unmatched";
+        else std::cout << "unmatched: " << f.reason;
         std::cout << "\n";
       }
     }

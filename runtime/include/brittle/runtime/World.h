@@ -6,17 +6,39 @@
 //   auto hit = world.value().impact({.object = plate.value(), .pointWorld = p, .normalWorld = n,
 //                                    .speedMps = 5, .impactorMassKg = 0.1, .impactorRadiusM = 0.02});
 //
+// or, off the host's critical path (the fracture runs on a worker thread):
+//
+//   auto ticket = world.value().submitImpact(desc);        // returns at once
+//   ... step the host's frames; the struck object stays rigid ...
+//   ImpactResult hit;
+//   world.value().collectImpact(ticket.value(), hit);      // at a frame the host fixes: waits only if not done
+//
 // No exception crosses this API: every call returns a Result or Status. Objects are reached by
 // ObjectId (index + generation, as in Box2D): an id whose object was removed or broken is stale and
 // every call with it returns InvalidArgument. Determinism: the same pack, settings, calls and
-// seeds give bit-identical results. A World is used from one thread at a time.
+// seeds give bit-identical results, whether impacts run with impact() or with submitImpact() and
+// collectImpact(), on any number of worker threads.
 //
-// An impact runs: Hertz contact (HertzContact.h) → modal response, integrated exactly
-// (ModalResponse.h), plus the static correction of the truncated modes (StaticCorrection.h) → stress scan with pruning and Rankine initiation → crack growth with the
-// Griffith stop (CrackPropagation.h) → fragment surfaces (FragmentSurfaces.h) → per fragment: exact
-// mass properties, and unless it is debris, the nearest database entry rescaled to it
+// Threading contract. A World's methods are called from one thread at a time (the host's). The
+// work behind submitImpact, and the background preparation of placed objects
+// (WorldSettings::prepareInBackground), runs on the World's own worker threads (a oneTBB arena of
+// WorldSettings::workerThreads); it reads only what no World call changes while it runs (the
+// struck object's immutable data, the pack's database) and writes only its own result. Between
+// submitImpact and collectImpact the struck object is pending: it stays in the world as it was,
+// and impact(), submitImpact() and removeObject() on it return InvalidArgument. collectImpact
+// applies the outcome (the broken object is removed, its fragments placed) on the host's thread,
+// so object ids are handed out in the order the host collects. The World's destructor waits for
+// work still running.
+//
+// An impact runs as stages: Hertz contact (HertzContact.h) → load over the contact patch → modal
+// response, integrated exactly (ModalResponse.h), plus the static correction of the truncated
+// modes (StaticCorrection.h) → stress scan with pruning and Rankine initiation → crack growth with
+// the Griffith stop (CrackPropagation.h) → fragment surfaces (FragmentSurfaces.h) → per fragment:
+// exact mass properties, and unless it is debris, the nearest database entry rescaled to it
 // (FragmentMatcher.h, ScalingLaws.h) or, for small fragments, its own modal analysis
-// (FragmentModes.h, exactModesMaxTets), which becomes a new object that can break again.
+// (FragmentModes.h, exactModesMaxTets), which becomes a new object that can break again. A
+// breaking impact is all or nothing: when a stage fails, or the fragments would not fit in
+// maxObjects, the world is left as it was and the call returns the error.
 #pragma once
 
 #include <Eigen/Core>
@@ -24,6 +46,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "brittle/database/FragmentMatcher.h"
@@ -78,6 +101,15 @@ struct FractureSettings {
 struct WorldSettings {
   int32_t maxObjects = 4096;   ///< capacity of object slots (live objects, including fragments)
   uint64_t seed = 1;
+  /// Impacts submitted and not yet collected, at most (submitImpact returns InvalidArgument beyond).
+  int32_t maxPendingImpacts = 64;
+  /// Worker threads for submitted impacts and background preparation; 0: one per core
+  /// (oneTBB's default). Results do not depend on it.
+  int32_t workerThreads = 0;
+  /// Placing the first instance of a pack object starts the factorisation of its K (the static
+  /// correction) on a worker and returns at once; the object's first impact waits for it if it
+  /// is not done. false: addObject factorises on the caller's thread and returns its errors.
+  bool prepareInBackground = true;
   FractureSettings fracture;
 };
 
@@ -113,8 +145,23 @@ struct ImpactDesc {
   bool fast = false;
 };
 
+/// What a fragment became.
+enum class FragmentPath : uint8_t {
+  Debris,       ///< below debrisVolumeFraction: a rigid piece, no modal data
+  ExactModes,   ///< a new object with its own modal analysis (the exact path)
+  Matched,      ///< a new object from its nearest database entry
+  SurfaceOnly,  ///< not debris, but no new object: FragmentResult::reason says why
+};
+
+/// Stable snake_case name of a path: "debris", "exact_modes", "matched", "surface_only".
+std::string_view fragmentPathName(FragmentPath path);
+
 struct FragmentResult {
   ObjectId object;              ///< the new breakable object; invalid for debris and unmatched fragments
+  FragmentPath path = FragmentPath::SurfaceOnly;
+  /// Why a fragment is SurfaceOnly (matching off, no database, the match or the entry failed), or
+  /// why the exact path fell back to the match; empty otherwise.
+  std::string reason;
   bool debris = false;
   TriangleMesh surface;         ///< closed, outward; the broken object's local frame (m)
   MassProperties massProperties;  ///< exact, from the surface; local frame
@@ -154,6 +201,13 @@ struct ImpactResult {
   StageTimes times;
 };
 
+/// A submitted impact (World::submitImpact). Default-constructed tickets are invalid.
+struct ImpactTicket {
+  uint64_t id = 0;
+  bool valid() const { return id != 0; }
+  bool operator==(const ImpactTicket&) const = default;
+};
+
 class World {
  public:
   /// Validates the settings and builds the search index of the pack's database (if any).
@@ -165,10 +219,13 @@ class World {
   ~World();
 
   /// Places an instance of a pack object. The first instance of each pack object builds what
-  /// impacts need (topology, stress bounds, the factorised K of the static correction).
+  /// impacts need (topology, stress bounds) and starts the factorisation of its K for the static
+  /// correction: on a worker (prepareInBackground, the default; an error there is returned by the
+  /// object's first impact) or here.
   /// Errors: InvalidArgument (unknown asset name, a rotation
   /// that is not orthonormal with det +1, non-finite values, no free slot: maxObjects reached),
-  /// those of building the object's topology.
+  /// those of building the object's topology, and without prepareInBackground those of
+  /// StaticCorrection::build.
   Result<ObjectId> addObject(const ObjectDesc& desc);
   /// Errors: InvalidArgument (stale or invalid id).
   Status removeObject(ObjectId id);
@@ -189,6 +246,22 @@ class World {
   /// stress scan; tested). A body's first impact may factorise its K (StaticCorrection.h), and a
   /// breaking impact allocates what it returns: crack state, fragment surfaces, new objects.
   Status impact(const ImpactDesc& desc, ImpactResult& result);
+
+  /// Starts the impact on a worker thread and returns at once; the struck object is pending until
+  /// the impact is collected. Checks the id and the values (as impact()) before it starts.
+  /// Errors: InvalidArgument (stale id, an object already pending, non-finite values,
+  /// maxPendingImpacts reached).
+  Result<ImpactTicket> submitImpact(const ImpactDesc& desc);
+  /// Whether collectImpact(ticket) would return without waiting. false for unknown tickets.
+  bool impactReady(ImpactTicket ticket) const;
+  /// Waits for the submitted impact if it is not done, then applies it as impact() would (the
+  /// broken object is removed and its fragments placed; all or nothing) and writes its result.
+  /// `result` keeps its storage between calls. A ticket is collected once.
+  /// Errors: InvalidArgument (unknown or collected ticket), and those impact() returns: a failed
+  /// impact leaves the object as it was, no longer pending.
+  Status collectImpact(ImpactTicket ticket, ImpactResult& result);
+  /// Impacts submitted and not yet collected.
+  int32_t pendingImpacts() const;
 
  private:
   struct Impl;

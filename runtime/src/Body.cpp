@@ -1,0 +1,67 @@
+#include "Body.h"
+
+#include <algorithm>
+
+#include "brittle/runtime/CrackPropagation.h"
+
+namespace brittle::detail {
+
+const Result<StaticCorrection>& Body::staticCorrection() const {
+  std::call_once(mCorrectionOnce, [this] {
+    auto built = StaticCorrection::build(asset, material, modes);
+    if (!built) built = Error{built.error().code, "object '" + asset.name + "': " + built.error().message};
+    mCorrection.emplace(std::move(built));
+    mCorrectionReady.store(true, std::memory_order_release);
+  });
+  return *mCorrection;
+}
+
+Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount) {
+  if (asset.modal.modes.cols() == 0 || asset.stressModes.rows() != 6 * asset.tetMesh.tets.rows()) {
+    return makeError(ErrorCode::InvalidArgument,
+                     "object '" + asset.name + "' has no modal data or stress modes of the wrong size");
+  }
+  auto topo = buildTetTopology(asset.tetMesh);
+  if (!topo) return Error{topo.error().code, "object '" + asset.name + "': " + topo.error().message};
+  auto body = std::make_shared<Body>();
+  body->topology = std::move(topo).value();
+  body->material = material;
+  const auto available = static_cast<int>(asset.modal.modes.cols());
+  body->modes = modeCount > 0 ? std::min(modeCount, available) : available;
+  body->omega = asset.modal.eigenvaluesRad2PerS2.head(body->modes).cwiseMax(0.0).cwiseSqrt();
+  if (!(body->omega.minCoeff() > 0.0)) {
+    return makeError(ErrorCode::InvalidArgument, "object '" + asset.name + "' has a zero-frequency elastic mode");
+  }
+  body->zeta.resize(body->modes);
+  for (int j = 0; j < body->modes; ++j) body->zeta[j] = rayleighDampingRatio(material, body->omega[j]);
+  body->stressBounds = stressModeBounds(asset.stressModes, body->modes);
+  const auto n = asset.tetMesh.nodes.rows();
+  body->nodeNormals.setZero(n, 3);
+  body->ring.assign(static_cast<size_t>(n), {});
+  const Triangles& tri = body->topology.boundaryTriangles;
+  for (Eigen::Index f = 0; f < tri.rows(); ++f) {
+    const Eigen::Vector3d a = asset.tetMesh.nodes.row(tri(f, 0)), b = asset.tetMesh.nodes.row(tri(f, 1)),
+                          c = asset.tetMesh.nodes.row(tri(f, 2));
+    const Eigen::Vector3d areaNormal = 0.5 * (b - a).cross(c - a);
+    for (int k = 0; k < 3; ++k) {
+      body->nodeNormals.row(tri(f, k)) += areaNormal.transpose();
+      auto& r = body->ring[static_cast<size_t>(tri(f, k))];
+      for (int m = 1; m < 3; ++m) {
+        const int32_t other = tri(f, (k + m) % 3);
+        if (std::find(r.begin(), r.end(), other) == r.end()) r.push_back(other);
+      }
+    }
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double len = body->nodeNormals.row(i).norm();
+    if (len > 0.0) {
+      body->nodeNormals.row(i) /= len;
+      body->boundaryNodes.push_back(static_cast<int32_t>(i));
+    }
+  }
+  body->sizeM = (asset.tetMesh.nodes.colwise().maxCoeff() - asset.tetMesh.nodes.colwise().minCoeff()).norm();
+  body->asset = std::move(asset);
+  return std::shared_ptr<const Body>(std::move(body));
+}
+
+}  // namespace brittle::detail

@@ -1,0 +1,55 @@
+// Body.h — what the runtime keeps per distinct asset (a pack object, or a fragment made by an
+// impact): the asset, its material, and what is precomputed from them once (topology, stress
+// bounds, surface normals and neighbours, the static correction's factorised K). Private to the
+// runtime: World.cpp places bodies in slots, ImpactStages.cpp reads them.
+//
+// A Body is immutable once made, except for its static correction, which is built at most once
+// (std::call_once) by whichever thread asks first: a background task the World starts when a
+// pack object is placed, or the body's first impact. Several threads may read a Body at once.
+#pragma once
+
+#include <Eigen/Core>
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <vector>
+
+#include "brittle/database/Material.h"
+#include "brittle/database/ObjectAsset.h"
+#include "brittle/descriptors/Result.h"
+#include "brittle/runtime/StaticCorrection.h"
+#include "brittle/runtime/TetTopology.h"
+
+namespace brittle::detail {
+
+struct Body {
+  ObjectAsset asset;
+  Material material;
+  TetTopology topology;
+  int modes = 0;
+  Eigen::VectorXd omega, zeta;
+  Eigen::MatrixXd stressBounds;            // T by modes
+  Points nodeNormals;                      // #N, area-weighted outward normals (boundary nodes)
+  std::vector<std::vector<int32_t>> ring;  // boundary neighbours per node
+  std::vector<int32_t> boundaryNodes;
+  double sizeM = 0.0;                      // bounding-box diagonal
+
+  /// The factorised K of the static correction (StaticCorrection.h), built on first use; waits
+  /// when another thread is building it. Its errors are those of StaticCorrection::build.
+  const Result<StaticCorrection>& staticCorrection() const;
+  /// Whether staticCorrection() would return at once (built, or failed).
+  bool staticCorrectionReady() const { return mCorrectionReady.load(std::memory_order_acquire); }
+
+ private:
+  mutable std::once_flag mCorrectionOnce;
+  mutable std::atomic<bool> mCorrectionReady{false};
+  mutable std::optional<Result<StaticCorrection>> mCorrection;
+};
+
+/// Builds a body with the first `modeCount` stored modes (0: all). Errors: InvalidArgument (no
+/// modal data, stress modes of the wrong size, a zero-frequency elastic mode), those of
+/// buildTetTopology.
+Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount);
+
+}  // namespace brittle::detail

@@ -1,0 +1,312 @@
+#include "ImpactStages.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+
+#include "ContactGeometry.h"
+#include "brittle/database/ScalingLaws.h"
+#include "brittle/runtime/FragmentModes.h"
+#include "brittle/runtime/FragmentSurfaces.h"
+#include "brittle/runtime/ModalResponse.h"
+
+namespace brittle::detail {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+Error inStage(const char* stage, const Error& e) { return Error{e.code, std::string(stage) + ": " + e.message}; }
+
+// What the stages pass on to one another.
+struct Flow {
+  Eigen::Vector3d pointLocal, normalLocal;
+  const StaticCorrection* correction = nullptr;  // null: the truncated modes alone
+  double complianceMPerN = 0.0;                  // f·u_t of the truncated modes, per newton²
+};
+
+// Contact: where on the surface, how curved there, Hertz, and the load's node weights.
+Status contactStage(const ImpactJob& job, Flow& flow, ImpactResult& result) {
+  const Body& body = *job.body;
+  const ImpactDesc& desc = job.desc;
+  flow.pointLocal = job.rotation.transpose() * (desc.pointWorld - job.translation);
+  flow.normalLocal = job.rotation.transpose() * desc.normalWorld;
+  const double tolerance = desc.pointToleranceM > 0.0 ? desc.pointToleranceM : 0.05 * body.sizeM;
+  auto site = locateContact(body, flow.pointLocal, tolerance);
+  if (!site) return site.error();
+  const double radius = desc.bodyRadiusM != 0.0 ? desc.bodyRadiusM : surfaceRadiusAt(body, site.value());
+  result.bodyRadiusM = radius;
+  HertzInput hi;
+  hi.impactorMassKg = desc.impactorMassKg;
+  hi.impactorRadiusM = desc.impactorRadiusM;
+  hi.impactorYoungsModulusPa = desc.impactorYoungsModulusPa;
+  hi.impactorPoissonRatio = desc.impactorPoissonRatio;
+  hi.bodyMassKg = body.asset.massProperties.massKg;
+  hi.bodyInertiaKgM2 = body.asset.massProperties.inertiaKgM2;
+  hi.contactOffsetM = flow.pointLocal - body.asset.massProperties.centerOfMassM;
+  hi.normal = flow.normalLocal.normalized();
+  hi.bodyRadiusM = radius;
+  hi.bodyYoungsModulusPa = body.material.youngsModulusPa;
+  hi.bodyPoissonRatio = body.material.poissonRatio;
+  hi.speedMps = desc.speedMps;
+  hi.impulseNs = desc.impulseNs;
+  hi.restitution = body.material.restitution;
+  auto contact = computeHertzContact(hi);
+  if (!contact) return contact.error();
+  result.contact = contact.value();
+  contactLoadWeights(body, site.value(), flow.pointLocal, result.contact.patchRadiusM, result.loadWeights);
+  return Ok{};
+}
+
+// The static correction's factorised K: built in the background after placement or here, on the
+// body's first impact. A fast impact (a host over its frame budget) takes it only when it is ready.
+Status prepareStage(const ImpactJob& job, Flow& flow, ImpactResult& result) {
+  const Body& body = *job.body;
+  const bool wanted = job.settings->staticCorrection && (!job.desc.fast || body.staticCorrectionReady());
+  if (wanted) {
+    const Result<StaticCorrection>& correction = body.staticCorrection();
+    if (!correction) return correction.error();
+    flow.correction = &correction.value();
+  }
+  result.staticCorrectionUsed = wanted;
+  return Ok{};
+}
+
+// Modal response over the pulse and the ring-down: q (instants by modes) and the force pulse.
+Status modalStage(const ImpactJob& job, const Flow& flow, ImpactWorkspace& ws, ImpactResult& result) {
+  const Body& body = *job.body;
+  const FractureSettings& fs = *job.settings;
+  const int r = body.modes;
+  result.modesUsed = r;
+  Eigen::VectorXd& g = ws.modalLoad;
+  g.setZero(r);
+  for (const auto& [i, w] : result.loadWeights) {
+    g.noalias() -= w * (body.asset.modal.modes.block(3 * i, 0, 3, r).transpose() * flow.normalLocal);  // along −n
+  }
+  const double lowestPeriod = 2.0 * std::numbers::pi / body.omega[0];
+  result.forceDirectionLocal = -flow.normalLocal;
+  result.ringDownS = fs.ringDownPeriods * lowestPeriod;
+  impactTimeGrid(result.contact.durationS, fs.pulseSteps, fs.ringDownPeriods * lowestPeriod,
+                 fs.ringDownPeriods > 0.0 ? fs.ringDownSteps : 0, ws.times);
+  ws.force.resize(ws.times.size());
+  for (size_t k = 0; k < ws.times.size(); ++k) ws.force[k] = hertzPulseForceN(result.contact, ws.times[k]);
+  return integrateModalResponse(body.omega, body.zeta, g, ws.times, ws.force, ws.q);
+}
+
+// Element stresses over every instant (pruned by bounds), the peak, and Rankine seeds.
+Status stressStage(const ImpactJob& job, Flow& flow, ImpactWorkspace& ws, ImpactResult& result) {
+  const Body& body = *job.body;
+  const FractureSettings& fs = *job.settings;
+  static const Eigen::VectorXd kNoStatic;
+  if (flow.correction) {
+    if (Status st = flow.correction->stressPerNewton(result.loadWeights, -flow.normalLocal, ws.staticStress,
+                                                     flow.complianceMPerN, ws.correction);
+        !st) {
+      return st;
+    }
+  }
+  StressScan& scan = ws.scan;
+  if (flow.correction && fs.reportUncorrectedPeak) {
+    // The truncated modes alone, for the report (peak only: no seeds needed).
+    scanStresses(body.asset.stressModes, body.stressBounds, ws.q, kNoStatic, ws.force,
+                 std::numeric_limits<double>::infinity(), fs.pruneStresses, ws.scanBuffers, scan);
+    result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
+  }
+  scanStresses(body.asset.stressModes, body.stressBounds, ws.q, flow.correction ? ws.staticStress : kNoStatic,
+               ws.force, body.material.tensileStrengthPa, fs.pruneStresses, ws.scanBuffers, scan);
+  result.peakPrincipalStressPa = scan.peakPrincipalPa;
+  if (!flow.correction) result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
+  result.peakElement = scan.peakElement;
+  result.peakTimeS = scan.peakInstant >= 0 ? ws.times[static_cast<size_t>(scan.peakInstant)] : 0.0;
+  result.stressEvaluations = scan.evaluations;
+  return Ok{};
+}
+
+// Crack growth from the seeds with the Griffith stop, paid from the elastic energy at the peak:
+// the kept modes' ½Σω²q², plus the truncated modes' static ½F²f·u_t.
+Status crackStage(const ImpactJob& job, const Flow& flow, const ImpactWorkspace& ws, ImpactResult& result) {
+  const Body& body = *job.body;
+  const StressScan& scan = ws.scan;
+  StressField field;
+  field.stressModes = &body.asset.stressModes;
+  field.q = ws.q.row(scan.peakInstant).transpose();
+  field.forceN = ws.force[static_cast<size_t>(scan.peakInstant)];
+  if (flow.correction) field.staticStress = &ws.staticStress;
+  const double energy = 0.5 * (body.omega.array().square() * field.q.array().square()).sum() +
+                        0.5 * field.forceN * field.forceN * flow.complianceMPerN;
+  CrackSettings cs = job.settings->crack;
+  cs.seed = job.crackSeed;
+  auto state = propagateCracks(body.asset.tetMesh, body.topology, scan, field, body.material.tensileStrengthPa,
+                               body.material.fractureEnergyJPerM2, energy, cs);
+  if (!state) return state.error();
+  result.fracture = std::move(state).value();
+  return Ok{};
+}
+
+// Each fragment's closed surface and exact mass properties; the small ones are debris.
+Status surfaceStage(const ImpactJob& job, ImpactResult& result) {
+  const Body& body = *job.body;
+  auto surfaces = buildFragmentSurfaces(body.asset.tetMesh, body.topology, result.fracture.nodeLabels,
+                                        result.fracture.fragmentCount, result.fracture.edgeCuts);
+  if (!surfaces) return surfaces.error();
+  result.fragments.resize(surfaces.value().size());
+  for (size_t i = 0; i < surfaces.value().size(); ++i) {
+    FragmentResult& fr = result.fragments[i];
+    fr.surface = std::move(surfaces.value()[i]);
+    fr.massProperties = computeSurfaceMassProperties(fr.surface, body.material.densityKgPerM3);
+    fr.debris = fr.massProperties.volumeM3 < job.settings->debrisVolumeFraction * body.topology.volumeM3;
+    fr.path = fr.debris ? FragmentPath::Debris : FragmentPath::SurfaceOnly;
+  }
+  return Ok{};
+}
+
+// The exact path: a small fragment's own modal analysis. A fragment it cannot analyse (e.g. one
+// hanging by an edge) falls back to the database match, with the reason kept.
+void exactPathStage(const ImpactJob& job, ImpactResult& result, std::vector<std::shared_ptr<const Body>>& born) {
+  const Body& body = *job.body;
+  const FractureSettings& fs = *job.settings;
+  ExactModesSettings es;
+  es.modeCount = fs.modeCount > 0 ? std::min(fs.modeCount, fs.exactModeCount) : fs.exactModeCount;
+  const std::vector<int64_t> sizes =
+      fragmentTetCounts(body.asset.tetMesh, result.fracture.nodeLabels, static_cast<int>(result.fragments.size()));
+  for (size_t i = 0; i < result.fragments.size(); ++i) {
+    FragmentResult& fr = result.fragments[i];
+    if (fr.debris || sizes[i] > fs.exactModesMaxTets) continue;
+    auto sub = fragmentSubMesh(body.asset.tetMesh, body.topology, result.fracture.nodeLabels, result.fracture.edgeCuts,
+                               static_cast<int>(i));
+    if (!sub) {
+      fr.reason = "exact path: " + sub.error().message;
+      continue;
+    }
+    auto own = exactFragmentAsset(sub.value(), body.material, es, body.asset.name + ".f" + std::to_string(i));
+    if (!own) {
+      fr.reason = "exact path: " + own.error().message;
+      continue;
+    }
+    auto child = makeBody(std::move(own).value(), body.material, fs.modeCount);
+    if (!child) {
+      fr.reason = "exact path: " + child.error().message;
+      continue;
+    }
+    born[i] = std::move(child).value();
+    fr.exactModes = true;
+    fr.path = FragmentPath::ExactModes;
+    fr.reason.clear();
+  }
+}
+
+// The database: the nearest entry, rescaled to the fragment's frame, size and material.
+void matchStage(const ImpactJob& job, ImpactResult& result, std::vector<std::shared_ptr<const Body>>& born) {
+  const Body& body = *job.body;
+  const FractureSettings& fs = *job.settings;
+  for (size_t i = 0; i < result.fragments.size(); ++i) {
+    FragmentResult& fr = result.fragments[i];
+    if (fr.debris || fr.exactModes) continue;
+    auto match = job.matcher->match(fr.surface, fs.descriptor, 1);
+    if (!match) {  // e.g. a sliver whose frame is undefined
+      fr.reason += (fr.reason.empty() ? "" : "; ") + ("match: " + match.error().message);
+      continue;
+    }
+    const FragmentMatch& m = match.value().front();
+    auto placed = instantiateEntry(job.database->entries[static_cast<size_t>(m.entry)],
+                                   job.database->referenceMaterial, body.material, m.queryFrame);
+    if (!placed) {
+      fr.reason += (fr.reason.empty() ? "" : "; ") + ("entry " + std::to_string(m.entry) + ": " + placed.error().message);
+      continue;
+    }
+    fr.matchedEntry = m.entry;
+    fr.matchDistance = m.distance;
+    auto child = makeBody(std::move(placed).value(), body.material, fs.modeCount);
+    if (!child) {
+      fr.reason += (fr.reason.empty() ? "" : "; ") + ("entry " + std::to_string(m.entry) + ": " + child.error().message);
+      continue;
+    }
+    born[i] = std::move(child).value();
+    fr.path = FragmentPath::Matched;
+  }
+}
+
+// New bodies for the fragments that are not debris: the exact path for small ones, else the match.
+void newBodiesStage(const ImpactJob& job, ImpactResult& result, std::vector<std::shared_ptr<const Body>>& born) {
+  const FractureSettings& fs = *job.settings;
+  born.assign(result.fragments.size(), nullptr);
+  if (!fs.matchFragments) {
+    for (FragmentResult& fr : result.fragments)
+      if (!fr.debris) fr.reason = "matchFragments is off: surface only";
+    return;
+  }
+  if (fs.exactModesMaxTets > 0) exactPathStage(job, result, born);
+  if (job.matcher) {
+    matchStage(job, result, born);
+  } else {
+    for (FragmentResult& fr : result.fragments)
+      if (fr.path == FragmentPath::SurfaceOnly) {
+        fr.reason += (fr.reason.empty() ? "" : "; ") + std::string("no database to match against");
+      }
+  }
+}
+
+}  // namespace
+
+void resetImpactResult(ImpactResult& r) {
+  r.broken = false;
+  r.contact = HertzContact{};
+  r.bodyRadiusM = 0.0;
+  r.peakPrincipalStressPa = 0.0;
+  r.peakWithoutCorrectionPa = std::numeric_limits<double>::quiet_NaN();
+  r.peakElement = -1;
+  r.peakTimeS = 0.0;
+  r.modesUsed = 0;
+  r.staticCorrectionUsed = false;
+  r.loadWeights.clear();
+  r.forceDirectionLocal.setZero();
+  r.ringDownS = 0.0;
+  r.stressEvaluations = 0;
+  r.fracture = FractureState{};
+  r.fragments.clear();
+  r.times = StageTimes{};
+}
+
+Status computeImpact(const ImpactJob& job, ImpactWorkspace& ws, ImpactResult& result,
+                     std::vector<std::shared_ptr<const Body>>& born) {
+  resetImpactResult(result);
+  born.clear();
+  Flow flow;
+  StageTimes& t = result.times;
+  auto t0 = Clock::now();
+  if (Status st = contactStage(job, flow, result); !st) return st;  // its errors name the impact already
+  t.contactS = since(t0);
+
+  t0 = Clock::now();
+  if (Status st = prepareStage(job, flow, result); !st) return inStage("static correction", st.error());
+  t.prepareS = since(t0);
+
+  t0 = Clock::now();
+  if (Status st = modalStage(job, flow, ws, result); !st) return inStage("modal response", st.error());
+  t.modalS = since(t0);
+
+  t0 = Clock::now();
+  if (Status st = stressStage(job, flow, ws, result); !st) return inStage("stress scan", st.error());
+  t.stressS = since(t0);
+  if (ws.scan.seeds.empty()) return Ok{};
+
+  t0 = Clock::now();
+  if (Status st = crackStage(job, flow, ws, result); !st) return inStage("crack growth", st.error());
+  t.propagationS = since(t0);
+  if (result.fracture.fragmentCount < 2) return Ok{};
+
+  t0 = Clock::now();
+  if (Status st = surfaceStage(job, result); !st) return inStage("fragment surfaces", st.error());
+  t.surfacesS = since(t0);
+
+  t0 = Clock::now();
+  newBodiesStage(job, result, born);
+  t.matchingS = since(t0);
+  result.broken = true;
+  return Ok{};
+}
+
+}  // namespace brittle::detail

@@ -1,0 +1,57 @@
+// ImpactStages.h — one impact's fracture, computed as named stages from inputs fixed when it was
+// submitted: contact → load → modal response → stress scan → cracks → fragment surfaces → new
+// bodies. Private to the runtime: World.cpp runs it on the caller's thread (World::impact) or on a
+// worker (World::submitImpact), and then applies its outcome to the world.
+//
+// computeImpact changes nothing outside its arguments: it reads the struck body (immutable, but
+// for its static correction, built at most once; Body.h), the database and the matcher (const,
+// safe to share between threads), and writes the result, the workspace and the new bodies. The
+// same job gives the same outcome on any thread, in any order with other jobs.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "Body.h"
+#include "brittle/database/FragmentMatcher.h"
+#include "brittle/runtime/CrackPropagation.h"
+#include "brittle/runtime/StaticCorrection.h"
+#include "brittle/runtime/World.h"
+
+namespace brittle::detail {
+
+/// What an impact's computation reads.
+struct ImpactJob {
+  std::shared_ptr<const Body> body;  ///< the struck body
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< its pose when the impact was reported
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  ImpactDesc desc;
+  uint64_t crackSeed = 0;            ///< from the world seed and the impact's number
+  const FractureSettings* settings = nullptr;
+  const FragmentMatcher* matcher = nullptr;  ///< null: no database search
+  const FragmentDatabase* database = nullptr;
+};
+
+/// The buffers of an impact, kept between impacts: once they have grown to the largest body hit,
+/// an impact that does not break its body allocates nothing.
+struct ImpactWorkspace {
+  std::vector<double> times, force;
+  Eigen::VectorXd modalLoad, staticStress;
+  Eigen::MatrixXd q;
+  StaticCorrection::Workspace correction;
+  StressScanWorkspace scanBuffers;
+  StressScan scan;
+};
+
+/// Computes the impact into `result` (reset first; fragment object ids are left invalid) and, per
+/// fragment, the body it becomes (`born`, parallel to result.fragments; null for debris and
+/// fragments that are not new objects). Errors: those of the stages (InvalidArgument for a point
+/// off the surface, FactorizationFailed, …), each naming its stage.
+Status computeImpact(const ImpactJob& job, ImpactWorkspace& workspace, ImpactResult& result,
+                     std::vector<std::shared_ptr<const Body>>& born);
+
+/// Back to a default result, keeping the storage of loadWeights.
+void resetImpactResult(ImpactResult& result);
+
+}  // namespace brittle::detail
