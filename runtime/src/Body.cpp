@@ -7,6 +7,7 @@
 namespace brittle::detail {
 
 const Result<StaticCorrection>& Body::staticCorrection() const {
+  scheduleStaticCorrection();
   std::call_once(mCorrectionOnce, [this] {
     auto built = StaticCorrection::build(asset, material, modes);
     if (!built) built = Error{built.error().code, "object '" + asset.name + "': " + built.error().message};

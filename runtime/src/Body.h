@@ -40,10 +40,16 @@ struct Body {
   const Result<StaticCorrection>& staticCorrection() const;
   /// Whether staticCorrection() would return at once (built, or failed).
   bool staticCorrectionReady() const { return mCorrectionReady.load(std::memory_order_acquire); }
+  /// Whether its build was started or asked for (World: a pack object placed in the background).
+  /// A fast impact takes the correction when this holds, so that its outcome does not depend on
+  /// how far a background build has got.
+  bool staticCorrectionScheduled() const { return mCorrectionScheduled.load(std::memory_order_acquire); }
+  void scheduleStaticCorrection() const { mCorrectionScheduled.store(true, std::memory_order_release); }
 
  private:
   mutable std::once_flag mCorrectionOnce;
   mutable std::atomic<bool> mCorrectionReady{false};
+  mutable std::atomic<bool> mCorrectionScheduled{false};
   mutable std::optional<Result<StaticCorrection>> mCorrection;
 };
 

@@ -37,7 +37,8 @@ Status contactStage(const ImpactJob& job, Flow& flow, ImpactResult& result) {
   const double tolerance = desc.pointToleranceM > 0.0 ? desc.pointToleranceM : 0.05 * body.sizeM;
   auto site = locateContact(body, flow.pointLocal, tolerance);
   if (!site) return site.error();
-  const double radius = desc.bodyRadiusM != 0.0 ? desc.bodyRadiusM : surfaceRadiusAt(body, site.value());
+  double radius = desc.bodyRadiusM != 0.0 ? desc.bodyRadiusM : surfaceRadiusAt(body, site.value());
+  if (std::isinf(radius) && std::isinf(desc.impactorRadiusM) && desc.flatPairRadiusM > 0.0) radius = desc.flatPairRadiusM;
   result.bodyRadiusM = radius;
   HertzInput hi;
   hi.impactorMassKg = desc.impactorMassKg;
@@ -62,10 +63,12 @@ Status contactStage(const ImpactJob& job, Flow& flow, ImpactResult& result) {
 }
 
 // The static correction's factorised K: built in the background after placement or here, on the
-// body's first impact. A fast impact (a host over its frame budget) takes it only when it is ready.
+// body's first impact. A fast impact (a host over its frame budget) takes it only when its build
+// was started already (a pack object's at placement, a fragment's by an earlier impact), waiting
+// for it if need be: whether it is used never depends on timing.
 Status prepareStage(const ImpactJob& job, Flow& flow, ImpactResult& result) {
   const Body& body = *job.body;
-  const bool wanted = job.settings->staticCorrection && (!job.desc.fast || body.staticCorrectionReady());
+  const bool wanted = job.settings->staticCorrection && (!job.desc.fast || body.staticCorrectionScheduled());
   if (wanted) {
     const Result<StaticCorrection>& correction = body.staticCorrection();
     if (!correction) return correction.error();

@@ -43,8 +43,9 @@ Status validateImpactDesc(const ImpactDesc& desc) {
     return bad("impact: the point must be finite and the normal a finite unit vector");
   }
   if (!(desc.speedMps > 0.0) || !std::isfinite(desc.speedMps)) return bad("impact: speed must be finite and > 0");
-  if (!(desc.bodyRadiusM >= 0.0) || !(desc.pointToleranceM >= 0.0)) {
-    return bad("impact: bodyRadiusM and pointToleranceM must be ≥ 0");
+  if (!(desc.bodyRadiusM >= 0.0) || !(desc.pointToleranceM >= 0.0) || !(desc.flatPairRadiusM >= 0.0) ||
+      !std::isfinite(desc.flatPairRadiusM)) {
+    return bad("impact: bodyRadiusM and pointToleranceM must be ≥ 0, flatPairRadiusM finite and ≥ 0");
   }
   return Ok{};
 }
@@ -263,6 +264,7 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
       std::shared_ptr<const Body> made = std::move(body).value();
       if (w.settings.fracture.staticCorrection) {  // pack objects are prepared before their first impact
         if (w.settings.prepareInBackground) {
+          made->scheduleStaticCorrection();
           w.workers().execute([&] { w.background.run([made] { (void)made->staticCorrection(); }); });
         } else if (const auto& correction = made->staticCorrection(); !correction) {
           return correction.error();
@@ -386,5 +388,19 @@ Status World::collectImpact(ImpactTicket ticket, ImpactResult& result) {
 }
 
 int32_t World::pendingImpacts() const { return static_cast<int32_t>(mImpl->pending.size()); }
+
+Status World::waitUntilPrepared() {
+  try {
+    Impl& w = *mImpl;
+    if (w.arena) w.arena->execute([&] { w.background.wait(); });
+    for (const auto& body : w.packBodies) {
+      if (!body || !body->staticCorrectionScheduled()) continue;
+      if (const auto& correction = body->staticCorrection(); !correction) return correction.error();
+    }
+    return Ok{};
+  } catch (const std::exception& e) {
+    return bad(std::string("waitUntilPrepared failed: ") + e.what());
+  }
+}
 
 }  // namespace brittle

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <tuple>
 #include <set>
 #include <cstdio>
 #include <memory>
@@ -63,20 +64,30 @@ PlayResult play(const Scene& s, PlayerSettings settings = {}) {
   return std::move(r).value();
 }
 
-class PlayerTest : public ::testing::TestWithParam<const char*> {
+// Each default scene, with its fracture applied at once (latency 0, on the player's thread) and
+// two frames after the contact (computed on the World's workers meanwhile).
+class PlayerTest : public ::testing::TestWithParam<std::tuple<const char*, int>> {
  protected:
   static void SetUpTestSuite() { smallPack(); }
 };
 
 TEST_P(PlayerTest, BreaksDeterministicallyAboveTheFloorWithoutGainingEnergy) {
   ASSERT_NE(smallPack(), nullptr);
-  const Scene s = defaultScene(GetParam());
-  const PlayResult a = play(s), b = play(s);
-  std::printf("%s: %lld impacts, %lld breaks, %lld deferred, %lld refused, %d bodies at end, hash %016llx\n", GetParam(),
+  const Scene s = defaultScene(std::get<0>(GetParam()));
+  PlayerSettings settings;
+  settings.fractureLatencyFrames = std::get<1>(GetParam());
+  const PlayResult a = play(s, settings), b = play(s, settings);
+  std::printf("%s, latency %d: %lld impacts, %lld breaks, %lld deferred, %lld refused, %d bodies at end, hash %016llx\n",
+              std::get<0>(GetParam()), settings.fractureLatencyFrames,
               static_cast<long long>(a.impacts), static_cast<long long>(a.breaks), static_cast<long long>(a.deferredImpacts),
               static_cast<long long>(a.failedImpacts), a.bodiesAtEnd, static_cast<unsigned long long>(a.poseHash));
   EXPECT_GE(a.breaks, 1);
   EXPECT_EQ(a.poseHash, b.poseHash);
+  // Every result takes effect exactly `latency` frames after its contact (or not before the end).
+  for (const ImpactEvent& e : a.events) {
+    if (e.appliedFrame >= 0) EXPECT_EQ(e.appliedFrame, e.frame + settings.fractureLatencyFrames);
+    else EXPECT_GT(e.frame + settings.fractureLatencyFrames, a.frames - 1);
+  }
   EXPECT_EQ(a.bodiesAtEnd, b.bodiesAtEnd);
   EXPECT_EQ(a.impacts, b.impacts);
   EXPECT_GT(a.bodiesAtEnd, static_cast<int32_t>(s.objects.size() + s.impactors.size()));
@@ -109,12 +120,44 @@ TEST_P(PlayerTest, BreaksDeterministicallyAboveTheFloorWithoutGainingEnergy) {
 }
 
 INSTANTIATE_TEST_SUITE_P(DefaultScenes, PlayerTest,
-                         ::testing::Values("plate-drop", "ball-through-pane", "brick-stack", "vase-drop"),
+                         ::testing::Combine(::testing::Values("plate-drop", "ball-through-pane", "brick-stack", "vase-drop"),
+                                            ::testing::Values(0, 2)),
                          [](const auto& p) {
-                           std::string n = p.param;
+                           std::string n = std::get<0>(p.param);
                            std::replace(n.begin(), n.end(), '-', '_');
-                           return n;
+                           return n + "_latency" + std::to_string(std::get<1>(p.param));
                          });
+
+// A static pane broken late still lets the ball through: at the frame its fragments appear, the
+// ball is put back where it touched with its velocity from before, so it ends on the far side at
+// any latency, near where it ends when the pane breaks at once (it meets the same fragments).
+TEST(PlayerLatencyTest, TheBallGoesThroughThePaneWhateverTheLatency) {
+  ASSERT_NE(smallPack(), nullptr);
+  const Scene s = defaultScene("ball-through-pane");
+  auto ballEnd = [&](int latency) {
+    PlayerSettings settings;
+    settings.fractureLatencyFrames = latency;
+    const PlayResult r = play(s, settings);
+    EXPECT_GE(r.breaks, 1) << latency;
+    for (const BodyState& b : r.bodies)
+      if (b.kind == BodyKind::Impactor) return b.translationsM.back();
+    return Eigen::Vector3d(Eigen::Vector3d::Constant(std::nan("")));
+  };
+  const Eigen::Vector3d now = ballEnd(0);
+  ASSERT_GT(now.y(), 0.2);  // through the pane (y = 0) and on
+  for (int latency : {1, 4}) {
+    const Eigen::Vector3d late = ballEnd(latency);
+    EXPECT_GT(late.y(), 0.2) << latency;
+    EXPECT_NEAR(late.y(), now.y(), 0.1) << latency;
+  }
+  PlayerSettings bad;
+  bad.fractureLatencyFrames = -2;
+  EXPECT_EQ(validatePlayerSettings(bad).error().code, ErrorCode::InvalidArgument);
+  // Automatic: 33 ms of play, 8 of the scene's 240 Hz frames.
+  const PlayResult automatic = play(s);
+  ASSERT_FALSE(automatic.events.empty());
+  EXPECT_EQ(automatic.events.front().appliedFrame - automatic.events.front().frame, 8);
+}
 
 // The replay: every body is a node, and every node is animated over the whole run (translation,
 // rotation, scale); a fragment is scaled to zero before it exists, and its parent after it broke.

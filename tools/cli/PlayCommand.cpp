@@ -57,6 +57,10 @@ Runner addPlayCommand(CLI::App& app) {
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--max-budget-waits", o->settings.maxBudgetWaits, "Steps an impact may wait for the frame budget")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--latency-frames", o->settings.fractureLatencyFrames,
+                  "Frames from a contact to its fracture, computed on worker threads meanwhile (0: at once, on the "
+                  "player's thread; -1: the frames nearest to 33 ms)")
+      ->capture_default_str()->check(CLI::Range(-1, 600));
   cmd->add_option("--settings", o->runtimeSettings, "Runtime settings (JSON, as brittle size writes them); flags given here win");
   cmd->add_option("--frames", o->framesDir, "Also draw frames into this directory (frame_NNNNNN.png; needs a display: xvfb-run)");
   cmd->add_option("--frame-every", o->frameEvery, "Draw every N-th frame")->capture_default_str()->check(CLI::PositiveNumber);

@@ -22,6 +22,7 @@ struct ViewOptions {
   int64_t frames = 0;
   int modes = 0;
   double frameBudgetMs = 0.0;
+  int latencyFrames = PlayerSettings{}.fractureLatencyFrames;
 };
 
 // "WxH" → (W, H). Error: InvalidArgument.
@@ -86,6 +87,10 @@ Runner addViewCommand(CLI::App& app) {
   cmd->add_option("--modes", o->modes, "Modes used per impact (0: all stored)")->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--frame-budget-ms", o->frameBudgetMs, "Fracture time per frame (as for play; 0: none)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--latency-frames", o->latencyFrames,
+                  "Frames from a contact to its fracture, computed on worker threads meanwhile (0: at once, on the "
+                  "player's thread; -1: the frames nearest to 33 ms)")
+      ->capture_default_str()->check(CLI::Range(-1, 600));
   return [o]() -> int {
     auto size = parseSize(o->size);
     if (!size) return reportError(size.error());
@@ -107,6 +112,7 @@ Runner addViewCommand(CLI::App& app) {
     PlayerSettings settings;
     settings.world.fracture.modeCount = o->modes;
     settings.fractureBudgetS = 1e-3 * o->frameBudgetMs;
+    settings.fractureLatencyFrames = o->latencyFrames;
     auto report = runViewer(pack.value(), scene.value(), settings, v);
     if (!report) return reportError(report.error());
     const ViewerReport& r = report.value();

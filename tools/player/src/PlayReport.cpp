@@ -1,6 +1,7 @@
 // PlayReport.cpp — JSON and text views of a PlayResult.
 #include "brittle/player/PlayReport.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
@@ -59,6 +60,9 @@ nlohmann::json playReportJson(const PlayResult& r, int framesEvery) {
                         {"debris", e.debris},
                         {"peak_principal_stress_pa", e.peakPrincipalStressPa},
                         {"waited_steps", e.waitedSteps},
+                        {"applied_frame", e.appliedFrame},
+                        {"latency_frames", e.appliedFrame >= 0 ? nlohmann::json(e.appliedFrame - e.frame) : nlohmann::json(nullptr)},
+                        {"wait_s", e.waitS},
                         {"simplified", e.simplified},
                         {"static_correction", e.staticCorrection},
                         {"modes_used", e.modesUsed},
@@ -106,6 +110,20 @@ void printPlaySummary(const PlayResult& r, std::ostream& out) {
   out << std::setprecision(4) << r.scene << ": " << r.frames << " frames of " << 1e3 * r.timeStepS << " ms, "
       << r.impacts << " impacts (" << r.failedImpacts << " refused, " << r.deferredImpacts << " deferred), "
       << r.breaks << " breaks\n";
+  {
+    int64_t latencyMax = -1, applied = 0;
+    double waitMax = 0.0;
+    for (const ImpactEvent& e : r.events) {
+      if (e.appliedFrame < 0) continue;
+      ++applied;
+      latencyMax = std::max(latencyMax, e.appliedFrame - e.frame);
+      waitMax = std::max(waitMax, e.waitS);
+    }
+    if (applied > 0) {
+      out << "  contact to fracture: " << latencyMax << " frames at most; longest wait for a result " << 1e3 * waitMax
+          << " ms\n";
+    }
+  }
   if (r.budgetDeferredImpacts > 0 || r.simplifiedImpacts > 0) {
     out << "  frame budget: " << r.budgetDeferredImpacts << " step waits, " << r.simplifiedImpacts
         << " impacts simplified (no factorisation of K) after waiting\n";

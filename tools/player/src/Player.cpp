@@ -62,6 +62,9 @@ TriangleMesh assetSurface(const ObjectAsset& asset) {
   return s;
 }
 
+// The automatic fracture latency, s of play: two frames at 60 Hz.
+constexpr double kAutoLatencyS = 2.0 / 60.0;
+
 struct Body {
   BodyState state;
   ObjectId object;                 ///< valid: breakable
@@ -79,6 +82,7 @@ struct Body {
   double sizeM = 0.0;              ///< largest distance of a surface point from the centre of mass
   double radiusForOthersM = kInf;  ///< what an impact on another body sees: sphere radius, else flat
   double cooldownUntilS = -kInf;
+  bool fracturing = false;  ///< an impact on it is submitted and not applied yet
   Eigen::Vector3d preVelocity = Eigen::Vector3d::Zero(), preAngular = Eigen::Vector3d::Zero();
 
   double massKg() const { return state.massKg; }
@@ -97,6 +101,17 @@ struct Candidate {
   Eigen::Vector3d pointLocal, normalLocal;
   int32_t waited = 0;  ///< steps waited (impact cap or frame budget)
   bool operator<(const Candidate& o) const { return speedMps != o.speedMps ? speedMps > o.speedMps : body < o.body; }
+};
+
+// An impact submitted to the World's workers, applied at the start of applyFrame.
+struct InFlight {
+  ImpactTicket ticket;
+  Candidate candidate;
+  int64_t applyFrame = 0;
+  size_t event = 0;          ///< its index in PlayResult::events
+  // The other body at the contact (after the step), and its velocities before it.
+  btTransform otherTransform = btTransform::getIdentity();
+  Eigen::Vector3d otherPreVelocity = Eigen::Vector3d::Zero(), otherPreAngular = Eigen::Vector3d::Zero();
 };
 
 // Fragments born in the same step start interpenetrating (the convex hulls of concave fragments
@@ -128,11 +143,19 @@ class Simulation {
  public:
   Simulation(World world, const Scene& scene, const PlayerSettings& settings)
       : mWorld(std::move(world)), mScene(scene), mSettings(settings) {
+    if (mSettings.fractureLatencyFrames < 0) {  // automatic: about two 60 Hz frames of play
+      mSettings.fractureLatencyFrames = std::max(1, static_cast<int>(std::lround(kAutoLatencyS / mScene.timeStepS)));
+    }
     mBroadphase = std::make_unique<btDbvtBroadphase>();
     mDispatcher = std::make_unique<btCollisionDispatcher>(&mConfig);
     mBullet = std::make_unique<btDiscreteDynamicsWorld>(mDispatcher.get(), mBroadphase.get(), &mSolver, &mConfig);
     mBullet->setGravity(bt(scene.gravityMps2));
-    mBullet->getSolverInfo().m_splitImpulse = 1;  // penetration recovery adds no kinetic energy
+    // Penetration recovery adds no kinetic energy: split impulse at every depth (Bullet's default
+    // threshold, −4 cm, recovers shallower penetrations through the velocities). Fragments can be
+    // born slightly into their neighbours (a matched fragment's pieces come from its database
+    // entry's shape, not its hull), and pushing them out must not launch them.
+    mBullet->getSolverInfo().m_splitImpulse = 1;
+    mBullet->getSolverInfo().m_splitImpulsePenetrationThreshold = 0;
     mBullet->getPairCache()->setOverlapFilterCallback(&mFilter);
     mSolver.setRandSeed(0);
   }
@@ -247,6 +270,8 @@ class Simulation {
     b.rigid->setAngularVelocity(bt(imp.angularVelocityRadPerS));
   }
 
+  Status waitUntilPrepared() { return mWorld.waitUntilPrepared(); }
+
   Material materialOf(const std::string& name) const {
     for (const Material& m : mMaterials)
       if (m.name == name) return m;
@@ -275,6 +300,11 @@ class Simulation {
     double timeS = 0.0;
     FrameStats fs;
     fs.frame = frame;
+    if (!mInFlight.empty()) {
+      const auto t0 = Clock::now();
+      fs.fractured = applyDue(frame, out);
+      fs.fractureS += seconds(t0, Clock::now());
+    }
     for (int s = 0; s < mScene.substeps; ++s) {
       const auto t0 = Clock::now();
       for (Body& b : mBodies) {
@@ -446,7 +476,7 @@ class Simulation {
   bool breakable(int index, double timeS) const {
     if (index < 0) return false;
     const Body& b = mBodies[static_cast<size_t>(index)];
-    return b.alive && b.object.valid() && timeS >= b.cooldownUntilS;
+    return b.alive && b.object.valid() && !b.fracturing && timeS >= b.cooldownUntilS;
   }
 
   Eigen::Vector3d pointVelocity(int index, const Eigen::Vector3d& point) const {
@@ -470,6 +500,7 @@ class Simulation {
     d.normalWorld = (b.runtimeRotation * c.normalLocal).normalized();
     d.speedMps = c.speedMps;
     d.pointToleranceM = mSettings.pointToleranceFraction * b.sizeM;
+    d.flatPairRadiusM = b.sizeM;  // an edge or corner of the body's size meets the flat
     d.fast = fast;
     const Material* otherMaterial = &mFloorMaterial;
     if (c.other >= 0) {
@@ -496,17 +527,66 @@ class Simulation {
     e.waitedSteps = c.waited;
     e.simplified = fast;
     ++out.impacts;
-    Status st = mWorld.impact(d, mResult);
-    if (!st && std::isinf(d.impactorRadiusM)) {
-      // A flat face on a flat impactor has no Hertz contact: take the body's size as its radius
-      // (an edge or corner of that size meets the flat).
-      d.bodyRadiusM = b.sizeM;
-      st = mWorld.impact(d, mResult);
+    if (mSettings.fractureLatencyFrames == 0) {
+      const Status st = mWorld.impact(d, mResult);
+      e.appliedFrame = frame;
+      out.events.push_back(std::move(e));
+      return applyResult(st, c, frame, out, out.events.back());
     }
+    auto ticket = mWorld.submitImpact(d);
+    if (!ticket) {
+      e.error = ticket.error().message;
+      ++out.failedImpacts;
+      out.events.push_back(std::move(e));
+      return false;
+    }
+    InFlight f;
+    f.ticket = ticket.value();
+    f.candidate = c;
+    f.applyFrame = frame + mSettings.fractureLatencyFrames;
+    f.event = out.events.size();
+    if (c.other >= 0) {
+      const Body& o = mBodies[static_cast<size_t>(c.other)];
+      f.otherTransform = o.rigid->getCenterOfMassTransform();
+      f.otherPreVelocity = o.preVelocity;
+      f.otherPreAngular = o.preAngular;
+    }
+    b.fracturing = true;
+    mInFlight.push_back(f);
+    out.events.push_back(std::move(e));
+    return false;
+  }
+
+  // Submitted impacts due at the start of `frame`, in the order they were submitted: collected
+  // (waiting if not done) and applied. Returns whether a body broke.
+  bool applyDue(int64_t frame, PlayResult& out) {
+    bool broke = false;
+    size_t kept = 0;
+    for (size_t i = 0; i < mInFlight.size(); ++i) {
+      InFlight f = mInFlight[i];
+      if (f.applyFrame > frame) {
+        mInFlight[kept++] = f;
+        continue;
+      }
+      const auto t0 = Clock::now();
+      const Status st = mWorld.collectImpact(f.ticket, mResult);
+      ImpactEvent& e = out.events[f.event];
+      e.waitS = seconds(t0, Clock::now());
+      e.appliedFrame = frame;
+      mBodies[static_cast<size_t>(f.candidate.body)].fracturing = false;
+      broke = applyResult(st, f.candidate, frame, out, e, &f) || broke;
+    }
+    mInFlight.resize(kept);
+    if (broke) updateSiblingPairs();
+    return broke;
+  }
+
+  // An impact's outcome: the event's figures, and the fragments in place of a broken body.
+  bool applyResult(const Status& st, const Candidate& c, int64_t frame, PlayResult& out, ImpactEvent& e,
+                   const InFlight* flight = nullptr) {
     if (!st) {
       e.error = st.error().message;
       ++out.failedImpacts;
-      out.events.push_back(std::move(e));
       return false;
     }
     e.broken = mResult.broken;
@@ -518,13 +598,13 @@ class Simulation {
       ++out.breaks;
       e.fragments = static_cast<int32_t>(mResult.fragments.size());
       for (const FragmentResult& f : mResult.fragments) e.debris += f.debris ? 1 : 0;
-      spawnFragments(c, frame);
+      spawnFragments(c, frame, flight);
     }
-    out.events.push_back(std::move(e));
     return mResult.broken;
   }
 
-  void spawnFragments(const Candidate& c, int64_t frame) {
+  // flight: the submitted impact (latency ≥ 1), whose impactor is put back where it touched.
+  void spawnFragments(const Candidate& c, int64_t frame, const InFlight* flight) {
     // Index, not reference: adding bodies grows mBodies.
     const size_t parentIndex = static_cast<size_t>(c.body);
     Eigen::Matrix3d rotation;
@@ -542,9 +622,16 @@ class Simulation {
     // A static body cannot take the impactor's momentum: the impactor goes on as before the step.
     if (parentStatic && c.other >= 0) {
       Body& o = mBodies[static_cast<size_t>(c.other)];
-      if (o.alive && o.rigid->getInvMass() > 0.0) {
+      if (o.alive && o.rigid->getInvMass() > 0.0 && !flight) {
         o.rigid->setLinearVelocity(bt(o.preVelocity));
         o.rigid->setAngularVelocity(bt(o.preAngular));
+      } else if (o.alive && o.rigid->getInvMass() > 0.0) {
+        // Back where it touched the pane, with the velocities it had before: it meets the
+        // fragments as it would have, `latency` frames later.
+        o.rigid->setCenterOfMassTransform(flight->otherTransform);
+        o.rigid->setInterpolationWorldTransform(flight->otherTransform);
+        o.rigid->setLinearVelocity(bt(flight->otherPreVelocity));
+        o.rigid->setAngularVelocity(bt(flight->otherPreAngular));
       }
     }
     for (size_t i = 0; i < mResult.fragments.size(); ++i) {
@@ -637,6 +724,7 @@ class Simulation {
   std::unique_ptr<btRigidBody> mFloor;
   std::vector<Body> mBodies;
   std::vector<Candidate> mDeferred;
+  std::vector<InFlight> mInFlight;  // submitted impacts, in submission order
   PlayResult mOut;
   int64_t mFrame = 0;
   int64_t mDeferredCount = 0;
@@ -665,6 +753,7 @@ Status validatePlayerSettings(const PlayerSettings& s) {
   if (s.maxImpactsPerStep < 1) return bad("maxImpactsPerStep must be ≥ 1");
   if (!(s.fractureBudgetS >= 0.0) || !std::isfinite(s.fractureBudgetS)) return bad("fractureBudgetS must be finite and ≥ 0");
   if (s.maxBudgetWaits < 0) return bad("maxBudgetWaits must be ≥ 0");
+  if (s.fractureLatencyFrames < -1 || s.fractureLatencyFrames > 600) return bad("fractureLatencyFrames must be in [-1, 600]");
   if (!(s.frictionCoefficient >= 0.0) || !std::isfinite(s.frictionCoefficient)) return bad("frictionCoefficient must be finite and ≥ 0");
   if (!(s.collisionMarginM > 0.0 && s.collisionMarginM <= 0.05)) return bad("collisionMarginM must be in (0, 0.05]");
   if (!(s.pointToleranceFraction > 0.0 && s.pointToleranceFraction <= 1.0)) return bad("pointToleranceFraction must be in (0, 1]");
@@ -700,6 +789,9 @@ Result<std::unique_ptr<PlaySession>> PlaySession::create(Pack pack, const Scene&
   for (const SceneObject& o : impl->scene.objects)
     if (Status st = impl->sim->addObject(o); !st) return st.error();
   for (const RigidImpactor& imp : impl->scene.impactors) impl->sim->addImpactor(imp);
+  // The objects' preparation (their K factorised on the World's workers) is part of loading, as a
+  // level load would be: no first impact waits for it.
+  if (Status st = impl->sim->waitUntilPrepared(); !st) return st.error();
   impl->sim->begin();
   impl->loadS = seconds(t0, Clock::now());
   return std::unique_ptr<PlaySession>(new PlaySession(std::move(impl)));

@@ -136,12 +136,17 @@ struct ImpactDesc {
   double impactorPoissonRatio = 0.3;
   double impulseNs = 0.0;                ///< the host's impulse; ≤ 0: (1 + e) m* v with the body's restitution
   double bodyRadiusM = 0.0;              ///< local radius of curvature; 0: estimated from the surface
+  /// Radius (m) taken for the body where it is flat (or concave) at the point and the impactor is
+  /// flat too, which Hertz cannot model: an edge or corner of that size meeting the flat. 0: such
+  /// an impact is an InvalidArgument error.
+  double flatPairRadiusM = 0.0;
   /// How far the point may lie from the body's surface (m); 0: 5 % of the body's size.
   double pointToleranceM = 0.0;
-  /// A host over its frame budget: skip the static correction unless the body already has it, so
-  /// that a fragment's first hit does not factorise its K (StageTimes::prepareS, the largest cost
-  /// of that hit; a pack object's K is factorised when it is placed). Less accurate (the truncated
-  /// modes alone; see chart 1); ImpactResult::staticCorrectionUsed says which it was.
+  /// A host over its frame budget: skip the static correction unless the body's K factorisation
+  /// was already started (a pack object's when it was placed, a fragment's by an earlier impact),
+  /// so that a fragment's first hit does not factorise its K (StageTimes::prepareS, the largest
+  /// cost of that hit). Less accurate (the truncated modes alone; see chart 1);
+  /// ImpactResult::staticCorrectionUsed says which it was. Never depends on timing.
   bool fast = false;
 };
 
@@ -262,6 +267,11 @@ class World {
   Status collectImpact(ImpactTicket ticket, ImpactResult& result);
   /// Impacts submitted and not yet collected.
   int32_t pendingImpacts() const;
+  /// Waits until the background preparation of every placed pack object is done (a host's
+  /// loading screen: afterwards no first impact waits for it). Errors: the first failed
+  /// preparation, in pack order (as StaticCorrection::build); the objects stay placed and their
+  /// impacts return the same error.
+  Status waitUntilPrepared();
 
  private:
   struct Impl;

@@ -9,10 +9,10 @@
 // Each frame runs `substeps` fixed Bullet steps (single thread, one internal step per call, so the
 // same pack, scene, settings and seed give bit-identical poses). After each step, every contact of
 // a breakable body whose normal approach speed, from the velocities before the step, exceeds
-// impactThresholdMps becomes a World::impact at the contact point with the body's outward normal,
+// impactThresholdMps becomes a World impact at the contact point with the body's outward normal,
 // the other body's mass (+∞ if static), radius (sphere radius, +∞ for a box, plane or hull) and
-// material (a flat face on a flat impactor, which has no Hertz contact, is retried with the body's
-// size as its radius). One impact per body per step (its fastest contact); at most
+// material (a flat face on a flat impactor, which has no Hertz contact, takes the body's size as
+// its radius: ImpactDesc::flatPairRadiusM). One impact per body per step (its fastest contact); at most
 // maxImpactsPerStep per step (fastest first, ties by body); the rest wait for the next step and
 // each wait is counted in deferredImpacts. A body that was hit ignores contacts for cooldownS
 // (its fragments inherit what is left of it). A broken body leaves Bullet, and each fragment enters as a new body with a convex hull
@@ -24,6 +24,17 @@
 // Bodies born in the same step whose bounding boxes overlap (convex hulls of concave fragments do)
 // do not collide with each other until their boxes have separated once: Bullet would otherwise
 // push them apart with energy out of nothing.
+//
+// Fracture off the frame (fractureLatencyFrames = L ≥ 1, the default): an impact found in frame F
+// is submitted to the World (World::submitImpact) and computed on its workers while the play goes
+// on. The struck body stays a rigid body in Bullet (it bounces as one) and takes no other impact;
+// at the start of frame F + L its result is collected (waiting only if the work is not done: the
+// wait is part of that frame's fractureS and of the event's waitS) and, if it broke, it is replaced
+// by its fragments at its pose and velocity then. If it was static, the body that hit it is put
+// back where it touched, with the velocities it had before the contact, so that it goes through
+// and meets the fragments as it would have, L frames later. Because the frame of application is
+// fixed, a play is bit-identical whatever the machine's speed. L = 0: each impact is computed in the
+// step that found it, on the player's thread, as before.
 //
 // Frames: the world's z axis is up; the floor is the plane z = height. Bodies are placed by their
 // asset's local origin (the pack's mesh frame); Bullet bodies live in principal axes at the centre
@@ -56,6 +67,11 @@ struct PlayerSettings {
   /// machine's speed; without it (the default) a play is deterministic.
   double fractureBudgetS = 0.0;
   int maxBudgetWaits = 4;
+  /// Frames from an impact's contact to its fracture taking effect (see above); 0: at once, on the
+  /// player's thread; −1 (the default): the frames nearest to 33 ms of play (two 60 Hz frames; 8
+  /// of the default scenes' 240 Hz frames), at least one. That is the time a worker has for an
+  /// impact before the play waits for it; a person does not see a break 33 ms late.
+  int fractureLatencyFrames = -1;
   double frictionCoefficient = 0.5;
   double collisionMarginM = 0.001;  ///< Bullet's margin around hulls and boxes
   /// Fraction of a body's size the contact point may lie off its surface in the runtime: Bullet's
@@ -67,7 +83,7 @@ struct PlayerSettings {
 };
 
 /// Range checks: threshold > 0, cooldown ≥ 0, maxImpactsPerStep ≥ 1, fractureBudgetS ≥ 0,
-/// maxBudgetWaits ≥ 0, friction ≥ 0, margin in
+/// maxBudgetWaits ≥ 0, fractureLatencyFrames in [−1, 600], friction ≥ 0, margin in
 /// (0, 0.05], tolerance fraction in (0, 1], and validateWorldSettings. Error: InvalidArgument.
 Status validatePlayerSettings(const PlayerSettings& settings);
 
@@ -93,6 +109,10 @@ struct ImpactEvent {
   bool simplified = false;       ///< run fast (ImpactDesc::fast) after waiting maxBudgetWaits steps
   bool staticCorrection = false; ///< the runtime used the static correction
   int32_t modesUsed = 0;         ///< the runtime's modes for this impact
+  /// The frame at whose start the result was applied (frame + latency); −1 if the play ended first.
+  /// With fractureLatencyFrames = 0, the contact's own frame.
+  int64_t appliedFrame = -1;
+  double waitS = 0.0;            ///< wall time the play waited for the result when it was due
 };
 
 struct FrameStats {
