@@ -13,6 +13,10 @@
 #include "brittle/runtime/FragmentSurfaces.h"
 #include "brittle/runtime/ModalResponse.h"
 
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/task_arena.h>
+
 namespace brittle::detail {
 namespace {
 
@@ -166,73 +170,62 @@ Status surfaceStage(const ImpactJob& job, ImpactResult& result) {
   return Ok{};
 }
 
-// The exact path: a small fragment's own modal analysis. A fragment it cannot analyse (e.g. one
-// hanging by an edge) falls back to the database match, with the reason kept.
-void exactPathStage(const ImpactJob& job, ImpactResult& result, std::vector<std::shared_ptr<const Body>>& born) {
+// The exact path: a small fragment's own modal analysis. Returns null when it cannot be done (e.g.
+// a fragment hanging by an edge), with the reason kept; the match is then tried.
+std::shared_ptr<const Body> exactBody(const ImpactJob& job, const ImpactResult& result, size_t i, std::string& reason) {
   const Body& body = *job.body;
   const FractureSettings& fs = *job.settings;
   ExactModesSettings es;
   es.modeCount = fs.modeCount > 0 ? std::min(fs.modeCount, fs.exactModeCount) : fs.exactModeCount;
-  const std::vector<int64_t> sizes =
-      fragmentTetCounts(body.asset.tetMesh, result.fracture.nodeLabels, static_cast<int>(result.fragments.size()));
-  for (size_t i = 0; i < result.fragments.size(); ++i) {
-    FragmentResult& fr = result.fragments[i];
-    if (fr.debris || sizes[i] > fs.exactModesMaxTets) continue;
-    auto sub = fragmentSubMesh(body.asset.tetMesh, body.topology, result.fracture.nodeLabels, result.fracture.edgeCuts,
-                               static_cast<int>(i));
-    if (!sub) {
-      fr.reason = "exact path: " + sub.error().message;
-      continue;
-    }
-    auto own = exactFragmentAsset(sub.value(), body.material, es, body.asset.name + ".f" + std::to_string(i));
-    if (!own) {
-      fr.reason = "exact path: " + own.error().message;
-      continue;
-    }
-    auto child = makeBody(std::move(own).value(), body.material, fs.modeCount);
-    if (!child) {
-      fr.reason = "exact path: " + child.error().message;
-      continue;
-    }
-    born[i] = std::move(child).value();
-    fr.exactModes = true;
-    fr.path = FragmentPath::ExactModes;
-    fr.reason.clear();
+  auto sub = fragmentSubMesh(body.asset.tetMesh, body.topology, result.fracture.nodeLabels, result.fracture.edgeCuts,
+                             static_cast<int>(i));
+  if (!sub) {
+    reason = "exact path: " + sub.error().message;
+    return nullptr;
   }
+  auto own = exactFragmentAsset(sub.value(), body.material, es, body.asset.name + ".f" + std::to_string(i));
+  if (!own) {
+    reason = "exact path: " + own.error().message;
+    return nullptr;
+  }
+  auto child = makeBody(std::move(own).value(), body.material, fs.modeCount);
+  if (!child) {
+    reason = "exact path: " + child.error().message;
+    return nullptr;
+  }
+  return std::move(child).value();
 }
 
 // The database: the nearest entry, rescaled to the fragment's frame, size and material.
-void matchStage(const ImpactJob& job, ImpactResult& result, std::vector<std::shared_ptr<const Body>>& born) {
+std::shared_ptr<const Body> matchedBody(const ImpactJob& job, FragmentResult& fr) {
   const Body& body = *job.body;
-  const FractureSettings& fs = *job.settings;
-  for (size_t i = 0; i < result.fragments.size(); ++i) {
-    FragmentResult& fr = result.fragments[i];
-    if (fr.debris || fr.exactModes) continue;
-    auto match = job.matcher->match(fr.surface, fs.descriptor, 1);
-    if (!match) {  // e.g. a sliver whose frame is undefined
-      fr.reason += (fr.reason.empty() ? "" : "; ") + ("match: " + match.error().message);
-      continue;
-    }
-    const FragmentMatch& m = match.value().front();
-    auto placed = instantiateEntry(job.database->entries[static_cast<size_t>(m.entry)],
-                                   job.database->referenceMaterial, body.material, m.queryFrame);
-    if (!placed) {
-      fr.reason += (fr.reason.empty() ? "" : "; ") + ("entry " + std::to_string(m.entry) + ": " + placed.error().message);
-      continue;
-    }
-    fr.matchedEntry = m.entry;
-    fr.matchDistance = m.distance;
-    auto child = makeBody(std::move(placed).value(), body.material, fs.modeCount);
-    if (!child) {
-      fr.reason += (fr.reason.empty() ? "" : "; ") + ("entry " + std::to_string(m.entry) + ": " + child.error().message);
-      continue;
-    }
-    born[i] = std::move(child).value();
-    fr.path = FragmentPath::Matched;
+  auto note = [&](const std::string& why) { fr.reason += (fr.reason.empty() ? "" : "; ") + why; };
+  auto match = job.matcher->match(fr.surface, job.settings->descriptor, 1);
+  if (!match) {  // e.g. a sliver whose frame is undefined
+    note("match: " + match.error().message);
+    return nullptr;
   }
+  const FragmentMatch& m = match.value().front();
+  auto placed = instantiateEntry(job.database->entries[static_cast<size_t>(m.entry)], job.database->referenceMaterial,
+                                 body.material, m.queryFrame);
+  if (!placed) {
+    note("entry " + std::to_string(m.entry) + ": " + placed.error().message);
+    return nullptr;
+  }
+  fr.matchedEntry = m.entry;
+  fr.matchDistance = m.distance;
+  auto child = makeBody(std::move(placed).value(), body.material, job.settings->modeCount);
+  if (!child) {
+    note("entry " + std::to_string(m.entry) + ": " + child.error().message);
+    return nullptr;
+  }
+  return std::move(child).value();
 }
 
-// New bodies for the fragments that are not debris: the exact path for small ones, else the match.
+// New bodies for the fragments that are not debris: the exact path for small ones (at most
+// exactModesMaxTets of the parent's tets), else, or when it fails, the match. Fragments are
+// independent, so they are made in parallel on the World's workers; each writes only its own
+// entries, so the outcome does not depend on the thread count.
 void newBodiesStage(const ImpactJob& job, ImpactResult& result, std::vector<std::shared_ptr<const Body>>& born) {
   const FractureSettings& fs = *job.settings;
   born.assign(result.fragments.size(), nullptr);
@@ -241,15 +234,33 @@ void newBodiesStage(const ImpactJob& job, ImpactResult& result, std::vector<std:
       if (!fr.debris) fr.reason = "matchFragments is off: surface only";
     return;
   }
-  if (fs.exactModesMaxTets > 0) exactPathStage(job, result, born);
-  if (job.matcher) {
-    matchStage(job, result, born);
-  } else {
-    for (FragmentResult& fr : result.fragments)
-      if (fr.path == FragmentPath::SurfaceOnly) {
-        fr.reason += (fr.reason.empty() ? "" : "; ") + std::string("no database to match against");
+  const std::vector<int64_t> sizes = fragmentTetCounts(job.body->asset.tetMesh, result.fracture.nodeLabels,
+                                                       static_cast<int>(result.fragments.size()));
+  auto make = [&](size_t i) {
+    FragmentResult& fr = result.fragments[i];
+    if (fr.debris) return;
+    if (fs.exactModesMaxTets > 0 && sizes[i] <= fs.exactModesMaxTets) {
+      born[i] = exactBody(job, result, i, fr.reason);
+      if (born[i]) {
+        fr.exactModes = true;
+        fr.path = FragmentPath::ExactModes;
+        return;
       }
-  }
+    }
+    if (!job.matcher) {
+      fr.reason += (fr.reason.empty() ? "" : "; ") + std::string("no database to match against");
+      return;
+    }
+    born[i] = matchedBody(job, fr);
+    if (born[i]) fr.path = FragmentPath::Matched;
+  };
+  auto all = [&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, result.fragments.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) make(i);
+    });
+  };
+  if (job.workers) job.workers->execute(all);
+  else all();
 }
 
 }  // namespace

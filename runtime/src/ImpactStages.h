@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <oneapi/tbb/task_arena.h>
 #include <memory>
 #include <vector>
 
@@ -31,6 +32,7 @@ struct ImpactJob {
   const FractureSettings* settings = nullptr;
   const FragmentMatcher* matcher = nullptr;  ///< null: no database search
   const FragmentDatabase* database = nullptr;
+  tbb::task_arena* workers = nullptr;  ///< where the fragments' new bodies are made in parallel; null: the caller's
 };
 
 /// The buffers of an impact, kept between impacts: once they have grown to the largest body hit,

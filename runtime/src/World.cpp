@@ -161,6 +161,7 @@ struct World::Impl {
     job.settings = &settings.fracture;
     job.matcher = matcher ? &*matcher : nullptr;
     job.database = &pack.database;
+    job.workers = &workers();
     return job;
   }
 
