@@ -1,6 +1,8 @@
 #include "Body.h"
 
 #include <algorithm>
+#include <exception>
+#include <string>
 
 #include "brittle/runtime/CrackPropagation.h"
 
@@ -15,6 +17,32 @@ const Result<StaticCorrection>& Body::staticCorrection() const {
     mCorrectionReady.store(true, std::memory_order_release);
   });
   return *mCorrection;
+}
+
+std::shared_ptr<const BodySource> BodySource::ready(std::shared_ptr<const Body> body) {
+  auto source = std::make_shared<BodySource>();
+  std::call_once(source->mOnce, [&] { source->mBody.emplace(std::move(body)); });
+  source->mMade.store(true, std::memory_order_release);
+  return source;
+}
+
+std::shared_ptr<const BodySource> BodySource::deferred(Maker make) {
+  auto source = std::make_shared<BodySource>();
+  source->mMake = std::move(make);
+  return source;
+}
+
+const Result<std::shared_ptr<const Body>>& BodySource::get() const {
+  std::call_once(mOnce, [this] {
+    try {
+      mBody.emplace(mMake());
+    } catch (const std::exception& e) {
+      mBody.emplace(makeError(ErrorCode::InvalidArgument, std::string("making the body failed: ") + e.what()));
+    }
+    mMake = nullptr;
+    mMade.store(true, std::memory_order_release);
+  });
+  return *mBody;
 }
 
 Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount) {

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -51,6 +52,26 @@ struct Body {
   mutable std::atomic<bool> mCorrectionReady{false};
   mutable std::atomic<bool> mCorrectionScheduled{false};
   mutable std::optional<Result<StaticCorrection>> mCorrection;
+};
+
+/// A body made on first use: a fragment's new object, whose modal data (its own analysis, or its
+/// matched entry rescaled) are made on a worker after the impact that broke its parent, or by
+/// whichever thread needs them first (std::call_once: others wait). Making is a pure function of
+/// what the maker captured, so when it runs changes nothing.
+class BodySource {
+ public:
+  using Maker = std::function<Result<std::shared_ptr<const Body>>()>;
+  static std::shared_ptr<const BodySource> ready(std::shared_ptr<const Body> body);
+  static std::shared_ptr<const BodySource> deferred(Maker make);
+  /// The body, made now if it was not; its errors are the maker's.
+  const Result<std::shared_ptr<const Body>>& get() const;
+  bool isMade() const { return mMade.load(std::memory_order_acquire); }
+
+ private:
+  mutable std::once_flag mOnce;
+  mutable std::atomic<bool> mMade{false};
+  mutable Maker mMake;  // released once made
+  mutable std::optional<Result<std::shared_ptr<const Body>>> mBody;
 };
 
 /// Builds a body with the first `modeCount` stored modes (0: all). Errors: InvalidArgument (no

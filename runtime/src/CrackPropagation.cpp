@@ -341,30 +341,94 @@ Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& to
 
 int mergeCrumbs(const TetTopology& topo, int minNodes, Eigen::VectorXd& edgeCuts, Eigen::VectorXi& labels,
                 int& fragmentCount) {
-  int merged = 0;
-  while (fragmentCount > 1) {
-    std::vector<int> size(static_cast<size_t>(fragmentCount), 0);
-    for (Eigen::Index i = 0; i < labels.size(); ++i) ++size[static_cast<size_t>(labels[i])];
-    // The smallest crumb (ties: lowest label) joins the neighbour it shares most cut edges with.
-    int crumb = -1;
-    for (int l = 0; l < fragmentCount; ++l) {
-      if (size[static_cast<size_t>(l)] < minNodes && (crumb < 0 || size[static_cast<size_t>(l)] < size[static_cast<size_t>(crumb)])) crumb = l;
+  // The components as they come in (labels numbered by lowest node), merged one crumb at a time:
+  // the smallest (ties: lowest first node, i.e. lowest label) joins the neighbour it shares most
+  // cut edges with (ties: lowest first node). Merging two components that share edges and
+  // un-cutting those edges gives exactly their union, so the components are tracked with a
+  // union-find instead of relabelling the mesh after each merge; the labels are recomputed once.
+  const int count = fragmentCount;
+  std::vector<int32_t> size(static_cast<size_t>(count), 0), low(static_cast<size_t>(count), std::numeric_limits<int32_t>::max());
+  for (Eigen::Index i = 0; i < labels.size(); ++i) {
+    const auto l = static_cast<size_t>(labels[i]);
+    ++size[l];
+    low[l] = std::min(low[l], static_cast<int32_t>(i));
+  }
+  if (std::none_of(size.begin(), size.end(), [&](int32_t n) { return n < minNodes; }) || count < 2) return 0;
+  std::vector<std::vector<int32_t>> members(static_cast<size_t>(count));
+  for (Eigen::Index i = 0; i < labels.size(); ++i) members[static_cast<size_t>(labels[i])].push_back(static_cast<int32_t>(i));
+  // Edges per node (CSR).
+  std::vector<int32_t> start(static_cast<size_t>(labels.size()) + 1, 0), incident(static_cast<size_t>(2 * topo.edges.rows()));
+  for (Eigen::Index e = 0; e < topo.edges.rows(); ++e) {
+    ++start[static_cast<size_t>(topo.edges(e, 0)) + 1];
+    ++start[static_cast<size_t>(topo.edges(e, 1)) + 1];
+  }
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<int32_t> fill(start.begin(), start.end() - 1);
+  for (Eigen::Index e = 0; e < topo.edges.rows(); ++e) {
+    incident[static_cast<size_t>(fill[static_cast<size_t>(topo.edges(e, 0))]++)] = static_cast<int32_t>(e);
+    incident[static_cast<size_t>(fill[static_cast<size_t>(topo.edges(e, 1))]++)] = static_cast<int32_t>(e);
+  }
+  std::vector<int32_t> root(static_cast<size_t>(count));
+  std::iota(root.begin(), root.end(), 0);
+  auto find = [&](int32_t x) {
+    while (root[static_cast<size_t>(x)] != x) x = root[static_cast<size_t>(x)] = root[static_cast<size_t>(root[static_cast<size_t>(x)])];
+    return x;
+  };
+  auto componentOf = [&](int32_t node) { return find(labels[node]); };
+  std::vector<char> stuck(static_cast<size_t>(count), 0);  // a crumb with no neighbour (a mesh in pieces)
+  std::vector<int32_t> shared(static_cast<size_t>(count), 0);
+  int merged = 0, alive = count;
+  while (alive > 1) {
+    int32_t crumb = -1;
+    for (int32_t c = 0; c < count; ++c) {
+      const auto k = static_cast<size_t>(c);
+      if (root[k] != c || stuck[k] || size[k] >= minNodes) continue;
+      if (crumb < 0 || size[k] < size[static_cast<size_t>(crumb)] ||
+          (size[k] == size[static_cast<size_t>(crumb)] && low[k] < low[static_cast<size_t>(crumb)])) {
+        crumb = c;
+      }
     }
     if (crumb < 0) break;
-    std::vector<int> shared(static_cast<size_t>(fragmentCount), 0);
-    for (Eigen::Index e = 0; e < topo.edges.rows(); ++e) {
-      const int a = labels[topo.edges(e, 0)], b = labels[topo.edges(e, 1)];
-      if (a == crumb && b != crumb) ++shared[static_cast<size_t>(b)];
-      if (b == crumb && a != crumb) ++shared[static_cast<size_t>(a)];
+    std::vector<int32_t> touched;
+    for (int32_t v : members[static_cast<size_t>(crumb)]) {
+      for (int32_t j = start[static_cast<size_t>(v)]; j < start[static_cast<size_t>(v) + 1]; ++j) {
+        const auto e = incident[static_cast<size_t>(j)];
+        const int32_t other = topo.edges(e, 0) == v ? topo.edges(e, 1) : topo.edges(e, 0);
+        const int32_t c = componentOf(other);
+        if (c == crumb) continue;
+        if (shared[static_cast<size_t>(c)]++ == 0) touched.push_back(c);
+      }
     }
-    const int into = static_cast<int>(std::max_element(shared.begin(), shared.end()) - shared.begin());
-    for (Eigen::Index e = 0; e < topo.edges.rows(); ++e) {
-      const int a = labels[topo.edges(e, 0)], b = labels[topo.edges(e, 1)];
-      if ((a == crumb && b == into) || (a == into && b == crumb)) edgeCuts[e] = std::numeric_limits<double>::quiet_NaN();
+    int32_t into = -1;
+    for (int32_t c : touched) {
+      const auto k = static_cast<size_t>(c);
+      if (into < 0 || shared[k] > shared[static_cast<size_t>(into)] ||
+          (shared[k] == shared[static_cast<size_t>(into)] && low[k] < low[static_cast<size_t>(into)])) {
+        into = c;
+      }
     }
-    fragmentCount = labelFragments(topo, edgeCuts, labels.size(), labels);
+    for (int32_t c : touched) shared[static_cast<size_t>(c)] = 0;
+    if (into < 0) {
+      stuck[static_cast<size_t>(crumb)] = 1;
+      continue;
+    }
+    for (int32_t v : members[static_cast<size_t>(crumb)]) {
+      for (int32_t j = start[static_cast<size_t>(v)]; j < start[static_cast<size_t>(v) + 1]; ++j) {
+        const auto e = incident[static_cast<size_t>(j)];
+        const int32_t other = topo.edges(e, 0) == v ? topo.edges(e, 1) : topo.edges(e, 0);
+        if (componentOf(other) == into) edgeCuts[e] = std::numeric_limits<double>::quiet_NaN();
+      }
+    }
+    const auto a = static_cast<size_t>(into), b = static_cast<size_t>(crumb);
+    root[b] = into;
+    size[a] += size[b];
+    low[a] = std::min(low[a], low[b]);
+    members[a].insert(members[a].end(), members[b].begin(), members[b].end());
+    members[b].clear();
     ++merged;
+    --alive;
   }
+  if (merged > 0) fragmentCount = labelFragments(topo, edgeCuts, labels.size(), labels);
   return merged;
 }
 

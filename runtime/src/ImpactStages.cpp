@@ -170,63 +170,77 @@ Status surfaceStage(const ImpactJob& job, ImpactResult& result) {
   return Ok{};
 }
 
-// The exact path: a small fragment's own modal analysis. Returns null when it cannot be done (e.g.
-// a fragment hanging by an edge), with the reason kept; the match is then tried.
-std::shared_ptr<const Body> exactBody(const ImpactJob& job, const ImpactResult& result, size_t i, std::string& reason) {
-  const Body& body = *job.body;
-  const FractureSettings& fs = *job.settings;
-  ExactModesSettings es;
-  es.modeCount = fs.modeCount > 0 ? std::min(fs.modeCount, fs.exactModeCount) : fs.exactModeCount;
-  auto sub = fragmentSubMesh(body.asset.tetMesh, body.topology, result.fracture.nodeLabels, result.fracture.edgeCuts,
-                             static_cast<int>(i));
-  if (!sub) {
-    reason = "exact path: " + sub.error().message;
-    return nullptr;
-  }
-  auto own = exactFragmentAsset(sub.value(), body.material, es, body.asset.name + ".f" + std::to_string(i));
-  if (!own) {
-    reason = "exact path: " + own.error().message;
-    return nullptr;
-  }
-  auto child = makeBody(std::move(own).value(), body.material, fs.modeCount);
-  if (!child) {
-    reason = "exact path: " + child.error().message;
-    return nullptr;
-  }
-  return std::move(child).value();
-}
+// What the fragments' deferred makers share: the broken body and its fracture state.
+struct BrokenParent {
+  std::shared_ptr<const Body> body;
+  Eigen::VectorXi nodeLabels;
+  Eigen::VectorXd edgeCuts;
+};
 
-// The database: the nearest entry, rescaled to the fragment's frame, size and material.
-std::shared_ptr<const Body> matchedBody(const ImpactJob& job, FragmentResult& fr) {
-  const Body& body = *job.body;
+// The database: the nearest entry and its placement (searched now, so that the result reports
+// it); the entry rescaled to the fragment is made later (BodySource).
+std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, FragmentResult& fr) {
+  const Material material = job.body->material;
+  const int modeCount = job.settings->modeCount;
   auto note = [&](const std::string& why) { fr.reason += (fr.reason.empty() ? "" : "; ") + why; };
   auto match = job.matcher->match(fr.surface, job.settings->descriptor, 1);
   if (!match) {  // e.g. a sliver whose frame is undefined
     note("match: " + match.error().message);
     return nullptr;
   }
-  const FragmentMatch& m = match.value().front();
-  auto placed = instantiateEntry(job.database->entries[static_cast<size_t>(m.entry)], job.database->referenceMaterial,
-                                 body.material, m.queryFrame);
-  if (!placed) {
-    note("entry " + std::to_string(m.entry) + ": " + placed.error().message);
-    return nullptr;
-  }
+  const FragmentMatch m = match.value().front();
   fr.matchedEntry = m.entry;
   fr.matchDistance = m.distance;
-  auto child = makeBody(std::move(placed).value(), body.material, job.settings->modeCount);
-  if (!child) {
-    note("entry " + std::to_string(m.entry) + ": " + child.error().message);
-    return nullptr;
-  }
-  return std::move(child).value();
+  const FragmentDatabase* db = job.database;
+  return BodySource::deferred([db, m, material, modeCount]() -> Result<std::shared_ptr<const Body>> {
+    auto placed = instantiateEntry(db->entries[static_cast<size_t>(m.entry)], db->referenceMaterial, material, m.queryFrame);
+    if (!placed) return Error{placed.error().code, "entry " + std::to_string(m.entry) + ": " + placed.error().message};
+    return makeBody(std::move(placed).value(), material, modeCount);
+  });
 }
 
-// New bodies for the fragments that are not debris: the exact path for small ones (at most
-// exactModesMaxTets of the parent's tets), else, or when it fails, the match. Fragments are
-// independent, so they are made in parallel on the World's workers; each writes only its own
-// entries, so the outcome does not depend on the thread count.
-void newBodiesStage(const ImpactJob& job, ImpactResult& result, std::vector<std::shared_ptr<const Body>>& born) {
+// The exact path: the fragment's own solid now (cheap, and where it fails, e.g. a fragment that
+// hangs by an edge, the match is taken instead); its modal analysis later (BodySource). Should
+// the analysis fail, the object takes the fragment's database match when there is a database.
+std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::shared_ptr<const BrokenParent>& parent,
+                                              const FragmentResult& fr, size_t i, std::string& reason) {
+  auto sub = fragmentSubMesh(parent->body->asset.tetMesh, parent->body->topology, parent->nodeLabels, parent->edgeCuts,
+                             static_cast<int>(i));
+  if (!sub) {
+    reason = "exact path: " + sub.error().message;
+    return nullptr;
+  }
+  const FractureSettings& fs = *job.settings;
+  ExactModesSettings es;
+  es.modeCount = fs.modeCount > 0 ? std::min(fs.modeCount, fs.exactModeCount) : fs.exactModeCount;
+  const int modeCount = fs.modeCount;
+  const DescriptorKind kind = fs.descriptor;
+  const FragmentMatcher* matcher = job.matcher;
+  const FragmentDatabase* db = job.database;
+  std::string name = parent->body->asset.name + ".f" + std::to_string(i);
+  TriangleMesh surface = matcher ? fr.surface : TriangleMesh{};
+  return BodySource::deferred([parent, mesh = std::move(sub).value(), es, modeCount, kind, matcher, db,
+                               name = std::move(name), surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
+    const Material& material = parent->body->material;
+    auto own = exactFragmentAsset(mesh, material, es, name);
+    Result<std::shared_ptr<const Body>> made = own ? makeBody(std::move(own).value(), material, modeCount)
+                                                   : Result<std::shared_ptr<const Body>>(own.error());
+    if (made || !matcher) return made;
+    auto match = matcher->match(surface, kind, 1);
+    if (!match) return made.error();
+    const FragmentMatch& m = match.value().front();
+    auto placed = instantiateEntry(db->entries[static_cast<size_t>(m.entry)], db->referenceMaterial, material, m.queryFrame);
+    if (!placed) return made.error();
+    return makeBody(std::move(placed).value(), material, modeCount);
+  });
+}
+
+// New objects for the fragments that are not debris: the exact path for small ones (at most
+// exactModesMaxTets of the parent's tets), else, or when their solid cannot be cut out, the
+// match. The heavy part of each (a modal analysis, an entry rescaled) is deferred into a
+// BodySource, which the World makes on its workers once the impact is applied; what stays here
+// is cheap. Fragments are independent and done in parallel; each writes only its own entries.
+void newBodiesStage(const ImpactJob& job, ImpactResult& result, std::vector<std::shared_ptr<const BodySource>>& born) {
   const FractureSettings& fs = *job.settings;
   born.assign(result.fragments.size(), nullptr);
   if (!fs.matchFragments) {
@@ -236,11 +250,16 @@ void newBodiesStage(const ImpactJob& job, ImpactResult& result, std::vector<std:
   }
   const std::vector<int64_t> sizes = fragmentTetCounts(job.body->asset.tetMesh, result.fracture.nodeLabels,
                                                        static_cast<int>(result.fragments.size()));
+  std::shared_ptr<const BrokenParent> parent;
+  if (fs.exactModesMaxTets > 0) {
+    parent = std::make_shared<const BrokenParent>(
+        BrokenParent{job.body, result.fracture.nodeLabels, result.fracture.edgeCuts});
+  }
   auto make = [&](size_t i) {
     FragmentResult& fr = result.fragments[i];
     if (fr.debris) return;
-    if (fs.exactModesMaxTets > 0 && sizes[i] <= fs.exactModesMaxTets) {
-      born[i] = exactBody(job, result, i, fr.reason);
+    if (parent && sizes[i] <= fs.exactModesMaxTets) {
+      born[i] = exactSource(job, parent, fr, i, fr.reason);
       if (born[i]) {
         fr.exactModes = true;
         fr.path = FragmentPath::ExactModes;
@@ -251,7 +270,7 @@ void newBodiesStage(const ImpactJob& job, ImpactResult& result, std::vector<std:
       fr.reason += (fr.reason.empty() ? "" : "; ") + std::string("no database to match against");
       return;
     }
-    born[i] = matchedBody(job, fr);
+    born[i] = matchedSource(job, fr);
     if (born[i]) fr.path = FragmentPath::Matched;
   };
   auto all = [&] {
@@ -284,10 +303,16 @@ void resetImpactResult(ImpactResult& r) {
   r.times = StageTimes{};
 }
 
-Status computeImpact(const ImpactJob& job, ImpactWorkspace& ws, ImpactResult& result,
-                     std::vector<std::shared_ptr<const Body>>& born) {
+Status computeImpact(const ImpactJob& submitted, ImpactWorkspace& ws, ImpactResult& result,
+                     std::vector<std::shared_ptr<const BodySource>>& born) {
   resetImpactResult(result);
   born.clear();
+  ImpactJob job = submitted;  // the struck body, made if it was not yet (a fragment's first impact)
+  if (!job.body) {
+    const auto& made = job.source->get();
+    if (!made) return Error{made.error().code, "the struck object's modal data could not be made: " + made.error().message};
+    job.body = made.value();
+  }
   Flow flow;
   StageTimes& t = result.times;
   auto t0 = Clock::now();

@@ -24,7 +24,8 @@ namespace brittle::detail {
 
 /// What an impact's computation reads.
 struct ImpactJob {
-  std::shared_ptr<const Body> body;  ///< the struck body
+  std::shared_ptr<const BodySource> source;  ///< the struck body, made on first use
+  std::shared_ptr<const Body> body;          ///< the same once made (set by computeImpact)
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< its pose when the impact was reported
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   ImpactDesc desc;
@@ -48,10 +49,10 @@ struct ImpactWorkspace {
 
 /// Computes the impact into `result` (reset first; fragment object ids are left invalid) and, per
 /// fragment, the body it becomes (`born`, parallel to result.fragments; null for debris and
-/// fragments that are not new objects). Errors: those of the stages (InvalidArgument for a point
+/// fragments that are not new objects), to be made on first use. Errors: those of the stages (InvalidArgument for a point
 /// off the surface, FactorizationFailed, …), each naming its stage.
 Status computeImpact(const ImpactJob& job, ImpactWorkspace& workspace, ImpactResult& result,
-                     std::vector<std::shared_ptr<const Body>>& born);
+                     std::vector<std::shared_ptr<const BodySource>>& born);
 
 /// Back to a default result, keeping the storage of loadWeights.
 void resetImpactResult(ImpactResult& result);

@@ -17,6 +17,7 @@ namespace brittle {
 namespace {
 
 using detail::Body;
+using detail::BodySource;
 using detail::makeBody;
 
 Error bad(const std::string& message) { return makeError(ErrorCode::InvalidArgument, message); }
@@ -32,7 +33,7 @@ struct Slot {
   uint32_t generation = 0;
   bool alive = false;
   bool pending = false;  // a submitted impact on it is not collected yet
-  std::shared_ptr<const Body> body;
+  std::shared_ptr<const BodySource> source;
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
 };
@@ -56,7 +57,7 @@ struct PendingImpact {
   detail::ImpactJob job;
   std::unique_ptr<detail::ImpactWorkspace> workspace;
   ImpactResult result;
-  std::vector<std::shared_ptr<const Body>> born;
+  std::vector<std::shared_ptr<const BodySource>> born;
   std::optional<Status> status;  // set by the worker, before done
   std::atomic<bool> done{false};
   tbb::task_group group;
@@ -68,13 +69,13 @@ struct World::Impl {
   Pack pack;
   WorldSettings settings;
   std::optional<FragmentMatcher> matcher;
-  std::vector<std::shared_ptr<const Body>> packBodies;  // per pack object, built on first use
+  std::vector<std::shared_ptr<const BodySource>> packBodies;  // per pack object, built on first use
   std::vector<Slot> slots;
   std::vector<uint32_t> freeSlots;
   uint64_t impacts = 0;
   int32_t live = 0;
   detail::ImpactWorkspace work;  // the synchronous impact()'s buffers
-  std::vector<std::shared_ptr<const Body>> born;
+  std::vector<std::shared_ptr<const BodySource>> born;
   // Asynchronous work: submitted impacts by ticket, spare workspaces, background preparation.
   std::unique_ptr<tbb::task_arena> arena;
   tbb::task_group background;
@@ -113,7 +114,7 @@ struct World::Impl {
     return freeSlots.size() + freed + (static_cast<size_t>(settings.maxObjects) - std::min(slots.size(), static_cast<size_t>(settings.maxObjects)));
   }
 
-  Result<ObjectId> place(std::shared_ptr<const Body> body, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& t) {
+  Result<ObjectId> place(std::shared_ptr<const BodySource> source, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& t) {
     uint32_t index;
     if (!freeSlots.empty()) {
       index = freeSlots.back();
@@ -128,7 +129,7 @@ struct World::Impl {
     Slot& s = slots[index];
     s.alive = true;
     s.pending = false;
-    s.body = std::move(body);
+    s.source = std::move(source);
     s.rotation = rotation;
     s.translation = t;
     ++live;
@@ -139,7 +140,7 @@ struct World::Impl {
     Slot& s = slots[id.index];
     s.alive = false;
     s.pending = false;
-    s.body.reset();
+    s.source.reset();
     ++s.generation;
     freeSlots.push_back(id.index);
     --live;
@@ -153,7 +154,7 @@ struct World::Impl {
     if (s.pending) return bad("impact: an impact on this object is pending (collect it first)");
     if (Status st = validateImpactDesc(desc); !st) return st.error();
     detail::ImpactJob job;
-    job.body = s.body;
+    job.source = s.source;
     job.rotation = s.rotation;
     job.translation = s.translation;
     job.desc = desc;
@@ -167,7 +168,7 @@ struct World::Impl {
 
   // Applies a computed impact: a broken object is replaced by its fragments, all or nothing.
   Status apply(ObjectId object, const detail::ImpactJob& job, ImpactResult& result,
-               std::vector<std::shared_ptr<const Body>>& newBodies) {
+               std::vector<std::shared_ptr<const BodySource>>& newBodies) {
     Slot& s = slots[object.index];
     s.pending = false;
     if (!result.broken) return Ok{};
@@ -179,10 +180,17 @@ struct World::Impl {
     remove(object);
     for (size_t i = 0; i < newBodies.size(); ++i) {
       if (!newBodies[i]) continue;
-      auto id = place(std::move(newBodies[i]), job.rotation, job.translation);
+      auto id = place(newBodies[i], job.rotation, job.translation);
       if (!id) return id.error();  // unreachable: capacity checked above
       result.fragments[i].object = id.value();
     }
+    // The fragments' modal data are made on the workers from now on (an impact or objectAsset
+    // that needs one first makes or waits for it).
+    workers().execute([&] {
+      for (auto& source : newBodies) {
+        if (source) background.run([source] { (void)source->get(); });
+      }
+    });
     newBodies.clear();
     return Ok{};
   }
@@ -262,7 +270,7 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
       if (mat == w.pack.materials.end()) return bad("object '" + desc.asset + "' names a missing material");
       auto body = makeBody(*it, *mat, w.settings.fracture.modeCount);
       if (!body) return body.error();
-      std::shared_ptr<const Body> made = std::move(body).value();
+      std::shared_ptr<const Body> made = body.value();
       if (w.settings.fracture.staticCorrection) {  // pack objects are prepared before their first impact
         if (w.settings.prepareInBackground) {
           made->scheduleStaticCorrection();
@@ -271,7 +279,7 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
           return correction.error();
         }
       }
-      w.packBodies[index] = std::move(made);
+      w.packBodies[index] = BodySource::ready(std::move(made));
     }
     return w.place(w.packBodies[index], desc.rotation, desc.translationM);
   } catch (const std::exception& e) {
@@ -293,14 +301,18 @@ int32_t World::objectCount() const { return mImpl->live; }
 Result<const ObjectAsset*> World::objectAsset(ObjectId id) const {
   auto s = mImpl->slot(id);
   if (!s) return s.error();
-  return &s.value()->body->asset;
+  const auto& body = s.value()->source->get();
+  if (!body) return body.error();
+  return &body.value()->asset;
 }
 
 Result<ObjectDesc> World::objectPose(ObjectId id) const {
   auto s = mImpl->slot(id);
   if (!s) return s.error();
   ObjectDesc d;
-  d.asset = s.value()->body->asset.name;
+  const auto& body = s.value()->source->get();
+  if (!body) return body.error();
+  d.asset = body.value()->asset.name;
   d.rotation = s.value()->rotation;
   d.translationM = s.value()->translation;
   return d;
@@ -394,8 +406,10 @@ Status World::waitUntilPrepared() {
   try {
     Impl& w = *mImpl;
     if (w.arena) w.arena->execute([&] { w.background.wait(); });
-    for (const auto& body : w.packBodies) {
-      if (!body || !body->staticCorrectionScheduled()) continue;
+    for (const auto& source : w.packBodies) {
+      if (!source) continue;
+      const std::shared_ptr<const Body>& body = source->get().value();  // pack bodies are made when placed
+      if (!body->staticCorrectionScheduled()) continue;
       if (const auto& correction = body->staticCorrection(); !correction) return correction.error();
     }
     return Ok{};
