@@ -57,6 +57,8 @@ Runner addPlayCommand(CLI::App& app) {
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--max-budget-waits", o->settings.maxBudgetWaits, "Steps an impact may wait for the frame budget")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--real-time", o->settings.realTime,
+               "Pace the frames in wall time, as a host would (workers get the time between an impact and its frame)");
   cmd->add_option("--latency-frames", o->settings.fractureLatencyFrames,
                   "Frames from a contact to its fracture, computed on worker threads meanwhile (0: at once, on the "
                   "player's thread; -1: the frames nearest to 33 ms)")

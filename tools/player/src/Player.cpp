@@ -4,6 +4,9 @@
 #include <btBulletDynamicsCommon.h>
 
 #include <Eigen/Eigenvalues>
+#include <LinearMath/btConvexHullComputer.h>
+#include <oneapi/tbb/parallel_for.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -12,6 +15,7 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <thread>
 
 #include "brittle/precompute/MaterialLibrary.h"
 
@@ -139,6 +143,33 @@ bool aabbsOverlap(const btRigidBody& a, const btRigidBody& b) {
   return true;
 }
 
+// A body's Bullet shape, computed apart from Bullet's world so that the fragments of a break can
+// be done in parallel: principal axes and moments, and the convex hull of the surface in them
+// (what btConvexHullShape::optimizeConvexHull keeps, computed the same way; the shape's box is
+// then that of the hull's vertices).
+struct Hull {
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d moments = Eigen::Vector3d::Zero();
+  btAlignedObjectArray<btVector3> points;
+  double sizeM = 0.0;  ///< largest distance of a surface point from the centre of mass
+};
+
+Hull convexHull(const TriangleMesh& surface, const MassProperties& mass) {
+  Hull h;
+  principalAxes(mass.inertiaKgM2, h.axes, h.moments);
+  btAlignedObjectArray<btVector3> all;
+  all.reserve(static_cast<int>(surface.vertices.rows()));
+  for (Eigen::Index v = 0; v < surface.vertices.rows(); ++v) {
+    const Eigen::Vector3d x = h.axes.transpose() * (surface.vertices.row(v).transpose() - mass.centerOfMassM);
+    h.sizeM = std::max(h.sizeM, x.norm());
+    all.push_back(bt(x));
+  }
+  btConvexHullComputer conv;
+  conv.compute(&all[0].getX(), sizeof(btVector3), all.size(), 0.f, 0.f);
+  for (int i = 0; i < conv.vertices.size(); ++i) h.points.push_back(conv.vertices[i]);
+  return h;
+}
+
 class Simulation {
  public:
   Simulation(World world, const Scene& scene, const PlayerSettings& settings)
@@ -182,6 +213,11 @@ class Simulation {
   // A hull body from a surface in its local frame, placed with the local frame at (rotation, translation).
   Body& addHullBody(BodyState state, const TriangleMesh& surface, const MassProperties& mass, bool isStatic,
                     const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {
+    return addHullBody(std::move(state), surface, mass, convexHull(surface, mass), isStatic, rotation, translation);
+  }
+
+  Body& addHullBody(BodyState state, const TriangleMesh& surface, const MassProperties& mass, const Hull& hull,
+                    bool isStatic, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {
     Body& b = mBodies.emplace_back();
     b.state = std::move(state);
     b.state.index = static_cast<int32_t>(mBodies.size() - 1);
@@ -189,19 +225,14 @@ class Simulation {
     b.state.massKg = mass.massKg;
     b.state.surface = surface;
     b.comLocal = mass.centerOfMassM;
-    Eigen::Vector3d moments;
-    principalAxes(mass.inertiaKgM2, b.axes, moments);
-    auto hull = std::make_unique<btConvexHullShape>();
-    for (Eigen::Index v = 0; v < surface.vertices.rows(); ++v) {
-      const Eigen::Vector3d x = b.axes.transpose() * (surface.vertices.row(v).transpose() - b.comLocal);
-      b.sizeM = std::max(b.sizeM, x.norm());
-      hull->addPoint(bt(x), false);
-    }
-    hull->recalcLocalAabb();
-    hull->optimizeConvexHull();
-    hull->setMargin(mSettings.collisionMarginM);
-    b.shape = std::move(hull);
-    finishBody(b, isStatic ? 0.0 : mass.massKg, moments, rotation * b.axes, rotation * b.comLocal + translation);
+    b.axes = hull.axes;
+    b.sizeM = hull.sizeM;
+    auto shape = std::make_unique<btConvexHullShape>();
+    for (int i = 0; i < hull.points.size(); ++i) shape->addPoint(hull.points[i], false);
+    shape->recalcLocalAabb();
+    shape->setMargin(mSettings.collisionMarginM);
+    b.shape = std::move(shape);
+    finishBody(b, isStatic ? 0.0 : mass.massKg, hull.moments, rotation * b.axes, rotation * b.comLocal + translation);
     return b;
   }
 
@@ -300,6 +331,11 @@ class Simulation {
     double timeS = 0.0;
     FrameStats fs;
     fs.frame = frame;
+    if (mSettings.realTime) {
+      if (frame == 0) mPaceStart = Clock::now();
+      std::this_thread::sleep_until(mPaceStart + std::chrono::duration_cast<Clock::duration>(
+                                                     std::chrono::duration<double>(static_cast<double>(frame) * mScene.timeStepS)));
+    }
     if (!mInFlight.empty()) {
       const auto t0 = Clock::now();
       fs.fractured = applyDue(frame, out);
@@ -634,6 +670,12 @@ class Simulation {
         o.rigid->setAngularVelocity(bt(flight->otherPreAngular));
       }
     }
+    // The fragments' hulls, in parallel (the largest cost of a break on this thread); the bodies
+    // are then added in order.
+    std::vector<Hull> hulls(mResult.fragments.size());
+    tbb::parallel_for(size_t{0}, hulls.size(), [&](size_t i) {
+      hulls[i] = convexHull(mResult.fragments[i].surface, mResult.fragments[i].massProperties);
+    });
     for (size_t i = 0; i < mResult.fragments.size(); ++i) {
       const FragmentResult& f = mResult.fragments[i];
       const Body& parent = mBodies[parentIndex];
@@ -646,7 +688,7 @@ class Simulation {
       const Eigen::Matrix3d runtimeRotation = parent.runtimeRotation;
       const Eigen::Vector3d runtimeTranslation = parent.runtimeTranslation;
       const double cooldown = parent.cooldownUntilS;
-      Body& b = addHullBody(std::move(state), f.surface, f.massProperties, false, rotation, translation);
+      Body& b = addHullBody(std::move(state), f.surface, f.massProperties, hulls[i], false, rotation, translation);
       b.object = f.object;
       b.material = material;
       b.rigid->setRestitution(material.restitution);
@@ -725,6 +767,7 @@ class Simulation {
   std::vector<Body> mBodies;
   std::vector<Candidate> mDeferred;
   std::vector<InFlight> mInFlight;  // submitted impacts, in submission order
+  Clock::time_point mPaceStart;      // realTime: the wall time of frame 0
   PlayResult mOut;
   int64_t mFrame = 0;
   int64_t mDeferredCount = 0;

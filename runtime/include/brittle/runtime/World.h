@@ -36,7 +36,10 @@
 // the Griffith stop (CrackPropagation.h) → fragment surfaces (FragmentSurfaces.h) → per fragment:
 // exact mass properties, and unless it is debris, the nearest database entry rescaled to it
 // (FragmentMatcher.h, ScalingLaws.h) or, for small fragments, its own modal analysis
-// (FragmentModes.h, exactModesMaxTets), which becomes a new object that can break again. A
+// (FragmentModes.h, exactModesMaxTets), which becomes a new object that can break again. The
+// heavy part of a new object (its own modal analysis, or its entry rescaled) is made after the
+// impact, on the World's workers, or by the first call that needs it (its first impact,
+// objectAsset), which then waits for it: an impact returns once its fragments are known. A
 // breaking impact is all or nothing: when a stage fails, or the fragments would not fit in
 // maxObjects, the world is left as it was and the call returns the error.
 #pragma once
@@ -162,7 +165,10 @@ enum class FragmentPath : uint8_t {
 std::string_view fragmentPathName(FragmentPath path);
 
 struct FragmentResult {
-  ObjectId object;              ///< the new breakable object; invalid for debris and unmatched fragments
+  /// The new breakable object; invalid for debris and unmatched fragments. Its modal data are made
+  /// after the impact (see above); should that fail, its impacts and objectAsset return the error
+  /// (an exact-path fragment whose analysis fails takes its database match instead, if any).
+  ObjectId object;
   FragmentPath path = FragmentPath::SurfaceOnly;
   /// Why a fragment is SurfaceOnly (matching off, no database, the match or the entry failed), or
   /// why the exact path fell back to the match; empty otherwise.

@@ -79,6 +79,11 @@ struct PlayerSettings {
   /// database entry, not its exact surface.
   double pointToleranceFraction = 0.5;
   bool recordTracks = false;        ///< keep every body's pose per frame (for a replay)
+  /// Paced as a host would be: each frame starts no earlier than its time in the play (frame ×
+  /// time step of wall time after the first), so that workers get the wall time a real-time host
+  /// gives them between an impact and its application. Frame times exclude the sleep. Results do
+  /// not change; only how long the play takes.
+  bool realTime = false;
   WorldSettings world;              ///< world.seed is replaced by the scene's seed
 };
 
