@@ -3,11 +3,13 @@
 #include "BenchSupport.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <random>
 #include <string>
 
+#include "brittle/database/Pack.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/runtime/World.h"
@@ -19,6 +21,15 @@ Status runImpactBench(const ImpactBenchSettings& s) {
   if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.csv.string());
   csv << "target_tets,tets,modes,prune,stage,impacts,median_ms,p99_ms,broken_fraction,mean_fragments,median_evaluations\n";
   const Material glass = materialPreset("glass").value();
+  FragmentDatabase database;
+  if (!s.databasePack.empty()) {
+    auto source = readPack(s.databasePack);
+    if (!source) return source.error();
+    database = std::move(source.value().database);
+    if (database.empty() || !database.hasPhysics()) {
+      return makeError(ErrorCode::InvalidArgument, s.databasePack.string() + " has no fragment database with modal data");
+    }
+  }
   const int maxModes = *std::max_element(s.modes.begin(), s.modes.end());
   for (int64_t target : s.tets) {
     ObjectBakeSettings b;
@@ -32,19 +43,24 @@ Status runImpactBench(const ImpactBenchSettings& s) {
     Pack pack;
     pack.materials.push_back(glass);
     pack.objects.push_back(std::move(asset).value());
+    pack.database = database;
     for (int modes : s.modes) {
       for (bool prune : {true, false}) {
         WorldSettings ws;
         ws.seed = s.seed;
         ws.fracture.modeCount = modes;
         ws.fracture.pruneStresses = prune;
-        ws.fracture.matchFragments = false;  // no database in this pack; matching is measured by bench search
+        // Without a database fragments stay surfaces; with one they become objects, and the World
+        // has one worker (this thread) so that making their bodies can be timed.
+        ws.fracture.matchFragments = !database.empty();
+        ws.fracture.exactModesMaxTets = s.exactModesMaxTets;
+        ws.workerThreads = 1;
         auto world = World::create(Pack(pack), ws);
         if (!world) return world.error();
         if (auto warm = world.value().addObject({.asset = "pane"}); !warm) return warm.error();  // factorises K
         std::mt19937_64 rng(s.seed);
         std::uniform_real_distribution<double> where(-0.08, 0.08);
-        std::vector<std::vector<double>> stage(8);
+        std::vector<std::vector<double>> stage(10);
         std::vector<double> evaluations;
         int broken = 0;
         double fragments = 0.0;
@@ -64,9 +80,14 @@ Status runImpactBench(const ImpactBenchSettings& s) {
           if (Status st = world.value().impact(d, result); !st) return st.error();
           const ImpactResult& r = result;
           const StageTimes& t = r.times;
+          const auto b0 = std::chrono::steady_clock::now();
+          for (const FragmentResult& f : r.fragments) {  // makes each new object's modal data
+            if (f.object.valid()) (void)world.value().objectAsset(f.object);
+          }
+          const double bodiesS = std::chrono::duration<double>(std::chrono::steady_clock::now() - b0).count();
           const double ms[] = {t.contactS, t.modalS, t.stressS, t.propagationS, t.surfacesS, t.matchingS, t.totalS(),
-                               t.totalS() - t.surfacesS - t.propagationS};
-          for (size_t k = 0; k < 8; ++k) stage[k].push_back(1e3 * ms[k]);
+                               t.totalS() - t.surfacesS - t.propagationS, bodiesS, t.totalS() + bodiesS};
+          for (size_t k = 0; k < 10; ++k) stage[k].push_back(1e3 * ms[k]);
           evaluations.push_back(static_cast<double>(r.stressEvaluations));
           broken += r.broken ? 1 : 0;
           fragments += static_cast<double>(r.fragments.size());
@@ -76,17 +97,19 @@ Status runImpactBench(const ImpactBenchSettings& s) {
           }
         }
         static const char* kStages[] = {"contact", "modal", "stress", "propagation", "surfaces", "matching", "total",
-                                        "to_initiation"};
-        for (size_t k = 0; k < 8; ++k) {
+                                        "to_initiation", "bodies", "to_objects"};
+        for (size_t k = 0; k < 10; ++k) {
           csv << target << "," << tets << "," << modes << "," << (prune ? 1 : 0) << "," << kStages[k] << "," << s.impacts
               << "," << percentile(stage[k], 0.5) << "," << percentile(stage[k], 0.99) << ","
               << static_cast<double>(broken) / s.impacts << "," << fragments / s.impacts << "," << percentile(evaluations, 0.5)
               << "\n";
         }
         if (!s.quiet) {
-          std::printf("%6lld tets %3d modes %-9s total median %8.2f ms p99 %8.2f ms (stress %.2f, cracks %.2f, surfaces %.2f)\n",
+          std::printf("%6lld tets %3d modes %-9s total median %8.2f ms p99 %8.2f ms (stress %.2f, cracks %.2f, surfaces %.2f, "
+                      "matching %.2f); bodies after %.2f ms; %.1f fragments\n",
                       static_cast<long long>(tets), modes, prune ? "pruned" : "unpruned", percentile(stage[6], 0.5),
-                      percentile(stage[6], 0.99), percentile(stage[2], 0.5), percentile(stage[3], 0.5), percentile(stage[4], 0.5));
+                      percentile(stage[6], 0.99), percentile(stage[2], 0.5), percentile(stage[3], 0.5), percentile(stage[4], 0.5),
+                      percentile(stage[5], 0.5), percentile(stage[8], 0.5), fragments / s.impacts);
           std::fflush(stdout);
         }
       }

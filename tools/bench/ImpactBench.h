@@ -5,6 +5,13 @@
 // `impacts` times with a 100 g steel ball at random points of its top face, at `speedMps`. Each impact is timed per stage; the same impacts without pruning
 // are timed in the same run as the reference. Output: one CSV row per setting and stage with the
 // median and p99 (ms), and the pruned/unpruned ratio of the medians.
+//
+// With a database (`databasePack`: a pack whose fragment database is used, e.g. the default pack's
+// 70 entries or a 10⁴-entry one from bake-db), fragments become objects as in a scene: the exact
+// path up to exactModesMaxTets, the database match beyond. The stage "matching" is what the impact
+// itself spends on them (the fragment's solid, the database search); "bodies" is making their
+// modal data afterwards (World: on its workers; here on the caller's thread, one worker, so that
+// it is timed), and "to_objects" the sum: contact to every fragment a breakable object.
 #pragma once
 
 #include <cstdint>
@@ -22,6 +29,8 @@ struct ImpactBenchSettings {
   double speedMps = 50.0;   // breaks the slab every time (5 fragments on average at 1k tets)
   uint64_t seed = 1;
   std::filesystem::path csv = "bench/impact_latency.csv";
+  std::filesystem::path databasePack;  ///< empty: no database, fragments stay surfaces
+  int exactModesMaxTets = 150;         ///< with a database: the World's default
   bool quiet = false;
 };
 

@@ -311,6 +311,11 @@ Runner addBenchCommand(CLI::App& app) {
   impact->add_option("--speed", is->speedMps, "Impact speed (m/s)")->capture_default_str();
   impact->add_option("--seed", is->seed, "Seed of the impact points and cracks")->capture_default_str();
   impact->add_option("--csv", is->csv, "Output CSV")->capture_default_str();
+  impact->add_option("--database", is->databasePack,
+                     "A pack whose fragment database the fragments are matched against (none: they stay surfaces)");
+  impact->add_option("--exact-max-tets", is->exactModesMaxTets,
+                     "With a database: fragments of at most this many parent tets get their own modes (0: all matched)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   impact->add_flag("--quiet", is->quiet, "No progress lines");
   auto* integrators = cmd->add_subcommand(
       "integrators", "Error and stability of the modal time integrators against the time step (ωh from 0.01 to 100)");
