@@ -37,4 +37,15 @@ struct ImpactBenchSettings {
 /// Errors: those of the bake and the runtime, PackIoError when the CSV cannot be written.
 Status runImpactBench(const ImpactBenchSettings& settings);
 
+/// `brittle bench place PACK`: what placing each pack object costs the caller (World::addObject,
+/// its first instance: topology, stress bounds; the K factorisation starts on a worker), against
+/// the reference measured in the same run, reading the object's bytes from the pack (the pack's
+/// read time shared out by the objects' array bytes), and the background preparation it starts.
+struct PlacementBenchSettings {
+  std::filesystem::path pack;
+  int repeats = 5;  ///< medians over this many fresh worlds
+  std::filesystem::path csv = "bench/placement.csv";
+};
+Status runPlacementBench(const PlacementBenchSettings& settings);
+
 }  // namespace brittle::bench

@@ -311,6 +311,11 @@ Runner addBenchCommand(CLI::App& app) {
   impact->add_option("--speed", is->speedMps, "Impact speed (m/s)")->capture_default_str();
   impact->add_option("--seed", is->seed, "Seed of the impact points and cracks")->capture_default_str();
   impact->add_option("--csv", is->csv, "Output CSV")->capture_default_str();
+  auto pb = std::make_shared<bench::PlacementBenchSettings>();
+  auto* place = cmd->add_subcommand("place", "Placing each object of a pack against reading its bytes (and its background preparation)");
+  place->add_option("pack", pb->pack, "The pack")->required()->check(CLI::ExistingFile);
+  place->add_option("--repeats", pb->repeats, "Fresh worlds per object (medians)")->capture_default_str()->check(CLI::Range(1, 1000));
+  place->add_option("--csv", pb->csv, "Output CSV")->capture_default_str();
   impact->add_option("--database", is->databasePack,
                      "A pack whose fragment database the fragments are matched against (none: they stay surfaces)");
   impact->add_option("--exact-max-tets", is->exactModesMaxTets,
@@ -376,7 +381,7 @@ Runner addBenchCommand(CLI::App& app) {
   exact->add_option("--repeats", xb->repeats, "Timing repeats (median)")->capture_default_str()->check(CLI::Range(1, 100));
   exact->add_option("--csv", xb->csv, "Output CSV")->capture_default_str();
   exact->add_flag("--quiet", xb->quiet, "No progress lines");
-  return [s, shapes, kinds, indices, impact, is, integrators, ib, modes, mb, resolution, rb, fracture, fb, exact, xb]() -> int {
+  return [s, shapes, kinds, indices, impact, is, place, pb, integrators, ib, modes, mb, resolution, rb, fracture, fb, exact, xb]() -> int {
     if (exact->parsed()) {
       if (xb->csv.has_parent_path()) std::filesystem::create_directories(xb->csv.parent_path());
       if (Status st = bench::runExactModesBench(*xb); !st) return reportError(st.error());
@@ -410,6 +415,12 @@ Runner addBenchCommand(CLI::App& app) {
       }
       if (Status st = bench::runIntegratorBench(*ib); !st) return reportError(st.error());
       std::cout << "wrote " << ib->csv.string() << " and " << ib->timingCsv.string() << "\n";
+      return kExitOk;
+    }
+    if (place->parsed()) {
+      if (pb->csv.has_parent_path()) std::filesystem::create_directories(pb->csv.parent_path());
+      if (Status st = bench::runPlacementBench(*pb); !st) return reportError(st.error());
+      std::cout << "wrote " << pb->csv.string() << "\n";
       return kExitOk;
     }
     if (impact->parsed()) {
