@@ -30,6 +30,7 @@ std::string_view errorCodeName(ErrorCode code) {
     case ErrorCode::PackShapeMismatch: return "pack_shape_mismatch";
     case ErrorCode::InvalidArgument: return "invalid_argument";
     case ErrorCode::Cancelled: return "cancelled";
+    case ErrorCode::CapacityExceeded: return "capacity_exceeded";
   }
   return "unknown";
 }

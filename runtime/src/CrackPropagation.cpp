@@ -6,7 +6,6 @@
 #include <limits>
 #include <cmath>
 #include <numeric>
-#include <queue>
 #include <random>
 
 namespace brittle {
@@ -64,20 +63,12 @@ bool faceCut(const TetMesh& mesh, Eigen::Index e, int f, const Eigen::Vector4d& 
   return true;
 }
 
-struct Front {
-  double priority;  // normal stress on the parent plane
-  int32_t element;
-  int32_t crack;
-  Eigen::Vector3d normal;  // parent's plane normal (orients the local principal direction)
-  Eigen::Vector3d point;   // the parent's cut through the shared face: the new plane contains it
-  Eigen::Vector3d point2;
-};
-struct FrontOrder {
-  bool operator()(const Front& a, const Front& b) const {
-    if (a.priority != b.priority) return a.priority < b.priority;  // strongest first
-    return a.element > b.element;                                  // ties: lowest id first
-  }
-};
+using Front = CrackWorkspace::Front;
+// Heap order: strongest normal stress on top; ties: lowest element id first.
+bool weaker(const Front& a, const Front& b) {
+  if (a.priority != b.priority) return a.priority < b.priority;
+  return a.element > b.element;
+}
 
 }  // namespace
 
@@ -204,9 +195,35 @@ void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eig
   for (const auto& [s1, e] : w.seeds) scan.seeds.push_back(e);
 }
 
+void CrackWorkspace::reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index edges, int cracks) {
+  const auto n = static_cast<size_t>(nodes), t = static_cast<size_t>(tets), c = static_cast<size_t>(std::max(cracks, 1));
+  front.reserve(4 * t);
+  cut.reserve(t);
+  stressKnown.reserve(t);
+  stressCache.reserve(t);
+  phi.reserve(c * n);
+  cutBy.reserve(c * t);
+  seedNormals.reserve(c);
+  for (auto* v : {&parent, &labelOfRoot, &size, &low, &root, &shared, &head, &tail, &touched, &next, &fill}) v->reserve(n);
+  start.reserve(n + 1);
+  incident.reserve(2 * static_cast<size_t>(edges));
+  stuck.reserve(n);
+}
+
 Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& topo, const StressScan& scan,
                                       const StressField& field, double sigmaT, double gc, double budget,
                                       const CrackSettings& settings) {
+  CrackWorkspace workspace;
+  FractureState state;
+  if (Status st = propagateCracks(mesh, topo, scan, field, sigmaT, gc, budget, settings, workspace, state); !st) {
+    return st.error();
+  }
+  return state;
+}
+
+Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const StressScan& scan, const StressField& field,
+                       double sigmaT, double gc, double budget, const CrackSettings& settings, CrackWorkspace& w,
+                       FractureState& state) {
   if (settings.maxCracks < 0 || std::isnan(settings.propagationStressRatio) || !(settings.directionBlend >= 0.0) ||
       !(settings.directionBlend <= 1.0) || !(settings.noiseRad >= 0.0)) {
     return makeError(ErrorCode::InvalidArgument, "crack settings: maxCracks ≥ 0, propagationStressRatio not NaN, "
@@ -216,14 +233,26 @@ Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& to
     return makeError(ErrorCode::InvalidArgument, "crack growth needs σ_t > 0, G_c > 0 and a finite energy budget");
   }
   const Eigen::Index t = mesh.tets.rows();
-  FractureState state;
+  const auto nodeCount = static_cast<size_t>(mesh.nodes.rows()), tetCount = static_cast<size_t>(t);
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  state.cutElements.clear();
+  state.cutPlanes.clear();
+  state.fragmentCount = 1;
+  state.crackCount = 0;
+  state.crackAreaM2 = 0.0;
+  state.energySpentJ = 0.0;
+  state.arrestedByEnergy = false;
+  state.mergedCrumbs = 0;
   state.energyBudgetJ = budget;
-  state.edgeCuts = Eigen::VectorXd::Constant(topo.edges.rows(), std::numeric_limits<double>::quiet_NaN());
-  std::vector<char> cut(static_cast<size_t>(t), 0);
+  state.edgeCuts.resize(topo.edges.rows());
+  state.edgeCuts.setConstant(kNaN);
+  w.cut.assign(tetCount, 0);
+  w.front.clear();
+  w.seedNormals.clear();  // per crack: the plane it started on
+  w.phi.clear();
+  w.cutBy.clear();
   std::mt19937_64 rng(settings.seed);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  std::priority_queue<Front, std::vector<Front>, FrontOrder> front;
-  std::vector<Eigen::Vector3d> seedNormals;  // per crack: the plane it started on
 
   // Each crack is the zero set of a nodal level set φ_c, piecewise linear over the tets. A cut
   // element gives its plane's signed distance to those of its nodes that have no value yet; the
@@ -231,19 +260,20 @@ Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& to
   // across elements, so a crack crosses a layer of elements instead of thickening into a blob, and
   // every edge it crosses is cut at the same point from every element around it.
   // Stresses at the peak instant, each computed once (an element is read by its cut neighbours).
-  std::vector<Voigt> stressCache(static_cast<size_t>(t));
-  std::vector<char> stressKnown(static_cast<size_t>(t), 0);
+  w.stressCache.resize(tetCount);
+  w.stressKnown.assign(tetCount, 0);
   auto stressAt = [&](int32_t e) -> const Voigt& {
-    if (!stressKnown[static_cast<size_t>(e)]) {
-      stressCache[static_cast<size_t>(e)] = field.at(e);
-      stressKnown[static_cast<size_t>(e)] = 1;
+    if (!w.stressKnown[static_cast<size_t>(e)]) {
+      w.stressCache[static_cast<size_t>(e)] = field.at(e);
+      w.stressKnown[static_cast<size_t>(e)] = 1;
     }
-    return stressCache[static_cast<size_t>(e)];
+    return w.stressCache[static_cast<size_t>(e)];
   };
-  std::vector<std::vector<double>> phi;
-  std::vector<std::vector<char>> cutBy;  // per crack: cracks cross each other, each needs its whole sheet
+  // Per crack c: φ_c at w.phi[c·#N + node], and whether it cut element e at w.cutBy[c·#T + e]
+  // (cracks cross each other, each needs its whole sheet).
+  auto cutBy = [&](int32_t crack, int32_t e) -> char& { return w.cutBy[static_cast<size_t>(crack) * tetCount + static_cast<size_t>(e)]; };
   auto apply = [&](int32_t e, const Eigen::Vector3d& n, double offset, int32_t crack) -> bool {
-    std::vector<double>& level = phi[static_cast<size_t>(crack)];
+    double* level = w.phi.data() + static_cast<size_t>(crack) * nodeCount;
     Eigen::Vector4d d;
     for (int i = 0; i < 4; ++i) {
       double& v = level[static_cast<size_t>(mesh.tets(e, i))];
@@ -259,9 +289,9 @@ Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& to
     }
     state.energySpentJ += cost;
     state.crackAreaM2 += area;
-    cutBy[static_cast<size_t>(crack)][static_cast<size_t>(e)] = 1;
-    if (!cut[static_cast<size_t>(e)]) state.cutElements.push_back(e);
-    cut[static_cast<size_t>(e)] = 1;
+    cutBy(crack, e) = 1;
+    if (!w.cut[static_cast<size_t>(e)]) state.cutElements.push_back(e);
+    w.cut[static_cast<size_t>(e)] = 1;
     state.cutPlanes.emplace_back(n.x(), n.y(), n.z(), offset);
     for (int k = 0; k < 6; ++k) {
       const auto [i, j] = kTetEdges[static_cast<size_t>(k)];
@@ -275,9 +305,10 @@ Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& to
     for (int f = 0; f < 4; ++f) {
       const int32_t nb = topo.neighbours(e, f);
       Eigen::Vector3d a, b;
-      if (nb < 0 || cutBy[static_cast<size_t>(crack)][static_cast<size_t>(nb)] || !faceCut(mesh, e, f, d, a, b)) continue;
+      if (nb < 0 || cutBy(crack, nb) || !faceCut(mesh, e, f, d, a, b)) continue;
       const Voigt& sNb = stressAt(nb);
-      front.push({n.dot(tensor(sNb) * n), nb, crack, n, a, b});
+      w.front.push_back({n.dot(tensor(sNb) * n), nb, crack, n, a, b});
+      std::push_heap(w.front.begin(), w.front.end(), weaker);
     }
     return true;
   };
@@ -285,27 +316,28 @@ Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& to
   // Seeds: strongest first; one crack per seed that is neither cut nor next to a cut element.
   for (int32_t e : scan.seeds) {
     if (state.crackCount >= settings.maxCracks || state.arrestedByEnergy) break;
-    bool nearCut = cut[static_cast<size_t>(e)] != 0;
+    bool nearCut = w.cut[static_cast<size_t>(e)] != 0;
     for (int f = 0; f < 4 && !nearCut; ++f) {
       const int32_t nb = topo.neighbours(e, f);
-      nearCut = nb >= 0 && cut[static_cast<size_t>(nb)];
+      nearCut = nb >= 0 && w.cut[static_cast<size_t>(nb)];
     }
     if (nearCut) continue;
     Eigen::Vector3d dir;
     maxPrincipalStress(stressAt(e), &dir);
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
     for (int i = 0; i < 4; ++i) centroid += 0.25 * mesh.nodes.row(mesh.tets(e, i)).transpose();
-    seedNormals.push_back(dir);
-    phi.emplace_back(static_cast<size_t>(mesh.nodes.rows()), std::numeric_limits<double>::quiet_NaN());
-    cutBy.emplace_back(static_cast<size_t>(t), 0);
+    w.seedNormals.push_back(dir);
+    w.phi.insert(w.phi.end(), nodeCount, kNaN);
+    w.cutBy.insert(w.cutBy.end(), tetCount, 0);
     if (!apply(e, dir, dir.dot(centroid), state.crackCount)) break;
     ++state.crackCount;
   }
   // Fronts advance together, strongest normal stress first.
-  while (!front.empty() && !state.arrestedByEnergy) {
-    const Front f = front.top();
-    front.pop();
-    if (cutBy[static_cast<size_t>(f.crack)][static_cast<size_t>(f.element)]) continue;
+  while (!w.front.empty() && !state.arrestedByEnergy) {
+    std::pop_heap(w.front.begin(), w.front.end(), weaker);
+    const Front f = w.front.back();
+    w.front.pop_back();
+    if (cutBy(f.crack, f.element)) continue;
     const Voigt& s = stressAt(f.element);
     Eigen::Vector3d dir;
     const double s1 = maxPrincipalStress(s, &dir);
@@ -313,7 +345,7 @@ Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& to
     // Blend with the crack's starting plane, not the parent's: blending with the parent would let
     // the noise accumulate into a random walk of orientations, and the sheet would curl up and fill
     // the body instead of running through it.
-    Eigen::Vector3d start = seedNormals[static_cast<size_t>(f.crack)];
+    Eigen::Vector3d start = w.seedNormals[static_cast<size_t>(f.crack)];
     if (start.dot(f.normal) < 0.0) start = -start;
     // The local direction steers in proportion to how close the tension is to σ_t: where the
     // stress is low its direction means little, and the crack runs on straight.
@@ -334,107 +366,134 @@ Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& to
     if (n.dot(tensor(s) * n) < settings.propagationStressRatio * sigmaT) continue;
     if (!apply(f.element, n, n.dot(f.point), f.crack)) break;
   }
-  state.fragmentCount = labelFragments(topo, state.edgeCuts, mesh.nodes.rows(), state.nodeLabels);
-  state.mergedCrumbs = mergeCrumbs(topo, settings.minFragmentNodes, state.edgeCuts, state.nodeLabels, state.fragmentCount);
-  return state;
+  state.fragmentCount = labelFragments(topo, state.edgeCuts, mesh.nodes.rows(), state.nodeLabels, w);
+  state.mergedCrumbs = mergeCrumbs(topo, settings.minFragmentNodes, state.edgeCuts, state.nodeLabels, state.fragmentCount, w);
+  return Ok{};
 }
 
 int mergeCrumbs(const TetTopology& topo, int minNodes, Eigen::VectorXd& edgeCuts, Eigen::VectorXi& labels,
                 int& fragmentCount) {
+  CrackWorkspace workspace;
+  return mergeCrumbs(topo, minNodes, edgeCuts, labels, fragmentCount, workspace);
+}
+
+int mergeCrumbs(const TetTopology& topo, int minNodes, Eigen::VectorXd& edgeCuts, Eigen::VectorXi& labels,
+                int& fragmentCount, CrackWorkspace& w) {
   // The components as they come in (labels numbered by lowest node), merged one crumb at a time:
   // the smallest (ties: lowest first node, i.e. lowest label) joins the neighbour it shares most
   // cut edges with (ties: lowest first node). Merging two components that share edges and
   // un-cutting those edges gives exactly their union, so the components are tracked with a
   // union-find instead of relabelling the mesh after each merge; the labels are recomputed once.
   const int count = fragmentCount;
-  std::vector<int32_t> size(static_cast<size_t>(count), 0), low(static_cast<size_t>(count), std::numeric_limits<int32_t>::max());
+  const auto n = static_cast<size_t>(labels.size()), c = static_cast<size_t>(count);
+  w.size.assign(c, 0);
+  w.low.assign(c, std::numeric_limits<int32_t>::max());
   for (Eigen::Index i = 0; i < labels.size(); ++i) {
     const auto l = static_cast<size_t>(labels[i]);
-    ++size[l];
-    low[l] = std::min(low[l], static_cast<int32_t>(i));
+    ++w.size[l];
+    w.low[l] = std::min(w.low[l], static_cast<int32_t>(i));
   }
-  if (std::none_of(size.begin(), size.end(), [&](int32_t n) { return n < minNodes; }) || count < 2) return 0;
-  std::vector<std::vector<int32_t>> members(static_cast<size_t>(count));
-  for (Eigen::Index i = 0; i < labels.size(); ++i) members[static_cast<size_t>(labels[i])].push_back(static_cast<int32_t>(i));
+  if (std::none_of(w.size.begin(), w.size.end(), [&](int32_t k) { return k < minNodes; }) || count < 2) return 0;
+  // Members of each component as linked lists (head, next, tail), so that a merge is a splice.
+  w.head.assign(c, -1);
+  w.tail.assign(c, -1);
+  w.next.assign(n, -1);
+  for (Eigen::Index i = 0; i < labels.size(); ++i) {
+    const auto l = static_cast<size_t>(labels[i]);
+    if (w.tail[l] < 0) w.head[l] = static_cast<int32_t>(i);
+    else w.next[static_cast<size_t>(w.tail[l])] = static_cast<int32_t>(i);
+    w.tail[l] = static_cast<int32_t>(i);
+  }
   // Edges per node (CSR).
-  std::vector<int32_t> start(static_cast<size_t>(labels.size()) + 1, 0), incident(static_cast<size_t>(2 * topo.edges.rows()));
+  w.start.assign(n + 1, 0);
+  w.incident.resize(static_cast<size_t>(2 * topo.edges.rows()));
   for (Eigen::Index e = 0; e < topo.edges.rows(); ++e) {
-    ++start[static_cast<size_t>(topo.edges(e, 0)) + 1];
-    ++start[static_cast<size_t>(topo.edges(e, 1)) + 1];
+    ++w.start[static_cast<size_t>(topo.edges(e, 0)) + 1];
+    ++w.start[static_cast<size_t>(topo.edges(e, 1)) + 1];
   }
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<int32_t> fill(start.begin(), start.end() - 1);
+  std::partial_sum(w.start.begin(), w.start.end(), w.start.begin());
+  w.fill.assign(w.start.begin(), w.start.end() - 1);
   for (Eigen::Index e = 0; e < topo.edges.rows(); ++e) {
-    incident[static_cast<size_t>(fill[static_cast<size_t>(topo.edges(e, 0))]++)] = static_cast<int32_t>(e);
-    incident[static_cast<size_t>(fill[static_cast<size_t>(topo.edges(e, 1))]++)] = static_cast<int32_t>(e);
+    w.incident[static_cast<size_t>(w.fill[static_cast<size_t>(topo.edges(e, 0))]++)] = static_cast<int32_t>(e);
+    w.incident[static_cast<size_t>(w.fill[static_cast<size_t>(topo.edges(e, 1))]++)] = static_cast<int32_t>(e);
   }
-  std::vector<int32_t> root(static_cast<size_t>(count));
-  std::iota(root.begin(), root.end(), 0);
+  w.root.resize(c);
+  std::iota(w.root.begin(), w.root.end(), 0);
   auto find = [&](int32_t x) {
-    while (root[static_cast<size_t>(x)] != x) x = root[static_cast<size_t>(x)] = root[static_cast<size_t>(root[static_cast<size_t>(x)])];
+    while (w.root[static_cast<size_t>(x)] != x) {
+      x = w.root[static_cast<size_t>(x)] = w.root[static_cast<size_t>(w.root[static_cast<size_t>(x)])];
+    }
     return x;
   };
   auto componentOf = [&](int32_t node) { return find(labels[node]); };
-  std::vector<char> stuck(static_cast<size_t>(count), 0);  // a crumb with no neighbour (a mesh in pieces)
-  std::vector<int32_t> shared(static_cast<size_t>(count), 0);
+  // Calls visit(edge, other node) for each edge from a member of component `from`.
+  auto forEachEdgeOut = [&](int32_t from, auto&& visit) {
+    for (int32_t v = w.head[static_cast<size_t>(from)]; v >= 0; v = w.next[static_cast<size_t>(v)]) {
+      for (int32_t j = w.start[static_cast<size_t>(v)]; j < w.start[static_cast<size_t>(v) + 1]; ++j) {
+        const auto e = w.incident[static_cast<size_t>(j)];
+        visit(e, topo.edges(e, 0) == v ? topo.edges(e, 1) : topo.edges(e, 0));
+      }
+    }
+  };
+  w.stuck.assign(c, 0);  // a crumb with no neighbour (a mesh in pieces)
+  w.shared.assign(c, 0);
   int merged = 0, alive = count;
   while (alive > 1) {
     int32_t crumb = -1;
-    for (int32_t c = 0; c < count; ++c) {
-      const auto k = static_cast<size_t>(c);
-      if (root[k] != c || stuck[k] || size[k] >= minNodes) continue;
-      if (crumb < 0 || size[k] < size[static_cast<size_t>(crumb)] ||
-          (size[k] == size[static_cast<size_t>(crumb)] && low[k] < low[static_cast<size_t>(crumb)])) {
-        crumb = c;
+    for (int32_t k = 0; k < count; ++k) {
+      const auto i = static_cast<size_t>(k);
+      if (w.root[i] != k || w.stuck[i] || w.size[i] >= minNodes) continue;
+      if (crumb < 0 || w.size[i] < w.size[static_cast<size_t>(crumb)] ||
+          (w.size[i] == w.size[static_cast<size_t>(crumb)] && w.low[i] < w.low[static_cast<size_t>(crumb)])) {
+        crumb = k;
       }
     }
     if (crumb < 0) break;
-    std::vector<int32_t> touched;
-    for (int32_t v : members[static_cast<size_t>(crumb)]) {
-      for (int32_t j = start[static_cast<size_t>(v)]; j < start[static_cast<size_t>(v) + 1]; ++j) {
-        const auto e = incident[static_cast<size_t>(j)];
-        const int32_t other = topo.edges(e, 0) == v ? topo.edges(e, 1) : topo.edges(e, 0);
-        const int32_t c = componentOf(other);
-        if (c == crumb) continue;
-        if (shared[static_cast<size_t>(c)]++ == 0) touched.push_back(c);
-      }
-    }
+    w.touched.clear();
+    forEachEdgeOut(crumb, [&](int32_t, int32_t other) {
+      const int32_t k = componentOf(other);
+      if (k != crumb && w.shared[static_cast<size_t>(k)]++ == 0) w.touched.push_back(k);
+    });
     int32_t into = -1;
-    for (int32_t c : touched) {
-      const auto k = static_cast<size_t>(c);
-      if (into < 0 || shared[k] > shared[static_cast<size_t>(into)] ||
-          (shared[k] == shared[static_cast<size_t>(into)] && low[k] < low[static_cast<size_t>(into)])) {
-        into = c;
+    for (int32_t k : w.touched) {
+      const auto i = static_cast<size_t>(k);
+      if (into < 0 || w.shared[i] > w.shared[static_cast<size_t>(into)] ||
+          (w.shared[i] == w.shared[static_cast<size_t>(into)] && w.low[i] < w.low[static_cast<size_t>(into)])) {
+        into = k;
       }
     }
-    for (int32_t c : touched) shared[static_cast<size_t>(c)] = 0;
+    for (int32_t k : w.touched) w.shared[static_cast<size_t>(k)] = 0;
     if (into < 0) {
-      stuck[static_cast<size_t>(crumb)] = 1;
+      w.stuck[static_cast<size_t>(crumb)] = 1;
       continue;
     }
-    for (int32_t v : members[static_cast<size_t>(crumb)]) {
-      for (int32_t j = start[static_cast<size_t>(v)]; j < start[static_cast<size_t>(v) + 1]; ++j) {
-        const auto e = incident[static_cast<size_t>(j)];
-        const int32_t other = topo.edges(e, 0) == v ? topo.edges(e, 1) : topo.edges(e, 0);
-        if (componentOf(other) == into) edgeCuts[e] = std::numeric_limits<double>::quiet_NaN();
-      }
-    }
+    forEachEdgeOut(crumb, [&](int32_t e, int32_t other) {
+      if (componentOf(other) == into) edgeCuts[e] = std::numeric_limits<double>::quiet_NaN();
+    });
     const auto a = static_cast<size_t>(into), b = static_cast<size_t>(crumb);
-    root[b] = into;
-    size[a] += size[b];
-    low[a] = std::min(low[a], low[b]);
-    members[a].insert(members[a].end(), members[b].begin(), members[b].end());
-    members[b].clear();
+    w.root[b] = into;
+    w.size[a] += w.size[b];
+    w.low[a] = std::min(w.low[a], w.low[b]);
+    w.next[static_cast<size_t>(w.tail[a])] = w.head[b];  // splice b's members after a's
+    w.tail[a] = w.tail[b];
+    w.head[b] = w.tail[b] = -1;
     ++merged;
     --alive;
   }
-  if (merged > 0) fragmentCount = labelFragments(topo, edgeCuts, labels.size(), labels);
+  if (merged > 0) fragmentCount = labelFragments(topo, edgeCuts, labels.size(), labels, w);
   return merged;
 }
 
 int labelFragments(const TetTopology& topo, const Eigen::VectorXd& edgeCuts, Eigen::Index nodeCount,
                    Eigen::VectorXi& labels) {
-  std::vector<int32_t> parent(static_cast<size_t>(nodeCount));
+  CrackWorkspace workspace;
+  return labelFragments(topo, edgeCuts, nodeCount, labels, workspace);
+}
+
+int labelFragments(const TetTopology& topo, const Eigen::VectorXd& edgeCuts, Eigen::Index nodeCount,
+                   Eigen::VectorXi& labels, CrackWorkspace& w) {
+  std::vector<int32_t>& parent = w.parent;
+  parent.resize(static_cast<size_t>(nodeCount));
   std::iota(parent.begin(), parent.end(), 0);
   auto find = [&](int32_t x) {
     while (parent[static_cast<size_t>(x)] != x) {
@@ -449,10 +508,10 @@ int labelFragments(const TetTopology& topo, const Eigen::VectorXd& edgeCuts, Eig
     if (a != b) parent[static_cast<size_t>(std::max(a, b))] = std::min(a, b);  // root = lowest node
   }
   labels.resize(nodeCount);
-  std::vector<int32_t> labelOfRoot(static_cast<size_t>(nodeCount), -1);
+  w.labelOfRoot.assign(static_cast<size_t>(nodeCount), -1);
   int count = 0;
   for (Eigen::Index i = 0; i < nodeCount; ++i) {
-    int32_t& l = labelOfRoot[static_cast<size_t>(find(static_cast<int32_t>(i)))];
+    int32_t& l = w.labelOfRoot[static_cast<size_t>(find(static_cast<int32_t>(i)))];
     if (l < 0) l = count++;
     labels[i] = l;
   }

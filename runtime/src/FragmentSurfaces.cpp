@@ -5,7 +5,6 @@
 #include <cmath>
 #include <array>
 #include <string>
-#include <unordered_map>
 
 namespace brittle {
 namespace {
@@ -15,34 +14,28 @@ struct Builder {
   const TetTopology& topo;
   const Eigen::VectorXi& labels;
   const Eigen::VectorXd& cuts;
-  std::vector<Eigen::Vector3d> points;           // nodes first, then created points
-  std::vector<int32_t> edgePoint;                // per edge, −1 until created
-  struct FaceHash {
-    size_t operator()(const std::array<int32_t, 3>& v) const {
-      return (static_cast<size_t>(v[0]) * 73856093u) ^ (static_cast<size_t>(v[1]) * 19349663u) ^
-             (static_cast<size_t>(v[2]) * 83492791u);
-    }
-  };
-  std::unordered_map<std::array<int32_t, 3>, int32_t, FaceHash> facePoint;
-  std::vector<std::vector<std::array<int32_t, 3>>> triangles;  // per label, into points
+  FragmentSurfaceWorkspace& w;
 
-  Builder(const TetMesh& m, const TetTopology& t, const Eigen::VectorXi& l, const Eigen::VectorXd& c, int labelCount)
-      : mesh(m), topo(t), labels(l), cuts(c), edgePoint(static_cast<size_t>(t.edges.rows()), -1),
-        triangles(static_cast<size_t>(labelCount)) {
-    points.reserve(static_cast<size_t>(m.nodes.rows()));
-    for (Eigen::Index i = 0; i < m.nodes.rows(); ++i) points.emplace_back(m.nodes.row(i).transpose());
+  Builder(const TetMesh& m, const TetTopology& t, const Eigen::VectorXi& l, const Eigen::VectorXd& c,
+          FragmentSurfaceWorkspace& workspace)
+      : mesh(m), topo(t), labels(l), cuts(c), w(workspace) {
+    w.edgePoint.assign(static_cast<size_t>(t.edges.rows()), -1);
+    w.facePoint.assign(static_cast<size_t>(4 * m.tets.rows()), -1);
+    w.triangles.clear();
+    w.points.clear();
+    for (Eigen::Index i = 0; i < m.nodes.rows(); ++i) w.points.emplace_back(m.nodes.row(i).transpose());
   }
 
   bool mixed(int32_t edge) const { return labels[topo.edges(edge, 0)] != labels[topo.edges(edge, 1)]; }
 
   int32_t onEdge(int32_t edge) {
-    int32_t& id = edgePoint[static_cast<size_t>(edge)];
+    int32_t& id = w.edgePoint[static_cast<size_t>(edge)];
     if (id < 0) {
       const double s = std::clamp(cuts[edge], 0.05, 0.95);
-      const Eigen::Vector3d a = points[static_cast<size_t>(topo.edges(edge, 0))];
-      const Eigen::Vector3d b = points[static_cast<size_t>(topo.edges(edge, 1))];
-      id = static_cast<int32_t>(points.size());
-      points.push_back(a + s * (b - a));
+      const Eigen::Vector3d a = w.points[static_cast<size_t>(topo.edges(edge, 0))];
+      const Eigen::Vector3d b = w.points[static_cast<size_t>(topo.edges(edge, 1))];
+      id = static_cast<int32_t>(w.points.size());
+      w.points.push_back(a + s * (b - a));
     }
     return id;
   }
@@ -58,30 +51,34 @@ struct Builder {
   }
 
   // The point of a mixed face (three local nodes of tet e): mean of its mixed-edge points. Shared
-  // by the two tets of an interior face, so it is keyed by the face's sorted node ids.
+  // by the two tets of an interior face, so it is recorded on both sides.
   int32_t onFace(Eigen::Index e, std::array<int, 3> local) {
-    std::array<int32_t, 3> v{mesh.tets(e, local[0]), mesh.tets(e, local[1]), mesh.tets(e, local[2])};
-    std::sort(v.begin(), v.end());
-    auto [it, inserted] = facePoint.try_emplace(v, static_cast<int32_t>(points.size()));
-    if (!inserted) return it->second;
+    const int f = 6 - local[0] - local[1] - local[2];  // the face opposite the fourth node
+    const int32_t known = w.facePoint[static_cast<size_t>(4 * e + f)];
+    if (known >= 0) return known;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     int count = 0;
     for (int k = 0; k < 3; ++k) {
       const int32_t edge = edgeOf(e, local[static_cast<size_t>(k)], local[static_cast<size_t>((k + 1) % 3)]);
       if (mixed(edge)) {
-        sum += points[static_cast<size_t>(onEdge(edge))];
+        sum += w.points[static_cast<size_t>(onEdge(edge))];
         ++count;
       }
     }
-    it->second = static_cast<int32_t>(points.size());  // onEdge may have added points meanwhile
-    points.push_back(sum / count);
-    return it->second;
+    const auto id = static_cast<int32_t>(w.points.size());
+    w.points.push_back(sum / count);
+    w.facePoint[static_cast<size_t>(4 * e + f)] = id;
+    if (const int32_t nb = topo.neighbours(e, f); nb >= 0) {
+      for (int g = 0; g < 4; ++g) {
+        if (topo.neighbours(nb, g) == e) w.facePoint[static_cast<size_t>(4 * nb + g)] = id;
+      }
+    }
+    return id;
   }
 
-  void fan(int label, const std::vector<int32_t>& polygon) {
-    for (size_t k = 1; k + 1 < polygon.size(); ++k) {
-      triangles[static_cast<size_t>(label)].push_back({polygon[0], polygon[k], polygon[k + 1]});
-    }
+  // Triangulates a convex polygon of `count` points as a fan from its first.
+  void fan(int label, const int32_t* polygon, int count) {
+    for (int k = 1; k + 1 < count; ++k) w.triangles.push_back({label, polygon[0], polygon[k], polygon[k + 1]});
   }
 
   void boundaryFace(size_t i) {
@@ -93,7 +90,7 @@ struct Builder {
       label[static_cast<size_t>(k)] = labels[node[static_cast<size_t>(k)]];
     }
     if (label[0] == label[1] && label[1] == label[2]) {
-      triangles[static_cast<size_t>(label[0])].push_back(node);
+      w.triangles.push_back({label[0], node[0], node[1], node[2]});
       return;
     }
     const int32_t center = onFace(e, local);
@@ -103,20 +100,21 @@ struct Builder {
     for (int start = 0; start < 3; ++start) {
       const int prev = (start + 2) % 3;
       if (label[static_cast<size_t>(prev)] == label[static_cast<size_t>(start)]) continue;  // not a run start
-      std::vector<int32_t> polygon;
+      int32_t polygon[6];  // at most two corners, two edge points and the face point
+      int size = 0;
       int k = start;
       while (true) {
-        polygon.push_back(node[static_cast<size_t>(k)]);
+        polygon[size++] = node[static_cast<size_t>(k)];
         const int next = (k + 1) % 3;
         if (label[static_cast<size_t>(next)] != label[static_cast<size_t>(start)]) {
-          polygon.push_back(onEdge(edgeOf(e, local[static_cast<size_t>(k)], local[static_cast<size_t>(next)])));
+          polygon[size++] = onEdge(edgeOf(e, local[static_cast<size_t>(k)], local[static_cast<size_t>(next)]));
           break;
         }
         k = next;
       }
-      polygon.push_back(center);
-      polygon.push_back(onEdge(edgeOf(e, local[static_cast<size_t>(prev)], local[static_cast<size_t>(start)])));
-      fan(label[static_cast<size_t>(start)], polygon);
+      polygon[size++] = center;
+      polygon[size++] = onEdge(edgeOf(e, local[static_cast<size_t>(prev)], local[static_cast<size_t>(start)]));
+      fan(label[static_cast<size_t>(start)], polygon, size);
     }
   }
 
@@ -132,11 +130,11 @@ struct Builder {
     int count = 0;
     for (int32_t id : edge) {
       if (!mixed(id)) continue;
-      sum += points[static_cast<size_t>(onEdge(id))];
+      sum += w.points[static_cast<size_t>(onEdge(id))];
       ++count;
     }
-    const auto center = static_cast<int32_t>(points.size());
-    points.push_back(sum / count);
+    const auto center = static_cast<int32_t>(w.points.size());
+    w.points.push_back(sum / count);
     for (int k = 0; k < 6; ++k) {
       if (!mixed(edge[static_cast<size_t>(k)])) continue;
       const int i = kTetEdges[k][0], j = kTetEdges[k][1];
@@ -147,26 +145,51 @@ struct Builder {
       const int32_t p = onEdge(edge[static_cast<size_t>(k)]);
       const int32_t f1 = onFace(e, {i, j, others[0]});
       const int32_t f2 = onFace(e, {i, j, others[1]});
-      std::vector<int32_t> quad = {p, f1, center, f2};
+      std::array<int32_t, 4> quad = {p, f1, center, f2};
       // Orient the quad from node i's cell towards node j's.
-      const Eigen::Vector3d normal = (points[static_cast<size_t>(center)] - points[static_cast<size_t>(p)])
-                                         .cross(points[static_cast<size_t>(f2)] - points[static_cast<size_t>(f1)]);
+      const Eigen::Vector3d normal = (w.points[static_cast<size_t>(center)] - w.points[static_cast<size_t>(p)])
+                                         .cross(w.points[static_cast<size_t>(f2)] - w.points[static_cast<size_t>(f1)]);
       const Eigen::Vector3d along = mesh.nodes.row(mesh.tets(e, j)) - mesh.nodes.row(mesh.tets(e, i));
       if (normal.dot(along) < 0.0) std::swap(quad[1], quad[3]);
-      fan(labels[mesh.tets(e, i)], quad);
+      fan(labels[mesh.tets(e, i)], quad.data(), 4);
       std::reverse(quad.begin(), quad.end());
       // Same diagonal (p, centre) for the other side: rotate so p leads again.
       std::rotate(quad.begin(), quad.begin() + 3, quad.end());
-      fan(labels[mesh.tets(e, j)], quad);
+      fan(labels[mesh.tets(e, j)], quad.data(), 4);
     }
   }
 };
 
 }  // namespace
 
+void FragmentSurfaceWorkspace::reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index edges,
+                                       Eigen::Index boundaryFaces) {
+  // Created points: one per mixed edge, face and tet; triangles: boundary pieces and the crack
+  // faces' quads (two triangles per mixed edge per side).
+  points.reserve(static_cast<size_t>(nodes + edges + 2 * tets + boundaryFaces));
+  edgePoint.reserve(static_cast<size_t>(edges));
+  facePoint.reserve(static_cast<size_t>(4 * tets));
+  triangles.reserve(static_cast<size_t>(3 * boundaryFaces + 4 * edges));
+  order.reserve(triangles.capacity());
+  labelStart.reserve(static_cast<size_t>(nodes) + 1);
+  local.reserve(points.capacity());
+  used.reserve(points.capacity());
+}
+
 Result<std::vector<TriangleMesh>> buildFragmentSurfaces(const TetMesh& mesh, const TetTopology& topology,
                                                         const Eigen::VectorXi& nodeLabels, int labelCount,
                                                         const Eigen::VectorXd& edgeCuts) {
+  FragmentSurfaceWorkspace workspace;
+  std::vector<TriangleMesh> out;
+  if (Status st = buildFragmentSurfaces(mesh, topology, nodeLabels, labelCount, edgeCuts, workspace, out); !st) {
+    return st.error();
+  }
+  return out;
+}
+
+Status buildFragmentSurfaces(const TetMesh& mesh, const TetTopology& topology, const Eigen::VectorXi& nodeLabels,
+                             int labelCount, const Eigen::VectorXd& edgeCuts, FragmentSurfaceWorkspace& w,
+                             std::vector<TriangleMesh>& out) {
   if (nodeLabels.size() != mesh.nodes.rows() || edgeCuts.size() != topology.edges.rows() || labelCount < 1) {
     return makeError(ErrorCode::InvalidArgument, "fragment surfaces: label or cut arrays do not match the mesh");
   }
@@ -179,34 +202,55 @@ Result<std::vector<TriangleMesh>> buildFragmentSurfaces(const TetMesh& mesh, con
                                                        " joins two fragments but has no finite cut");
     }
   }
-  Builder b(mesh, topology, nodeLabels, edgeCuts, labelCount);
+  Builder b(mesh, topology, nodeLabels, edgeCuts, w);
   for (size_t i = 0; i < topology.boundaryFaces.size(); ++i) b.boundaryFace(i);
   for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) b.interior(e);
 
-  std::vector<TriangleMesh> out(static_cast<size_t>(labelCount));
-  std::vector<int32_t> local(b.points.size(), -1);
-  for (int l = 0; l < labelCount; ++l) {
-    const auto& tris = b.triangles[static_cast<size_t>(l)];
-    if (tris.empty()) return makeError(ErrorCode::InvalidArgument, "fragment surfaces: label " + std::to_string(l) + " has no surface");
-    std::vector<int32_t> used;
-    for (const auto& t : tris) {
-      for (int32_t p : t) {
-        if (local[static_cast<size_t>(p)] < 0) {
-          local[static_cast<size_t>(p)] = static_cast<int32_t>(used.size());
-          used.push_back(p);
+  // The triangles grouped by label, in creation order within each (a stable counting sort).
+  const auto labels = static_cast<size_t>(labelCount);
+  w.labelStart.assign(labels + 1, 0);
+  for (const auto& t : w.triangles) ++w.labelStart[static_cast<size_t>(t[0]) + 1];
+  for (size_t l = 0; l < labels; ++l) {
+    if (w.labelStart[l + 1] == 0) {
+      return makeError(ErrorCode::InvalidArgument, "fragment surfaces: label " + std::to_string(l) + " has no surface");
+    }
+    w.labelStart[l + 1] += w.labelStart[l];
+  }
+  w.order.resize(w.triangles.size());
+  w.used.assign(w.labelStart.begin(), w.labelStart.end() - 1);  // fill positions
+  for (size_t i = 0; i < w.triangles.size(); ++i) {
+    w.order[static_cast<size_t>(w.used[static_cast<size_t>(w.triangles[i][0])]++)] = static_cast<int32_t>(i);
+  }
+  out.resize(labels);
+  w.local.assign(w.points.size(), -1);
+  for (size_t l = 0; l < labels; ++l) {
+    const auto first = static_cast<size_t>(w.labelStart[l]), last = static_cast<size_t>(w.labelStart[l + 1]);
+    w.used.clear();
+    for (size_t i = first; i < last; ++i) {
+      const auto& t = w.triangles[static_cast<size_t>(w.order[i])];
+      for (int k = 1; k < 4; ++k) {
+        const int32_t p = t[static_cast<size_t>(k)];
+        if (w.local[static_cast<size_t>(p)] < 0) {
+          w.local[static_cast<size_t>(p)] = static_cast<int32_t>(w.used.size());
+          w.used.push_back(p);
         }
       }
     }
-    TriangleMesh& m = out[static_cast<size_t>(l)];
-    m.vertices.resize(static_cast<Eigen::Index>(used.size()), 3);
-    for (size_t i = 0; i < used.size(); ++i) m.vertices.row(static_cast<Eigen::Index>(i)) = b.points[static_cast<size_t>(used[i])].transpose();
-    m.faces.resize(static_cast<Eigen::Index>(tris.size()), 3);
-    for (size_t i = 0; i < tris.size(); ++i) {
-      for (int k = 0; k < 3; ++k) m.faces(static_cast<Eigen::Index>(i), k) = local[static_cast<size_t>(tris[i][static_cast<size_t>(k)])];
+    TriangleMesh& m = out[l];
+    m.vertices.resize(static_cast<Eigen::Index>(w.used.size()), 3);
+    for (size_t i = 0; i < w.used.size(); ++i) {
+      m.vertices.row(static_cast<Eigen::Index>(i)) = w.points[static_cast<size_t>(w.used[i])].transpose();
     }
-    for (int32_t p : used) local[static_cast<size_t>(p)] = -1;
+    m.faces.resize(static_cast<Eigen::Index>(last - first), 3);
+    for (size_t i = first; i < last; ++i) {
+      const auto& t = w.triangles[static_cast<size_t>(w.order[i])];
+      for (int k = 0; k < 3; ++k) {
+        m.faces(static_cast<Eigen::Index>(i - first), k) = w.local[static_cast<size_t>(t[static_cast<size_t>(k) + 1])];
+      }
+    }
+    for (int32_t p : w.used) w.local[static_cast<size_t>(p)] = -1;
   }
-  return out;
+  return Ok{};
 }
 
 }  // namespace brittle

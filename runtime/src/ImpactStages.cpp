@@ -134,7 +134,7 @@ Status stressStage(const ImpactJob& job, Flow& flow, ImpactWorkspace& ws, Impact
 
 // Crack growth from the seeds with the Griffith stop, paid from the elastic energy at the peak:
 // the kept modes' ½Σω²q², plus the truncated modes' static ½F²f·u_t.
-Status crackStage(const ImpactJob& job, const Flow& flow, const ImpactWorkspace& ws, ImpactResult& result) {
+Status crackStage(const ImpactJob& job, const Flow& flow, ImpactWorkspace& ws, ImpactResult& result) {
   const Body& body = *job.body;
   const StressScan& scan = ws.scan;
   StressField field;
@@ -146,23 +146,29 @@ Status crackStage(const ImpactJob& job, const Flow& flow, const ImpactWorkspace&
                         0.5 * field.forceN * field.forceN * flow.complianceMPerN;
   CrackSettings cs = job.settings->crack;
   cs.seed = job.crackSeed;
-  auto state = propagateCracks(body.asset.tetMesh, body.topology, scan, field, body.material.tensileStrengthPa,
-                               body.material.fractureEnergyJPerM2, energy, cs);
-  if (!state) return state.error();
-  result.fracture = std::move(state).value();
-  return Ok{};
+  return propagateCracks(body.asset.tetMesh, body.topology, scan, field, body.material.tensileStrengthPa,
+                         body.material.fractureEnergyJPerM2, energy, cs, ws.crack, result.fracture);
 }
 
-// Each fragment's closed surface and exact mass properties; the small ones are debris.
-Status surfaceStage(const ImpactJob& job, ImpactResult& result) {
+// Each fragment's closed surface and exact mass properties; the small ones are debris. More
+// fragments than the World's capacity is an error (the impact then leaves the world unchanged).
+Status surfaceStage(const ImpactJob& job, ImpactWorkspace& ws, ImpactResult& result) {
   const Body& body = *job.body;
-  auto surfaces = buildFragmentSurfaces(body.asset.tetMesh, body.topology, result.fracture.nodeLabels,
-                                        result.fracture.fragmentCount, result.fracture.edgeCuts);
-  if (!surfaces) return surfaces.error();
-  result.fragments.resize(surfaces.value().size());
-  for (size_t i = 0; i < surfaces.value().size(); ++i) {
+  const int count = result.fracture.fragmentCount;
+  if (count > job.maxFragments) {
+    return makeError(ErrorCode::CapacityExceeded, std::to_string(count) + " fragments exceed maxFragmentsPerImpact = " +
+                                                      std::to_string(job.maxFragments) + " (the object is left unbroken)");
+  }
+  if (Status st = buildFragmentSurfaces(body.asset.tetMesh, body.topology, result.fracture.nodeLabels, count,
+                                        result.fracture.edgeCuts, ws.surfaceBuffers, ws.surfaces);
+      !st) {
+    return st;
+  }
+  result.fragments.resize(static_cast<size_t>(count));
+  for (size_t i = 0; i < result.fragments.size(); ++i) {
     FragmentResult& fr = result.fragments[i];
-    fr.surface = std::move(surfaces.value()[i]);
+    fr.surface.vertices.swap(ws.surfaces[i].vertices);  // handed over: the buffers' next use allocates anew
+    fr.surface.faces.swap(ws.surfaces[i].faces);
     fr.massProperties = computeSurfaceMassProperties(fr.surface, body.material.densityKgPerM3);
     fr.debris = fr.massProperties.volumeM3 < job.settings->debrisVolumeFraction * body.topology.volumeM3;
     fr.path = fr.debris ? FragmentPath::Debris : FragmentPath::SurfaceOnly;
@@ -284,6 +290,12 @@ void newBodiesStage(const ImpactJob& job, ImpactResult& result, std::vector<std:
 
 }  // namespace
 
+void ImpactWorkspace::reserve(const TetMesh& mesh, const TetTopology& topology, const FractureSettings& settings) {
+  crack.reserve(mesh.nodes.rows(), mesh.tets.rows(), topology.edges.rows(), settings.crack.maxCracks);
+  surfaceBuffers.reserve(mesh.nodes.rows(), mesh.tets.rows(), topology.edges.rows(),
+                         static_cast<Eigen::Index>(topology.boundaryFaces.size()));
+}
+
 void resetImpactResult(ImpactResult& r) {
   r.broken = false;
   r.contact = HertzContact{};
@@ -298,7 +310,15 @@ void resetImpactResult(ImpactResult& r) {
   r.forceDirectionLocal.setZero();
   r.ringDownS = 0.0;
   r.stressEvaluations = 0;
-  r.fracture = FractureState{};
+  FractureState& f = r.fracture;
+  f.cutElements.clear();
+  f.cutPlanes.clear();
+  f.edgeCuts.resize(0);
+  f.nodeLabels.resize(0);
+  f.fragmentCount = 1;
+  f.crackCount = f.mergedCrumbs = 0;
+  f.crackAreaM2 = f.energyBudgetJ = f.energySpentJ = 0.0;
+  f.arrestedByEnergy = false;
   r.fragments.clear();
   r.times = StageTimes{};
 }
@@ -338,7 +358,7 @@ Status computeImpact(const ImpactJob& submitted, ImpactWorkspace& ws, ImpactResu
   if (result.fracture.fragmentCount < 2) return Ok{};
 
   t0 = Clock::now();
-  if (Status st = surfaceStage(job, result); !st) return inStage("fragment surfaces", st.error());
+  if (Status st = surfaceStage(job, ws, result); !st) return inStage("fragment surfaces", st.error());
   t.surfacesS = since(t0);
 
   t0 = Clock::now();

@@ -17,6 +17,7 @@
 #include "Body.h"
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/runtime/CrackPropagation.h"
+#include "brittle/runtime/FragmentSurfaces.h"
 #include "brittle/runtime/StaticCorrection.h"
 #include "brittle/runtime/World.h"
 
@@ -33,11 +34,13 @@ struct ImpactJob {
   const FractureSettings* settings = nullptr;
   const FragmentMatcher* matcher = nullptr;  ///< null: no database search
   const FragmentDatabase* database = nullptr;
+  int32_t maxFragments = 256;          ///< WorldSettings::maxFragmentsPerImpact
   tbb::task_arena* workers = nullptr;  ///< where the fragments' new bodies are made in parallel; null: the caller's
 };
 
-/// The buffers of an impact, kept between impacts: once they have grown to the largest body hit,
-/// an impact that does not break its body allocates nothing.
+/// The buffers of an impact, kept between impacts: once they have grown to the largest body hit
+/// (the crack and surface buffers are reserved for the pack's largest object when the World is
+/// made), an impact allocates only what it hands over (World.h, "Allocation").
 struct ImpactWorkspace {
   std::vector<double> times, force;
   Eigen::VectorXd modalLoad, staticStress;
@@ -45,6 +48,11 @@ struct ImpactWorkspace {
   StaticCorrection::Workspace correction;
   StressScanWorkspace scanBuffers;
   StressScan scan;
+  CrackWorkspace crack;
+  FragmentSurfaceWorkspace surfaceBuffers;
+  std::vector<TriangleMesh> surfaces;
+  /// Reserves the crack and surface buffers for a body of the given mesh and topology.
+  void reserve(const TetMesh& mesh, const TetTopology& topology, const FractureSettings& settings);
 };
 
 /// Computes the impact into `result` (reset first; fragment object ids are left invalid) and, per
@@ -54,7 +62,8 @@ struct ImpactWorkspace {
 Status computeImpact(const ImpactJob& job, ImpactWorkspace& workspace, ImpactResult& result,
                      std::vector<std::shared_ptr<const BodySource>>& born);
 
-/// Back to a default result, keeping the storage of loadWeights.
+/// Back to a default result, keeping the storage of loadWeights, the fracture state's lists and
+/// the fragments vector.
 void resetImpactResult(ImpactResult& result);
 
 }  // namespace brittle::detail

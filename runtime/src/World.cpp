@@ -121,7 +121,8 @@ struct World::Impl {
       freeSlots.pop_back();
     } else {
       if (slots.size() >= static_cast<size_t>(settings.maxObjects)) {
-        return bad("no free object slot: maxObjects = " + std::to_string(settings.maxObjects) + " reached");
+        return makeError(ErrorCode::CapacityExceeded,
+                         "no free object slot: maxObjects = " + std::to_string(settings.maxObjects) + " reached");
       }
       index = static_cast<uint32_t>(slots.size());
       slots.emplace_back();
@@ -163,6 +164,7 @@ struct World::Impl {
     job.matcher = matcher ? &*matcher : nullptr;
     job.database = &pack.database;
     job.workers = &workers();
+    job.maxFragments = settings.maxFragmentsPerImpact;
     return job;
   }
 
@@ -174,8 +176,10 @@ struct World::Impl {
     if (!result.broken) return Ok{};
     const auto count = static_cast<size_t>(std::count_if(newBodies.begin(), newBodies.end(), [](const auto& b) { return b != nullptr; }));
     if (count > freeCapacity(1)) {
-      return bad("impact: " + std::to_string(count) + " fragments do not fit in maxObjects = " +
-                 std::to_string(settings.maxObjects) + " (the object is left unbroken)");
+      return makeError(ErrorCode::CapacityExceeded, "impact: " + std::to_string(count) +
+                                                        " fragments do not fit in maxObjects = " +
+                                                        std::to_string(settings.maxObjects) +
+                                                        " (the object is left unbroken)");
     }
     remove(object);
     for (size_t i = 0; i < newBodies.size(); ++i) {
@@ -209,8 +213,8 @@ std::string_view fragmentPathName(FragmentPath path) {
 Status validateWorldSettings(const WorldSettings& s) {
   const FractureSettings& f = s.fracture;
   if (s.maxObjects < 1) return bad("WorldSettings: maxObjects must be ≥ 1");
-  if (s.maxPendingImpacts < 1 || s.workerThreads < 0) {
-    return bad("WorldSettings: maxPendingImpacts must be ≥ 1 and workerThreads ≥ 0");
+  if (s.maxPendingImpacts < 1 || s.workerThreads < 0 || s.maxFragmentsPerImpact < 2) {
+    return bad("WorldSettings: maxPendingImpacts must be ≥ 1, workerThreads ≥ 0 and maxFragmentsPerImpact ≥ 2");
   }
   if (f.modeCount < 0 || f.pulseSteps < 2 || f.ringDownSteps < 0 || !(f.ringDownPeriods >= 0.0) ||
       !std::isfinite(f.ringDownPeriods) || !(f.debrisVolumeFraction >= 0.0 && f.debrisVolumeFraction < 1.0) ||
@@ -271,6 +275,7 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
       auto body = makeBody(*it, *mat, w.settings.fracture.modeCount);
       if (!body) return body.error();
       std::shared_ptr<const Body> made = body.value();
+      w.work.reserve(made->asset.tetMesh, made->topology, w.settings.fracture);  // the largest body's crack buffers
       if (w.settings.fracture.staticCorrection) {  // pack objects are prepared before their first impact
         if (w.settings.prepareInBackground) {
           made->scheduleStaticCorrection();
@@ -341,7 +346,8 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
   try {
     Impl& w = *mImpl;
     if (w.pending.size() >= static_cast<size_t>(w.settings.maxPendingImpacts)) {
-      return bad("submitImpact: maxPendingImpacts = " + std::to_string(w.settings.maxPendingImpacts) + " reached");
+      return makeError(ErrorCode::CapacityExceeded,
+                       "submitImpact: maxPendingImpacts = " + std::to_string(w.settings.maxPendingImpacts) + " reached");
     }
     auto job = w.makeJob(desc);
     if (!job) return job.error();

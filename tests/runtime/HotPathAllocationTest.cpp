@@ -1,5 +1,6 @@
 // The runtime's hot path allocates nothing after warm-up: an impact that does not break its body,
-// reported into a reused ImpactResult, makes no heap allocation once the World's buffers have grown.
+// reported into a reused ImpactResult, makes no heap allocation once the World's buffers have grown;
+// one that breaks it allocates only what it hands over (per fragment, not per element).
 //
 // Allocations are counted by interposing the C allocator (operator new, Eigen and the standard
 // containers all end in malloc), so this test has an executable of its own. Under AddressSanitizer,
@@ -161,6 +162,46 @@ TEST_F(HotPathAllocationTest, ReportingTheUncorrectedPeakAllocatesNothing) {
   s.fracture.reportUncorrectedPeak = true;
   s.fracture.modeCount = 12;
   expectNoAllocationAfterWarmUp(s);
+}
+
+// A breaking impact grows its cracks, labels its nodes and builds its surfaces in the World's
+// buffers: what it allocates is what it hands over (World.h): the fracture state's two arrays and,
+// per fragment, its surface's two arrays and its reason text. Fragments here stay surfaces (no
+// database, no exact path), so no body is made on the workers while allocations are counted.
+TEST_F(HotPathAllocationTest, BreakingImpactsAllocateOnlyWhatTheyHandOver) {
+  if (!BRITTLE_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";
+  WorldSettings settings;
+  settings.prepareInBackground = false;  // nothing runs on the workers meanwhile
+  settings.fracture.matchFragments = false;
+  auto world = World::create(*sPack, settings);
+  ASSERT_TRUE(world) << world.error().message;
+  ImpactDesc hit;
+  hit.pointWorld = Eigen::Vector3d(0.01, -0.02, 0.005);
+  hit.speedMps = 60.0;
+  hit.impactorMassKg = 0.1;
+  hit.impactorRadiusM = 0.02;
+  ImpactResult result;
+  long counted = 0;
+  size_t fragments = 0, elements = 0;
+  for (int round = 0; round < 3; ++round) {  // round 0 warms up
+    auto id = world.value().addObject({.asset = "plate"});
+    ASSERT_TRUE(id) << id.error().message;
+    hit.object = id.value();
+    const long before = gAllocations.load();
+    const Status st = world.value().impact(hit, result);
+    const long made = gAllocations.load() - before;
+    ASSERT_TRUE(st) << st.error().message;
+    ASSERT_TRUE(result.broken) << "the impact must break the plate";
+    ASSERT_GE(result.fragments.size(), 2u);
+    if (round == 0) continue;
+    counted += made;
+    fragments += result.fragments.size();
+    elements += result.fracture.cutElements.size();
+    EXPECT_LE(made, 2 + 3 * static_cast<long>(result.fragments.size()))
+        << result.fragments.size() << " fragments, " << result.fracture.cutElements.size() << " cut elements";
+  }
+  EXPECT_GT(counted, 0) << "the surfaces handed over are allocated: the counter is live";
+  EXPECT_GT(elements, fragments) << "more elements are cut than fragments made: the bound is not trivial";
 }
 
 }  // namespace

@@ -358,7 +358,7 @@ TEST_F(WorldTest, BadInputsGiveTypedErrorsNeverCrashes) {
   tiny.maxObjects = 1;
   World small = World::create(Pack(*sPack), tiny).value();
   ASSERT_TRUE(small.addObject({.asset = "plate"}));
-  EXPECT_EQ(small.addObject({.asset = "plate"}).error().code, ErrorCode::InvalidArgument);  // capacity
+  EXPECT_EQ(small.addObject({.asset = "plate"}).error().code, ErrorCode::CapacityExceeded);
 }
 
 TEST_F(WorldTest, PosesMoveTheImpactWithTheObject) {
@@ -450,7 +450,7 @@ TEST_F(WorldTest, APendingObjectStaysAsItWasAndRefusesOtherCalls) {
   World limited = makeWorld(one);
   const ObjectId a = limited.addObject({.asset = "plate"}).value(), b = limited.addObject({.asset = "plate"}).value();
   ASSERT_TRUE(limited.submitImpact(ball(a, 1.0)));
-  EXPECT_EQ(limited.submitImpact(ball(b, 1.0)).error().code, ErrorCode::InvalidArgument);  // capacity
+  EXPECT_EQ(limited.submitImpact(ball(b, 1.0)).error().code, ErrorCode::CapacityExceeded);
 }
 
 TEST_F(WorldTest, AFailedImpactLeavesTheWorldAsItWas) {
@@ -475,11 +475,26 @@ TEST_F(WorldTest, AFailedImpactLeavesTheWorldAsItWas) {
   const ObjectId plate = small.addObject({.asset = "plate"}).value();
   const Status full = small.impact(ball(plate, 60.0), r);
   ASSERT_FALSE(full);
-  EXPECT_EQ(full.error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(full.error().code, ErrorCode::CapacityExceeded);
   EXPECT_NE(full.error().message.find("maxObjects"), std::string::npos) << full.error().message;
   EXPECT_TRUE(small.isAlive(plate));
   EXPECT_EQ(small.objectCount(), 1);
   EXPECT_TRUE(small.impact(ball(plate, 1.0)));
+  // More fragments than maxFragmentsPerImpact: the same, caught before the surfaces are built.
+  World reference = makeWorld();  // the same first impact, uncapped
+  const size_t made = reference.impact(ball(reference.addObject({.asset = "plate"}).value(), 60.0)).value().fragments.size();
+  ASSERT_GT(made, 2u);
+  WorldSettings few;
+  few.maxFragmentsPerImpact = 2;
+  World capped = makeWorld(few);
+  const ObjectId capPlate = capped.addObject({.asset = "plate"}).value();
+  const Status over = capped.impact(ball(capPlate, 60.0), r);
+  ASSERT_FALSE(over);
+  EXPECT_EQ(over.error().code, ErrorCode::CapacityExceeded);
+  EXPECT_NE(over.error().message.find("maxFragmentsPerImpact"), std::string::npos) << over.error().message;
+  EXPECT_TRUE(capped.isAlive(capPlate));
+  few.maxFragmentsPerImpact = 1;
+  EXPECT_EQ(World::create(Pack{}, few).error().code, ErrorCode::InvalidArgument);
 }
 
 TEST_F(WorldTest, EveryFragmentSaysWhatItBecameAndWhy) {

@@ -49,6 +49,7 @@ enum class ErrorCode {
   // Generic.
   InvalidArgument,
   Cancelled,
+  CapacityExceeded,  ///< a capacity declared in advance (e.g. WorldSettings) would be exceeded
 };
 
 /// Stable snake_case identifier of a code, e.g. "open_mesh".

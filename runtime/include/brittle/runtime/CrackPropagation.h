@@ -111,20 +111,53 @@ struct StressField {
   Voigt at(int32_t element) const;
 };
 
+/// Buffers of crack growth, labelling and crumb merging, kept between calls: once they have grown
+/// to the largest body cracked (or been reserved for it), growing cracks allocates nothing.
+struct CrackWorkspace {
+  struct Front {
+    double priority;         ///< normal stress on the parent plane
+    int32_t element, crack;
+    Eigen::Vector3d normal;  ///< parent's plane normal (orients the local principal direction)
+    Eigen::Vector3d point, point2;  ///< the parent's cut through the shared face
+  };
+  std::vector<Front> front;              ///< a max-heap
+  std::vector<char> cut, stressKnown;    ///< #T
+  std::vector<Voigt> stressCache;        ///< #T
+  std::vector<double> phi;               ///< cracks × #N: each crack's nodal level set
+  std::vector<char> cutBy;               ///< cracks × #T
+  std::vector<Eigen::Vector3d> seedNormals;
+  // labelFragments
+  std::vector<int32_t> parent, labelOfRoot;
+  // mergeCrumbs: per component, per node (member lists), per node (incident edges, CSR)
+  std::vector<int32_t> size, low, root, shared, head, tail, touched, next, start, fill, incident;
+  std::vector<char> stuck;
+  /// Reserves for a body of the given counts and up to `cracks` cracks.
+  void reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index edges, int cracks);
+};
+
 /// Grows cracks from scan.seeds in the field at the peak instant, within energyBudgetJ.
 /// Errors: InvalidArgument (bad settings, sizes or material values).
 Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& topology, const StressScan& scan,
                                       const StressField& field, double tensileStrengthPa, double fractureEnergyJPerM2,
                                       double energyBudgetJ, const CrackSettings& settings);
+/// The same into `out` (its arrays keep their storage), with the buffers of `workspace`.
+Status propagateCracks(const TetMesh& mesh, const TetTopology& topology, const StressScan& scan,
+                       const StressField& field, double tensileStrengthPa, double fractureEnergyJPerM2,
+                       double energyBudgetJ, const CrackSettings& settings, CrackWorkspace& workspace,
+                       FractureState& out);
 
 /// Merges fragments of fewer than minNodes nodes into their best-connected neighbour (by
 /// un-cutting the edges between them), smallest first, and relabels. Returns the merges done.
 int mergeCrumbs(const TetTopology& topology, int minNodes, Eigen::VectorXd& edgeCuts, Eigen::VectorXi& labels,
                 int& fragmentCount);
+int mergeCrumbs(const TetTopology& topology, int minNodes, Eigen::VectorXd& edgeCuts, Eigen::VectorXi& labels,
+                int& fragmentCount, CrackWorkspace& workspace);
 
 /// Labels nodes by connected components over uncut edges (NaN in edgeCuts), numbered in order of
 /// their lowest node. Returns the number of labels.
 int labelFragments(const TetTopology& topology, const Eigen::VectorXd& edgeCuts, Eigen::Index nodeCount,
                    Eigen::VectorXi& labels);
+int labelFragments(const TetTopology& topology, const Eigen::VectorXd& edgeCuts, Eigen::Index nodeCount,
+                   Eigen::VectorXi& labels, CrackWorkspace& workspace);
 
 }  // namespace brittle

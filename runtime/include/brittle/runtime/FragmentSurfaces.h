@@ -16,6 +16,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
+#include <cstdint>
 #include <vector>
 
 #include "brittle/descriptors/MeshTypes.h"
@@ -32,5 +34,21 @@ namespace brittle {
 Result<std::vector<TriangleMesh>> buildFragmentSurfaces(const TetMesh& mesh, const TetTopology& topology,
                                                         const Eigen::VectorXi& nodeLabels, int labelCount,
                                                         const Eigen::VectorXd& edgeCuts);
+
+/// Buffers of buildFragmentSurfaces, kept between calls: once they have grown to the largest body
+/// (or been reserved for it), building surfaces allocates only the output meshes' arrays.
+struct FragmentSurfaceWorkspace {
+  std::vector<Eigen::Vector3d> points;           ///< nodes first, then created points
+  std::vector<int32_t> edgePoint, facePoint;     ///< per edge; per (tet, local face): −1 until created
+  std::vector<std::array<int32_t, 4>> triangles; ///< (label, three points), in creation order
+  std::vector<int32_t> labelStart, order, local, used;
+  void reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index edges, Eigen::Index boundaryFaces);
+};
+
+/// The same into `out` (resized to labelCount; each mesh keeps its storage where its size is
+/// unchanged), with the buffers of `workspace`.
+Status buildFragmentSurfaces(const TetMesh& mesh, const TetTopology& topology, const Eigen::VectorXi& nodeLabels,
+                             int labelCount, const Eigen::VectorXd& edgeCuts, FragmentSurfaceWorkspace& workspace,
+                             std::vector<TriangleMesh>& out);
 
 }  // namespace brittle

@@ -101,10 +101,15 @@ struct FractureSettings {
   DescriptorKind descriptor = DescriptorKind::Moment;
 };
 
+/// Capacities are declared up front, as in Jolt: a call that would exceed one returns
+/// ErrorCode::CapacityExceeded and changes nothing.
 struct WorldSettings {
   int32_t maxObjects = 4096;   ///< capacity of object slots (live objects, including fragments)
+  /// Fragments one impact may make (after crumb merging), at least 2; more leave the object
+  /// unbroken. The default pack's hardest impacts make up to ~130.
+  int32_t maxFragmentsPerImpact = 256;
   uint64_t seed = 1;
-  /// Impacts submitted and not yet collected, at most (submitImpact returns InvalidArgument beyond).
+  /// Impacts submitted and not yet collected, at most.
   int32_t maxPendingImpacts = 64;
   /// Worker threads for submitted impacts and background preparation; 0: one per core
   /// (oneTBB's default). Results do not depend on it.
@@ -116,7 +121,7 @@ struct WorldSettings {
   FractureSettings fracture;
 };
 
-/// Checks ranges: maxObjects ≥ 1, modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0,
+/// Checks ranges: maxObjects ≥ 1, maxPendingImpacts ≥ 1, maxFragmentsPerImpact ≥ 2, modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0,
 /// ringDownPeriods ≥ 0, debrisVolumeFraction in [0, 1), crack settings. Error: InvalidArgument.
 Status validateWorldSettings(const WorldSettings& settings);
 
@@ -234,8 +239,8 @@ class World {
   /// correction: on a worker (prepareInBackground, the default; an error there is returned by the
   /// object's first impact) or here.
   /// Errors: InvalidArgument (unknown asset name, a rotation
-  /// that is not orthonormal with det +1, non-finite values, no free slot: maxObjects reached),
-  /// those of building the object's topology, and without prepareInBackground those of
+  /// that is not orthonormal with det +1, non-finite values), CapacityExceeded (no free slot:
+  /// maxObjects reached), those of building the object's topology, and without prepareInBackground those of
   /// StaticCorrection::build.
   Result<ObjectId> addObject(const ObjectDesc& desc);
   /// Errors: InvalidArgument (stale or invalid id).
@@ -249,19 +254,26 @@ class World {
   /// Computes the fracture of one impact. When the body breaks, its id becomes stale and each
   /// matched fragment is a new object (same pose). Errors: InvalidArgument (stale id, non-finite
   /// or non-positive values, a point farther than the tolerance from the surface), those of the
-  /// stages; Internal failures are reported as InvalidArgument with the stage named.
+  /// stages; Internal failures are reported as InvalidArgument with the stage named;
+  /// CapacityExceeded (more fragments than maxFragmentsPerImpact, or than free object slots).
   Result<ImpactResult> impact(const ImpactDesc& desc);
-  /// The same into `result`, which keeps its storage between calls. This is the hot path: once the
-  /// World's buffers have grown to the largest body hit (after one impact on it), an impact that
-  /// does not break the body allocates no heap memory (contact, modal response, static correction,
-  /// stress scan; tested). A body's first impact may factorise its K (StaticCorrection.h), and a
-  /// breaking impact allocates what it returns: crack state, fragment surfaces, new objects.
+  /// The same into `result`, which keeps its storage between calls. This is the hot path.
+  /// Allocation: once the World's buffers have grown to the largest body hit (after one impact on
+  /// it; the crack and surface buffers are reserved when a pack object is first placed), an impact
+  /// that does not break the body allocates no heap memory (contact, modal response, static
+  /// correction, stress scan), and one that breaks it computes its cracks, labels and surfaces in
+  /// those buffers and allocates only what it hands over: the fracture state's two arrays, and per
+  /// fragment its surface's two arrays, its reason text when it has one, and for a new object
+  /// the source of its body (the fragment's own solid or its match; the body itself is made after
+  /// the impact, on the workers). So the allocations are bounded by the fragments made, not by
+  /// the body's size (tested: HotPathAllocationTest). A body's first impact may factorise its K
+  /// (StaticCorrection.h).
   Status impact(const ImpactDesc& desc, ImpactResult& result);
 
   /// Starts the impact on a worker thread and returns at once; the struck object is pending until
   /// the impact is collected. Checks the id and the values (as impact()) before it starts.
-  /// Errors: InvalidArgument (stale id, an object already pending, non-finite values,
-  /// maxPendingImpacts reached).
+  /// Errors: InvalidArgument (stale id, an object already pending, non-finite values),
+  /// CapacityExceeded (maxPendingImpacts reached).
   Result<ImpactTicket> submitImpact(const ImpactDesc& desc);
   /// Whether collectImpact(ticket) would return without waiting. false for unknown tickets.
   bool impactReady(ImpactTicket ticket) const;
