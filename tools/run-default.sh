@@ -10,7 +10,7 @@
 # xvfb-run when there is no display).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash tools/setup.sh
+bash tools/setup.sh --main  # the CLI alone: the tests are built by tools/run-tests.sh
 rm -rf out/impacts out/fragments out/pictures out/replays out/play out/frames
 mkdir -p out/impacts out/fragments out/replays out/play out/frames
 build/bin/brittle bake --manifest assets/default-pack.json --out out/default.h5

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs every Debian package brittle needs, then configures and builds into build/ (Release).
-#   tools/setup.sh            Release build in build/
+#   tools/setup.sh            Release build in build/: everything (libraries, CLI, tests, benchmarks)
+#   tools/setup.sh --main     Release build in build/: the CLI alone (what the main job runs)
 #   tools/setup.sh --asan     ASan + UBSan build in build-asan/
 # Safe to re-run: apt-get skips what is installed and the build is incremental.
 set -euo pipefail
@@ -32,7 +33,13 @@ if [ ${#missing[@]} -gt 0 ] || ! ls /var/lib/apt/lists/*_Packages >/dev/null 2>&
 fi
 
 preset=release
-if [ "${1:-}" = "--asan" ]; then preset=asan; fi
+targets=()
+case "${1:-}" in
+  "") ;;
+  --asan) preset=asan ;;
+  --main) targets=(--target brittle) ;;
+  *) echo "usage: tools/setup.sh [--main | --asan]" >&2; exit 2 ;;
+esac
 cmake --preset "$preset" >/dev/null
 # Two cores: two jobs. The Mesh_3 unit needs ~4.3 GiB of compiler memory on its own.
-cmake --build --preset "$preset" -j 2
+cmake --build --preset "$preset" -j 2 "${targets[@]}"

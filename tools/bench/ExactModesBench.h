@@ -35,7 +35,7 @@ struct ExactModesBenchSettings {
   int64_t referenceMaxTets = 20000;              ///< no reference above this size of the exact mesh (×8 refined)
   int exactModes = 20;                           ///< modes of the exact path (FractureSettings::exactModeCount)
   int repeats = 3;                               ///< timings: the median of this many runs
-  std::filesystem::path csv = "bench/exact_modes.csv";
+  std::filesystem::path csv = "docs/results/data/exact_modes.csv";
   bool quiet = false;
 };
 

@@ -29,7 +29,7 @@ struct FractureStatsBenchSettings {
   int modes = 40;  // the bake default (ModalSettings)
   double jitterM = 0.03;
   std::filesystem::path brickMesh = "assets/meshes/brick.off";
-  std::filesystem::path csv = "bench/fracture.csv";
+  std::filesystem::path csv = "docs/results/data/fracture.csv";
   bool quiet = false;
 };
 

@@ -28,7 +28,7 @@ struct ImpactBenchSettings {
   int impacts = 30;
   double speedMps = 50.0;   // breaks the slab every time (5 fragments on average at 1k tets)
   uint64_t seed = 1;
-  std::filesystem::path csv = "bench/impact_latency.csv";
+  std::filesystem::path csv = "docs/results/data/impact_latency.csv";
   std::filesystem::path databasePack;  ///< empty: no database, fragments stay surfaces
   int exactModesMaxTets = 150;         ///< with a database: the World's default
   bool quiet = false;
@@ -44,7 +44,7 @@ Status runImpactBench(const ImpactBenchSettings& settings);
 struct PlacementBenchSettings {
   std::filesystem::path pack;
   int repeats = 5;  ///< medians over this many fresh worlds
-  std::filesystem::path csv = "bench/placement.csv";
+  std::filesystem::path csv = "docs/results/data/placement.csv";
 };
 Status runPlacementBench(const PlacementBenchSettings& settings);
 

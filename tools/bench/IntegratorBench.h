@@ -27,8 +27,8 @@ struct IntegratorBenchSettings {
   int pulseSteps = 16;
   int points = 41;              ///< ωh values, log-spaced over [0.01, 100]
   int timingRepeats = 21;
-  std::filesystem::path csv = "bench/integrators.csv";
-  std::filesystem::path timingCsv = "bench/integrator_timing.csv";
+  std::filesystem::path csv = "docs/results/data/integrators.csv";
+  std::filesystem::path timingCsv = "docs/results/data/integrator_timing.csv";
 };
 
 /// Errors: PackIoError when a CSV cannot be written.

@@ -57,7 +57,7 @@ double maxRelDiff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 
 int main(int argc, char** argv) {
   CLI::App app{"Benchmark: tet meshing and modal solve time against DOF count"};
-  std::string meshPath = "assets/meshes/brick.off", materialName = "glass", out = "bench/modal_solve.csv";
+  std::string meshPath = "assets/meshes/brick.off", materialName = "glass", out = "docs/results/data/modal_solve.csv";
   std::vector<int64_t> sizes = {250, 800, 2500, 8000, 25000, 80000};
   std::vector<int> modeCounts = {20, 40};
   int denseMaxDof = 2000, repeats = 1;

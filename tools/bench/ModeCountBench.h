@@ -27,7 +27,7 @@ struct ModeCountBenchSettings {
   int repeats = 5;
   int referenceStepsPerContact = 60;
   uint64_t seed = 1;
-  std::filesystem::path csv = "bench/modes.csv";
+  std::filesystem::path csv = "docs/results/data/modes.csv";
   bool quiet = false;
 };
 

@@ -23,7 +23,7 @@ struct ResolutionBenchSettings {
   std::string material = "concrete";
   std::vector<int64_t> tets = {300, 1000, 3000, 10000, 30000, 100000};
   int modes = 10;
-  std::filesystem::path csv = "bench/resolution.csv";
+  std::filesystem::path csv = "docs/results/data/resolution.csv";
   bool quiet = false;
 };
 

@@ -50,8 +50,8 @@ struct SearchBenchSettings {
   int voxelResolution = 16;
   int momentOrder = 4;             ///< highest order of the moment descriptor (database and queries)
   uint64_t seed = 1;
-  std::filesystem::path searchCsv = "bench/search.csv";
-  std::filesystem::path descriptorCsv = "bench/descriptor_cost.csv";
+  std::filesystem::path searchCsv = "docs/results/data/search.csv";
+  std::filesystem::path descriptorCsv = "docs/results/data/descriptor_cost.csv";
   bool quiet = false;
 };
 

@@ -38,7 +38,7 @@ Runner addBakeCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("bake", "Bake surface meshes into a pack: validate, tet-mesh, FEM, modal basis, stress modes");
   auto o = std::make_shared<BakeOptions>();
   auto* mesh = cmd->add_option("--mesh", o->mesh, "Surface mesh (OFF, OBJ, PLY, STL), closed and outward");
-  auto* manifest = cmd->add_option("--manifest", o->manifest, "JSON manifest of several objects (see README)");
+  auto* manifest = cmd->add_option("--manifest", o->manifest, "JSON manifest of several objects (see docs/cli.md)");
   mesh->excludes(manifest);
   cmd->add_option("--material", o->material, "Preset name (" + [] {
     std::string names;

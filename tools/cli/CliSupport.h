@@ -12,7 +12,7 @@
 
 namespace brittle::cli {
 
-/// Exit codes (documented in the README).
+/// Exit codes (documented in docs/cli.md).
 enum ExitCode : int {
   kExitOk = 0,
   kExitInternal = 1,

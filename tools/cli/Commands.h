@@ -29,7 +29,7 @@ Runner addViewCommand(CLI::App& app);
 
 namespace brittle::cli {
 
-/// The stable JSON document of `brittle inspect --json` (documented in the README).
+/// The stable JSON document of `brittle inspect --json` (documented in docs/cli.md).
 nlohmann::json inspectJson(const Pack& pack);
 
 /// The human-readable inspection.

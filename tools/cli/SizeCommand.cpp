@@ -114,7 +114,7 @@ Runner addSizeCommand(CLI::App& app) {
               "reference, only the objects the scene uses, the database only if it refractures");
   auto o = std::make_shared<SizeOptions>();
   cmd->add_option("--manifest", o->manifest, "Bake manifest (JSON, as for bake --manifest)")->required();
-  cmd->add_option("--scene", o->scene, "Scene requirements (JSON: target, objects, speeds, impactors; see README)")->required();
+  cmd->add_option("--scene", o->scene, "Scene requirements (JSON: target, objects, speeds, impactors; see docs/cli.md)")->required();
   cmd->add_option("--out", o->out, "Sized pack (.h5), written atomically")->required();
   cmd->add_option("--target", o->target, "Worst peak-stress error allowed (overrides the scene's)")->check(CLI::Range(1e-6, 0.999));
   cmd->add_option("--ladder", o->settings.modeLadder, "Mode counts tried")->delimiter(',')->capture_default_str()

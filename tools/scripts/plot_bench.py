@@ -1,9 +1,9 @@
 #!/usr/bin/python3
-"""Charts for brittle_bench_modal's CSV (bench/modal_solve.csv).
+"""Charts for brittle_bench_modal's CSV (docs/results/data/modal_solve.csv).
 
-Writes bench/modal_solve.png (modal solve time against DOF, per method and mode count, with
-the single-factorisation floor) and bench/tet_meshing.png (Mesh_3 time against element count),
-and prints the medians and ratios the README quotes.
+Writes docs/results/data/modal_solve.png (modal solve time against DOF, per method and mode
+count, with the single-factorisation floor) and docs/results/data/tet_meshing.png (Mesh_3 time
+against element count), and prints the medians and ratios docs/results/ quotes.
 """
 import csv
 import math
@@ -30,7 +30,7 @@ def load(path):
 
 
 def main():
-    src = Path(sys.argv[1] if len(sys.argv) > 1 else "bench/modal_solve.csv")
+    src = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/results/data/modal_solve.csv")
     rows = load(src)
     out_dir = src.parent
     methods = [

@@ -1,11 +1,11 @@
 #!/usr/bin/python3
-"""Chart 5, for `brittle bench exact-modes` (bench/exact_modes.csv): per fragment, the database
-match against the fragment's own modal analysis at runtime (the exact path), both against the
-reference bake of the fragment's exact surface. Left: time per fragment against its size (tets of
-its own mesh). Right: the error of the first three frequencies against the same size. Medians per
-size bin as lines. Writes bench/exact_modes.png next to the CSV and prints the figures the README
-quotes, with the largest size bin whose median exact time stays within the budget
-(--budget-ms, default 20 ms)."""
+"""Chart 5, for `brittle bench exact-modes` (docs/results/data/exact_modes.csv): per fragment,
+the database match against the fragment's own modal analysis at runtime (the exact path), both
+against the reference bake of the fragment's exact surface. Left: time per fragment against its
+size (tets of its own mesh). Right: the error of the first three frequencies against the same
+size. Medians per size bin as lines. Writes docs/results/data/exact_modes.png next to the CSV
+and prints the figures docs/results/ quotes, with the largest size bin whose median exact time
+stays within the budget (--budget-ms, default 20 ms)."""
 import argparse
 import csv
 import math
@@ -38,7 +38,7 @@ def binned(x, y, edges):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("csv", nargs="?", default="bench/exact_modes.csv")
+    parser.add_argument("csv", nargs="?", default="docs/results/data/exact_modes.csv")
     parser.add_argument("--budget-ms", type=float, default=20.0)
     args = parser.parse_args()
     rows = [r for r in csv.DictReader(open(args.csv, newline="")) if int(r["parent_tets"]) > 0]

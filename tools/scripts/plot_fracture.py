@@ -1,8 +1,8 @@
 #!/usr/bin/python3
-"""Chart for `brittle bench fracture` (bench/fracture.csv): fragment count and the largest
-fragment's mass share against impact speed, every seed as a dot, the median as a line and the
-10–90 % band shaded. Writes bench/fracture.png next to the CSV and prints the figures the README
-quotes."""
+"""Chart for `brittle bench fracture` (docs/results/data/fracture.csv): fragment count and the
+largest fragment's mass share against impact speed, every seed as a dot, the median as a line
+and the 10–90 % band shaded. Writes docs/results/data/fracture.png next to the CSV and prints
+the figures docs/results/ quotes."""
 import csv
 import statistics
 import sys
@@ -21,7 +21,7 @@ def quantile(values, q):
     return float(np.quantile(np.asarray(values, dtype=float), q))
 
 
-def main(path="bench/fracture.csv"):
+def main(path="docs/results/data/fracture.csv"):
     rows = list(csv.DictReader(open(path, newline="")))
     cases = [c for c in ("plate", "brick") if any(r["case"] == c for r in rows)]
     fig, axes = plt.subplots(2, len(cases), figsize=(5.5 * len(cases), 7.5), squeeze=False)

@@ -23,7 +23,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("stats", nargs="+", help="JSON statistics of brittle play")
-    parser.add_argument("--out", default="bench/frame_times.png")
+    parser.add_argument("--out", default="docs/results/data/frame_times.png")
     args = parser.parse_args()
     docs = [json.load(open(p)) for p in args.stats]
     fig, axes = plt.subplots(len(docs), 2, figsize=(12, 2.8 * len(docs)), squeeze=False)

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
-"""Chart for `brittle bench impact` (bench/impact_latency.csv): median time per stage of one
-impact, pruned, for each tet count and mode count, with the unpruned total beside it.
-Writes bench/impact_latency.png next to the CSV and prints the figures the README quotes."""
+"""Chart for `brittle bench impact` (docs/results/data/impact_latency.csv): median time per
+stage of one impact, pruned, for each tet count and mode count, with the unpruned total beside
+it. Writes docs/results/data/impact_latency.png next to the CSV and prints the figures
+docs/results/ quotes."""
 import csv
 import sys
 from pathlib import Path
@@ -14,7 +15,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 STAGES = ["contact", "modal", "stress", "propagation", "surfaces", "matching"]
 
 
-def main(path="bench/impact_latency.csv"):
+def main(path="docs/results/data/impact_latency.csv"):
     rows = list(csv.DictReader(open(path, newline="")))
     settings = sorted({(int(r["tets"]), int(r["modes"])) for r in rows})
     value = {(int(r["tets"]), int(r["modes"]), int(r["prune"]), r["stage"]): float(r["median_ms"]) for r in rows}

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
-"""Chart for `brittle bench integrators` (bench/integrators.csv, bench/integrator_timing.csv):
-peak error and late amplitude of each modal integrator against ωh, one column per damping ratio.
-Writes bench/integrators.png next to the CSV and prints the figures the README quotes."""
+"""Chart for `brittle bench integrators` (docs/results/data/integrators.csv,
+docs/results/data/integrator_timing.csv): peak error and late amplitude of each modal integrator
+against ωh, one column per damping ratio. Writes docs/results/data/integrators.png next to the
+CSV and prints the figures docs/results/ quotes."""
 import csv
 import math
 import sys
@@ -16,7 +17,7 @@ ORDER = ["exact", "explicit-euler", "symplectic-euler", "implicit-euler"]
 CAP = 1e6  # blown-up values are drawn at the cap
 
 
-def main(path="bench/integrators.csv", timing_path="bench/integrator_timing.csv"):
+def main(path="docs/results/data/integrators.csv", timing_path="docs/results/data/integrator_timing.csv"):
     rows = list(csv.DictReader(open(path, newline="")))
     zetas = sorted({float(r["zeta"]) for r in rows})
     fig, axes = plt.subplots(2, len(zetas), figsize=(5 * len(zetas), 7), sharex=True, squeeze=False)
@@ -44,7 +45,7 @@ def main(path="bench/integrators.csv", timing_path="bench/integrator_timing.csv"
     fig.savefig(out, dpi=100)
     print(f"chart: {out}")
 
-    # Figures for the README: where each scheme's error passes 10 %, and whether it ever grew.
+    # Figures for docs/results/: where each scheme's error passes 10 %, and whether it ever grew.
     for zeta in zetas:
         for name in ORDER:
             sel = [r for r in rows if r["integrator"] == name and float(r["zeta"]) == zeta]

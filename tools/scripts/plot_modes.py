@@ -1,7 +1,8 @@
 #!/usr/bin/python3
-"""Chart for `brittle bench modes` (bench/modes.csv): peak-stress error against the full-FEM
-reference, with and without the static correction, and the impact time, against the number of
-modes. Writes bench/modes.png next to the CSV and prints the figures the README quotes."""
+"""Chart for `brittle bench modes` (docs/results/data/modes.csv): peak-stress error against the
+full-FEM reference, with and without the static correction, and the impact time, against the
+number of modes. Writes docs/results/data/modes.png next to the CSV and prints the figures
+docs/results/ quotes."""
 import csv
 import statistics
 import sys
@@ -13,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def main(path="bench/modes.csv"):
+def main(path="docs/results/data/modes.csv"):
     rows = list(csv.DictReader(open(path, newline="")))
     points = sorted({int(r["point"]) for r in rows})
     fig, (err_ax, time_ax) = plt.subplots(1, 2, figsize=(11, 4.2))

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
-"""Chart for `brittle bench resolution` (bench/resolution.csv): frequency error of the lowest
-modes and bake time against the tet count. Writes bench/resolution.png next to the CSV and prints
-the figures the README quotes."""
+"""Chart for `brittle bench resolution` (docs/results/data/resolution.csv): frequency error of
+the lowest modes and bake time against the tet count. Writes docs/results/data/resolution.png
+next to the CSV and prints the figures docs/results/ quotes."""
 import csv
 import statistics
 import sys
@@ -13,7 +13,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def main(path="bench/resolution.csv"):
+def main(path="docs/results/data/resolution.csv"):
     rows = list(csv.DictReader(open(path, newline="")))
     tets = sorted({int(r["tets"]) for r in rows})
     by = {t: [r for r in rows if int(r["tets"]) == t] for t in tets}

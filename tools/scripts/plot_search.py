@@ -1,11 +1,12 @@
 #!/usr/bin/python3
-"""Charts for `brittle bench search` (bench/search.csv, bench/descriptor_cost.csv).
+"""Charts for `brittle bench search` (docs/results/data/search.csv,
+docs/results/data/descriptor_cost.csv).
 
 Writes, next to the CSV:
   search_recall_vs_time.png   recall@1 against median query time, per descriptor and size
   search_latency_vs_size.png  median query time against database size: brute force and kd-forest
   search_physical_error.png   median frequency error of the match against median query time
-and prints the figures the README quotes.
+and prints the figures docs/results/ quotes.
 """
 import csv
 import sys
@@ -40,7 +41,7 @@ def label(r):
 
 
 def main():
-    src = Path(sys.argv[1] if len(sys.argv) > 1 else "bench/search.csv")
+    src = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/results/data/search.csv")
     rows = load(src)
     out = src.parent
     sizes = sorted({int(r["entries"]) for r in rows})

@@ -1,10 +1,11 @@
 #!/usr/bin/python3
 """Chart 4 of the speed/accuracy study: descriptor kind × resolution × database size against the
 physical error of the match and the query time. Takes the CSV pairs that `brittle bench search`
-wrote for each resolution (search CSV, cost CSV, ...), merges them into bench/search_resolution.csv
-and draws bench/search_resolution.png: the median frequency and mass error of the exact match
-(brute force) against the whole query time, i.e. describing the fragment from its raw mesh
-(canonical frames + descriptor of every candidate frame) plus the search."""
+wrote for each resolution (search CSV, cost CSV, ...), merges them into
+docs/results/data/search_resolution.csv and draws docs/results/data/search_resolution.png: the
+median frequency and mass error of the exact match (brute force) against the whole query time,
+i.e. describing the fragment from its raw mesh (canonical frames + descriptor of every candidate
+frame) plus the search."""
 import csv
 import sys
 from pathlib import Path

@@ -21,7 +21,7 @@
 // coordinate, exact since Ŝ = Ĉ₀ B Φ̂), the reduced stiffness at ν is K_r = Σ_e V̂_e ε̂_eᵀ C(E₀, ν) ε̂_e
 // and the reduced mass stays I; its eigenpairs (λ̂', Y) give Φ̂' = Φ̂ Y and Ŝ' = C(E₀, ν) ε̂ Y. Ritz
 // values are upper bounds; the error is second order in the basis error (measured in the tests and
-// README). The analytic laws are then applied with (E/E₀, ρ/ρ₀).
+// docs/results/fragment-database.md). The analytic laws are then applied with (E/E₀, ρ/ρ₀).
 #pragma once
 
 #include <string>

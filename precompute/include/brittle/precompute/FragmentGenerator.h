@@ -12,7 +12,7 @@
 // on its geometry alone.
 //
 // Cost per generateFragment call with the default FragmentSettings: the "fragment-cut" row of
-// `brittle bench search` (bench/descriptor_cost.csv) and the README's "Fragment database".
+// `brittle bench search` (docs/results/data/descriptor_cost.csv) and docs/results/fragment-database.md.
 #pragma once
 
 #include <Eigen/Core>

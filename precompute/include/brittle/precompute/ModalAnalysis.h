@@ -6,7 +6,7 @@
 // ones (eigenvalue zero at the scale of |σ|), are checked to span the analytic rigid-body space,
 // then excluded.
 // (K − σM) is factorised once, by CHOLMOD's supernodal Cholesky (default; measured 3–6× faster
-// than Eigen's SimplicialLDLT on these matrices, see README) or by Eigen.
+// than Eigen's SimplicialLDLT on these matrices, see docs/results/bake-cost.md) or by Eigen.
 #pragma once
 
 #include <cstdint>
@@ -33,7 +33,7 @@ struct ModalSettings {
   int maxIterations = 500;           ///< ARPACK restarts (iparam[2])
   int lanczosVectors = 0;            ///< ncv; 0 means max(2·nev + 1, nev + 20)
   /// ARPACK relative tolerance on the Ritz values; 0 means machine precision. 1e-12 gives
-  /// residuals ~1e-9 in about half the solves of machine precision (see README); a basis whose
+  /// residuals ~1e-9 in about half the solves of machine precision (see docs/results/bake-cost.md); a basis whose
   /// residual still exceeds 1e-8 is solved again at machine precision.
   double tolerance = 1e-12;
   int retries = 2;                   ///< on non-convergence, retry with 2× ncv and 2× iterations

@@ -36,7 +36,7 @@ struct TetMeshSettings {
   bool optimize = true;                 ///< sliver perturbation + exudation
   /// Dihedral angle (degrees) the optimisers aim for. Measured on 3k-tet meshes of real models:
   /// 5° costs ~1 s, 10° ~20 s, 0 ("as good as possible") ~50 s. Protected sharp features can
-  /// keep a few slivers below the bound (see README).
+  /// keep a few slivers below the bound (see docs/results/bake-cost.md).
   double sliverBoundDeg = 5.0;
   uint64_t seed = 1;                    ///< seeds CGAL's random generator (determinism)
 };

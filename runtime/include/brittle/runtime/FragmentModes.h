@@ -16,7 +16,7 @@
 // generalised solver when 3N ≤ denseMaxDof. The six rigid modes are dropped, the others are
 // mass-normalised, and the stress modes follow (computeStressModes). The cost grows with the
 // fragment's size, which is why the World takes this path only below a tet count
-// (FractureSettings::exactModesMaxTets; chart 5 in the README picks its default).
+// (FractureSettings::exactModesMaxTets; chart 5 in docs/results/speed-accuracy.md picks its default).
 #pragma once
 
 #include <Eigen/Core>

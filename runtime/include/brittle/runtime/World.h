@@ -88,7 +88,7 @@ struct FractureSettings {
   bool matchFragments = true;
   /// The exact path (FragmentModes.h): a fragment that holds a part of at most this many of the
   /// broken body's tets, and is not debris, gets its own modal analysis at runtime instead of the
-  /// database match (and can break again even without a database). 0: never. Chart 5 (README),
+  /// database match (and can break again even without a database). 0: never. Chart 5 (docs/results/speed-accuracy.md),
   /// 20 modes: up to 150 tets the exact path costs 13.5 ms per fragment (p90 15.7 ms, within a
   /// 60 Hz frame; a match costs ~1.2 ms) and has the match's median frequency error (26 % against
   /// 24 %) but a bounded worst case (p90 38 % against 79 %); beyond, its cost grows about linearly
