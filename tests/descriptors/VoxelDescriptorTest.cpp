@@ -43,6 +43,64 @@ float bestCandidate(const TriangleMesh& reference, const TriangleMesh& query, Co
   return best;
 }
 
+// The winding number of a closed surface at p (van Oosterom–Strackee solid angles): 1 inside,
+// 0 outside. Independent of the parity fill under test.
+double windingNumber(const Points& v, const Triangles& f, const Eigen::Vector3d& p) {
+  double total = 0.0;
+  for (Eigen::Index t = 0; t < f.rows(); ++t) {
+    const Eigen::Vector3d a = v.row(f(t, 0)).transpose() - p, b = v.row(f(t, 1)).transpose() - p,
+                          c = v.row(f(t, 2)).transpose() - p;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    total += 2.0 * std::atan2(a.dot(b.cross(c)), la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb);
+  }
+  return total / (4.0 * std::numbers::pi);
+}
+
+// Occupancy against the winding number at every voxel centre, in a given frame.
+void expectOccupancyIsTheWindingNumber(const TriangleMesh& mesh, const CanonicalFrame& frame, int resolution) {
+  VoxelDescriptorSettings s;
+  s.resolution = resolution;
+  const auto d = computeVoxelDescriptor(mesh, frame, s);
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  const Points canonical = frame.pointsToCanonical(mesh.vertices);
+  const double h = 2.0 * s.halfExtent / resolution;
+  int mismatches = 0, inside = 0;
+  for (int i = 0; i < resolution; ++i) {
+    for (int j = 0; j < resolution; ++j) {
+      for (int l = 0; l < resolution; ++l) {
+        const Eigen::Vector3d p(-s.halfExtent + (i + 0.5) * h, -s.halfExtent + (j + 0.5) * h, -s.halfExtent + (l + 0.5) * h);
+        const double w = windingNumber(canonical, mesh.faces, p);
+        ASSERT_TRUE(std::abs(w) < 1e-6 || std::abs(w - 1.0) < 1e-6) << "a centre on the surface: pick another shape";
+        const float expected = w > 0.5 ? 1.0f : 0.0f;
+        inside += expected == 1.0f;
+        mismatches += d.value()[(i * resolution + j) * resolution + l] != expected;
+      }
+    }
+  }
+  EXPECT_EQ(mismatches, 0) << "of " << resolution * resolution * resolution << " centres, " << inside << " inside";
+  EXPECT_GT(inside, 0);
+}
+
+TEST(VoxelDescriptor, OccupancyIsTheWindingNumberAtEveryCentre) {
+  // A ball, in its canonical frame and turned.
+  const TriangleMesh ball = testing::makeIcosphere(1.0, 3);
+  expectOccupancyIsTheWindingNumber(ball, primaryFrame(ball), 16);
+  CanonicalFrame turned;
+  turned.rotation = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  turned.scalePerM = 0.8;
+  expectOccupancyIsTheWindingNumber(ball, turned, 16);
+  // A box whose faces' diagonals run exactly through columns of centres (x = ±y), so that the
+  // column's line meets the top and bottom faces on an edge shared by two triangles: the tie rule
+  // must count one crossing there, not zero or two.
+  const double h = 3.0 / 16.0;
+  const TriangleMesh box = testing::makeBoxSurface(2.0 * (2.5 * h), 2.0 * (2.5 * h), 1.3);
+  expectOccupancyIsTheWindingNumber(box, CanonicalFrame{}, 16);
+  // A bent, non-convex solid: the box with one corner pushed in (a fold seen from some columns).
+  TriangleMesh dented = testing::makeBoxSurface(1.2, 0.9, 0.7);
+  dented.vertices.row(0) *= 0.2;
+  expectOccupancyIsTheWindingNumber(dented, CanonicalFrame{}, 24);
+}
+
 TEST(VoxelDescriptor, CubeOccupiesTheExpectedVoxels) {
   // Unit cube [-½, ½]³ on the default grid (h = 3/16, centres at −1.5 + (i + ½)h): the centres
   // with |x| ≤ ½ are i = 5..10, so exactly 6³ voxels are occupied.

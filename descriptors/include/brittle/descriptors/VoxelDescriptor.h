@@ -1,5 +1,6 @@
-// VoxelDescriptor.h — shape descriptors sampled on a k³ grid over the canonical frame, through
-// OpenVDB's mesh-to-volume (openvdb/tools/MeshToVolume.h).
+// VoxelDescriptor.h — shape descriptors sampled on a k³ grid over the canonical frame: occupancy
+// by an exact parity fill along the grid's columns, the clamped signed distance through OpenVDB's
+// mesh-to-volume (openvdb/tools/MeshToVolume.h).
 //
 // Grid. The canonical cube [-c, c]³ (c = halfExtent, dimensionless canonical units) is split into
 // k³ cubic voxels of edge h = 2c/k; voxel (i, j, l) has its centre at -c + (i + ½, j + ½, l + ½) h
@@ -8,8 +9,12 @@
 // ball (diameter 1.24), a square rod up to about 5:1, a square plate down to about 1/9 thick (27:1).
 // Parts outside the cube are cropped; the descriptor stays defined.
 //
-// Voxel descriptor: occupancy, 1 where the voxel centre is inside or on the solid (signed distance
-// ≤ 0), else 0.
+// Voxel descriptor: occupancy, 1 where the voxel centre is inside the solid, else 0 (a centre
+// exactly on the surface falls on either side, by a fixed rule). Computed by parity: along each
+// column of centres parallel to z, a centre is inside when an odd number of the surface's crossings
+// with the column's line lie at or above it. A line through an edge or a vertex is counted by a
+// tie rule on the projected triangles, so it crosses once where the surface passes through and
+// never where it folds back; the result equals the winding number at every centre (tested).
 //
 // Improved voxel descriptor: the signed distance at each voxel centre, clamped to ±w voxels and
 // divided by w·h, so values lie in [-1, 1] (negative inside). Why this instead of occupancy:
@@ -48,7 +53,7 @@ Status validateImprovedVoxelDescriptorSettings(const ImprovedVoxelDescriptorSett
 /// computeCanonicalFrames on the same surface.
 /// Output: k³ values in the grid order above.
 /// Errors: EmptyMesh, NonFiniteValue, InvalidArgument (face index out of range, bad settings or
-/// frame, OpenVDB failure), OpenMesh.
+/// frame), OpenMesh.
 Result<Descriptor> computeVoxelDescriptor(const TriangleMesh& surface, const CanonicalFrame& frame,
                                           const VoxelDescriptorSettings& settings = {});
 
