@@ -163,12 +163,11 @@ std::vector<float> occupancyByParity(const Points& canonical, const Triangles& f
   }
   std::vector<float> out(columns * static_cast<size_t>(k), 0.0f);
   for (size_t q = 0; q < columns; ++q) {
-    float* first = crossings.data() + start[q];
-    float* last = crossings.data() + start[q + 1];
+    const auto first = crossings.begin() + start[q], last = crossings.begin() + start[q + 1];
     std::sort(first, last);
     // Walk the centres upwards; `above` counts the crossings at or above the centre.
     auto above = static_cast<size_t>(last - first);
-    const float* next = first;
+    auto next = first;
     for (int l = 0; l < k; ++l) {
       const auto zl = static_cast<float>(centre(l));
       while (next != last && *next < zl) {

@@ -34,7 +34,8 @@ ExitCode exitCodeFor(ErrorCode code) {
     case ErrorCode::PackVersionMismatch:
     case ErrorCode::PackCorrupt:
     case ErrorCode::PackShapeMismatch: return kExitPack;
-    case ErrorCode::InvalidArgument: return kExitUsage;
+    case ErrorCode::InvalidArgument:
+    case ErrorCode::CapacityExceeded: return kExitUsage;  // a setting (a capacity) too small for the run
     case ErrorCode::Cancelled: return kExitInternal;
   }
   return kExitInternal;
