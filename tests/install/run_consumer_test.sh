@@ -6,7 +6,8 @@
 #   4. run the consumer on it: one impact, exit 0 and a contact line expected.
 #
 #   run_consumer_test.sh <build dir> <source dir>
-# Environment: CMAKE, CXX (default: cmake and CMake's own compiler choice). The work directory
+# Environment: CMAKE, CXX (default: cmake and CMake's own compiler choice), CONSUMER_CXXFLAGS
+# (the sanitizers, when the build has them). The work directory
 # is removed on success and kept, with its path printed, on failure.
 set -euo pipefail
 
@@ -28,6 +29,7 @@ done
 step "configure and build the consumer against the installed package"
 compiler=()
 [ -n "${CXX:-}" ] && compiler=("-DCMAKE_CXX_COMPILER=$CXX")
+[ -n "${CONSUMER_CXXFLAGS:-}" ] && compiler+=("-DCMAKE_CXX_FLAGS=$CONSUMER_CXXFLAGS")
 "$cmake" -S "$src/tests/install/consumer" -B "$work/consumer" -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF "${compiler[@]}"
 # The package must come from the prefix, never from the build tree.
