@@ -102,65 +102,58 @@ std::vector<float> occupancyByParity(const Points& canonical, const Triangles& f
     const double w = (b.x() - a.x()) * (py - a.y()) - (b.y() - a.y()) * (px - a.x());
     return swap ? -w : w;
   };
-  // Crossings per column, in two passes (count, then fill).
+  // Each triangle's crossings once, as (column, z); then grouped by column (counting sort).
   const auto columns = static_cast<size_t>(k) * static_cast<size_t>(k);
-  std::vector<uint32_t> start(columns + 1, 0);
-  std::vector<float> crossings;
-  for (int pass = 0; pass < 2; ++pass) {
-    std::vector<uint32_t> fill;
-    if (pass == 1) {
-      for (size_t q = 0; q < columns; ++q) start[q + 1] += start[q];
-      crossings.resize(start[columns]);
-      fill.assign(start.begin(), start.end() - 1);
+  std::vector<std::pair<uint32_t, float>> hits;
+  hits.reserve(static_cast<size_t>(2 * columns));
+  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+    Eigen::Vector2d p[3];
+    double z[3];
+    for (int m = 0; m < 3; ++m) {
+      p[m] = canonical.row(faces(f, m)).head<2>().transpose();
+      z[m] = canonical(faces(f, m), 2);
     }
-    for (Eigen::Index f = 0; f < faces.rows(); ++f) {
-      Eigen::Vector2d p[3];
-      double z[3];
-      for (int m = 0; m < 3; ++m) {
-        p[m] = canonical.row(faces(f, m)).head<2>().transpose();
-        z[m] = canonical(faces(f, m), 2);
-      }
-      double area = (p[1] - p[0]).x() * (p[2] - p[0]).y() - (p[1] - p[0]).y() * (p[2] - p[0]).x();
-      if (area == 0.0) continue;
-      if (area < 0.0) {  // counter-clockwise in projection from here on
-        std::swap(p[1], p[2]);
-        std::swap(z[1], z[2]);
-        area = -area;
-      }
-      const double xmin = std::min({p[0].x(), p[1].x(), p[2].x()}), xmax = std::max({p[0].x(), p[1].x(), p[2].x()});
-      const double ymin = std::min({p[0].y(), p[1].y(), p[2].y()}), ymax = std::max({p[0].y(), p[1].y(), p[2].y()});
-      const int i0 = std::max(0, static_cast<int>(std::ceil((xmin + c) / h - 0.5)));
-      const int i1 = std::min(k - 1, static_cast<int>(std::floor((xmax + c) / h - 0.5)));
-      const int j0 = std::max(0, static_cast<int>(std::ceil((ymin + c) / h - 0.5)));
-      const int j1 = std::min(k - 1, static_cast<int>(std::floor((ymax + c) / h - 0.5)));
-      for (int i = i0; i <= i1; ++i) {
-        const double x = centre(i);
-        for (int j = j0; j <= j1; ++j) {
-          const double y = centre(j);
-          double w[3];
-          bool owned = true;
-          for (int m = 0; m < 3 && owned; ++m) {
-            const Eigen::Vector2d& a = p[(m + 1) % 3];
-            const Eigen::Vector2d& b = p[(m + 2) % 3];
-            w[m] = side(a, b, x, y);  // > 0: inside of edge a → b (the triangle is counter-clockwise)
-            // Top-left rule: on the edge itself, owned when the edge is a top edge (horizontal,
-            // pointing to −x) or a left edge (pointing to −y).
-            const Eigen::Vector2d d = b - a;
-            const bool topLeft = (d.y() == 0.0 && d.x() < 0.0) || d.y() < 0.0;
-            owned = w[m] > 0.0 || (w[m] == 0.0 && topLeft);
-          }
-          if (!owned) continue;
-          const size_t q = static_cast<size_t>(i) * static_cast<size_t>(k) + static_cast<size_t>(j);
-          if (pass == 0) {
-            ++start[q + 1];
-          } else {
-            const double zc = (w[0] * z[0] + w[1] * z[1] + w[2] * z[2]) / area;
-            crossings[fill[q]++] = static_cast<float>(zc);
-          }
+    double area = (p[1] - p[0]).x() * (p[2] - p[0]).y() - (p[1] - p[0]).y() * (p[2] - p[0]).x();
+    if (area == 0.0) continue;
+    if (area < 0.0) {  // counter-clockwise in projection from here on
+      std::swap(p[1], p[2]);
+      std::swap(z[1], z[2]);
+      area = -area;
+    }
+    const double xmin = std::min({p[0].x(), p[1].x(), p[2].x()}), xmax = std::max({p[0].x(), p[1].x(), p[2].x()});
+    const double ymin = std::min({p[0].y(), p[1].y(), p[2].y()}), ymax = std::max({p[0].y(), p[1].y(), p[2].y()});
+    const int i0 = std::max(0, static_cast<int>(std::ceil((xmin + c) / h - 0.5)));
+    const int i1 = std::min(k - 1, static_cast<int>(std::floor((xmax + c) / h - 0.5)));
+    const int j0 = std::max(0, static_cast<int>(std::ceil((ymin + c) / h - 0.5)));
+    const int j1 = std::min(k - 1, static_cast<int>(std::floor((ymax + c) / h - 0.5)));
+    for (int i = i0; i <= i1; ++i) {
+      const double x = centre(i);
+      for (int j = j0; j <= j1; ++j) {
+        const double y = centre(j);
+        double w[3];
+        bool owned = true;
+        for (int m = 0; m < 3 && owned; ++m) {
+          const Eigen::Vector2d& a = p[(m + 1) % 3];
+          const Eigen::Vector2d& b = p[(m + 2) % 3];
+          w[m] = side(a, b, x, y);  // > 0: inside of edge a → b (the triangle is counter-clockwise)
+          // Top-left rule: on the edge itself, owned when the edge is a top edge (horizontal,
+          // pointing to −x) or a left edge (pointing to −y).
+          const Eigen::Vector2d d = b - a;
+          const bool topLeft = (d.y() == 0.0 && d.x() < 0.0) || d.y() < 0.0;
+          owned = w[m] > 0.0 || (w[m] == 0.0 && topLeft);
         }
+        if (!owned) continue;
+        const auto q = static_cast<uint32_t>(i * k + j);
+        hits.emplace_back(q, static_cast<float>((w[0] * z[0] + w[1] * z[1] + w[2] * z[2]) / area));
       }
     }
   }
+  std::vector<uint32_t> start(columns + 1, 0);
+  for (const auto& hit : hits) ++start[hit.first + 1];
+  for (size_t q = 0; q < columns; ++q) start[q + 1] += start[q];
+  std::vector<float> crossings(hits.size());
+  std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+  for (const auto& hit : hits) crossings[fill[hit.first]++] = hit.second;
   std::vector<float> out(columns * static_cast<size_t>(k), 0.0f);
   for (size_t q = 0; q < columns; ++q) {
     const auto first = crossings.begin() + start[q], last = crossings.begin() + start[q + 1];

@@ -235,14 +235,7 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
   const Eigen::Index t = mesh.tets.rows();
   const auto nodeCount = static_cast<size_t>(mesh.nodes.rows()), tetCount = static_cast<size_t>(t);
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-  state.cutElements.clear();
-  state.cutPlanes.clear();
-  state.fragmentCount = 1;
-  state.crackCount = 0;
-  state.crackAreaM2 = 0.0;
-  state.energySpentJ = 0.0;
-  state.arrestedByEnergy = false;
-  state.mergedCrumbs = 0;
+  state.clear();
   state.energyBudgetJ = budget;
   state.edgeCuts.resize(topo.edges.rows());
   state.edgeCuts.setConstant(kNaN);

@@ -172,6 +172,7 @@ void FragmentSurfaceWorkspace::reserve(Eigen::Index nodes, Eigen::Index tets, Ei
   triangles.reserve(static_cast<size_t>(3 * boundaryFaces + 4 * edges));
   order.reserve(triangles.capacity());
   labelStart.reserve(static_cast<size_t>(nodes) + 1);
+  fill.reserve(static_cast<size_t>(nodes));
   local.reserve(points.capacity());
   used.reserve(points.capacity());
 }
@@ -217,9 +218,9 @@ Status buildFragmentSurfaces(const TetMesh& mesh, const TetTopology& topology, c
     w.labelStart[l + 1] += w.labelStart[l];
   }
   w.order.resize(w.triangles.size());
-  w.used.assign(w.labelStart.begin(), w.labelStart.end() - 1);  // fill positions
+  w.fill.assign(w.labelStart.begin(), w.labelStart.end() - 1);
   for (size_t i = 0; i < w.triangles.size(); ++i) {
-    w.order[static_cast<size_t>(w.used[static_cast<size_t>(w.triangles[i][0])]++)] = static_cast<int32_t>(i);
+    w.order[static_cast<size_t>(w.fill[static_cast<size_t>(w.triangles[i][0])]++)] = static_cast<int32_t>(i);
   }
   out.resize(labels);
   w.local.assign(w.points.size(), -1);

@@ -310,15 +310,7 @@ void resetImpactResult(ImpactResult& r) {
   r.forceDirectionLocal.setZero();
   r.ringDownS = 0.0;
   r.stressEvaluations = 0;
-  FractureState& f = r.fracture;
-  f.cutElements.clear();
-  f.cutPlanes.clear();
-  f.edgeCuts.resize(0);
-  f.nodeLabels.resize(0);
-  f.fragmentCount = 1;
-  f.crackCount = f.mergedCrumbs = 0;
-  f.crackAreaM2 = f.energyBudgetJ = f.energySpentJ = 0.0;
-  f.arrestedByEnergy = false;
+  r.fracture.clear();
   r.fragments.clear();
   r.times = StageTimes{};
 }

@@ -100,6 +100,19 @@ struct FractureState {
   double energySpentJ = 0.0;
   bool arrestedByEnergy = false;                    ///< growth ended because the energy ran out
   int mergedCrumbs = 0;                             ///< fragments below minFragmentNodes merged away
+
+  /// Back to an uncracked state. The lists keep their storage; the two Eigen arrays, which have no
+  /// capacity, are emptied (a breaking impact allocates them anew, see HotPathAllocationTest).
+  void clear() {
+    cutElements.clear();
+    cutPlanes.clear();
+    edgeCuts.resize(0);
+    nodeLabels.resize(0);
+    fragmentCount = 1;
+    crackCount = mergedCrumbs = 0;
+    crackAreaM2 = energyBudgetJ = energySpentJ = 0.0;
+    arrestedByEnergy = false;
+  }
 };
 
 /// The stress field at one instant: σ_e = S_e q (+ σ̂_e F).

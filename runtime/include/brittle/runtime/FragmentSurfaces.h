@@ -41,7 +41,8 @@ struct FragmentSurfaceWorkspace {
   std::vector<Eigen::Vector3d> points;           ///< nodes first, then created points
   std::vector<int32_t> edgePoint, facePoint;     ///< per edge; per (tet, local face): −1 until created
   std::vector<std::array<int32_t, 4>> triangles; ///< (label, three points), in creation order
-  std::vector<int32_t> labelStart, order, local, used;
+  std::vector<int32_t> labelStart, fill, order;  ///< the triangles sorted by label (counting sort)
+  std::vector<int32_t> local, used;              ///< per fragment: each point's local index; its points
   void reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index edges, Eigen::Index boundaryFaces);
 };
 
