@@ -1,6 +1,11 @@
 # Per-target flags: warnings, sanitizers. Never global.
 function(brittle_target_flags target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local)
+  # In a unity batch every source but the first reads as a header to GCC, which then flags a class
+  # holding a file-local (anonymous-namespace) type; that is what the file meant.
+  if(CMAKE_UNITY_BUILD)
+    target_compile_options(${target} PRIVATE -Wno-subobject-linkage)
+  endif()
   # The public headers are C++20 (defaulted comparisons): consumers get the standard from the targets.
   target_compile_features(${target} PUBLIC cxx_std_20)
   # One version for every module and tool (packs record it as "generator").

@@ -63,7 +63,6 @@ struct DescriptorIndex::Hnsw {
 
 namespace {
 
-Error invalid(std::string message) { return makeError(ErrorCode::InvalidArgument, std::move(message)); }
 
 // Orders the k results by (distance, id) so ties break by lower id whatever order a backend found
 // them in. k is small, so insertion sort.
@@ -110,34 +109,34 @@ Result<DescriptorIndexSettings::Kind> parseDescriptorIndexKind(std::string_view 
 Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, int64_t dims,
                                                const DescriptorIndexSettings& settings) {
   using Kind = DescriptorIndexSettings::Kind;
-  if (data == nullptr) return invalid("DescriptorIndex: data is null");
-  if (rows < 1) return invalid("DescriptorIndex: rows must be >= 1, got " + std::to_string(rows));
-  if (dims < 1) return invalid("DescriptorIndex: dims must be >= 1, got " + std::to_string(dims));
+  if (data == nullptr) return invalidArgument("DescriptorIndex: data is null");
+  if (rows < 1) return invalidArgument("DescriptorIndex: rows must be >= 1, got " + std::to_string(rows));
+  if (dims < 1) return invalidArgument("DescriptorIndex: dims must be >= 1, got " + std::to_string(dims));
   if (rows > std::numeric_limits<int64_t>::max() / dims ||
       static_cast<uint64_t>(rows * dims) > std::numeric_limits<std::size_t>::max() / sizeof(float))
-    return invalid("DescriptorIndex: rows * dims overflows");
+    return invalidArgument("DescriptorIndex: rows * dims overflows");
   const bool flannKind = settings.kind == Kind::KdForest || settings.kind == Kind::Autotuned;
   // FLANN 1.9 stores point indices and dimensions as int internally.
   if (flannKind && (rows > INT_MAX || dims > INT_MAX))
-    return invalid("DescriptorIndex: FLANN backends need rows and dims <= INT32_MAX");
+    return invalidArgument("DescriptorIndex: FLANN backends need rows and dims <= INT32_MAX");
   if (settings.kind == Kind::KdForest && settings.trees < 1)
-    return invalid("DescriptorIndex: settings.trees must be >= 1, got " + std::to_string(settings.trees));
+    return invalidArgument("DescriptorIndex: settings.trees must be >= 1, got " + std::to_string(settings.trees));
   if (settings.kind == Kind::KdForest && settings.checks < 1)
-    return invalid("DescriptorIndex: settings.checks must be >= 1, got " + std::to_string(settings.checks));
+    return invalidArgument("DescriptorIndex: settings.checks must be >= 1, got " + std::to_string(settings.checks));
   if (settings.kind == Kind::Hnsw && (settings.trees < 2 || settings.trees > 1024))
-    return invalid("DescriptorIndex: settings.trees (HNSW M) must be in [2, 1024], got " + std::to_string(settings.trees));
+    return invalidArgument("DescriptorIndex: settings.trees (HNSW M) must be in [2, 1024], got " + std::to_string(settings.trees));
   if (settings.kind == Kind::Hnsw && settings.checks < 1)
-    return invalid("DescriptorIndex: settings.checks (HNSW ef) must be >= 1, got " + std::to_string(settings.checks));
+    return invalidArgument("DescriptorIndex: settings.checks (HNSW ef) must be >= 1, got " + std::to_string(settings.checks));
   if (settings.kind == Kind::Hnsw && rows > static_cast<int64_t>(std::numeric_limits<uint32_t>::max()))
-    return invalid("DescriptorIndex: HNSW needs rows <= UINT32_MAX");
+    return invalidArgument("DescriptorIndex: HNSW needs rows <= UINT32_MAX");
   if (settings.kind == Kind::Autotuned &&
       !(settings.targetPrecision > 0.0f && settings.targetPrecision <= 1.0f))
-    return invalid("DescriptorIndex: settings.targetPrecision must be in (0, 1], got " +
+    return invalidArgument("DescriptorIndex: settings.targetPrecision must be in (0, 1], got " +
                    std::to_string(settings.targetPrecision));
   for (int64_t r = 0; r < rows; ++r) {
     for (int64_t c = 0; c < dims; ++c) {
       if (!std::isfinite(data[r * dims + c]))
-        return invalid("DescriptorIndex: non-finite value in data at row " + std::to_string(r) +
+        return invalidArgument("DescriptorIndex: non-finite value in data at row " + std::to_string(r) +
                        ", column " + std::to_string(c));
     }
   }
@@ -182,7 +181,7 @@ Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, 
     result.mFlann->index.buildIndex();
     return result;
   } catch (const std::exception& e) {
-    return invalid(std::string("DescriptorIndex: ") + descriptorIndexKindName(settings.kind) + " build failed: " + e.what());
+    return invalidArgument(std::string("DescriptorIndex: ") + descriptorIndexKindName(settings.kind) + " build failed: " + e.what());
   }
 }
 
@@ -201,14 +200,14 @@ int64_t DescriptorIndex::memoryBytes() const {
 
 Status DescriptorIndex::validateQuery(const float* descriptor, int k, int64_t queryRow,
                                       bool batch) const {
-  if (descriptor == nullptr) return invalid("DescriptorIndex query: descriptor is null");
-  if (k < 1) return invalid("DescriptorIndex query: k must be >= 1, got " + std::to_string(k));
+  if (descriptor == nullptr) return invalidArgument("DescriptorIndex query: descriptor is null");
+  if (k < 1) return invalidArgument("DescriptorIndex query: k must be >= 1, got " + std::to_string(k));
   if (k > mRows)
-    return invalid("DescriptorIndex query: k = " + std::to_string(k) + " exceeds the " +
+    return invalidArgument("DescriptorIndex query: k = " + std::to_string(k) + " exceeds the " +
                    std::to_string(mRows) + " entries");
   for (int64_t c = 0; c < mDims; ++c) {
     if (!std::isfinite(descriptor[c]))
-      return invalid("DescriptorIndex query: non-finite value " +
+      return invalidArgument("DescriptorIndex query: non-finite value " +
                      (batch ? "at query row " + std::to_string(queryRow) + ", " : std::string("at ")) +
                      "column " + std::to_string(c));
   }
@@ -218,7 +217,7 @@ Status DescriptorIndex::validateQuery(const float* descriptor, int k, int64_t qu
 Status DescriptorIndex::query(const float* descriptor, int k, int64_t* ids,
                               float* squaredDistances) const {
   if (ids == nullptr || squaredDistances == nullptr)
-    return invalid("DescriptorIndex query: ids or squaredDistances is null");
+    return invalidArgument("DescriptorIndex query: ids or squaredDistances is null");
   Status valid = validateQuery(descriptor, k, 0, false);
   if (!valid) return valid;
   return queryBackend(descriptor, k, ids, squaredDistances);
@@ -233,10 +232,10 @@ Status DescriptorIndex::queryBackend(const float* descriptor, int k, int64_t* id
 
 Status DescriptorIndex::queryBatch(const float* descriptors, int64_t count, int k, int64_t* ids,
                                    float* squaredDistances) const {
-  if (descriptors == nullptr) return invalid("DescriptorIndex queryBatch: descriptors is null");
+  if (descriptors == nullptr) return invalidArgument("DescriptorIndex queryBatch: descriptors is null");
   if (ids == nullptr || squaredDistances == nullptr)
-    return invalid("DescriptorIndex queryBatch: ids or squaredDistances is null");
-  if (count < 1) return invalid("DescriptorIndex queryBatch: count must be >= 1, got " + std::to_string(count));
+    return invalidArgument("DescriptorIndex queryBatch: ids or squaredDistances is null");
+  if (count < 1) return invalidArgument("DescriptorIndex queryBatch: count must be >= 1, got " + std::to_string(count));
   for (int64_t q = 0; q < count; ++q) {
     Status valid = validateQuery(descriptors + q * mDims, k, q, true);
     if (!valid) return valid;
@@ -293,10 +292,10 @@ Status DescriptorIndex::queryFlann(const float* descriptor, int k, int64_t* ids,
     const int found = mFlann->index.knnSearch(queryMatrix, indexMatrix, distanceMatrix,
                                               static_cast<std::size_t>(k), mFlann->searchParams);
     if (found < k)
-      return invalid("DescriptorIndex query: FLANN returned " + std::to_string(found) + " of " +
+      return invalidArgument("DescriptorIndex query: FLANN returned " + std::to_string(found) + " of " +
                      std::to_string(k) + " neighbours");
   } catch (const std::exception& e) {
-    return invalid(std::string("DescriptorIndex query: FLANN search failed: ") + e.what());
+    return invalidArgument(std::string("DescriptorIndex query: FLANN search failed: ") + e.what());
   }
   sortByDistanceThenId(k, ids, squaredDistances);
   return Ok{};
@@ -306,7 +305,7 @@ Status DescriptorIndex::queryHnsw(const float* descriptor, int k, int64_t* ids, 
   try {
     auto found = mHnsw->graph->searchKnn(descriptor, static_cast<size_t>(k));  // max-heap: farthest on top
     if (static_cast<int>(found.size()) < k)
-      return invalid("DescriptorIndex query: HNSW returned " + std::to_string(found.size()) + " of " +
+      return invalidArgument("DescriptorIndex query: HNSW returned " + std::to_string(found.size()) + " of " +
                      std::to_string(k) + " neighbours");
     for (int i = k - 1; i >= 0; --i) {
       squaredDistances[i] = found.top().first;
@@ -314,7 +313,7 @@ Status DescriptorIndex::queryHnsw(const float* descriptor, int k, int64_t* ids, 
       found.pop();
     }
   } catch (const std::exception& e) {
-    return invalid(std::string("DescriptorIndex query: HNSW search failed: ") + e.what());
+    return invalidArgument(std::string("DescriptorIndex query: HNSW search failed: ") + e.what());
   }
   sortByDistanceThenId(k, ids, squaredDistances);
   return Ok{};

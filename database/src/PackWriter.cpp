@@ -50,12 +50,11 @@ struct WriteFailure {
 // Validation: everything the reader would reject is rejected here, so a bake fails at write time
 // with InvalidArgument instead of producing a pack that cannot be loaded.
 
-Status invalid(std::string message) { return makeError(ErrorCode::InvalidArgument, std::move(message)); }
 
 Status checkFinite(const std::string& where, const double* values, Eigen::Index count) {
   for (Eigen::Index i = 0; i < count; ++i) {
     if (!std::isfinite(values[i])) {
-      return invalid(where + " holds a non-finite value at index " + std::to_string(i));
+      return invalidArgument(where + " holds a non-finite value at index " + std::to_string(i));
     }
   }
   return Ok{};
@@ -63,17 +62,17 @@ Status checkFinite(const std::string& where, const double* values, Eigen::Index 
 
 Status checkString(const std::string& where, const std::string& value) {
   // Fixed-length HDF5 strings are NUL-padded, so an embedded NUL would be cut off on reading.
-  if (value.find('\0') != std::string::npos) return invalid(where + " contains a NUL character");
+  if (value.find('\0') != std::string::npos) return invalidArgument(where + " contains a NUL character");
   return Ok{};
 }
 
 template <typename IndexMatrix>
-Status checkIndices(const std::string& where, const IndexMatrix& indices, Eigen::Index nodeCount) {
+Status checkIndexRange(const std::string& where, const IndexMatrix& indices, Eigen::Index nodeCount) {
   for (Eigen::Index r = 0; r < indices.rows(); ++r) {
     for (Eigen::Index c = 0; c < indices.cols(); ++c) {
       const int32_t v = indices(r, c);
       if (v < 0 || v >= nodeCount) {
-        return invalid(where + "(" + std::to_string(r) + ", " + std::to_string(c) + ") = " + std::to_string(v) +
+        return invalidArgument(where + "(" + std::to_string(r) + ", " + std::to_string(c) + ") = " + std::to_string(v) +
                        " is not a node index in [0, " + std::to_string(nodeCount) + ")");
       }
     }
@@ -82,9 +81,9 @@ Status checkIndices(const std::string& where, const IndexMatrix& indices, Eigen:
 }
 
 Status validateObject(const ObjectAsset& o, const std::string& label, const std::set<std::string>& materialNames) {
-  if (o.name.empty()) return invalid(label + " has an empty name");
+  if (o.name.empty()) return invalidArgument(label + " has an empty name");
   if (materialNames.count(o.materialName) == 0) {
-    return invalid(label + " names material '" + o.materialName + "', which is not in the pack");
+    return invalidArgument(label + " names material '" + o.materialName + "', which is not in the pack");
   }
   const struct {
     const char* field;
@@ -100,23 +99,23 @@ Status validateObject(const ObjectAsset& o, const std::string& label, const std:
 
   const Eigen::Index n = o.tetMesh.nodes.rows();
   const Eigen::Index t = o.tetMesh.tets.rows();
-  if (Status st = checkIndices(label + " tetMesh.tets", o.tetMesh.tets, n); !st) return st;
-  if (Status st = checkIndices(label + " surfaceFaces", o.surfaceFaces, n); !st) return st;
+  if (Status st = checkIndexRange(label + " tetMesh.tets", o.tetMesh.tets, n); !st) return st;
+  if (Status st = checkIndexRange(label + " surfaceFaces", o.surfaceFaces, n); !st) return st;
 
   const ModalBasis& m = o.modal;
   const Eigen::Index r = m.eigenvaluesRad2PerS2.size();
   if (m.frequenciesHz.size() != r || m.residuals.size() != r) {
-    return invalid(label + ": modal has " + std::to_string(r) + " eigenvalues but " +
+    return invalidArgument(label + ": modal has " + std::to_string(r) + " eigenvalues but " +
                    std::to_string(m.frequenciesHz.size()) + " frequencies and " + std::to_string(m.residuals.size()) +
                    " residuals");
   }
   if (m.modes.rows() != 3 * n || m.modes.cols() != r) {
-    return invalid(label + ": modal.modes is " + std::to_string(m.modes.rows()) + " by " +
+    return invalidArgument(label + ": modal.modes is " + std::to_string(m.modes.rows()) + " by " +
                    std::to_string(m.modes.cols()) + ", expected 3N by r = " + std::to_string(3 * n) + " by " +
                    std::to_string(r));
   }
   if (o.stressModes.rows() != 6 * t || o.stressModes.cols() != r) {
-    return invalid(label + ": stressModes is " + std::to_string(o.stressModes.rows()) + " by " +
+    return invalidArgument(label + ": stressModes is " + std::to_string(o.stressModes.rows()) + " by " +
                    std::to_string(o.stressModes.cols()) + ", expected 6T by r = " + std::to_string(6 * t) + " by " +
                    std::to_string(r));
   }
@@ -166,10 +165,10 @@ Status validatePack(const Pack& pack) {
   for (size_t i = 0; i < pack.materials.size(); ++i) {
     const Material& m = pack.materials[i];
     const std::string label = "material " + std::to_string(i) + " ('" + m.name + "')";
-    if (Status st = validateMaterial(m); !st) return invalid(st.error().message);
+    if (Status st = validateMaterial(m); !st) return invalidArgument(st.error().message);
     if (Status st = checkString(label + " name", m.name); !st) return st;
     if (Status st = checkString(label + " source", m.source); !st) return st;
-    if (!materialNames.insert(m.name).second) return invalid("two materials are named '" + m.name + "'");
+    if (!materialNames.insert(m.name).second) return invalidArgument("two materials are named '" + m.name + "'");
   }
   std::set<std::string> objectNames;
   for (size_t i = 0; i < pack.objects.size(); ++i) {
@@ -177,10 +176,10 @@ Status validatePack(const Pack& pack) {
     if (Status st = validateObject(o, "object " + std::to_string(i) + " ('" + o.name + "')", materialNames); !st) {
       return st;
     }
-    if (!objectNames.insert(o.name).second) return invalid("two objects are named '" + o.name + "'");
+    if (!objectNames.insert(o.name).second) return invalidArgument("two objects are named '" + o.name + "'");
   }
   if (!pack.database.empty()) {
-    if (Status st = validateFragmentDatabase(pack.database); !st) return invalid("database: " + st.error().message);
+    if (Status st = validateFragmentDatabase(pack.database); !st) return invalidArgument("database: " + st.error().message);
     const std::set<std::string> reference{pack.database.referenceMaterial.name};
     for (const FragmentEntry& e : pack.database.entries) {
       if (Status st = validateObject(e.asset, "database entry '" + e.asset.name + "'", reference); !st) return st;

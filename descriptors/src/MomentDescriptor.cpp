@@ -3,17 +3,9 @@
 #include <cmath>
 #include <string>
 
+#include "SurfaceChecks.h"
+
 namespace brittle {
-namespace {
-
-Status checkFrame(const CanonicalFrame& f) {
-  if (!f.rotation.allFinite() || !f.translationM.allFinite() || !std::isfinite(f.scalePerM) || !(f.scalePerM > 0.0)) {
-    return makeError(ErrorCode::InvalidArgument, "canonical frame has a non-finite value or a non-positive scale");
-  }
-  return Ok{};
-}
-
-}  // namespace
 
 Status validateMomentDescriptorSettings(const MomentDescriptorSettings& s) {
   if (s.maxOrder < 2 || s.maxOrder > kMaxMomentOrder) {
@@ -72,7 +64,7 @@ Result<Descriptor> momentDescriptorFromMoments(const VolumeMoments& canonicalMom
 Result<Descriptor> computeMomentDescriptor(const TriangleMesh& surface, const CanonicalFrame& frame,
                                            const MomentDescriptorSettings& settings) {
   if (auto status = validateMomentDescriptorSettings(settings); !status) return status.error();
-  if (auto status = checkFrame(frame); !status) return status.error();
+  if (auto status = detail::checkFrame(frame); !status) return status.error();
   auto raw = computeVolumeMoments(surface, settings.maxOrder, frame.translationM);
   if (!raw) return raw.error();
   return momentDescriptorFromMoments(transformVolumeMoments(raw.value(), frame.scalePerM * frame.rotation),
@@ -84,7 +76,7 @@ Result<DescriptorMatrix> computeMomentDescriptors(const TriangleMesh& surface, c
   if (auto status = validateMomentDescriptorSettings(settings); !status) return status.error();
   if (frames.candidates.empty()) return makeError(ErrorCode::InvalidArgument, "no canonical frame given");
   for (const auto& frame : frames.candidates) {
-    if (auto status = checkFrame(frame); !status) return status.error();
+    if (auto status = detail::checkFrame(frame); !status) return status.error();
   }
   const Eigen::Vector3d origin = frames.candidates.front().translationM;
   auto raw = computeVolumeMoments(surface, settings.maxOrder, origin);
@@ -112,7 +104,7 @@ Result<DescriptorMatrix> momentDescriptorsFromFrames(const CanonicalFrames& fram
   DescriptorMatrix out(static_cast<Eigen::Index>(frames.candidates.size()), momentDescriptorSize(settings.maxOrder));
   for (size_t c = 0; c < frames.candidates.size(); ++c) {
     const auto& frame = frames.candidates[c];
-    if (auto status = checkFrame(frame); !status) return status.error();
+    if (auto status = detail::checkFrame(frame); !status) return status.error();
     auto d = momentDescriptorFromMoments(transformVolumeMoments(frames.centralMoments, frame.scalePerM * frame.rotation,
                                                                 frame.translationM - frames.centerOfMassM),
                                          settings);

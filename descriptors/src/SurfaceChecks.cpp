@@ -54,4 +54,11 @@ Status checkClosedSurface(const TriangleMesh& surface) {
   return Ok{};
 }
 
+Status checkFrame(const CanonicalFrame& f) {
+  if (!f.rotation.allFinite() || !f.translationM.allFinite() || !std::isfinite(f.scalePerM) || !(f.scalePerM > 0.0)) {
+    return makeError(ErrorCode::InvalidArgument, "canonical frame has a non-finite value or a non-positive scale");
+  }
+  return Ok{};
+}
+
 }  // namespace brittle::detail

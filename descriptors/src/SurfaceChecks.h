@@ -1,6 +1,7 @@
 // SurfaceChecks.h — the input checks every descriptor runs at the module boundary (private).
 #pragma once
 
+#include "brittle/descriptors/CanonicalFrame.h"
 #include "brittle/descriptors/MeshTypes.h"
 #include "brittle/descriptors/Result.h"
 
@@ -16,5 +17,9 @@ namespace brittle::detail {
 /// residue (false pass ≈ 2⁻⁶⁴). This is the exact condition under which the divergence-theorem
 /// integrals do not depend on the reference point; pinched (non-manifold) but closed surfaces pass.
 Status checkClosedSurface(const TriangleMesh& surface);
+
+/// A usable canonical frame: finite rotation and translation, a finite positive scale
+/// (InvalidArgument otherwise).
+Status checkFrame(const CanonicalFrame& frame);
 
 }  // namespace brittle::detail

@@ -32,13 +32,6 @@ Status checkGrid(int resolution, double halfExtent) {
   return Ok{};
 }
 
-Status checkFrame(const CanonicalFrame& f) {
-  if (!f.rotation.allFinite() || !f.translationM.allFinite() || !std::isfinite(f.scalePerM) || !(f.scalePerM > 0.0)) {
-    return makeError(ErrorCode::InvalidArgument, "canonical frame has a non-finite value or a non-positive scale");
-  }
-  return Ok{};
-}
-
 // Signed distance (canonical units) at the k³ voxel centres, in grid order. Precondition: the
 // surface passed checkClosedSurface. OpenVDB exceptions stop here.
 Result<std::vector<float>> sampleSignedDistance(const TriangleMesh& surface, const CanonicalFrame& frame,
@@ -205,7 +198,7 @@ Status validateImprovedVoxelDescriptorSettings(const ImprovedVoxelDescriptorSett
 Result<Descriptor> computeVoxelDescriptor(const TriangleMesh& surface, const CanonicalFrame& frame,
                                           const VoxelDescriptorSettings& settings) {
   if (auto status = validateVoxelDescriptorSettings(settings); !status) return status.error();
-  if (auto status = checkFrame(frame); !status) return status.error();
+  if (auto status = detail::checkFrame(frame); !status) return status.error();
   if (auto status = detail::checkClosedSurface(surface); !status) return status.error();
   // Occupancy needs only inside or outside: a parity fill along the grid's columns, exact and
   // without OpenVDB's narrow band (measured: 16³ of a 1k-triangle fragment, see
@@ -218,7 +211,7 @@ Result<Descriptor> computeVoxelDescriptor(const TriangleMesh& surface, const Can
 Result<Descriptor> computeImprovedVoxelDescriptor(const TriangleMesh& surface, const CanonicalFrame& frame,
                                                   const ImprovedVoxelDescriptorSettings& settings) {
   if (auto status = validateImprovedVoxelDescriptorSettings(settings); !status) return status.error();
-  if (auto status = checkFrame(frame); !status) return status.error();
+  if (auto status = detail::checkFrame(frame); !status) return status.error();
   if (auto status = detail::checkClosedSurface(surface); !status) return status.error();
   // The band reaches one voxel past the clamp so every unclamped value is a true distance.
   const float band = static_cast<float>(settings.clampVoxels) + 1.0f;

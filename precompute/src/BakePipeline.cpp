@@ -6,13 +6,14 @@
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/MeshIO.h"
 #include "brittle/precompute/MeshValidation.h"
+#include "Support.h"
 
 
 namespace brittle {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+using detail::Clock;
+using detail::secondsSince;
 
 Error inObject(const std::string& name, const Error& e) {
   return Error{e.code, "object '" + name + "': " + e.message};

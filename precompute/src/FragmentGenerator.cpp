@@ -17,6 +17,7 @@
 
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/MeshValidation.h"
+#include "Support.h"
 
 namespace brittle {
 namespace {
@@ -255,7 +256,7 @@ Result<std::vector<Plane>> bisectors(const std::vector<Eigen::Vector3d>& sites, 
   return planes;
 }
 
-double unit(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+using detail::unit;
 
 // An index uniform in [0, n), n ≥ 1.
 int uniformIndex(std::mt19937_64& rng, int n) { return std::min(n - 1, static_cast<int>(unit(rng) * n)); }

@@ -7,9 +7,11 @@
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/precompute/ModelSizing.h"
-#include "Median.h"
+#include "Support.h"
 
 namespace brittle {
+
+using detail::median;
 
 Result<std::vector<FragmentRecord>> sceneFragments(const ObjectAsset& asset, const Material& material,
                                                    const SceneObjectRange& range, int modes,

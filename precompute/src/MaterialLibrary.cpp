@@ -207,31 +207,31 @@ constexpr const char* kAllKeys[] = {kKeyName,     kKeyYoungs, kKeyPoisson,   kKe
                                     kKeyStrength, kKeyEnergy, kKeyToughness, kKeyAlpha,
                                     kKeyBeta,     kKeyRestitution, kKeySource};
 
-Error parseError(const std::filesystem::path& path, const std::string& what) {
+Error materialFileError(const std::filesystem::path& path, const std::string& what) {
   return makeError(ErrorCode::ParseError, "material file " + path.string() + ": " + what);
 }
 
 Result<double> readNumber(const nlohmann::json& doc, const char* key, const std::filesystem::path& path) {
   const auto it = doc.find(key);
-  if (it == doc.end()) return parseError(path, std::string("missing key \"") + key + "\"");
+  if (it == doc.end()) return materialFileError(path, std::string("missing key \"") + key + "\"");
   // Booleans are not numbers in nlohmann::json, so `true` is rejected here as it should be.
-  if (!it->is_number()) return parseError(path, std::string("key \"") + key + "\" must be a number");
+  if (!it->is_number()) return materialFileError(path, std::string("key \"") + key + "\" must be a number");
   return it->get<double>();
 }
 
 Result<std::string> readString(const nlohmann::json& doc, const char* key, const std::filesystem::path& path) {
   const auto it = doc.find(key);
-  if (it == doc.end()) return parseError(path, std::string("missing key \"") + key + "\"");
-  if (!it->is_string()) return parseError(path, std::string("key \"") + key + "\" must be a string");
+  if (it == doc.end()) return materialFileError(path, std::string("missing key \"") + key + "\"");
+  if (!it->is_string()) return materialFileError(path, std::string("key \"") + key + "\" must be a string");
   return it->get<std::string>();
 }
 
 Result<Material> materialFromJson(const nlohmann::json& doc, const std::filesystem::path& path) {
-  if (!doc.is_object()) return parseError(path, "the top level must be a JSON object");
+  if (!doc.is_object()) return materialFileError(path, "the top level must be a JSON object");
   for (const auto& item : doc.items()) {
     const bool known = std::any_of(std::begin(kAllKeys), std::end(kAllKeys),
                                    [&](const char* k) { return item.key() == k; });
-    if (!known) return parseError(path, "unknown key \"" + item.key() + "\"");
+    if (!known) return materialFileError(path, "unknown key \"" + item.key() + "\"");
   }
 
   Material m;
@@ -260,7 +260,7 @@ Result<Material> materialFromJson(const nlohmann::json& doc, const std::filesyst
   const bool hasEnergy = doc.contains(kKeyEnergy);
   const bool hasToughness = doc.contains(kKeyToughness);
   if (hasEnergy == hasToughness) {
-    return parseError(path, std::string(hasEnergy ? "both" : "neither") + " of \"" + kKeyEnergy + "\" and \"" +
+    return materialFileError(path, std::string(hasEnergy ? "both" : "neither") + " of \"" + kKeyEnergy + "\" and \"" +
                                 kKeyToughness + "\" given (exactly one is required)");
   }
   if (hasEnergy) {
@@ -330,9 +330,9 @@ Result<Material> loadMaterialFile(const std::filesystem::path& path) {
     const nlohmann::json doc = nlohmann::json::parse(in);
     return materialFromJson(doc, path);
   } catch (const nlohmann::json::exception& e) {
-    return parseError(path, e.what());
+    return materialFileError(path, e.what());
   } catch (const std::exception& e) {
-    return parseError(path, e.what());
+    return materialFileError(path, e.what());
   }
 }
 

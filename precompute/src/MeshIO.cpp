@@ -26,8 +26,8 @@
 namespace brittle {
 namespace {
 
-using Kernel = CGAL::Simple_cartesian<double>;
-using Point = Kernel::Point_3;
+using IoKernel = CGAL::Simple_cartesian<double>;
+using IoPoint = IoKernel::Point_3;
 
 std::string lowerExtension(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
@@ -104,7 +104,7 @@ std::optional<T> parseWhole(std::string_view token) {
 }
 
 struct PolygonSoup {
-  std::vector<Point> points;
+  std::vector<IoPoint> points;
   std::vector<std::vector<std::size_t>> polygons;
 };
 
@@ -521,7 +521,7 @@ Result<TriangleMesh> readSurfaceMesh(const std::filesystem::path& path) {
   } else {
     return read.error();
   }
-  const std::vector<Point>& points = soup.points;
+  const std::vector<IoPoint>& points = soup.points;
   const std::vector<std::vector<std::size_t>>& polygons = soup.polygons;
   if (points.empty() || polygons.empty()) {
     return makeError(ErrorCode::EmptyMesh, "mesh has no " + std::string(points.empty() ? "vertices" : "faces") +
@@ -567,7 +567,7 @@ Result<TriangleMesh> readSurfaceMesh(const std::filesystem::path& path) {
 
 Status writeSurfaceMesh(const TriangleMesh& mesh, const std::filesystem::path& path) {
   const std::string ext = lowerExtension(path);
-  std::vector<Point> points;
+  std::vector<IoPoint> points;
   std::vector<std::array<std::size_t, 3>> polygons;
   for (Eigen::Index i = 0; i < mesh.vertices.rows(); ++i) {
     points.emplace_back(mesh.vertices(i, 0), mesh.vertices(i, 1), mesh.vertices(i, 2));

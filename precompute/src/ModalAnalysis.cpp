@@ -14,6 +14,7 @@
 #include <numeric>
 #include <random>
 #include <vector>
+#include "Support.h"
 
 namespace brittle {
 namespace {
@@ -21,10 +22,8 @@ namespace {
 // Largest accepted relative residual ‖Kφ − λMφ‖/‖Kφ‖ before a solve is redone at machine precision.
 constexpr double kMaxResidual = 1e-8;
 
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+using detail::Clock;
+using detail::secondsSince;
 
 class CholmodFactor final : public ShiftInvertFactor {
  public:

@@ -14,15 +14,17 @@
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/runtime/FullFemReference.h"
 #include "brittle/runtime/World.h"
-#include "Median.h"
+#include "Support.h"
 
 namespace brittle {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using detail::kInf;
+using detail::secondsSince;
+using detail::unit;
+using detail::median;
 
 /// A uniform double in [0, 1) from 53 bits of the generator (the same on every platform).
-double unit(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
 }  // namespace
 
@@ -164,10 +166,6 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
 namespace {
 
 std::string objectName(const ObjectBakeSettings& s) { return s.name.empty() ? s.meshPath.stem().string() : s.name; }
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 /// Bakes the objects (and the database, when given) into a pack, written to `path`.
 Result<Pack> bakeAndWrite(const std::vector<ObjectBakeSettings>& objects, const FragmentDatabase* database,

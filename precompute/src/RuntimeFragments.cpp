@@ -9,11 +9,12 @@
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/runtime/World.h"
+#include "Support.h"
 
 namespace brittle {
 namespace {
 
-double unit(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+using detail::unit;
 
 Error bad(const std::string& message) { return makeError(ErrorCode::InvalidArgument, message); }
 

@@ -12,7 +12,7 @@
 namespace brittle {
 namespace {
 
-Error parseError(std::string_view source, const std::string& what) {
+Error settingsFileError(std::string_view source, const std::string& what) {
   return makeError(ErrorCode::ParseError, "runtime settings " + std::string(source) + ": " + what);
 }
 
@@ -24,13 +24,13 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
   try {
     doc = nlohmann::json::parse(json);
   } catch (const std::exception& e) {
-    return parseError(sourceName, e.what());
+    return settingsFileError(sourceName, e.what());
   }
-  if (!doc.is_object()) return parseError(sourceName, "not a JSON object");
+  if (!doc.is_object()) return settingsFileError(sourceName, "not a JSON object");
   FractureSettings s = base;
   auto integer = [&](const std::string& key, int& out) -> Status {
     const auto& v = doc[key];
-    if (!v.is_number_integer()) return parseError(sourceName, "\"" + key + "\" must be an integer");
+    if (!v.is_number_integer()) return settingsFileError(sourceName, "\"" + key + "\" must be an integer");
     const auto x = v.get<int64_t>();
     if (x < 0 || x > std::numeric_limits<int>::max()) return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"" + key + "\" out of range");
     out = static_cast<int>(x);
@@ -38,12 +38,12 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
   };
   for (const auto& [key, value] : doc.items()) {
     if (key == "descriptor") {
-      if (!value.is_string()) return parseError(sourceName, "\"descriptor\" must be a string");
+      if (!value.is_string()) return settingsFileError(sourceName, "\"descriptor\" must be a string");
       auto kind = parseDescriptorKind(value.get<std::string>());
-      if (!kind) return parseError(sourceName, kind.error().message);
+      if (!kind) return settingsFileError(sourceName, kind.error().message);
       s.descriptor = kind.value();
     } else if (key == "debris_volume_fraction") {
-      if (!value.is_number()) return parseError(sourceName, "\"debris_volume_fraction\" must be a number");
+      if (!value.is_number()) return settingsFileError(sourceName, "\"debris_volume_fraction\" must be a number");
       const double f = value.get<double>();
       if (!(f >= 0.0 && f < 1.0)) {
         return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"debris_volume_fraction\" must be in [0, 1)");
@@ -57,7 +57,7 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
     } else if (key == "modes") {
       if (Status st = integer(key, s.modeCount); !st) return st.error();
     } else {
-      return parseError(sourceName, "unknown key \"" + key + "\"");
+      return settingsFileError(sourceName, "unknown key \"" + key + "\"");
     }
   }
   return s;

@@ -17,7 +17,6 @@
 namespace brittle {
 namespace {
 
-Error bad(const std::string& message) { return makeError(ErrorCode::InvalidArgument, message); }
 
 // Spectra's shift-invert operator on a factorisation of K − σM made once.
 class ShiftInvertOp {
@@ -87,7 +86,7 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
                                         const Eigen::VectorXi& nodeLabels, const Eigen::VectorXd& edgeCuts, int label) {
   const Eigen::Index n = parent.nodes.rows(), t = parent.tets.rows();
   if (nodeLabels.size() != n || edgeCuts.size() != topology.edges.rows() || topology.tetEdges.rows() != t) {
-    return bad("fragmentSubMesh: one label per node, one cut per edge and the mesh's topology expected");
+    return invalidArgument("fragmentSubMesh: one label per node, one cut per edge and the mesh's topology expected");
   }
   auto mixed = [&](int32_t edge) { return nodeLabels[topology.edges(edge, 0)] != nodeLabels[topology.edges(edge, 1)]; };
   auto edgeOf = [&](Eigen::Index e, int i, int j) {
@@ -127,7 +126,7 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
     int own = 0;
     for (int k = 0; k < 4; ++k) {
       const int32_t v = parent.tets(e, k);
-      if (v < 0 || v >= n) return bad("fragmentSubMesh: tet " + std::to_string(e) + " has a node out of range");
+      if (v < 0 || v >= n) return invalidArgument("fragmentSubMesh: tet " + std::to_string(e) + " has a node out of range");
       l[static_cast<size_t>(k)] = nodeLabels[v];
       own += l[static_cast<size_t>(k)] == label ? 1 : 0;
     }
@@ -145,7 +144,7 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
     for (int k = 0; k < 6; ++k) {
       const int32_t edge = topology.tetEdges(e, k);
       if (!mixed(edge)) continue;
-      if (!std::isfinite(edgeCuts[edge])) return bad("fragmentSubMesh: a crossed edge without a finite cut");
+      if (!std::isfinite(edgeCuts[edge])) return invalidArgument("fragmentSubMesh: a crossed edge without a finite cut");
       centre += edgePoint(edge).second;
       ++crossings;
     }
@@ -198,7 +197,7 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
       for (size_t j = 0; j + 1 < polygon.size(); ++j) addTet(tetPoint, facePoint, polygon[j], polygon[j + 1]);
     }
   }
-  if (tets.empty()) return bad("fragmentSubMesh: label " + std::to_string(label) + " owns no part of the mesh");
+  if (tets.empty()) return invalidArgument("fragmentSubMesh: label " + std::to_string(label) + " owns no part of the mesh");
 
   // Largest face-connected set (a label's nodes are joined by uncut edges, so this is normally all).
   std::vector<int32_t> root(tets.size());
@@ -254,10 +253,10 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
 Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Material& material,
                                        const ExactModesSettings& settings, const std::string& name) {
   if (settings.modeCount < 1 || settings.denseMaxDof < 0 || !(settings.tolerance > 0.0 && settings.tolerance < 1.0)) {
-    return bad("ExactModesSettings: modeCount ≥ 1, denseMaxDof ≥ 0, tolerance in (0, 1)");
+    return invalidArgument("ExactModesSettings: modeCount ≥ 1, denseMaxDof ≥ 0, tolerance in (0, 1)");
   }
   const Eigen::Index nodes = sub.mesh.nodes.rows();
-  if (nodes < 4 || sub.mesh.tets.rows() < 1) return bad("fragment '" + name + "': fewer than 4 nodes");
+  if (nodes < 4 || sub.mesh.tets.rows() < 1) return invalidArgument("fragment '" + name + "': fewer than 4 nodes");
   auto topology = buildTetTopology(sub.mesh);
   if (!topology) return topology.error();
   auto fem = assembleFem(sub.mesh, material, FemSettings{});
@@ -266,7 +265,7 @@ Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Materia
   // Six rigid modes plus the elastic ones; a mesh too small for that keeps what it has.
   const auto dof = static_cast<int>(3 * nodes);
   const int wanted = std::min(settings.modeCount + 6, dof - 1);
-  if (wanted <= 6) return bad("fragment '" + name + "': too few degrees of freedom for an elastic mode");
+  if (wanted <= 6) return invalidArgument("fragment '" + name + "': too few degrees of freedom for an elastic mode");
   ExactModesSettings s = settings;
   if (wanted >= dof - 1 || dof <= 2 * wanted + 1) s.denseMaxDof = std::max(s.denseMaxDof, dof);  // Lanczos needs room
   // σ = −10⁻³ (c/L)², as the bake's shift (ModalAnalysis.h): K − σM is positive definite, and σ

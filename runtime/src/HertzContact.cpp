@@ -8,7 +8,7 @@
 namespace brittle {
 namespace {
 
-Error bad(const std::string& field, const std::string& why) {
+Error badImpact(const std::string& field, const std::string& why) {
   return makeError(ErrorCode::InvalidArgument, "impact: " + field + " " + why);
 }
 
@@ -18,24 +18,24 @@ bool positiveFinite(double x) { return x > 0.0 && std::isfinite(x); }
 }  // namespace
 
 Result<HertzContact> computeHertzContact(const HertzInput& in) {
-  if (!positiveOrInfinite(in.impactorMassKg)) return bad("impactor mass", "must be > 0 (or +inf)");
-  if (!positiveOrInfinite(in.impactorRadiusM)) return bad("impactor radius", "must be > 0 (or +inf)");
-  if (!positiveOrInfinite(in.bodyRadiusM)) return bad("body radius of curvature", "must be > 0 (or +inf)");
+  if (!positiveOrInfinite(in.impactorMassKg)) return badImpact("impactor mass", "must be > 0 (or +inf)");
+  if (!positiveOrInfinite(in.impactorRadiusM)) return badImpact("impactor radius", "must be > 0 (or +inf)");
+  if (!positiveOrInfinite(in.bodyRadiusM)) return badImpact("body radius of curvature", "must be > 0 (or +inf)");
   if (std::isinf(in.impactorRadiusM) && std::isinf(in.bodyRadiusM)) {
-    return bad("radii", "are both infinite: a flat body hit by a flat impactor has no Hertz contact");
+    return badImpact("radii", "are both infinite: a flat body hit by a flat impactor has no Hertz contact");
   }
-  if (!positiveFinite(in.impactorYoungsModulusPa)) return bad("impactor Young's modulus", "must be finite and > 0");
-  if (!positiveFinite(in.bodyYoungsModulusPa)) return bad("body Young's modulus", "must be finite and > 0");
+  if (!positiveFinite(in.impactorYoungsModulusPa)) return badImpact("impactor Young's modulus", "must be finite and > 0");
+  if (!positiveFinite(in.bodyYoungsModulusPa)) return badImpact("body Young's modulus", "must be finite and > 0");
   for (double nu : {in.impactorPoissonRatio, in.bodyPoissonRatio}) {
-    if (!(nu > -1.0 && nu < 0.5)) return bad("Poisson ratio", "must be in (-1, 0.5)");
+    if (!(nu > -1.0 && nu < 0.5)) return badImpact("Poisson ratio", "must be in (-1, 0.5)");
   }
-  if (!positiveFinite(in.bodyMassKg)) return bad("body mass", "must be finite and > 0");
-  if (!in.bodyInertiaKgM2.allFinite()) return bad("body inertia", "is not finite");
-  if (!in.contactOffsetM.allFinite()) return bad("contact point", "is not finite");
-  if (!in.normal.allFinite() || std::abs(in.normal.norm() - 1.0) > 1e-6) return bad("normal", "must be a unit vector");
-  if (!positiveFinite(in.speedMps)) return bad("speed", "must be finite and > 0");
-  if (!std::isfinite(in.impulseNs)) return bad("impulse", "is not finite");
-  if (!(in.restitution >= 0.0 && in.restitution <= 1.0)) return bad("restitution", "must be in [0, 1]");
+  if (!positiveFinite(in.bodyMassKg)) return badImpact("body mass", "must be finite and > 0");
+  if (!in.bodyInertiaKgM2.allFinite()) return badImpact("body inertia", "is not finite");
+  if (!in.contactOffsetM.allFinite()) return badImpact("contact point", "is not finite");
+  if (!in.normal.allFinite() || std::abs(in.normal.norm() - 1.0) > 1e-6) return badImpact("normal", "must be a unit vector");
+  if (!positiveFinite(in.speedMps)) return badImpact("speed", "must be finite and > 0");
+  if (!std::isfinite(in.impulseNs)) return badImpact("impulse", "is not finite");
+  if (!(in.restitution >= 0.0 && in.restitution <= 1.0)) return badImpact("restitution", "must be in [0, 1]");
 
   HertzContact c;
   c.effectiveModulusPa = 1.0 / ((1.0 - in.impactorPoissonRatio * in.impactorPoissonRatio) / in.impactorYoungsModulusPa +
@@ -47,7 +47,7 @@ Result<HertzContact> computeHertzContact(const HertzInput& in) {
   const Eigen::LDLT<Eigen::Matrix3d> inertia(in.bodyInertiaKgM2);
   double bodyCompliance = 1.0 / in.bodyMassKg;
   if (rn.squaredNorm() > 0.0) {
-    if (inertia.info() != Eigen::Success || !inertia.isPositive()) return bad("body inertia", "is not positive definite");
+    if (inertia.info() != Eigen::Success || !inertia.isPositive()) return badImpact("body inertia", "is not positive definite");
     bodyCompliance += rn.dot(inertia.solve(rn));
   }
   c.effectiveMassKg = 1.0 / (1.0 / in.impactorMassKg + bodyCompliance);
@@ -60,7 +60,7 @@ Result<HertzContact> computeHertzContact(const HertzInput& in) {
   c.impulseNs = in.impulseNs > 0.0 ? in.impulseNs : (1.0 + in.restitution) * m * v;
   c.pulseAmplitudeN = c.impulseNs / (kHertzPulseShapeIntegral * c.durationS);
   if (!std::isfinite(c.durationS) || !std::isfinite(c.pulseAmplitudeN) || !(c.durationS > 0.0)) {
-    return bad("values", "give a non-finite contact (extreme masses, radii or speed)");
+    return badImpact("values", "give a non-finite contact (extreme masses, radii or speed)");
   }
   return c;
 }

@@ -20,7 +20,6 @@ using detail::Body;
 using detail::BodySource;
 using detail::makeBody;
 
-Error bad(const std::string& message) { return makeError(ErrorCode::InvalidArgument, message); }
 
 uint64_t mix(uint64_t x) {
   x += 0x9e3779b97f4a7c15ull;
@@ -41,12 +40,12 @@ struct Slot {
 // The checks on an impact's values that need no body.
 Status validateImpactDesc(const ImpactDesc& desc) {
   if (!desc.pointWorld.allFinite() || !desc.normalWorld.allFinite() || std::abs(desc.normalWorld.norm() - 1.0) > 1e-6) {
-    return bad("impact: the point must be finite and the normal a finite unit vector");
+    return invalidArgument("impact: the point must be finite and the normal a finite unit vector");
   }
-  if (!(desc.speedMps > 0.0) || !std::isfinite(desc.speedMps)) return bad("impact: speed must be finite and > 0");
+  if (!(desc.speedMps > 0.0) || !std::isfinite(desc.speedMps)) return invalidArgument("impact: speed must be finite and > 0");
   if (!(desc.bodyRadiusM >= 0.0) || !(desc.pointToleranceM >= 0.0) || !(desc.flatPairRadiusM >= 0.0) ||
       !std::isfinite(desc.flatPairRadiusM)) {
-    return bad("impact: bodyRadiusM and pointToleranceM must be ≥ 0, flatPairRadiusM finite and ≥ 0");
+    return invalidArgument("impact: bodyRadiusM and pointToleranceM must be ≥ 0, flatPairRadiusM finite and ≥ 0");
   }
   return Ok{};
 }
@@ -101,10 +100,10 @@ struct World::Impl {
   }
 
   Result<Slot*> slot(ObjectId id) {
-    if (!id.valid() || id.index >= slots.size()) return bad("invalid object id");
+    if (!id.valid() || id.index >= slots.size()) return invalidArgument("invalid object id");
     Slot& s = slots[id.index];
     if (!s.alive || s.generation != id.generation) {
-      return bad("stale object id (slot " + std::to_string(id.index) + ", generation " + std::to_string(id.generation) + ")");
+      return invalidArgument("stale object id (slot " + std::to_string(id.index) + ", generation " + std::to_string(id.generation) + ")");
     }
     return &s;
   }
@@ -152,7 +151,7 @@ struct World::Impl {
     auto found = slot(desc.object);
     if (!found) return found.error();
     const Slot& s = *found.value();
-    if (s.pending) return bad("impact: an impact on this object is pending (collect it first)");
+    if (s.pending) return invalidArgument("impact: an impact on this object is pending (collect it first)");
     if (Status st = validateImpactDesc(desc); !st) return st.error();
     detail::ImpactJob job;
     job.source = s.source;
@@ -212,19 +211,19 @@ std::string_view fragmentPathName(FragmentPath path) {
 
 Status validateWorldSettings(const WorldSettings& s) {
   const FractureSettings& f = s.fracture;
-  if (s.maxObjects < 1) return bad("WorldSettings: maxObjects must be ≥ 1");
+  if (s.maxObjects < 1) return invalidArgument("WorldSettings: maxObjects must be ≥ 1");
   if (s.maxPendingImpacts < 1 || s.workerThreads < 0 || s.maxFragmentsPerImpact < 2) {
-    return bad("WorldSettings: maxPendingImpacts must be ≥ 1, workerThreads ≥ 0 and maxFragmentsPerImpact ≥ 2");
+    return invalidArgument("WorldSettings: maxPendingImpacts must be ≥ 1, workerThreads ≥ 0 and maxFragmentsPerImpact ≥ 2");
   }
   if (f.modeCount < 0 || f.pulseSteps < 2 || f.ringDownSteps < 0 || !(f.ringDownPeriods >= 0.0) ||
       !std::isfinite(f.ringDownPeriods) || !(f.debrisVolumeFraction >= 0.0 && f.debrisVolumeFraction < 1.0) ||
       f.exactModesMaxTets < 0 || f.exactModeCount < 1) {
-    return bad("FractureSettings: modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0, ringDownPeriods ≥ 0 and finite, "
+    return invalidArgument("FractureSettings: modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0, ringDownPeriods ≥ 0 and finite, "
                "debrisVolumeFraction in [0, 1), exactModesMaxTets ≥ 0, exactModeCount ≥ 1");
   }
   if (f.crack.maxCracks < 0 || std::isnan(f.crack.propagationStressRatio) || !(f.crack.directionBlend >= 0.0) ||
       !(f.crack.directionBlend <= 1.0) || !(f.crack.noiseRad >= 0.0) || !std::isfinite(f.crack.noiseRad)) {
-    return bad("CrackSettings: maxCracks ≥ 0, propagationStressRatio not NaN, directionBlend in [0, 1], noiseRad ≥ 0");
+    return invalidArgument("CrackSettings: maxCracks ≥ 0, propagationStressRatio not NaN, directionBlend in [0, 1], noiseRad ≥ 0");
   }
   return Ok{};
 }
@@ -252,7 +251,7 @@ Result<World> World::create(Pack pack, const WorldSettings& settings) {
     }
     return World(std::move(impl));
   } catch (const std::exception& e) {
-    return bad(std::string("world creation failed: ") + e.what());
+    return invalidArgument(std::string("world creation failed: ") + e.what());
   }
 }
 
@@ -261,17 +260,17 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
     Impl& w = *mImpl;
     const auto it = std::find_if(w.pack.objects.begin(), w.pack.objects.end(),
                                  [&](const ObjectAsset& a) { return a.name == desc.asset; });
-    if (it == w.pack.objects.end()) return bad("unknown object '" + desc.asset + "' (not in the pack)");
+    if (it == w.pack.objects.end()) return invalidArgument("unknown object '" + desc.asset + "' (not in the pack)");
     if (!desc.rotation.allFinite() || !desc.translationM.allFinite() ||
         (desc.rotation.transpose() * desc.rotation - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
         std::abs(desc.rotation.determinant() - 1.0) > 1e-6) {
-      return bad("object pose: the rotation must be orthonormal with det +1 and the pose finite");
+      return invalidArgument("object pose: the rotation must be orthonormal with det +1 and the pose finite");
     }
     const auto index = static_cast<size_t>(it - w.pack.objects.begin());
     if (!w.packBodies[index]) {
       const auto mat = std::find_if(w.pack.materials.begin(), w.pack.materials.end(),
                                     [&](const Material& m) { return m.name == it->materialName; });
-      if (mat == w.pack.materials.end()) return bad("object '" + desc.asset + "' names a missing material");
+      if (mat == w.pack.materials.end()) return invalidArgument("object '" + desc.asset + "' names a missing material");
       auto body = makeBody(*it, *mat, w.settings.fracture.modeCount);
       if (!body) return body.error();
       std::shared_ptr<const Body> made = body.value();
@@ -288,14 +287,14 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
     }
     return w.place(w.packBodies[index], desc.rotation, desc.translationM);
   } catch (const std::exception& e) {
-    return bad(std::string("addObject failed: ") + e.what());
+    return invalidArgument(std::string("addObject failed: ") + e.what());
   }
 }
 
 Status World::removeObject(ObjectId id) {
   auto s = mImpl->slot(id);
   if (!s) return s.error();
-  if (s.value()->pending) return bad("removeObject: an impact on this object is pending (collect it first)");
+  if (s.value()->pending) return invalidArgument("removeObject: an impact on this object is pending (collect it first)");
   mImpl->remove(id);
   return Ok{};
 }
@@ -338,7 +337,7 @@ Status World::impact(const ImpactDesc& desc, ImpactResult& result) {
     if (Status st = detail::computeImpact(job.value(), w.work, result, w.born); !st) return st;
     return w.apply(desc.object, job.value(), result, w.born);
   } catch (const std::exception& e) {
-    return bad(std::string("impact failed: ") + e.what());
+    return invalidArgument(std::string("impact failed: ") + e.what());
   }
 }
 
@@ -369,14 +368,14 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
         try {
           raw->status = detail::computeImpact(raw->job, *raw->workspace, raw->result, raw->born);
         } catch (const std::exception& e) {
-          raw->status = bad(std::string("impact failed on a worker: ") + e.what());
+          raw->status = invalidArgument(std::string("impact failed on a worker: ") + e.what());
         }
         raw->done.store(true, std::memory_order_release);
       });
     });
     return ticket;
   } catch (const std::exception& e) {
-    return bad(std::string("submitImpact failed: ") + e.what());
+    return invalidArgument(std::string("submitImpact failed: ") + e.what());
   }
 }
 
@@ -389,20 +388,20 @@ Status World::collectImpact(ImpactTicket ticket, ImpactResult& result) {
   try {
     Impl& w = *mImpl;
     const auto it = w.pending.find(ticket.id);
-    if (it == w.pending.end()) return bad("collectImpact: unknown or already collected ticket " + std::to_string(ticket.id));
+    if (it == w.pending.end()) return invalidArgument("collectImpact: unknown or already collected ticket " + std::to_string(ticket.id));
     std::unique_ptr<PendingImpact> p = std::move(it->second);
     w.pending.erase(it);
     w.workers().execute([&] { p->group.wait(); });
     w.spareWorkspaces.push_back(std::move(p->workspace));
     std::swap(result, p->result);
-    Status status = p->status.value_or(Status(bad("collectImpact: the impact did not run")));
+    Status status = p->status.value_or(Status(invalidArgument("collectImpact: the impact did not run")));
     if (!status) {
       w.slots[p->object.index].pending = false;
       return status;
     }
     return w.apply(p->object, p->job, result, p->born);
   } catch (const std::exception& e) {
-    return bad(std::string("collectImpact failed: ") + e.what());
+    return invalidArgument(std::string("collectImpact failed: ") + e.what());
   }
 }
 
@@ -420,7 +419,7 @@ Status World::waitUntilPrepared() {
     }
     return Ok{};
   } catch (const std::exception& e) {
-    return bad(std::string("waitUntilPrepared failed: ") + e.what());
+    return invalidArgument(std::string("waitUntilPrepared failed: ") + e.what());
   }
 }
 

@@ -11,13 +11,15 @@
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/MeshValidation.h"
 #include "brittle/testing/Fixtures.h"
+#include "SurfaceExpectations.h"
 
 namespace brittle {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+using testing::expectValid;
+using testing::volumeOf;
 
-double volumeOf(const TriangleMesh& m) { return computeSurfaceMassProperties(m, 1.0).volumeM3; }
+constexpr double kPi = std::numbers::pi;
 
 // Area of the regular n-gon inscribed in the ellipse of diameters sx, sy.
 double inscribedPolygonArea(int n, double sx, double sy) { return 0.5 * n * std::sin(2.0 * kPi / n) * 0.25 * sx * sy; }
@@ -29,11 +31,6 @@ BaseShapeDefinition shape(BaseShapeKind kind, Eigen::Vector3d size, int segments
   d.sizeM = size;
   d.segments = segments;
   return d;
-}
-
-void expectValid(const TriangleMesh& m) {
-  const Status valid = validateSurfaceMesh(m);
-  EXPECT_TRUE(valid) << valid.error().message;
 }
 
 TEST(BaseShapes, ShippedShapesAreValidSolidsWithTheirVolumes) {

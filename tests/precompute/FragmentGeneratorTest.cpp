@@ -12,16 +12,13 @@
 #include "brittle/precompute/BaseShapes.h"
 #include "brittle/precompute/MeshValidation.h"
 #include "brittle/testing/Fixtures.h"
+#include "SurfaceExpectations.h"
 
 namespace brittle {
 namespace {
 
-double volumeOf(const TriangleMesh& m) { return computeSurfaceMassProperties(m, 1.0).volumeM3; }
-
-void expectValid(const TriangleMesh& m) {
-  const Status valid = validateSurfaceMesh(m);
-  EXPECT_TRUE(valid) << valid.error().message;
-}
+using testing::expectValid;
+using testing::volumeOf;
 
 TriangleMesh baseShape(BaseShapeKind kind, Eigen::Vector3d size, int segments, double noise = 0.0) {
   BaseShapeDefinition d;

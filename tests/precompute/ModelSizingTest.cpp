@@ -198,7 +198,9 @@ TEST_F(ModelSizingTest, FragmentsGiveTheDebrisThresholdAndTheSearch) {
   if (broke > 0) {
     EXPECT_DOUBLE_EQ(debris.debrisVolumeFraction, std::clamp(0.5 * debris.smallestBrokenFraction, 0.001, 0.5));
     for (const FragmentRecord& f : fragments.value()) {
-      if (f.brokeAgain) EXPECT_GE(f.volumeFraction, 2.0 * debris.debrisVolumeFraction - 1e-15);
+      if (f.brokeAgain) {
+        EXPECT_GE(f.volumeFraction, 2.0 * debris.debrisVolumeFraction - 1e-15);
+      }
     }
   } else {
     EXPECT_EQ(debris.debrisVolumeFraction, 0.5);

@@ -79,7 +79,9 @@ TEST(CrackPropagation, CrumbMergingEqualsRelabellingAfterEveryMerge) {
     // Every fragment left is at least minNodes big, unless it is the only one.
     std::vector<int> size(static_cast<size_t>(fastCount), 0);
     for (Eigen::Index i = 0; i < fastLabels.size(); ++i) ++size[static_cast<size_t>(fastLabels[i])];
-    if (fastCount > 1) EXPECT_GE(*std::min_element(size.begin(), size.end()), minNodes) << "trial " << trial;
+    if (fastCount > 1) {
+      EXPECT_GE(*std::min_element(size.begin(), size.end()), minNodes) << "trial " << trial;
+    }
   }
   EXPECT_GT(totalMerges, 40);  // the trials exercised merging
 }

@@ -96,5 +96,7 @@ struct Ok {};
 using Status = Result<Ok>;
 
 inline Error makeError(ErrorCode code, std::string message) { return Error{code, std::move(message)}; }
+/// The commonest error: an argument a function cannot take.
+inline Error invalidArgument(std::string message) { return makeError(ErrorCode::InvalidArgument, std::move(message)); }
 
 }  // namespace brittle
