@@ -10,6 +10,7 @@
 #include "brittle/database/Pack.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshIO.h"
+#include "brittle/runtime/Fingerprint.h"
 #include "brittle/runtime/World.h"
 
 namespace brittle::cli {
@@ -151,6 +152,7 @@ Runner addImpactCommand(CLI::App& app) {
                                   {"exact_modes", f.exactModes}, {"path", fragmentPathName(f.path)},
                                   {"reason", f.reason}});
     }
+    doc["fingerprint"] = fingerprintHex(fingerprint(r));  // every computed value; times aside
     doc["times_s"] = {{"contact", r.times.contactS}, {"prepare", r.times.prepareS}, {"modal", r.times.modalS}, {"stress", r.times.stressS},
                       {"propagation", r.times.propagationS}, {"surfaces", r.times.surfacesS},
                       {"matching", r.times.matchingS}, {"total", r.times.totalS()}};
@@ -183,6 +185,7 @@ Runner addImpactCommand(CLI::App& app) {
               << 1e3 * r.times.stressS << ", propagation " << 1e3 * r.times.propagationS << ", surfaces "
               << 1e3 * r.times.surfacesS << ", matching " << 1e3 * r.times.matchingS << ", total "
               << 1e3 * r.times.totalS() << "\n";
+    std::cout << "  fingerprint " << fingerprintHex(fingerprint(r)) << " (every computed value; equal means bit-identical)\n";
     return kExitOk;
   };
 }

@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <iomanip>
 
+#include "brittle/runtime/Fingerprint.h"
+
 namespace brittle {
 namespace {
 
@@ -17,11 +19,6 @@ int32_t maxBodies(const PlayResult& r) {
   return m;
 }
 
-std::string hex(uint64_t v) {
-  char s[24];
-  std::snprintf(s, sizeof s, "%016llx", static_cast<unsigned long long>(v));
-  return s;
-}
 
 }  // namespace
 
@@ -41,7 +38,7 @@ nlohmann::json playReportJson(const PlayResult& r, int framesEvery) {
                     {"failed_impacts", r.failedImpacts},
                     {"bodies_at_end", r.bodiesAtEnd},
                     {"bodies_max", maxBodies(r)},
-                    {"pose_hash", hex(r.poseHash)},
+                    {"pose_hash", fingerprintHex(r.poseHash)},
                     {"frame_time_s", {{"median", t.medianS}, {"p99", t.p99S}, {"max", t.maxS}}},
                     {"bullet_s", t.bulletS},
                     {"fracture_s", t.fractureS},
@@ -139,7 +136,7 @@ void printPlaySummary(const PlayResult& r, std::ostream& out) {
     if (!e.error.empty()) out << "refused (" << e.error << ")\n";
     else out << e.fragments << " fragments (" << e.debris << " debris), " << 1e3 * e.times.totalS() << " ms\n";
   }
-  out << "  pose hash " << hex(r.poseHash) << "\n";
+  out << "  pose hash " << fingerprintHex(r.poseHash) << "\n";
 }
 
 }  // namespace brittle

@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "brittle/precompute/MaterialLibrary.h"
+#include "brittle/runtime/Fingerprint.h"
 
 namespace brittle {
 namespace {
@@ -373,21 +374,16 @@ class Simulation {
     PlayResult out = std::move(mOut);
     mOut = PlayResult{};
     out.frames = mFrame;  // frames actually played
-    uint64_t hash = 1469598103934665603ull;
-    auto eat = [&](double v) {
-      unsigned char bytes[sizeof v];
-      std::memcpy(bytes, &v, sizeof v);
-      for (unsigned char c : bytes) hash = (hash ^ c) * 1099511628211ull;
-    };
+    Fingerprint hash;
     for (Body& b : mBodies) {
       if (!b.alive) continue;
       ++out.bodiesAtEnd;
       const btTransform& t = b.rigid->getCenterOfMassTransform();
-      for (int i = 0; i < 3; ++i) eat(t.getOrigin()[i]);
+      for (int i = 0; i < 3; ++i) hash.add(static_cast<double>(t.getOrigin()[i]));
       const btQuaternion q = t.getRotation();
-      for (int i = 0; i < 4; ++i) eat(q[i]);
+      for (int i = 0; i < 4; ++i) hash.add(static_cast<double>(q[i]));
     }
-    out.poseHash = hash;
+    out.poseHash = hash.value();
     for (Body& b : mBodies) {
       if (b.alive && !mSettings.recordTracks) recordPose(b);
       if (b.alive) b.state.lowestPointM = lowestPoint(b);

@@ -1,0 +1,114 @@
+#!/usr/bin/env bash
+# Bit-identical across processes and thread counts. Each step runs in three separate processes
+# whose heap and stack sit in different places: address-space randomisation stays on, and each
+# process gets an environment of a different size (which moves its initial stack and what the
+# loader allocates first). Checked:
+#   1. a fragment-database bake (bake-db) with 1, 2 and 1 worker threads gives the same pack data;
+#   2. a bake of the four default objects (the default manifest's meshes and materials, at fewer
+#      elements and modes) with a small database gives the same pack data;
+# (pack data: every dataset and attribute bit for bit, the wall-clock bake timings aside;
+# compare_packs.py);
+#   3. one breaking impact on each object (the main job's four impacts) gives the same fracture
+#      fingerprint (brittle impact: every value the impact computed, times aside), and that
+#      fingerprint equals the golden value pinned in golden-fingerprints.txt beside this script.
+#   determinism_across_processes.sh BRITTLE_CLI SOURCE_DIR [--pin]
+# --pin writes this build's fingerprints into golden-fingerprints.txt instead of comparing: run it
+# after a change that is meant to change fractures, and commit the file with the change.
+set -euo pipefail
+cli=$1
+src=$2
+pin=${3:-}
+golden="$src/tests/tools/golden-fingerprints.txt"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+pad() { head -c "$1" /dev/zero | tr '\0' 'x'; }  # an environment variable of $1 bytes
+run() {  # run N CMD...: the command in a process whose environment is N bytes larger
+  local size=$1
+  shift
+  env "BRITTLE_TEST_PAD=$(pad "$size")" "$@"
+}
+same_packs() {  # same_packs WHAT PACK...: every pack holds the first one's data, bit for bit
+  local what=$1
+  shift
+  if ! /usr/bin/python3 "$src/tests/tools/compare_packs.py" "$@" > "$work/digests"; then
+    echo "FAIL: $what differs between processes:"
+    cat "$work/digests"
+    exit 1
+  fi
+  echo "ok: $what, $# processes, data sha256 $(head -c 16 "$work/digests")"
+}
+
+# 1. The database bake, on 1, 2 and 1 threads.
+for i in 1 2 3; do
+  threads=$(( i == 2 ? 2 : 1 ))
+  run $(( i * 3000 )) "$cli" bake-db --shapes "$src/assets/shapes/base-shapes.json" --entries 6 --seed 5 --tets 300 \
+    --modes 6 --threads "$threads" --quiet --out "$work/db$i.h5" >/dev/null
+done
+same_packs "bake-db (threads 1, 2, 1)" "$work/db1.h5" "$work/db2.h5" "$work/db3.h5"
+
+# 2. The four default objects, smaller, with a small database.
+cat > "$work/manifest.json" <<JSON
+{
+  "objects": [
+    { "name": "glass-plate", "mesh": "$src/assets/meshes/plate.off", "material": "glass", "tets": 3000, "modes": 16 },
+    { "name": "porcelain-vase", "mesh": "$src/assets/meshes/vase.off", "material": "porcelain", "tets": 2000, "modes": 16 },
+    { "name": "brick", "mesh": "$src/assets/meshes/brick.off", "material": "concrete", "tets": 1500, "modes": 16 },
+    { "name": "stone-ball", "mesh": "$src/assets/meshes/ball.off", "material": "stone", "tets": 1500, "modes": 16 }
+  ],
+  "database": { "shapes": "$src/assets/shapes/base-shapes.json", "entries": 8, "seed": 1, "tets": 300, "modes": 6 }
+}
+JSON
+for i in 1 2 3; do
+  run $(( i * 5000 )) "$cli" bake --manifest "$work/manifest.json" --quiet --out "$work/pack$i.h5" >/dev/null
+done
+same_packs "bake of the four default objects" "$work/pack1.h5" "$work/pack2.h5" "$work/pack3.h5"
+
+# 3. The main job's four impacts (tools/run-default.sh), each in three processes.
+impacts=(
+  "glass-plate --point 0.02,0.01,0.005 --normal 0,0,1 --speed 5 --impactor-mass 0.1 --impactor-radius 0.02"
+  "porcelain-vase --point 0.0741,0,0.12 --normal 1,0,0 --speed 10 --impactor-mass 0.1 --impactor-radius 0.02"
+  "brick --point 0.1075,0.05125,0.0325 --normal 0.7,0.5,0.5 --speed 10 --impactor-mass inf --impactor-radius inf"
+  "stone-ball --point 0,0,-0.1 --normal 0,0,-1 --speed 15 --impactor-mass inf --impactor-radius inf"
+)
+computed=()
+for spec in "${impacts[@]}"; do
+  read -r object args <<<"$spec"
+  prints=()
+  for i in 1 2 3; do
+    # shellcheck disable=SC2086  # args is a list of flags
+    print=$(run $(( i * 7000 )) "$cli" impact "$work/pack$i.h5" --object "$object" $args --json |
+      python3 -c 'import json, sys; d = json.load(sys.stdin); print(d["fingerprint"], d["broken"], len(d["fragments"]))')
+    prints+=("$print")
+  done
+  if [ "${prints[0]}" != "${prints[1]}" ] || [ "${prints[0]}" != "${prints[2]}" ]; then
+    echo "FAIL: the $object impact differs between processes: ${prints[*]}"
+    exit 1
+  fi
+  read -r fp broken fragments <<<"${prints[0]}"
+  [ "$broken" = True ] || { echo "FAIL: the $object impact did not break the object"; exit 1; }
+  echo "ok: $object impact, 3 processes, $fragments fragments, fingerprint $fp"
+  computed+=("$object $fp")
+done
+
+if [ "$pin" = --pin ]; then
+  {
+    echo "# Fracture fingerprints of the main job's four impacts on the default objects as"
+    echo "# tests/tools/determinism_across_processes.sh bakes them. Re-pin after an intended change:"
+    echo "#   bash tests/tools/determinism_across_processes.sh build/bin/brittle . --pin"
+    printf '%s\n' "${computed[@]}"
+  } > "$golden"
+  echo "pinned: $golden"
+  exit 0
+fi
+for line in "${computed[@]}"; do
+  read -r object fp <<<"$line"
+  want=$(awk -v o="$object" '$1 == o { print $2 }' "$golden")
+  if [ "$fp" != "$want" ]; then
+    echo "FAIL: the $object impact's fingerprint $fp is not the pinned $want ($golden)."
+    echo "      If the change was meant to change fractures, re-pin:"
+    echo "      bash tests/tools/determinism_across_processes.sh build/bin/brittle . --pin"
+    exit 1
+  fi
+done
+echo "ok: all four fingerprints equal the pinned values"
