@@ -42,7 +42,7 @@ same_packs() {  # same_packs WHAT PACK...: every pack holds the first one's data
 # 1. The database bake, on 1, 2 and 1 threads.
 for i in 1 2 3; do
   threads=$(( i == 2 ? 2 : 1 ))
-  run $(( i * 3000 )) "$cli" bake-db --shapes "$src/assets/shapes/base-shapes.json" --entries 6 --seed 5 --tets 300 \
+  run $(( i * 3000 )) "$cli" bake-db --shapes "$src/assets/shapes/base-shapes.json" --entries 4 --seed 5 --tets 300 \
     --modes 6 --threads "$threads" --quiet --out "$work/db$i.h5" >/dev/null
 done
 same_packs "bake-db (threads 1, 2, 1)" "$work/db1.h5" "$work/db2.h5" "$work/db3.h5"
@@ -51,12 +51,12 @@ same_packs "bake-db (threads 1, 2, 1)" "$work/db1.h5" "$work/db2.h5" "$work/db3.
 cat > "$work/manifest.json" <<JSON
 {
   "objects": [
-    { "name": "glass-plate", "mesh": "$src/assets/meshes/plate.off", "material": "glass", "tets": 3000, "modes": 16 },
-    { "name": "porcelain-vase", "mesh": "$src/assets/meshes/vase.off", "material": "porcelain", "tets": 2000, "modes": 16 },
-    { "name": "brick", "mesh": "$src/assets/meshes/brick.off", "material": "concrete", "tets": 1500, "modes": 16 },
-    { "name": "stone-ball", "mesh": "$src/assets/meshes/ball.off", "material": "stone", "tets": 1500, "modes": 16 }
+    { "name": "glass-plate", "mesh": "$src/assets/meshes/plate.off", "material": "glass", "tets": 2000, "modes": 12 },
+    { "name": "porcelain-vase", "mesh": "$src/assets/meshes/vase.off", "material": "porcelain", "tets": 1500, "modes": 12 },
+    { "name": "brick", "mesh": "$src/assets/meshes/brick.off", "material": "concrete", "tets": 1000, "modes": 12 },
+    { "name": "stone-ball", "mesh": "$src/assets/meshes/ball.off", "material": "stone", "tets": 1000, "modes": 12 }
   ],
-  "database": { "shapes": "$src/assets/shapes/base-shapes.json", "entries": 8, "seed": 1, "tets": 300, "modes": 6 }
+  "database": { "shapes": "$src/assets/shapes/base-shapes.json", "entries": 6, "seed": 1, "tets": 300, "modes": 6 }
 }
 JSON
 for i in 1 2 3; do
