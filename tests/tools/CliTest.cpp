@@ -610,9 +610,6 @@ TEST_F(CliTest, MpiBakeEqualsTheSingleProcessBake) {
 #else
   ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);  // CI containers run as root
   ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
-  // A rank that waits yields its core instead of polling: on two cores shared with another test,
-  // polling ranks starved the working ones (357 s under the sanitizers, against 8 s in Release).
-  ::setenv("OMPI_MCA_mpi_yield_when_idle", "1", 1);
   // Under ASan, OpenMPI's own leftovers at MPI_Finalize are not brittle's leaks.
   const std::string suppressions = (testing::sourceDir() / "tests" / "lsan.supp").string();
   ::setenv("LSAN_OPTIONS", ("suppressions=" + suppressions).c_str(), 1);

@@ -38,6 +38,12 @@ class Fingerprint {
       for (Eigen::Index j = 0; j < m.cols(); ++j) add(m(i, j));
     }
   }
+  /// Several values, in order.
+  template <typename... T>
+    requires(sizeof...(T) > 1)
+  void add(const T&... values) {
+    (add(values), ...);
+  }
   uint64_t value() const { return mHash; }
 
  private:
