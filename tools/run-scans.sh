@@ -53,6 +53,8 @@ for path in "$meshes"/$only.off; do
   [ "$code" = 124 ] && error=timeout
   # "adjusted X: why" lines, joined; commas would break the CSV.
   adjustments=$(sed -n 's/^adjusted \([^:]*\):.*/\1/p' "$work/err.txt" | paste -sd ';' - | tr ',' ' ')
+  # A failed bake names what it adjusted in its error ("...; adjusted: a, b, c (...").
+  [ -z "$adjustments" ] && adjustments=$(sed -n 's/^error .*; adjusted: \([^(]*\).*/\1/p' "$work/err.txt" | sed 's/ *$//; s/, /;/g')
   tets=""
   if [ "$code" = 3 ]; then
     validator=$error bake="-"

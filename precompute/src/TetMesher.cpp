@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <cmath>
@@ -34,15 +35,22 @@ using Tr = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_ta
 using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr, Domain::Corner_index, Domain::Curve_index>;
 using Criteria = CGAL::Mesh_criteria_3<Tr>;
 
+// Only the vertices the faces use: an unused one would be an isolated polyhedron vertex, on
+// which CGAL's feature detection crashes (libcgal-demo's prim.off lists three).
 Polyhedron toPolyhedron(const TriangleMesh& surface) {
-  std::vector<Kernel::Point_3> points;
-  for (Eigen::Index v = 0; v < surface.vertices.rows(); ++v) {
-    points.emplace_back(surface.vertices(v, 0), surface.vertices(v, 1), surface.vertices(v, 2));
+  std::vector<std::size_t> index(static_cast<size_t>(surface.vertices.rows()), SIZE_MAX);
+  for (Eigen::Index i = 0; i < surface.faces.size(); ++i) index[static_cast<size_t>(surface.faces.data()[i])] = 0;
+  std::vector<Kernel::Point_3> points;  // in the surface's order, so a mesh without unused vertices is unchanged
+  for (size_t v = 0; v < index.size(); ++v) {
+    if (index[v] == SIZE_MAX) continue;
+    index[v] = points.size();
+    const auto row = static_cast<Eigen::Index>(v);
+    points.emplace_back(surface.vertices(row, 0), surface.vertices(row, 1), surface.vertices(row, 2));
   }
   std::vector<std::array<std::size_t, 3>> faces;
   for (Eigen::Index f = 0; f < surface.faces.rows(); ++f) {
-    faces.push_back({static_cast<std::size_t>(surface.faces(f, 0)), static_cast<std::size_t>(surface.faces(f, 1)),
-                     static_cast<std::size_t>(surface.faces(f, 2))});
+    faces.push_back({index[static_cast<size_t>(surface.faces(f, 0))], index[static_cast<size_t>(surface.faces(f, 1))],
+                     index[static_cast<size_t>(surface.faces(f, 2))]});
   }
   Polyhedron poly;
   CGAL::Polygon_mesh_processing::polygon_soup_to_polygon_mesh(points, faces, poly);
@@ -157,6 +165,7 @@ std::string fmt(double x) {
 struct Check {
   enum Kind { Ok, Pieces, Degenerate } kind = Ok;
   int64_t pieces = 1;
+  int64_t tets = 0;
   std::vector<SizingBall> splitOff;  ///< a ball around each piece but the largest
   int64_t degenerateTet = -1;
   double volumeM3 = 0.0, thresholdM3 = 0.0;
@@ -164,6 +173,7 @@ struct Check {
 
 Check checkMesh(const TetMesh& mesh, double h) {
   Check c;
+  c.tets = mesh.tets.rows();
   const auto labels = labelFaceConnectedComponents(mesh);
   c.pieces = labels.empty() ? 0 : int64_t{*std::max_element(labels.begin(), labels.end())} + 1;
   if (c.pieces > 1) {
@@ -207,8 +217,8 @@ Check checkMesh(const TetMesh& mesh, double h) {
 
 std::string describe(const Check& c, int run) {
   if (c.kind == Check::Pieces) {
-    return "run " + std::to_string(run) + " gave " + std::to_string(c.pieces) +
-           " face-connected pieces (a part thinner than the cell size)";
+    return "run " + std::to_string(run) + " gave " + std::to_string(c.pieces) + " face-connected pieces of " +
+           std::to_string(c.tets) + " tets (a part thinner than the cell size)";
   }
   return "run " + std::to_string(run) + " gave a degenerate tet (" + fmt(c.volumeM3) + " m^3, at most " + fmt(c.thresholdM3) +
          " m^3)";
@@ -234,7 +244,8 @@ Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshS
   // Mesh_3 tets at cell size h average about 0.175 h³ (circumradius ~0.7 h, near-regular).
   // The size search runs refinement only (cheap); optimisation, which changes the count by a
   // few per cent, runs once at the chosen size.
-  double h = s.targetTets > 0 ? std::cbrt(volume / (0.175 * static_cast<double>(s.targetTets))) : s.cellSizeM;
+  auto estimate = [&](int64_t target) { return std::cbrt(volume / (0.175 * static_cast<double>(target))); };
+  double h = s.targetTets > 0 ? estimate(s.targetTets) : s.cellSizeM;
   TetMeshResult best;
   RunPlan plan;
   FeatureCurves curves;
@@ -261,25 +272,31 @@ Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshS
   const int attemptsAllowed = s.targetTets > 0 ? std::max(1, s.maxAttempts) : 0;
   TetMeshSettings search = s;
   search.optimize = false;
-  best.cellSizeM = h;
-  double bestMiss = std::numeric_limits<double>::infinity();
   Check check;
   std::string tried;  // the adjustments, for an error message
-  try {
+  // The cell size that gives about `target` tets with the plan's features and local sizes,
+  // searched from h0 with refinement-only runs.
+  auto searchSize = [&](int64_t target, double h0) {
+    double size = h0, chosen = h0;
+    double bestMiss = std::numeric_limits<double>::infinity();
     for (int attempt = 0; attempt < attemptsAllowed; ++attempt) {
-      if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "tet meshing cancelled");
       reportProgress(progress, "tet meshing: sizing", static_cast<double>(attempt) / attemptsAllowed);
-      plan.h = h;
+      plan.h = size;
       const double count = static_cast<double>(meshOnce(poly, search, plan, curves).tets.rows());
-      best.attempts = attempt + 1;
+      ++best.attempts;
       if (count == 0) break;
-      const double miss = std::abs(count / static_cast<double>(s.targetTets) - 1.0);
-      if (miss < bestMiss) bestMiss = miss, best.cellSizeM = h;
+      const double miss = std::abs(count / static_cast<double>(target) - 1.0);
+      if (miss < bestMiss) bestMiss = miss, chosen = size;
       if (miss <= s.countTolerance) break;
-      h *= std::cbrt(count / static_cast<double>(s.targetTets));
+      size *= std::cbrt(count / static_cast<double>(target));
     }
-    plan.h = best.cellSizeM;
-    bool localSized = false;
+    return chosen;
+  };
+  int64_t target = s.targetTets;
+  bool localSized = false;
+  try {
+    if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "tet meshing cancelled");
+    plan.h = searchSize(target, h);
     for (int run = 1;; ++run) {
       if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "tet meshing cancelled");
       reportProgress(progress, s.optimize ? "tet meshing: refine + optimise" : "tet meshing: refine",
@@ -297,12 +314,25 @@ Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshS
       MeshingAdjustment adjusted;
       if (check.kind == Check::Pieces && !localSized) {
         localSized = true;
+        // Halve the size where each piece split off.
         for (const auto& ball : check.splitOff) plan.balls.push_back(ball);
         adjusted = {"local size halved", "around " + std::to_string(check.splitOff.size()) + " split-off piece" +
                                              (check.splitOff.size() == 1 ? "" : "s") + ": " + describe(check, run)};
-      } else if (plan.features != Protection::None) {
+      } else if (check.kind == Check::Degenerate && plan.features != Protection::None) {
+        // Protection adds tets along the features: the size is searched again without it.
         plan.features = Protection::None;
+        if (target > 0) plan.h = searchSize(target, estimate(target));
         adjusted = {"sharp features off", describe(check, run) + " with feature curves protected"};
+      } else if (target > 0) {
+        // Twice the tets, by a fresh size search (without local sizes) from the estimate for
+        // twice the target: thin parts make the count far from cubic in the cell size, and a
+        // search that starts from the last size can stall far from the target.
+        target *= 2;
+        plan.balls.clear();
+        if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "tet meshing cancelled");
+        plan.h = searchSize(target, estimate(target));
+        adjusted = {"tets doubled", describe(check, run) + "; now " + std::to_string(target) + " tets targeted, cell size " +
+                                        fmt(plan.h) + " m"};
       } else {
         plan.h /= std::cbrt(2.0);
         adjusted = {"tets doubled", describe(check, run) + "; cell size now " + fmt(plan.h) + " m"};

@@ -10,10 +10,11 @@
 // (FemAssembly.h), so a degenerate element never reaches the FEM. When a run fails the check,
 // the mesher adjusts and runs again, at most meshingRuns runs in all, and records each adjustment
 // with its reason:
-//   * a degenerate tet with features protected: feature protection off;
-//   * split-off pieces: the size halved around them (a part thinner than the cell size), once;
-//     then feature protection off;
-//   * otherwise: twice the tets (cell size / 2^(1/3)).
+//   * a degenerate tet with feature curves protected: feature protection off;
+//   * split-off pieces (a part thinner than the cell size), the first time: the size halved in
+//     a ball around each piece but the largest;
+//   * otherwise: twice the tets (a fresh size search for twice the target, local sizes dropped;
+//     with a cell size instead of a target, the size / 2^(1/3)).
 // This is the only translation unit that instantiates Mesh_3 (it costs ~4 GiB to compile); its
 // interface is flat arrays only.
 #pragma once
@@ -47,7 +48,7 @@ struct TetMeshSettings {
   double featureAngleDeg = 60.0;        ///< dihedral angle that marks an edge as sharp
   /// Crease groups shorter than this many cell sizes are not protected (FeatureCurves.h).
   double minFeatureLengthCells = 8.0;
-  double needleTurnDeg = 30.0;          ///< crease groups turning back sharper than this are not protected
+  double needleTurnDeg = 15.0;          ///< crease groups turning back sharper than this are not protected
   /// Final Mesh_3 runs allowed (the first and its adjusted retries; sizing runs not counted).
   /// 1: no retry, a failed check is an error.
   int meshingRuns = 4;
