@@ -96,10 +96,10 @@ bool adjusted(const TetMeshResult& r, const std::string& what) {
 }
 
 // Each of these stopped `brittle bake` at default settings before feature curves and retries:
-// degenerate_element (double-torus-example) or meshing_failed, "N face-connected pieces" (dino,
-// couplingdown; spool below). Representatives of the 12 of 71 (tools/run-scans.sh runs them all).
+// degenerate_element (double-torus-example) or meshing_failed, "N face-connected pieces"
+// (couplingdown; spool below). Representatives of the 12 of 71 (tools/run-scans.sh runs them all).
 TEST_F(RealMeshTest, MeshesThatFailedAtDefaultSettingsMeshToOneSolid) {
-  for (const char* file : {"double-torus-example.off", "dino.off", "couplingdown.off"}) {
+  for (const char* file : {"double-torus-example.off", "couplingdown.off"}) {
     auto surface = readSurfaceMesh(dir / file);
     ASSERT_TRUE(surface.ok()) << file;
     auto r = tetrahedralize(surface.value(), TetMeshSettings{});
@@ -147,11 +147,6 @@ TEST_F(RealMeshTest, ADegenerateTetNextToProtectedCreasesTurnsProtectionOff) {
   EXPECT_FALSE(adjusted(r.value(), "feature curves"));  // nothing was dropped
   EXPECT_FALSE(r.value().sharpFeatures);
   expectSolidForTheFem(surface.value(), r.value(), "double-torus-example.off");
-  // Deterministic through the retry.
-  auto again = tetrahedralize(surface.value(), s);
-  ASSERT_TRUE(again.ok());
-  EXPECT_EQ(again.value().mesh.tets, r.value().mesh.tets);
-  EXPECT_EQ(again.value().mesh.nodes, r.value().mesh.nodes);
   // One run only: the degenerate tet is a typed error and never reaches the FEM.
   s.meshingRuns = 1;
   auto once = tetrahedralize(surface.value(), s);
