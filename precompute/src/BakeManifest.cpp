@@ -30,7 +30,7 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
       return makeError(ErrorCode::ParseError, "manifest " + path.filename().string() + ": needs an \"objects\" array");
     }
     static const std::set<std::string> kKeys = {"name", "mesh", "material", "tets", "modes", "repair", "lumped_mass", "seed",
-                                                "sharp_features", "sliver_bound"};
+                                                "sharp_features", "sliver_bound", "meshing_runs"};
     for (size_t i = 0; i < doc["objects"].size(); ++i) {
       const auto& o = doc["objects"][i];
       const std::string where = "manifest " + path.filename().string() + ", object " + std::to_string(i);
@@ -57,7 +57,8 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
         return v >= lo && v <= hi && (std::string(key) == "sliver_bound" || v == std::floor(v));
       };
       for (const auto& [key, lo, hi] : {std::tuple{"tets", 0.0, 5e6}, std::tuple{"modes", 1.0, 2000.0},
-                                         std::tuple{"seed", 0.0, 9.007199254740992e15}, std::tuple{"sliver_bound", 0.0, 30.0}}) {
+                                         std::tuple{"seed", 0.0, 9.007199254740992e15}, std::tuple{"sliver_bound", 0.0, 30.0},
+                                         std::tuple{"meshing_runs", 1.0, 8.0}}) {
         if (!checked(key, lo, hi)) {
           return makeError(ErrorCode::ParseError, where + ": \"" + key + "\" must be a number in [" + std::to_string(lo) + ", " +
                                                       std::to_string(hi) + "]" + (std::string(key) == "sliver_bound" ? "" : ", integer"));
@@ -69,6 +70,7 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
       s.fem.lumpedMass = o.value("lumped_mass", false);
       s.tetMesh.detectSharpFeatures = o.value("sharp_features", true);
       s.tetMesh.sliverBoundDeg = o.value("sliver_bound", s.tetMesh.sliverBoundDeg);
+      s.tetMesh.meshingRuns = o.value("meshing_runs", s.tetMesh.meshingRuns);
       const auto seed = o.value("seed", static_cast<uint64_t>(1));
       s.modal.seed = s.tetMesh.seed = seed;
       out.push_back(std::move(s));

@@ -94,6 +94,8 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
   if (!tets) return inObject(name, tets.error());
   rec.meshingS = secondsSince(t);
   rec.cellSizeM = tets.value().cellSizeM;
+  rep.meshingRuns = tets.value().meshingRuns;
+  rep.meshingAdjustments = tets.value().adjustments;
   asset.tetMesh = std::move(tets.value().mesh);
   asset.surfaceFaces = std::move(tets.value().surfaceFaces);
   asset.quality = tets.value().quality;

@@ -71,6 +71,12 @@ TetMeshSettings DatabaseBakeSettings::defaultFragmentTetMeshSettings() {
   s.targetTets = 1000;
   s.countTolerance = 0.35;
   s.maxAttempts = 3;
+  // A fragment is a cut polyhedron: every crease is a real edge, so all are protected; and the
+  // database bake meshes a fragment that splits finer itself (bakeEntry), or draws another, so
+  // one Mesh_3 run each. This keeps database entries as they were before meshing retries.
+  s.minFeatureLengthCells = 0.0;
+  s.needleTurnDeg = 0.0;
+  s.meshingRuns = 1;
   return s;
 }
 

@@ -96,7 +96,7 @@ Triangles boundaryFaces(const TetMesh& mesh) {
   return result;
 }
 
-int64_t countFaceConnectedComponents(const TetMesh& mesh) {
+std::vector<int32_t> labelFaceConnectedComponents(const TetMesh& mesh) {
   const auto count = static_cast<size_t>(mesh.tets.rows());
   std::vector<int64_t> parent(count);
   std::iota(parent.begin(), parent.end(), 0);
@@ -116,9 +116,21 @@ int64_t countFaceConnectedComponents(const TetMesh& mesh) {
       }
     }
   }
-  int64_t roots = 0;
-  for (size_t t = 0; t < count; ++t) roots += find(static_cast<int64_t>(t)) == static_cast<int64_t>(t);
-  return roots;
+  // Roots are each group's smallest tet, so numbering roots in tet order numbers groups by their
+  // first tet.
+  std::vector<int32_t> labels(count, -1);
+  int32_t next = 0;
+  for (size_t t = 0; t < count; ++t) {
+    const auto root = static_cast<size_t>(find(static_cast<int64_t>(t)));
+    if (root == t) labels[t] = next++;
+    labels[t] = labels[root];
+  }
+  return labels;
+}
+
+int64_t countFaceConnectedComponents(const TetMesh& mesh) {
+  const auto labels = labelFaceConnectedComponents(mesh);
+  return labels.empty() ? 0 : int64_t{*std::max_element(labels.begin(), labels.end())} + 1;
 }
 
 TetMesh compactNodes(const TetMesh& mesh) {

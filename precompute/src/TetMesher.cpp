@@ -10,14 +10,20 @@
 #include <CGAL/Random.h>
 #include <CGAL/make_mesh_3.h>
 
+#include <algorithm>
 #include <array>
+#include <cstdint>
+#include <cstdio>
+#include <string>
 #include <cmath>
 #include <limits>
 #include <unordered_map>
 #include <vector>
 
 #include "brittle/descriptors/MassProperties.h"
+#include "brittle/precompute/FeatureCurves.h"
 #include "brittle/precompute/TetMeshQuality.h"
+#include "brittle/runtime/FemAssembly.h"
 
 namespace brittle {
 namespace {
@@ -29,32 +35,88 @@ using Tr = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_ta
 using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr, Domain::Corner_index, Domain::Curve_index>;
 using Criteria = CGAL::Mesh_criteria_3<Tr>;
 
+// Only the vertices the faces use: an unused one would be an isolated polyhedron vertex, on
+// which CGAL's feature detection crashes (libcgal-demo's prim.off lists three).
 Polyhedron toPolyhedron(const TriangleMesh& surface) {
-  std::vector<Kernel::Point_3> points;
-  for (Eigen::Index v = 0; v < surface.vertices.rows(); ++v) {
-    points.emplace_back(surface.vertices(v, 0), surface.vertices(v, 1), surface.vertices(v, 2));
+  std::vector<std::size_t> index(static_cast<size_t>(surface.vertices.rows()), SIZE_MAX);
+  for (Eigen::Index i = 0; i < surface.faces.size(); ++i) index[static_cast<size_t>(surface.faces.data()[i])] = 0;
+  std::vector<Kernel::Point_3> points;  // in the surface's order, so a mesh without unused vertices is unchanged
+  for (size_t v = 0; v < index.size(); ++v) {
+    if (index[v] == SIZE_MAX) continue;
+    index[v] = points.size();
+    const auto row = static_cast<Eigen::Index>(v);
+    points.emplace_back(surface.vertices(row, 0), surface.vertices(row, 1), surface.vertices(row, 2));
   }
   std::vector<std::array<std::size_t, 3>> faces;
   for (Eigen::Index f = 0; f < surface.faces.rows(); ++f) {
-    faces.push_back({static_cast<std::size_t>(surface.faces(f, 0)), static_cast<std::size_t>(surface.faces(f, 1)),
-                     static_cast<std::size_t>(surface.faces(f, 2))});
+    faces.push_back({index[static_cast<size_t>(surface.faces(f, 0))], index[static_cast<size_t>(surface.faces(f, 1))],
+                     index[static_cast<size_t>(surface.faces(f, 2))]});
   }
   Polyhedron poly;
   CGAL::Polygon_mesh_processing::polygon_soup_to_polygon_mesh(points, faces, poly);
   return poly;
 }
 
-// One Mesh_3 run at cell size h. Nodes are numbered in the order the complex's cells first
-// reach them, which is deterministic for a fixed input and seed (no pointer ordering).
-TetMesh meshOnce(const Polyhedron& poly, const TetMeshSettings& s, double h) {
+// Where a run puts its elements: the cell size h everywhere, scaled by a ball's factor inside it
+// (the smallest factor where balls overlap).
+struct SizingBall {
+  Eigen::Vector3d center;
+  double radiusM = 0.0;
+  double factor = 0.5;
+};
+
+struct LocalSize {
+  double h = 0.0;
+  std::vector<SizingBall> balls;
+  template <class Index>
+  Kernel::FT operator()(const Kernel::Point_3& p, int /*dim*/, const Index& /*index*/) const {
+    const Eigen::Vector3d q(p.x(), p.y(), p.z());
+    double factor = 1.0;
+    for (const auto& b : balls) {
+      if ((q - b.center).squaredNorm() <= b.radiusM * b.radiusM) factor = std::min(factor, b.factor);
+    }
+    return h * factor;
+  }
+};
+
+enum class Protection { None, Detected, Curves };
+
+// What one final run does: the settings' values plus the mesher's adjustments.
+struct RunPlan {
+  double h = 0.0;
+  Protection features = Protection::None;
+  std::vector<SizingBall> balls;
+};
+
+// One Mesh_3 run. Nodes are numbered in the order the complex's cells first reach them, which is
+// deterministic for a fixed input and seed (no pointer ordering).
+TetMesh meshOnce(const Polyhedron& poly, const TetMeshSettings& s, const RunPlan& plan, const FeatureCurves& curves) {
   // CGAL's generator takes 32 bits: fold the high half in so every 64-bit seed counts.
   CGAL::get_default_random() = CGAL::Random(static_cast<unsigned int>(s.seed ^ (s.seed >> 32)));
   Domain domain(poly);
-  if (s.detectSharpFeatures) domain.detect_features(s.featureAngleDeg);
+  if (plan.features == Protection::Detected) {
+    domain.detect_features(s.featureAngleDeg);
+  } else if (plan.features == Protection::Curves) {
+    std::vector<std::vector<Kernel::Point_3>> lines;
+    for (const auto& line : curves.polylines) {
+      auto& out = lines.emplace_back();
+      for (const auto& q : line) out.emplace_back(q.x(), q.y(), q.z());
+    }
+    domain.add_features(lines.begin(), lines.end());
+  }
   namespace params = CGAL::parameters;
-  Criteria criteria(params::edge_size = h, params::facet_angle = s.facetAngleDeg, params::facet_size = h,
+  const double h = plan.h;
+  auto criteria = [&] {
+    if (plan.balls.empty()) {
+      return Criteria(params::edge_size = h, params::facet_angle = s.facetAngleDeg, params::facet_size = h,
+                      params::facet_distance = s.facetDistanceFraction * h,
+                      params::cell_radius_edge_ratio = s.cellRadiusEdgeRatio, params::cell_size = h);
+    }
+    const LocalSize size{h, plan.balls};
+    return Criteria(params::edge_size = size, params::facet_angle = s.facetAngleDeg, params::facet_size = size,
                     params::facet_distance = s.facetDistanceFraction * h,
-                    params::cell_radius_edge_ratio = s.cellRadiusEdgeRatio, params::cell_size = h);
+                    params::cell_radius_edge_ratio = s.cellRadiusEdgeRatio, params::cell_size = size);
+  }();
   // Mesh_3 gives perturbation and exudation a wall-clock budget equal to the refinement time
   // unless told otherwise, which makes the mesh depend on machine load. time_limit = 0 means
   // "no clock"; the perturber then stops once every dihedral angle reaches sliverBoundDeg, so the
@@ -90,7 +152,76 @@ TetMesh meshOnce(const Polyhedron& poly, const TetMeshSettings& s, double h) {
   for (size_t t = 0; t < tets.size(); ++t) {
     mesh.tets.row(static_cast<Eigen::Index>(t)) << tets[t][0], tets[t][1], tets[t][2], tets[t][3];
   }
-  return mesh;
+  return compactNodes(mesh);
+}
+
+std::string fmt(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
+}
+
+// What is wrong with a run's mesh, if anything.
+struct Check {
+  enum Kind { Ok, Pieces, Degenerate } kind = Ok;
+  int64_t pieces = 1;
+  int64_t tets = 0;
+  std::vector<SizingBall> splitOff;  ///< a ball around each piece but the largest
+  int64_t degenerateTet = -1;
+  double volumeM3 = 0.0, thresholdM3 = 0.0;
+};
+
+Check checkMesh(const TetMesh& mesh, double h) {
+  Check c;
+  c.tets = mesh.tets.rows();
+  const auto labels = labelFaceConnectedComponents(mesh);
+  c.pieces = labels.empty() ? 0 : int64_t{*std::max_element(labels.begin(), labels.end())} + 1;
+  if (c.pieces > 1) {
+    c.kind = Check::Pieces;
+    std::vector<int64_t> size(static_cast<size_t>(c.pieces), 0);
+    for (int32_t l : labels) ++size[static_cast<size_t>(l)];
+    const auto largest = std::max_element(size.begin(), size.end()) - size.begin();  // first on ties
+    for (int64_t piece = 0; piece < c.pieces; ++piece) {
+      if (piece == largest) continue;
+      // The ball around the piece's tet centroids, grown by a cell size to reach where it split.
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      std::vector<Eigen::Vector3d> centroids;
+      for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+        if (labels[static_cast<size_t>(t)] != piece) continue;
+        Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+        for (int k = 0; k < 4; ++k) centroid += mesh.nodes.row(mesh.tets(t, k)).transpose() / 4.0;
+        centroids.push_back(centroid);
+        sum += centroid;
+      }
+      SizingBall ball;
+      ball.center = sum / static_cast<double>(centroids.size());
+      for (const auto& q : centroids) ball.radiusM = std::max(ball.radiusM, (q - ball.center).norm());
+      ball.radiusM += 2.0 * h;
+      c.splitOff.push_back(ball);
+    }
+    return c;
+  }
+  c.thresholdM3 = degenerateTetVolumeM3(mesh.nodes);
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    const double v = signedTetVolume(mesh.nodes.row(mesh.tets(t, 0)).transpose(), mesh.nodes.row(mesh.tets(t, 1)).transpose(),
+                                     mesh.nodes.row(mesh.tets(t, 2)).transpose(), mesh.nodes.row(mesh.tets(t, 3)).transpose());
+    if (!(v > c.thresholdM3)) {
+      c.kind = Check::Degenerate;
+      c.degenerateTet = t;
+      c.volumeM3 = v;
+      return c;
+    }
+  }
+  return c;
+}
+
+std::string describe(const Check& c, int run) {
+  if (c.kind == Check::Pieces) {
+    return "run " + std::to_string(run) + " gave " + std::to_string(c.pieces) + " face-connected pieces of " +
+           std::to_string(c.tets) + " tets (a part thinner than the cell size)";
+  }
+  return "run " + std::to_string(run) + " gave a degenerate tet (" + fmt(c.volumeM3) + " m^3, at most " + fmt(c.thresholdM3) +
+         " m^3)";
 }
 
 }  // namespace
@@ -99,6 +230,7 @@ Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshS
   if (s.targetTets <= 0 && !(s.cellSizeM > 0.0)) {
     return makeError(ErrorCode::InvalidArgument, "tet meshing needs a target tet count or a cell size > 0");
   }
+  if (s.meshingRuns < 1) return makeError(ErrorCode::InvalidArgument, "tet meshing needs meshingRuns >= 1");
   const double volume = computeSurfaceMassProperties(surface, 1.0).volumeM3;
   if (!(volume > 0.0)) return makeError(ErrorCode::MeshingFailed, "surface encloses no volume");
 
@@ -112,50 +244,123 @@ Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshS
   // Mesh_3 tets at cell size h average about 0.175 h³ (circumradius ~0.7 h, near-regular).
   // The size search runs refinement only (cheap); optimisation, which changes the count by a
   // few per cent, runs once at the chosen size.
-  double h = s.targetTets > 0 ? std::cbrt(volume / (0.175 * static_cast<double>(s.targetTets))) : s.cellSizeM;
+  auto estimate = [&](int64_t target) { return std::cbrt(volume / (0.175 * static_cast<double>(target))); };
+  double h = s.targetTets > 0 ? estimate(s.targetTets) : s.cellSizeM;
+  TetMeshResult best;
+  RunPlan plan;
+  FeatureCurves curves;
+  if (s.detectSharpFeatures) {
+    // The creases worth protecting, measured against the first estimate of the cell size (the
+    // size search moves it little), so that the choice does not depend on the search.
+    curves = detectFeatureCurves(surface, {s.featureAngleDeg, s.minFeatureLengthCells * h, s.needleTurnDeg});
+    // Nothing dropped: CGAL's own detection as before (it also splits the surface into patches).
+    if (!curves.droppedAny()) {
+      plan.features = Protection::Detected;
+    } else {
+      plan.features = curves.keptEdges > 0 ? Protection::Curves : Protection::None;
+    }
+    if (curves.droppedAny()) {
+      best.adjustments.push_back(
+          {"feature curves", "protecting " + std::to_string(curves.keptEdges) + " of " + std::to_string(curves.creaseEdges) +
+                                 " crease edges (" + std::to_string(curves.keptGroups) + " of " + std::to_string(curves.groups) +
+                                 " groups); " + std::to_string(curves.shortGroups) + " groups are shorter than " +
+                                 fmt(s.minFeatureLengthCells) + " cell sizes and " + std::to_string(curves.needleGroups) +
+                                 " turn back sharper than " + fmt(s.needleTurnDeg) + " deg, as scan noise does"});
+    }
+  }
+
   const int attemptsAllowed = s.targetTets > 0 ? std::max(1, s.maxAttempts) : 0;
   TetMeshSettings search = s;
   search.optimize = false;
-  TetMeshResult best;
-  best.cellSizeM = h;
-  double bestMiss = std::numeric_limits<double>::infinity();
-  try {
+  Check check;
+  std::string tried;  // the adjustments, for an error message
+  // The cell size that gives about `target` tets with the plan's features and local sizes,
+  // searched from h0 with refinement-only runs.
+  auto searchSize = [&](int64_t target, double h0) {
+    double size = h0, chosen = h0;
+    double bestMiss = std::numeric_limits<double>::infinity();
     for (int attempt = 0; attempt < attemptsAllowed; ++attempt) {
-      if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "tet meshing cancelled");
       reportProgress(progress, "tet meshing: sizing", static_cast<double>(attempt) / attemptsAllowed);
-      const double count = static_cast<double>(meshOnce(poly, search, h).tets.rows());
-      best.attempts = attempt + 1;
+      plan.h = size;
+      const double count = static_cast<double>(meshOnce(poly, search, plan, curves).tets.rows());
+      ++best.attempts;
       if (count == 0) break;
-      const double miss = std::abs(count / static_cast<double>(s.targetTets) - 1.0);
-      if (miss < bestMiss) bestMiss = miss, best.cellSizeM = h;
+      const double miss = std::abs(count / static_cast<double>(target) - 1.0);
+      if (miss < bestMiss) bestMiss = miss, chosen = size;
       if (miss <= s.countTolerance) break;
-      h *= std::cbrt(count / static_cast<double>(s.targetTets));
+      size *= std::cbrt(count / static_cast<double>(target));
     }
+    return chosen;
+  };
+  int64_t target = s.targetTets;
+  bool localSized = false;
+  try {
     if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "tet meshing cancelled");
-    reportProgress(progress, s.optimize ? "tet meshing: refine + optimise" : "tet meshing: refine", 0.0);
-    best.mesh = meshOnce(poly, s, best.cellSizeM);
-    ++best.attempts;
+    plan.h = searchSize(target, h);
+    for (int run = 1;; ++run) {
+      if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "tet meshing cancelled");
+      reportProgress(progress, s.optimize ? "tet meshing: refine + optimise" : "tet meshing: refine",
+                     static_cast<double>(run - 1) / s.meshingRuns);
+      best.mesh = meshOnce(poly, s, plan, curves);
+      ++best.attempts;
+      best.meshingRuns = run;
+      if (best.mesh.tets.rows() == 0) {
+        return makeError(ErrorCode::MeshingFailed,
+                         "CGAL Mesh_3 produced no tetrahedra at cell size " + std::to_string(plan.h) + " m" + tried);
+      }
+      check = checkMesh(best.mesh, plan.h);
+      if (check.kind == Check::Ok || run == s.meshingRuns) break;
+      // The next adjustment (see TetMesher.h).
+      MeshingAdjustment adjusted;
+      if (check.kind == Check::Pieces && !localSized) {
+        localSized = true;
+        // Halve the size where each piece split off.
+        for (const auto& ball : check.splitOff) plan.balls.push_back(ball);
+        adjusted = {"local size halved", "around " + std::to_string(check.splitOff.size()) + " split-off piece" +
+                                             (check.splitOff.size() == 1 ? "" : "s") + ": " + describe(check, run)};
+      } else if (check.kind == Check::Degenerate && plan.features != Protection::None) {
+        // Protection adds tets along the features: the size is searched again without it.
+        plan.features = Protection::None;
+        if (target > 0) plan.h = searchSize(target, estimate(target));
+        adjusted = {"sharp features off", describe(check, run) + " with feature curves protected"};
+      } else if (target > 0) {
+        // Twice the tets, by a fresh size search (without local sizes) from the estimate for
+        // twice the target: thin parts make the count far from cubic in the cell size, and a
+        // search that starts from the last size can stall far from the target.
+        target *= 2;
+        plan.balls.clear();
+        if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "tet meshing cancelled");
+        plan.h = searchSize(target, estimate(target));
+        adjusted = {"tets doubled", describe(check, run) + "; now " + std::to_string(target) + " tets targeted, cell size " +
+                                        fmt(plan.h) + " m"};
+      } else {
+        plan.h /= std::cbrt(2.0);
+        adjusted = {"tets doubled", describe(check, run) + "; cell size now " + fmt(plan.h) + " m"};
+      }
+      tried += (tried.empty() ? "; adjusted: " : ", ") + adjusted.what;
+      best.adjustments.push_back(std::move(adjusted));
+    }
   } catch (const std::exception& e) {
-    return makeError(ErrorCode::MeshingFailed, std::string("CGAL Mesh_3 failed: ") + e.what());
-  }
-  if (best.mesh.tets.rows() == 0) {
-    return makeError(ErrorCode::MeshingFailed,
-                     "CGAL Mesh_3 produced no tetrahedra at cell size " + std::to_string(best.cellSizeM) + " m");
+    return makeError(ErrorCode::MeshingFailed, std::string("CGAL Mesh_3 failed: ") + e.what() + tried);
   }
   reportProgress(progress, "tet meshing", 1.0);
+  best.cellSizeM = plan.h;
+  best.sharpFeatures = plan.features != Protection::None;
 
-  best.mesh = compactNodes(best.mesh);
-  if (const int64_t pieces = countFaceConnectedComponents(best.mesh); pieces != 1) {
+  const std::string runs = " after " + std::to_string(best.meshingRuns) + " Mesh_3 run" + (best.meshingRuns == 1 ? "" : "s");
+  if (check.kind == Check::Pieces) {
     return makeError(ErrorCode::MeshingFailed,
-                     "Mesh_3 output is not one solid: " + std::to_string(pieces) +
-                         " face-connected pieces at cell size " + std::to_string(best.cellSizeM) +
-                         " m (a part thinner than the cell size? try more tets)");
+                     "Mesh_3 output is not one solid: " + std::to_string(check.pieces) +
+                         " face-connected pieces at cell size " + std::to_string(plan.h) + " m" + runs + tried +
+                         " (a part thinner than the cell size? try more tets)");
+  }
+  if (check.kind == Check::Degenerate) {
+    return makeError(ErrorCode::DegenerateElement, "Mesh_3 output has a degenerate tet: tet " + std::to_string(check.degenerateTet) +
+                                                       " has volume " + fmt(check.volumeM3) + " m^3 (at most " +
+                                                       fmt(check.thresholdM3) + " m^3)" + runs + tried);
   }
   best.surfaceFaces = boundaryFaces(best.mesh);
   best.quality = computeMeshQuality(best.mesh);
-  if (!(best.quality.minTetVolumeM3 > 0.0)) {
-    return makeError(ErrorCode::MeshingFailed, "Mesh_3 output has a tetrahedron of non-positive volume");
-  }
   return best;
 }
 

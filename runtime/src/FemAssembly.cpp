@@ -42,12 +42,17 @@ Eigen::Matrix<double, 6, 12> tetStrainDisplacement(const Eigen::Vector3d& p0, co
   return b;
 }
 
+double degenerateTetVolumeM3(const Points& nodes) {
+  if (nodes.rows() == 0) return 0.0;
+  const Eigen::Vector3d extent = (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).transpose();
+  return 1e-12 * extent.prod();
+}
+
 Result<FemSystem> assembleFem(const TetMesh& mesh, const Material& material, const FemSettings& settings) {
   if (Status s = validateMaterial(material); !s) return s.error();
   const Eigen::Index n = mesh.nodes.rows();
   if (n == 0 || mesh.tets.rows() == 0) return makeError(ErrorCode::DegenerateElement, "tet mesh is empty");
-  const Eigen::Vector3d extent = (mesh.nodes.colwise().maxCoeff() - mesh.nodes.colwise().minCoeff()).transpose();
-  const double minVolume = 1e-12 * extent.prod();
+  const double minVolume = degenerateTetVolumeM3(mesh.nodes);
   const auto c = isotropicElasticity(material.youngsModulusPa, material.poissonRatio);
   const double rho = material.densityKgPerM3;
 

@@ -134,6 +134,13 @@ TEST_F(BakePipelineTest, ManifestLoadsAndRejectsTypos) {
   EXPECT_EQ(loadBakeManifest(dir / "range.json").error().code, ErrorCode::ParseError);
   std::ofstream(dir / "frac.json") << R"({"objects": [{"mesh": "cube.off", "material": "glass", "modes": 2.5}]})";
   EXPECT_EQ(loadBakeManifest(dir / "frac.json").error().code, ErrorCode::ParseError);
+  EXPECT_EQ(ok.value()[0].tetMesh.meshingRuns, TetMeshSettings{}.meshingRuns);
+  std::ofstream(dir / "runs.json") << R"({"objects": [{"mesh": "cube.off", "material": "glass", "meshing_runs": 2}]})";
+  auto runs = loadBakeManifest(dir / "runs.json");
+  ASSERT_TRUE(runs.ok()) << runs.error().message;
+  EXPECT_EQ(runs.value()[0].tetMesh.meshingRuns, 2);
+  std::ofstream(dir / "noruns.json") << R"({"objects": [{"mesh": "cube.off", "material": "glass", "meshing_runs": 0}]})";
+  EXPECT_EQ(loadBakeManifest(dir / "noruns.json").error().code, ErrorCode::ParseError);
 }
 
 }  // namespace

@@ -87,6 +87,13 @@ TEST(FemAssembly, RejectsDegenerateAndInvertedTets) {
   ASSERT_FALSE(inverted.ok());
   EXPECT_EQ(inverted.error().code, ErrorCode::DegenerateElement);
   EXPECT_NE(inverted.error().message.find("tet 2"), std::string::npos);
+  // A flat tet: volume above zero but at the threshold the mesher checks against.
+  auto flat = testing::makeBoxTetMesh(2.0, 1.0, 0.5, 1, 1, 1);
+  EXPECT_DOUBLE_EQ(degenerateTetVolumeM3(flat.nodes), 1e-12);
+  flat.nodes.row(flat.tets(0, 3)) = (flat.nodes.row(flat.tets(0, 0)) + flat.nodes.row(flat.tets(0, 1)) + flat.nodes.row(flat.tets(0, 2))) / 3.0;
+  auto degenerate = assembleFem(flat, glass(), {});
+  ASSERT_FALSE(degenerate.ok());
+  EXPECT_EQ(degenerate.error().code, ErrorCode::DegenerateElement);
   Material bad = glass();
   bad.poissonRatio = 0.5;
   EXPECT_EQ(assembleFem(testing::makeBoxTetMesh(1, 1, 1, 1, 1, 1), bad, {}).error().code, ErrorCode::InvalidMaterial);

@@ -31,6 +31,10 @@ TEST(TetMesher, BoxKeepsItsExactVolumeAndHitsTheTarget) {
   EXPECT_GT(m.quality.minTetVolumeM3, 0.0);
   EXPECT_EQ(m.quality.tetCount, m.mesh.tets.rows());
   EXPECT_EQ(m.quality.nodeCount, m.mesh.nodes.rows());
+  // Its edges are real features, all protected; the first run passes its checks.
+  EXPECT_TRUE(m.sharpFeatures);
+  EXPECT_EQ(m.meshingRuns, 1);
+  EXPECT_TRUE(m.adjustments.empty());
 }
 
 TEST(TetMesher, BoundaryIsClosedOutwardAndBoundsTheTets) {
@@ -88,6 +92,9 @@ TEST(TetMesher, SameSeedSameMesh) {
 
 TEST(TetMesher, CellSizeDrivenAndErrors) {
   TetMeshSettings s;
+  s.meshingRuns = 0;
+  EXPECT_EQ(tetrahedralize(testing::makeBoxSurface(1, 1, 1), s).error().code, ErrorCode::InvalidArgument);
+  s.meshingRuns = 4;
   s.targetTets = 0;
   EXPECT_EQ(tetrahedralize(testing::makeBoxSurface(1, 1, 1), s).error().code, ErrorCode::InvalidArgument);
   s.cellSizeM = 0.25;
@@ -115,6 +122,10 @@ TEST(TetMeshQuality, FaceConnectivityCountsPiecesJoinedOnlyAtAVertex) {
     if (shifted.data()[i] == static_cast<int32_t>(block.nodes.rows())) shifted.data()[i] = farCorner;
   two.tets << block.tets, shifted;
   EXPECT_EQ(countFaceConnectedComponents(compactNodes(two)), 2);
+  // Labels: the first block's tets are group 0, the second's group 1.
+  const auto labels = labelFaceConnectedComponents(compactNodes(two));
+  ASSERT_EQ(labels.size(), static_cast<size_t>(two.tets.rows()));
+  for (size_t t = 0; t < labels.size(); ++t) EXPECT_EQ(labels[t], t < static_cast<size_t>(block.tets.rows()) ? 0 : 1) << t;
 }
 
 TEST(TetMeshQuality, RegularTetValues) {

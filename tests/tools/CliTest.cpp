@@ -89,6 +89,11 @@ TEST_F(CliTest, BakeThenInspectJson) {
   for (const char* key : {"meshing", "assembly", "modal", "stress_modes", "total"}) {
     EXPECT_TRUE(o["bake"]["timings_s"].contains(key)) << key;
   }
+  // A box's edges are real features: nothing to adjust, nothing printed.
+  EXPECT_EQ(bake.out.find("adjusted "), std::string::npos) << bake.out;
+  // The meshing-run budget is at least one run.
+  const CliRun noRuns = run("bake --mesh " + path("box.off") + " --material glass --meshing-runs 0 --out " + path("x.h5"));
+  EXPECT_EQ(noRuns.exitCode, 2) << noRuns.out;
 }
 
 // play: a glass box dropped on a concrete floor with a steel ball thrown at it; the statistics on

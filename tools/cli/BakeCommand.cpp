@@ -26,6 +26,7 @@ struct BakeOptions {
   bool lumped = false;
   bool noFeatures = false;
   double sliverBound = 5.0;
+  int meshingRuns = TetMeshSettings{}.meshingRuns;
   std::string factorization = "cholmod";
   uint64_t seed = 1;
   bool quiet = false;
@@ -56,6 +57,10 @@ Runner addBakeCommand(CLI::App& app) {
   cmd->add_option("--sliver-bound", o->sliverBound,
                   "Smallest dihedral angle (deg) Mesh_3's optimisers aim for; higher is slower, 0 = best effort")
       ->capture_default_str()->check(CLI::Range(0.0, 30.0));
+  cmd->add_option("--meshing-runs", o->meshingRuns,
+                  "Mesh_3 runs allowed for the final mesh: when one splits a thin part or makes a degenerate tet, "
+                  "the next adjusts (sharp features off, local size, more tets); 1 = no retry")
+      ->capture_default_str()->check(CLI::Range(1, 8));
   cmd->add_flag("--lumped-mass", o->lumped, "Use a lumped (diagonal) mass matrix instead of the consistent one");
   cmd->add_option("--factorization", o->factorization, "Sparse factorisation of K - sigma M")
       ->check(CLI::IsMember({"cholmod", "eigen"}))->capture_default_str();
@@ -66,7 +71,7 @@ Runner addBakeCommand(CLI::App& app) {
   cmd->get_option("--cell-size")->excludes(cmd->get_option("--tets"));
   // A manifest carries its own per-object settings: refuse options it would silently override.
   for (const char* perObject : {"--material", "--name", "--tets", "--cell-size", "--modes", "--repair", "--repair-voxel",
-                                "--lumped-mass", "--no-sharp-features", "--sliver-bound", "--seed"}) {
+                                "--lumped-mass", "--no-sharp-features", "--sliver-bound", "--meshing-runs", "--seed"}) {
     cmd->get_option(perObject)->excludes(manifest);
   }
 
@@ -98,6 +103,7 @@ Runner addBakeCommand(CLI::App& app) {
       s.tetMesh.seed = o->seed;
       s.tetMesh.detectSharpFeatures = !o->noFeatures;
       s.tetMesh.sliverBoundDeg = o->sliverBound;
+      s.tetMesh.meshingRuns = o->meshingRuns;
       s.modal.modeCount = o->modes;
       s.modal.seed = o->seed;
       s.repair = o->repair;
@@ -124,6 +130,13 @@ Runner addBakeCommand(CLI::App& app) {
       return objectsPack;
     }();
     if (!pack) return reportError(pack.error());
+    // What the mesher changed, on stderr so that --json output stays one document.
+    for (size_t i = 0; i < reports.size(); ++i) {
+      for (const auto& a : reports[i].meshingAdjustments) {
+        std::cerr << "adjusted " << a.what << (reports.size() > 1 ? " (" + pack.value().objects[i].name + ")" : "") << ": "
+                  << a.why << "\n";
+      }
+    }
     Pack reread;
     if (int code = writeAndPrintPack(pack.value(), o->out, o->json, &reread); code != kExitOk || o->json) return code;
     for (size_t i = 0; i < reports.size(); ++i) {

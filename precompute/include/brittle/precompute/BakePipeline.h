@@ -35,6 +35,8 @@ struct ObjectBakeReport {
   double surfaceVolumeM3 = 0.0;       ///< exact volume of the validated input surface
   double tetVolumeRelativeError = 0.0;///< (V_tets − V_surface) / V_surface
   ModalSolveStats modalStats;
+  int meshingRuns = 0;                            ///< final Mesh_3 runs (TetMeshResult)
+  std::vector<MeshingAdjustment> meshingAdjustments;  ///< what the tet mesher changed, and why
 };
 
 /// Bakes one object. Errors: those of readSurfaceMesh, repairSurfaceMesh, validateSurfaceMesh,
@@ -56,9 +58,11 @@ Result<Pack> bakePack(const std::vector<ObjectBakeSettings>& objects, ProgressSi
 /// Reads a bake manifest (JSON):
 ///   { "objects": [ { "name": "glass-plate", "mesh": "meshes/plate.off", "material": "glass",
 ///                    "tets": 6000, "modes": 20, "repair": false, "lumped_mass": false,
-///                    "seed": 1, "sharp_features": true, "sliver_bound": 5 }, ... ] }
+///                    "seed": 1, "sharp_features": true, "sliver_bound": 5,
+///                    "meshing_runs": 4 }, ... ] }
 /// "mesh" and a "material" that names a .json file are relative to the manifest's directory;
-/// "name", "tets", "modes", "repair", "lumped_mass", "seed", "sharp_features" and "sliver_bound" are optional (defaults as in the
+/// "name", "tets", "modes", "repair", "lumped_mass", "seed", "sharp_features", "sliver_bound" and
+/// "meshing_runs" (TetMeshSettings::meshingRuns, 1 to 8) are optional (defaults as in the
 /// settings structs). Errors: FileNotFound, ParseError (naming the key), UnknownMaterial,
 /// InvalidMaterial.
 Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::path& path);

@@ -1,14 +1,27 @@
 // TetMesher.h — tetrahedral meshing of a validated closed surface with CGAL Mesh_3.
 //
-// The domain keeps sharp features (Polyhedral_mesh_domain_with_features_3 + feature detection),
-// so boxes keep their edges and corners exactly. Mesh quality comes from Mesh_3's sliver
+// The domain keeps sharp features (Polyhedral_mesh_domain_with_features_3), so boxes keep their
+// edges and corners exactly. Only real feature curves are protected (FeatureCurves.h): long
+// creases, not the scattered facet creases of a scan. Mesh quality comes from Mesh_3's sliver
 // perturbation and exudation (on by default, aiming at sliverBoundDeg): without them slivers go
 // down to ~0.3°.
+//
+// The final mesh is checked: one face-connected solid, every tet above degenerateTetVolumeM3
+// (FemAssembly.h), so a degenerate element never reaches the FEM. When a run fails the check,
+// the mesher adjusts and runs again, at most meshingRuns runs in all, and records each adjustment
+// with its reason:
+//   * a degenerate tet with feature curves protected: feature protection off;
+//   * split-off pieces (a part thinner than the cell size), the first time: the size halved in
+//     a ball around each piece but the largest;
+//   * otherwise: twice the tets (a fresh size search for twice the target, local sizes dropped;
+//     with a cell size instead of a target, the size / 2^(1/3)).
 // This is the only translation unit that instantiates Mesh_3 (it costs ~4 GiB to compile); its
 // interface is flat arrays only.
 #pragma once
 
 #include <cstdint>
+#include <string>
+#include <vector>
 
 #include "brittle/database/ObjectAsset.h"
 #include "brittle/descriptors/MeshTypes.h"
@@ -33,6 +46,12 @@ struct TetMeshSettings {
   double cellRadiusEdgeRatio = 3.0;     ///< upper bound on circumradius / shortest edge
   bool detectSharpFeatures = true;
   double featureAngleDeg = 60.0;        ///< dihedral angle that marks an edge as sharp
+  /// Crease groups shorter than this many cell sizes are not protected (FeatureCurves.h).
+  double minFeatureLengthCells = 8.0;
+  double needleTurnDeg = 15.0;          ///< crease groups turning back sharper than this are not protected
+  /// Final Mesh_3 runs allowed (the first and its adjusted retries; sizing runs not counted).
+  /// 1: no retry, a failed check is an error.
+  int meshingRuns = 4;
   bool optimize = true;                 ///< sliver perturbation + exudation
   /// Dihedral angle (degrees) the optimisers aim for. Measured on 3k-tet meshes of real models:
   /// 5° costs ~1 s, 10° ~20 s, 0 ("as good as possible") ~50 s. Protected sharp features can
@@ -41,17 +60,27 @@ struct TetMeshSettings {
   uint64_t seed = 1;                    ///< seeds CGAL's random generator (determinism)
 };
 
+/// One change the mesher made to the settings it was given, and why.
+struct MeshingAdjustment {
+  std::string what;  ///< e.g. "sharp features off"
+  std::string why;
+};
+
 struct TetMeshResult {
   TetMesh mesh;               ///< positively oriented tets, no unused nodes
   Triangles surfaceFaces;     ///< boundary faces of mesh, outward
   MeshQuality quality;
   double cellSizeM = 0.0;     ///< the cell size that produced mesh
-  int attempts = 0;           ///< Mesh_3 runs made (sizing runs + the final one)
+  int attempts = 0;           ///< Mesh_3 runs made (sizing runs + the final ones)
+  int meshingRuns = 0;        ///< final runs made (1 when the first passed the checks)
+  bool sharpFeatures = false; ///< whether the mesh protects feature curves
+  std::vector<MeshingAdjustment> adjustments;  ///< in order
 };
 
 /// Tetrahedralises the solid bounded by surface (which must pass validateSurfaceMesh).
-/// Errors: InvalidArgument (no target and no cell size), MeshingFailed (Mesh_3 produced no cells
-/// or a mesh that is not one solid), Cancelled.
+/// Errors: InvalidArgument (no target and no cell size, meshingRuns < 1), MeshingFailed (Mesh_3
+/// produced no cells, or a mesh that is not one solid after meshingRuns runs), DegenerateElement
+/// (a degenerate tet after meshingRuns runs), Cancelled. Their messages list the adjustments made.
 Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshSettings& settings,
                                      ProgressSink* progress = nullptr);
 

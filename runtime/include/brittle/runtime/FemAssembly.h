@@ -31,7 +31,12 @@ Eigen::Matrix<double, 6, 12> tetStrainDisplacement(const Eigen::Vector3d& p0, co
                                                    const Eigen::Vector3d& p2, const Eigen::Vector3d& p3,
                                                    double* volumeM3);
 
-/// Assembles K and M. Error: DegenerateElement (a tet with volume ≤ 1e-12 × bounding-box volume
+/// The volume (m³) at or below which a tet of a mesh with these nodes (#N by 3) is degenerate:
+/// 1e-12 × the volume of the nodes' bounding box. assembleFem refuses such a tet; the tet mesher
+/// retries rather than hand one over.
+double degenerateTetVolumeM3(const Points& nodes);
+
+/// Assembles K and M. Error: DegenerateElement (a tet with volume ≤ degenerateTetVolumeM3(nodes)
 /// or inverted, naming the tet), InvalidMaterial.
 Result<FemSystem> assembleFem(const TetMesh& mesh, const Material& material, const FemSettings& settings);
 
