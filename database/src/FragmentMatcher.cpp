@@ -43,6 +43,17 @@ Result<std::vector<FragmentMatch>> FragmentMatcher::match(const TriangleMesh& su
   return matchDescriptors(frames.value(), descriptors.value(), kind, k);
 }
 
+Result<std::vector<FragmentMatch>> FragmentMatcher::match(const TriangleMesh& surface, const VolumeMoments& moments,
+                                                          const Eigen::Vector3d& momentsOriginM, DescriptorKind kind,
+                                                          int k) const {
+  const ShapeDescriptorSettings& settings = mDatabase->descriptorSettings;
+  auto frames = computeCanonicalFrames(surface, moments, momentsOriginM, settings.frame);
+  if (!frames) return frames.error();
+  auto descriptors = computeShapeDescriptors(surface, frames.value(), kind, settings);
+  if (!descriptors) return descriptors.error();
+  return matchDescriptors(frames.value(), descriptors.value(), kind, k);
+}
+
 Result<std::vector<FragmentMatch>> FragmentMatcher::matchDescriptors(const CanonicalFrames& frames,
                                                                      const DescriptorMatrix& descriptors,
                                                                      DescriptorKind kind, int k) const {

@@ -182,18 +182,59 @@ Points CanonicalFrame::pointsToCanonical(const Points& pointsM) const {
   return out;
 }
 
-Result<CanonicalFrames> computeCanonicalFrames(const TriangleMesh& surface, const CanonicalFrameSettings& settings) {
-  if (auto status = validateCanonicalFrameSettings(settings); !status) return status.error();
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-  double diagonal = 0.0;
+namespace {
+
+// The surface's bounding-box centre (the moments' origin) and diagonal (the scale of the zero-volume test).
+void boundingBox(const TriangleMesh& surface, Eigen::Vector3d& centre, double& diagonal) {
+  centre.setZero();
+  diagonal = 0.0;
   if (surface.vertices.rows() > 0 && surface.vertices.allFinite()) {
     const Eigen::Vector3d lo = surface.vertices.colwise().minCoeff(), hi = surface.vertices.colwise().maxCoeff();
-    origin = 0.5 * (lo + hi);
+    centre = 0.5 * (lo + hi);
     diagonal = (hi - lo).norm();
   }
+}
+
+Result<CanonicalFrames> framesFromMoments(const VolumeMoments& x, const Eigen::Vector3d& origin, double diagonal,
+                                          const CanonicalFrameSettings& settings);
+
+}  // namespace
+
+Result<CanonicalFrames> computeCanonicalFrames(const TriangleMesh& surface, const CanonicalFrameSettings& settings) {
+  if (auto status = validateCanonicalFrameSettings(settings); !status) return status.error();
+  Eigen::Vector3d origin;
+  double diagonal;
+  boundingBox(surface, origin, diagonal);
   auto raw = computeVolumeMoments(surface, kFrameOrder, origin);
   if (!raw) return raw.error();
-  const VolumeMoments& x = raw.value();
+  return framesFromMoments(raw.value(), origin, diagonal, settings);
+}
+
+Result<CanonicalFrames> computeCanonicalFrames(const TriangleMesh& surface, const VolumeMoments& moments,
+                                               const Eigen::Vector3d& momentsOriginM,
+                                               const CanonicalFrameSettings& settings) {
+  if (auto status = validateCanonicalFrameSettings(settings); !status) return status.error();
+  if (moments.maxOrder < kFrameOrder || moments.values.size() != monomialCount(moments.maxOrder)) {
+    return makeError(ErrorCode::InvalidArgument, "canonical frames need moments up to order " + std::to_string(kFrameOrder));
+  }
+  if (!moments.values.allFinite() || !momentsOriginM.allFinite()) {
+    return makeError(ErrorCode::NonFiniteValue, "the solid's moments or their origin are not finite");
+  }
+  Eigen::Vector3d origin;
+  double diagonal;
+  boundingBox(surface, origin, diagonal);
+  VolumeMoments truncated;
+  truncated.maxOrder = kFrameOrder;
+  truncated.values = moments.values.head(monomialCount(kFrameOrder));
+  // The same origin as the pass over the surface takes (its box centre), so both give the same frames.
+  return framesFromMoments(transformVolumeMoments(truncated, Eigen::Matrix3d::Identity(), origin - momentsOriginM), origin,
+                           diagonal, settings);
+}
+
+namespace {
+
+Result<CanonicalFrames> framesFromMoments(const VolumeMoments& x, const Eigen::Vector3d& origin, double diagonal,
+                                          const CanonicalFrameSettings& settings) {
 
   const double volume = x(0, 0, 0);
   const double minVolume = kMinRelativeVolume * diagonal * diagonal * diagonal;
@@ -333,5 +374,7 @@ Result<CanonicalFrames> computeCanonicalFrames(const TriangleMesh& surface, cons
   }
   return out;
 }
+
+}  // namespace
 
 }  // namespace brittle

@@ -3,6 +3,21 @@
 namespace brittle {
 namespace {
 
+// From ∫1, ∫x, ∫xxᵀ about an origin: the properties about the centre of mass.
+MassProperties finishMassProperties(double volume, const Eigen::Vector3d& first, const Eigen::Matrix3d& second,
+                                    const Eigen::Vector3d& origin, double density) {
+  MassProperties out;
+  out.volumeM3 = volume;
+  out.massKg = density * volume;
+  if (volume == 0.0) return out;
+  const Eigen::Vector3d cLocal = first / volume;
+  out.centerOfMassM = cLocal + origin;
+  out.secondMomentM5 = second - volume * cLocal * cLocal.transpose();
+  const Eigen::Matrix3d c = density * out.secondMomentM5;
+  out.inertiaKgM2 = c.trace() * Eigen::Matrix3d::Identity() - c;
+  return out;
+}
+
 // Accumulates ∫1, ∫x, ∫xxᵀ over signed tetrahedra, relative to an origin that keeps the numbers
 // small (cancellation would otherwise cost digits on meshes far from the world origin).
 class MomentAccumulator {
@@ -21,18 +36,7 @@ class MomentAccumulator {
                 p3 * p3.transpose() + s * s.transpose());
   }
 
-  MassProperties finish(double density) const {
-    MassProperties out;
-    out.volumeM3 = mVolume;
-    out.massKg = density * mVolume;
-    if (mVolume == 0.0) return out;
-    const Eigen::Vector3d cLocal = mFirst / mVolume;
-    out.centerOfMassM = cLocal + mOrigin;
-    out.secondMomentM5 = mSecond - mVolume * cLocal * cLocal.transpose();
-    const Eigen::Matrix3d c = density * out.secondMomentM5;
-    out.inertiaKgM2 = c.trace() * Eigen::Matrix3d::Identity() - c;
-    return out;
-  }
+  MassProperties finish(double density) const { return finishMassProperties(mVolume, mFirst, mSecond, mOrigin, density); }
 
  private:
   Eigen::Vector3d mOrigin;
@@ -57,6 +61,17 @@ MassProperties computeSurfaceMassProperties(const TriangleMesh& surface, double 
                surface.vertices.row(surface.faces(f, 2)).transpose());
   }
   return acc.finish(densityKgPerM3);
+}
+
+MassProperties massPropertiesFromMoments(const double* v, const Eigen::Vector3d& originM, double densityKgPerM3) {
+  // Graded order: 1, x, y, z, xx, xy, xz, yy, yz, zz.
+  Eigen::Matrix3d second;
+  second << v[4], v[5], v[6], v[5], v[7], v[8], v[6], v[8], v[9];
+  return finishMassProperties(v[0], Eigen::Vector3d(v[1], v[2], v[3]), second, originM, densityKgPerM3);
+}
+
+MassProperties massPropertiesFromMoments(const VolumeMoments& m, const Eigen::Vector3d& originM, double densityKgPerM3) {
+  return massPropertiesFromMoments(m.values.data(), originM, densityKgPerM3);
 }
 
 MassProperties computeTetMassProperties(const TetMesh& mesh, double densityKgPerM3) {

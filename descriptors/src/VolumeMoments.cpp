@@ -169,6 +169,91 @@ Result<VolumeMoments> computeVolumeMoments(const TriangleMesh& surface, int maxO
   return out;
 }
 
+namespace {
+
+// The gather step of the recurrences for four vertices, monomial m from its lower monomials.
+// h[0..3] are the coefficient arrays of h(A), h(A,B), h(A,B,C), h(A,B,C,D).
+template <class Lower>
+inline double tetMonomial(const Lower& lower, int m, const Eigen::Vector3d* p, double* const* h) {
+  double s[4] = {0.0, 0.0, 0.0, 0.0};
+  for (int j = 0; j < 3; ++j) {
+    const int src = lower[j];
+    if (src < 0) continue;
+    for (int v = 0; v < 4; ++v) s[v] += p[v][j] * h[v][src];
+  }
+  h[0][m] = s[0];
+  h[1][m] = h[0][m] + s[1];
+  h[2][m] = h[1][m] + s[2];
+  h[3][m] = h[2][m] + s[3];
+  return h[3][m];
+}
+
+// Order 4 with tables known at compile time, so that the loop unrolls into straight-line code.
+struct Order4Tables {
+  static constexpr int kCount = monomialCount(4);
+  std::array<std::array<int, 3>, kCount> lower{};
+  std::array<double, kCount> scale{};  // α! / (n+3)!
+};
+
+constexpr Order4Tables makeOrder4Tables() {
+  Order4Tables t;
+  int index[5][5][5] = {};
+  int i = 0;
+  for (int n = 0; n <= 4; ++n) {
+    for (int p = n; p >= 0; --p) {
+      for (int q = n - p; q >= 0; --q) index[p][q][n - p - q] = i++;
+    }
+  }
+  auto fact = [](int k) {
+    double f = 1.0;
+    for (int j = 2; j <= k; ++j) f *= j;
+    return f;
+  };
+  for (int n = 0; n <= 4; ++n) {
+    for (int p = n; p >= 0; --p) {
+      for (int q = n - p; q >= 0; --q) {
+        const int r = n - p - q, m = index[p][q][r];
+        t.lower[m] = {p > 0 ? index[p - 1][q][r] : -1, q > 0 ? index[p][q - 1][r] : -1, r > 0 ? index[p][q][r - 1] : -1};
+        t.scale[m] = fact(p) * fact(q) * fact(r) / fact(n + 3);
+      }
+    }
+  }
+  return t;
+}
+
+constexpr Order4Tables kOrder4 = makeOrder4Tables();
+
+}  // namespace
+
+void addTetVolumeMoments(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                         const Eigen::Vector3d& d, int maxOrder, double* values) {
+  assert(maxOrder >= 0 && maxOrder <= kMaxMomentOrder);
+  const Eigen::Vector3d p[4] = {a, b, c, d};
+  const double det = (b - a).dot((c - a).cross(d - a));
+  if (maxOrder == 4) {
+    constexpr int count = Order4Tables::kCount;
+    double ha[count], hab[count], habc[count], habcd[count];
+    double* h[4] = {ha, hab, habc, habcd};
+    ha[0] = hab[0] = habc[0] = habcd[0] = 1.0;
+    values[0] += det * kOrder4.scale[0];
+#pragma GCC unroll 40
+    for (int m = 1; m < count; ++m) values[m] += det * kOrder4.scale[m] * tetMonomial(kOrder4.lower[m], m, p, h);
+    return;
+  }
+  const auto& t = detail::monomialTables();
+  const int count = monomialCount(maxOrder);
+  std::array<double, monomialCount(kMaxMomentOrder)> ha, hab, habc, habcd;
+  double* h[4] = {ha.data(), hab.data(), habc.data(), habcd.data()};
+  ha[0] = hab[0] = habc[0] = habcd[0] = 1.0;
+  auto scale = [&](int m) {
+    double denominator = 1.0;  // (n+3)!
+    for (int j = 2; j <= t.degree[m] + 3; ++j) denominator *= j;
+    return t.factorial[m] / denominator;
+  };
+  values[0] += det * scale(0);
+  for (int m = 1; m < count; ++m) values[m] += det * scale(m) * tetMonomial(t.lower[m], m, p, h);
+}
+
 VolumeMoments transformVolumeMoments(const VolumeMoments& moments, const Eigen::Matrix3d& linearMap,
                                      const Eigen::Vector3d& offset) {
   const auto& t = detail::monomialTables();

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "brittle/runtime/CrackPropagation.h"
+#include "brittle/runtime/FragmentSurfaces.h"
 
 namespace brittle::detail {
 
@@ -17,6 +18,11 @@ const Result<StaticCorrection>& Body::staticCorrection() const {
     mCorrectionReady.store(true, std::memory_order_release);
   });
   return *mCorrection;
+}
+
+const std::vector<double>& Body::tetMoments() const {
+  std::call_once(mMomentsOnce, [this] { mTetMoments = tetVolumeMoments(asset.tetMesh, centreM); });
+  return mTetMoments;
 }
 
 std::shared_ptr<const BodySource> BodySource::ready(std::shared_ptr<const Body> body) {
@@ -88,7 +94,9 @@ Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& 
       body->boundaryNodes.push_back(static_cast<int32_t>(i));
     }
   }
-  body->sizeM = (asset.tetMesh.nodes.colwise().maxCoeff() - asset.tetMesh.nodes.colwise().minCoeff()).norm();
+  const Eigen::Vector3d lo = asset.tetMesh.nodes.colwise().minCoeff(), hi = asset.tetMesh.nodes.colwise().maxCoeff();
+  body->sizeM = (hi - lo).norm();
+  body->centreM = 0.5 * (lo + hi);
   body->asset = std::move(asset);
   return std::shared_ptr<const Body>(std::move(body));
 }

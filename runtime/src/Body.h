@@ -1,10 +1,10 @@
 // Body.h — what the runtime keeps per distinct asset (a pack object, or a fragment made by an
 // impact): the asset, its material, and what is precomputed from them once (topology, stress
-// bounds, surface normals and neighbours, the static correction's factorised K). Private to the
+// bounds, surface normals and neighbours, the static correction's factorised K, the tets' moments). Private to the
 // runtime: World.cpp places bodies in slots, ImpactStages.cpp reads them.
 //
-// A Body is immutable once made, except for its static correction, which is built at most once
-// (std::call_once) by whichever thread asks first: a background task the World starts when a
+// A Body is immutable once made, except for its static correction and its tets' moments, each made
+// at most once (std::call_once) by whichever thread asks first: a background task the World starts when a
 // pack object is placed, or the body's first impact. Several threads may read a Body at once.
 #pragma once
 
@@ -35,6 +35,11 @@ struct Body {
   std::vector<std::vector<int32_t>> ring;  // boundary neighbours per node
   std::vector<int32_t> boundaryNodes;
   double sizeM = 0.0;                      // bounding-box diagonal
+  Eigen::Vector3d centreM = Eigen::Vector3d::Zero();  // bounding-box centre: the origin of the tet moments
+
+  /// Each tet's volume moments about centreM (FragmentSurfaces.h: tetVolumeMoments), from which a
+  /// breaking impact sums its fragments' moments; made on first use, as the static correction.
+  const std::vector<double>& tetMoments() const;
 
   /// The factorised K of the static correction (StaticCorrection.h), built on first use; waits
   /// when another thread is building it. Its errors are those of StaticCorrection::build.
@@ -52,6 +57,8 @@ struct Body {
   mutable std::atomic<bool> mCorrectionReady{false};
   mutable std::atomic<bool> mCorrectionScheduled{false};
   mutable std::optional<Result<StaticCorrection>> mCorrection;
+  mutable std::once_flag mMomentsOnce;
+  mutable std::vector<double> mTetMoments;
 };
 
 /// A body made on first use: a fragment's new object, whose modal data (its own analysis, or its

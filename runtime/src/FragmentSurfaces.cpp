@@ -160,7 +160,128 @@ struct Builder {
   }
 };
 
+Status checkLabelsAndCuts(const TetMesh& mesh, const TetTopology& topology, const Eigen::VectorXi& nodeLabels,
+                          int labelCount, const Eigen::VectorXd& edgeCuts) {
+  if (nodeLabels.size() != mesh.nodes.rows() || edgeCuts.size() != topology.edges.rows() || labelCount < 1) {
+    return makeError(ErrorCode::InvalidArgument, "fragment surfaces: label or cut arrays do not match the mesh");
+  }
+  if (nodeLabels.minCoeff() < 0 || nodeLabels.maxCoeff() >= labelCount) {
+    return makeError(ErrorCode::InvalidArgument, "fragment surfaces: node label out of range");
+  }
+  for (Eigen::Index e = 0; e < topology.edges.rows(); ++e) {
+    if (nodeLabels[topology.edges(e, 0)] != nodeLabels[topology.edges(e, 1)] && !std::isfinite(edgeCuts[e])) {
+      return makeError(ErrorCode::InvalidArgument, "fragment surfaces: edge " + std::to_string(e) +
+                                                       " joins two fragments but has no finite cut");
+    }
+  }
+  return Ok{};
+}
+
+// Parity of the permutation (i, j, k, l) of (0, 1, 2, 3): true when odd.
+bool oddPermutation(int i, int j, int k, int l) {
+  const int p[4] = {i, j, k, l};
+  int inversions = 0;
+  for (int a = 0; a < 4; ++a)
+    for (int b = a + 1; b < 4; ++b) inversions += p[a] > p[b] ? 1 : 0;
+  return (inversions & 1) != 0;
+}
+
 }  // namespace
+
+std::vector<double> tetVolumeMoments(const TetMesh& mesh, const Eigen::Vector3d& originM) {
+  std::vector<double> out(static_cast<size_t>(mesh.tets.rows()) * kFragmentMomentCount, 0.0);
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    Eigen::Vector3d p[4];
+    for (int i = 0; i < 4; ++i) p[i] = mesh.nodes.row(mesh.tets(t, i)).transpose() - originM;
+    addTetVolumeMoments(p[0], p[1], p[2], p[3], kFragmentMomentOrder, out.data() + t * kFragmentMomentCount);
+  }
+  return out;
+}
+
+Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, const std::vector<double>& tetMoments,
+                             const Eigen::Vector3d& originM, const Eigen::VectorXi& nodeLabels, int labelCount,
+                             const Eigen::VectorXd& edgeCuts, std::vector<double>& moments) {
+  if (Status st = checkLabelsAndCuts(mesh, topology, nodeLabels, labelCount, edgeCuts); !st) return st;
+  constexpr int count = kFragmentMomentCount;
+  if (tetMoments.size() != static_cast<size_t>(mesh.tets.rows()) * count) {
+    return makeError(ErrorCode::InvalidArgument, "fragment moments: tetMoments needs one block per tet");
+  }
+  moments.assign(static_cast<size_t>(labelCount) * count, 0.0);
+  double cell[count];
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    int label[4];
+    for (int i = 0; i < 4; ++i) label[i] = nodeLabels[mesh.tets(t, i)];
+    const double* whole = tetMoments.data() + t * count;
+    if (label[0] == label[1] && label[1] == label[2] && label[2] == label[3]) {
+      double* into = moments.data() + static_cast<size_t>(label[0]) * count;
+      for (int m = 0; m < count; ++m) into[m] += whole[m];
+      continue;
+    }
+    // The points of the corner cells, relative to the origin, as the surface builder places them.
+    Eigen::Vector3d x[4], edgePoint[4][4], facePoint[4], centre = Eigen::Vector3d::Zero();
+    for (int i = 0; i < 4; ++i) x[i] = mesh.nodes.row(mesh.tets(t, i)).transpose() - originM;
+    bool mixed[4][4] = {};
+    int mixedEdges = 0;
+    for (int k = 0; k < 6; ++k) {
+      const int i = kTetEdges[static_cast<size_t>(k)][0], j = kTetEdges[static_cast<size_t>(k)][1];
+      const int32_t edge = topology.tetEdges(t, k);
+      Eigen::Vector3d p = 0.5 * (x[i] + x[j]);
+      if (label[i] != label[j]) {
+        const double s = std::clamp(edgeCuts[edge], 0.05, 0.95);
+        const bool forward = topology.edges(edge, 0) == mesh.tets(t, i);
+        const Eigen::Vector3d& a = forward ? x[i] : x[j];
+        const Eigen::Vector3d& b = forward ? x[j] : x[i];
+        p = a + s * (b - a);
+        mixed[i][j] = mixed[j][i] = true;
+        centre += p;
+        ++mixedEdges;
+      }
+      edgePoint[i][j] = edgePoint[j][i] = p;
+    }
+    centre /= mixedEdges;
+    for (int f = 0; f < 4; ++f) {  // face f: the three nodes other than f
+      const auto local = tetFaceNodes(f);
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero(), corners = Eigen::Vector3d::Zero();
+      int crossed = 0;
+      for (int k = 0; k < 3; ++k) {
+        const int i = local[static_cast<size_t>(k)], j = local[static_cast<size_t>((k + 1) % 3)];
+        corners += x[i];
+        if (mixed[i][j]) sum += edgePoint[i][j], ++crossed;
+      }
+      facePoint[f] = crossed > 0 ? Eigen::Vector3d(sum / crossed) : Eigen::Vector3d(corners / 3.0);
+    }
+    // The largest group of nodes with one label (ties: the lowest local node) takes the rest.
+    int rest = 0, restSize = 0;
+    for (int i = 0; i < 4; ++i) {
+      int size = 0;
+      for (int j = 0; j < 4; ++j) size += label[j] == label[i] ? 1 : 0;
+      if (size > restSize) rest = i, restSize = size;
+    }
+    double* restInto = moments.data() + static_cast<size_t>(label[rest]) * count;
+    for (int m = 0; m < count; ++m) restInto[m] += whole[m];
+    for (int i = 0; i < 4; ++i) {
+      if (label[i] == label[rest]) continue;
+      // Node i's corner cell: the sub-tets (x_i, e_ij, f_ijk, c) of the flags i ⊂ ij ⊂ ijk, each
+      // oriented as the permutation (i, j, k, l) orients the tet.
+      std::fill(cell, cell + count, 0.0);
+      for (int j = 0; j < 4; ++j) {
+        if (j == i) continue;
+        for (int k = 0; k < 4; ++k) {
+          if (k == i || k == j) continue;
+          const int l = 6 - i - j - k;
+          if (oddPermutation(i, j, k, l)) {
+            addTetVolumeMoments(x[i], edgePoint[i][j], centre, facePoint[l], kFragmentMomentOrder, cell);
+          } else {
+            addTetVolumeMoments(x[i], edgePoint[i][j], facePoint[l], centre, kFragmentMomentOrder, cell);
+          }
+        }
+      }
+      double* into = moments.data() + static_cast<size_t>(label[i]) * count;
+      for (int m = 0; m < count; ++m) into[m] += cell[m], restInto[m] -= cell[m];
+    }
+  }
+  return Ok{};
+}
 
 void FragmentSurfaceWorkspace::reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index edges,
                                        Eigen::Index boundaryFaces) {
@@ -191,18 +312,7 @@ Result<std::vector<TriangleMesh>> buildFragmentSurfaces(const TetMesh& mesh, con
 Status buildFragmentSurfaces(const TetMesh& mesh, const TetTopology& topology, const Eigen::VectorXi& nodeLabels,
                              int labelCount, const Eigen::VectorXd& edgeCuts, FragmentSurfaceWorkspace& w,
                              std::vector<TriangleMesh>& out) {
-  if (nodeLabels.size() != mesh.nodes.rows() || edgeCuts.size() != topology.edges.rows() || labelCount < 1) {
-    return makeError(ErrorCode::InvalidArgument, "fragment surfaces: label or cut arrays do not match the mesh");
-  }
-  if (nodeLabels.minCoeff() < 0 || nodeLabels.maxCoeff() >= labelCount) {
-    return makeError(ErrorCode::InvalidArgument, "fragment surfaces: node label out of range");
-  }
-  for (Eigen::Index e = 0; e < topology.edges.rows(); ++e) {
-    if (nodeLabels[topology.edges(e, 0)] != nodeLabels[topology.edges(e, 1)] && !std::isfinite(edgeCuts[e])) {
-      return makeError(ErrorCode::InvalidArgument, "fragment surfaces: edge " + std::to_string(e) +
-                                                       " joins two fragments but has no finite cut");
-    }
-  }
+  if (Status st = checkLabelsAndCuts(mesh, topology, nodeLabels, labelCount, edgeCuts); !st) return st;
   Builder b(mesh, topology, nodeLabels, edgeCuts, w);
   for (size_t i = 0; i < topology.boundaryFaces.size(); ++i) b.boundaryFace(i);
   for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) b.interior(e);

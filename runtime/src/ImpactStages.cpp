@@ -164,12 +164,20 @@ Status surfaceStage(const ImpactJob& job, ImpactWorkspace& ws, ImpactResult& res
       !st) {
     return st;
   }
+  // Mass properties (and the matcher's moments) summed over the fragments' tets and cut cells,
+  // which is exact for the same solids and far cheaper than a pass over their dense surfaces.
+  if (Status st = fragmentVolumeMoments(body.asset.tetMesh, body.topology, body.tetMoments(), body.centreM,
+                                        result.fracture.nodeLabels, count, result.fracture.edgeCuts, ws.fragmentMoments);
+      !st) {
+    return st;
+  }
   result.fragments.resize(static_cast<size_t>(count));
   for (size_t i = 0; i < result.fragments.size(); ++i) {
     FragmentResult& fr = result.fragments[i];
     fr.surface.vertices.swap(ws.surfaces[i].vertices);  // handed over: the buffers' next use allocates anew
     fr.surface.faces.swap(ws.surfaces[i].faces);
-    fr.massProperties = computeSurfaceMassProperties(fr.surface, body.material.densityKgPerM3);
+    fr.massProperties = massPropertiesFromMoments(ws.fragmentMoments.data() + i * kFragmentMomentCount, body.centreM,
+                                                  body.material.densityKgPerM3);
     fr.debris = fr.massProperties.volumeM3 < job.settings->debrisVolumeFraction * body.topology.volumeM3;
     fr.path = fr.debris ? FragmentPath::Debris : FragmentPath::SurfaceOnly;
   }
@@ -185,11 +193,14 @@ struct BrokenParent {
 
 // The database: the nearest entry and its placement (searched now, so that the result reports
 // it); the entry rescaled to the fragment is made later (BodySource).
-std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, FragmentResult& fr) {
+std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const double* moments, FragmentResult& fr) {
   const Material material = job.body->material;
   const int modeCount = job.settings->modeCount;
   auto note = [&](const std::string& why) { fr.reason += (fr.reason.empty() ? "" : "; ") + why; };
-  auto match = job.matcher->match(fr.surface, job.settings->descriptor, 1);
+  VolumeMoments solid;
+  solid.maxOrder = kFragmentMomentOrder;
+  solid.values = Eigen::Map<const Eigen::VectorXd>(moments, kFragmentMomentCount);
+  auto match = job.matcher->match(fr.surface, solid, job.body->centreM, job.settings->descriptor, 1);
   if (!match) {  // e.g. a sliver whose frame is undefined
     note("match: " + match.error().message);
     return nullptr;
@@ -246,7 +257,8 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
 // match. The heavy part of each (a modal analysis, an entry rescaled) is deferred into a
 // BodySource, which the World makes on its workers once the impact is applied; what stays here
 // is cheap. Fragments are independent and done in parallel; each writes only its own entries.
-void newBodiesStage(const ImpactJob& job, ImpactResult& result, std::vector<std::shared_ptr<const BodySource>>& born) {
+void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResult& result,
+                    std::vector<std::shared_ptr<const BodySource>>& born) {
   const FractureSettings& fs = *job.settings;
   born.assign(result.fragments.size(), nullptr);
   if (!fs.matchFragments) {
@@ -276,7 +288,7 @@ void newBodiesStage(const ImpactJob& job, ImpactResult& result, std::vector<std:
       fr.reason += (fr.reason.empty() ? "" : "; ") + std::string("no database to match against");
       return;
     }
-    born[i] = matchedSource(job, fr);
+    born[i] = matchedSource(job, ws.fragmentMoments.data() + i * kFragmentMomentCount, fr);
     if (born[i]) fr.path = FragmentPath::Matched;
   };
   auto all = [&] {
@@ -294,6 +306,7 @@ void ImpactWorkspace::reserve(const TetMesh& mesh, const TetTopology& topology, 
   crack.reserve(mesh.nodes.rows(), mesh.tets.rows(), topology.edges.rows(), settings.crack.maxCracks);
   surfaceBuffers.reserve(mesh.nodes.rows(), mesh.tets.rows(), topology.edges.rows(),
                          static_cast<Eigen::Index>(topology.boundaryFaces.size()));
+  fragmentMoments.reserve(64 * static_cast<size_t>(kFragmentMomentCount));
 }
 
 void resetImpactResult(ImpactResult& r) {
@@ -354,7 +367,7 @@ Status computeImpact(const ImpactJob& submitted, ImpactWorkspace& ws, ImpactResu
   t.surfacesS = since(t0);
 
   t0 = Clock::now();
-  newBodiesStage(job, result, born);
+  newBodiesStage(job, ws, result, born);
   t.matchingS = since(t0);
   result.broken = true;
   return Ok{};

@@ -51,6 +51,7 @@ struct ImpactWorkspace {
   CrackWorkspace crack;
   FragmentSurfaceWorkspace surfaceBuffers;
   std::vector<TriangleMesh> surfaces;
+  std::vector<double> fragmentMoments;  ///< per fragment, kFragmentMomentCount moments about the body's centre
   /// Reserves the crack and surface buffers for a body of the given mesh and topology.
   void reserve(const TetMesh& mesh, const TetTopology& topology, const FractureSettings& settings);
 };

@@ -275,12 +275,21 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
       if (!body) return body.error();
       std::shared_ptr<const Body> made = body.value();
       w.work.reserve(made->asset.tetMesh, made->topology, w.settings.fracture);  // the largest body's crack buffers
-      if (w.settings.fracture.staticCorrection) {  // pack objects are prepared before their first impact
-        if (w.settings.prepareInBackground) {
-          made->scheduleStaticCorrection();
-          w.workers().execute([&] { w.background.run([made] { (void)made->staticCorrection(); }); });
-        } else if (const auto& correction = made->staticCorrection(); !correction) {
-          return correction.error();
+      // Pack objects are prepared before their first impact: the static correction's factorised K
+      // and the tets' moments (what a breaking impact sums its fragments' moments from).
+      const bool correct = w.settings.fracture.staticCorrection;
+      if (w.settings.prepareInBackground) {
+        if (correct) made->scheduleStaticCorrection();
+        w.workers().execute([&] {
+          w.background.run([made, correct] {
+            (void)made->tetMoments();
+            if (correct) (void)made->staticCorrection();
+          });
+        });
+      } else {
+        (void)made->tetMoments();
+        if (correct) {
+          if (const auto& correction = made->staticCorrection(); !correction) return correction.error();
         }
       }
       w.packBodies[index] = BodySource::ready(std::move(made));

@@ -57,6 +57,32 @@ TEST(CanonicalFrame, FrameIsNormalisedPrincipalAndRightHanded) {
   EXPECT_GT(std::abs(m(0, 0, 3)), 0.0);
 }
 
+TEST(CanonicalFrame, FramesFromGivenMomentsEqualThePassOverTheSurface) {
+  // What the runtime does: moments summed elsewhere (here about an arbitrary origin, order 5),
+  // moved to the surface's box centre. Same candidates up to rounding; too low an order is refused.
+  // (Only for a shape whose frame is well defined: where a symmetry leaves an axis or its sign to
+  // rounding, a box say, the two forms may keep different but equivalent candidates.)
+  const TriangleMesh solid = testing::makeIrregularSolid();
+  const auto fromSurface = computeCanonicalFrames(solid);
+  ASSERT_TRUE(fromSurface.ok()) << fromSurface.error().message;
+  const Eigen::Vector3d origin(0.3, -1.2, 0.7);
+  const auto moments = computeVolumeMoments(solid, 5, origin);
+  ASSERT_TRUE(moments.ok());
+  const auto fromMoments = computeCanonicalFrames(solid, moments.value(), origin);
+  ASSERT_TRUE(fromMoments.ok()) << fromMoments.error().message;
+  ASSERT_EQ(fromMoments.value().candidates.size(), fromSurface.value().candidates.size());
+  for (size_t c = 0; c < fromSurface.value().candidates.size(); ++c) {
+    const CanonicalFrame &a = fromMoments.value().candidates[c], &b = fromSurface.value().candidates[c];
+    EXPECT_LT((a.rotation - b.rotation).norm(), 1e-9) << c;
+    EXPECT_LT((a.translationM - b.translationM).norm(), 1e-12) << c;
+    EXPECT_NEAR(a.scalePerM, b.scalePerM, 1e-12 * b.scalePerM) << c;
+  }
+  EXPECT_LT((fromMoments.value().centralMoments.values - fromSurface.value().centralMoments.values).norm(),
+            1e-12 * fromSurface.value().centralMoments.values.norm());
+  const auto low = computeVolumeMoments(solid, 3, origin);
+  EXPECT_EQ(computeCanonicalFrames(solid, low.value(), origin).error().code, ErrorCode::InvalidArgument);
+}
+
 TEST(CanonicalFrame, InvariantToSimilarityAndRemeshing) {
   const auto solid = testing::makeIrregularSolid();
   const auto base = computeCanonicalFrames(solid);

@@ -54,6 +54,25 @@ TEST(VolumeMoments, RightTetrahedronMatchesDirichletIntegral) {
   }
 }
 
+TEST(VolumeMoments, TetMomentsEqualThoseOfItsSurface) {
+  // A general tetrahedron off the origin: the four-vertex kernel (order 4 unrolled, order 6
+  // generic) against the pass over its four faces, and its sign under a swap of two vertices.
+  const Eigen::Vector3d a(0.31, -0.12, 0.05), b(1.4, 0.2, -0.3), c(0.2, 1.1, 0.4), d(0.5, 0.3, 1.7);
+  const auto tet = testing::makeTetrahedron(a, b, c, d);
+  for (int order : {4, 6}) {
+    const auto fromFaces = computeVolumeMoments(tet, order, Eigen::Vector3d::Zero());
+    ASSERT_TRUE(fromFaces.ok()) << fromFaces.error().message;
+    std::vector<double> fromTet(monomialCount(order), 0.0), swapped(monomialCount(order), 0.0);
+    addTetVolumeMoments(a, b, c, d, order, fromTet.data());
+    addTetVolumeMoments(b, a, c, d, order, swapped.data());
+    for (int m = 0; m < monomialCount(order); ++m) {
+      const double expected = fromFaces.value().values[m];
+      EXPECT_NEAR(fromTet[m], expected, 1e-13 * (1.0 + std::abs(expected))) << "order " << order << ", monomial " << m;
+      EXPECT_NEAR(swapped[m], -fromTet[m], 1e-14 * (1.0 + std::abs(expected))) << m;
+    }
+  }
+}
+
 TEST(VolumeMoments, RightTetrahedronCentralThirdMomentIsHandChecked) {
   // Central third moment along x of T = (0, a e1, b e2, c e3), with x̄ = a/4:
   //   μ₃ = m300 − 3x̄ m200 + 3x̄² m100 − x̄³ V = a⁴bc (1/120 − 1/80 + 1/128 − 1/384) = a⁴bc/960 > 0:

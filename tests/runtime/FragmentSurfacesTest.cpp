@@ -124,6 +124,58 @@ TEST_F(FragmentSurfacesTest, AnyLabellingPartitionsTheVolume) {
   }
 }
 
+// The moments summed over tets and cut cells equal those of the built surfaces, to rounding, per
+// monomial relative to V·Lⁿ (L the box's largest side): for plane cracks and for random labels
+// with up to four labels in one tet.
+void expectMomentsOfTheSurfaces(const TetMesh& mesh, const TetTopology& topo, const Eigen::VectorXi& labels, int count,
+                                const Eigen::VectorXd& cuts) {
+  const Eigen::Vector3d origin(0.14, 0.11, 0.04);
+  std::vector<double> moments;
+  ASSERT_TRUE(fragmentVolumeMoments(mesh, topo, tetVolumeMoments(mesh, origin), origin, labels, count, cuts, moments));
+  ASSERT_EQ(moments.size(), static_cast<size_t>(count * kFragmentMomentCount));
+  auto surfaces = buildFragmentSurfaces(mesh, topo, labels, count, cuts);
+  ASSERT_TRUE(surfaces) << surfaces.error().message;
+  double total = 0.0;
+  for (int l = 0; l < count; ++l) {
+    const auto expected = computeVolumeMoments(surfaces.value()[static_cast<size_t>(l)], kFragmentMomentOrder, origin);
+    ASSERT_TRUE(expected.ok()) << expected.error().message;
+    for (int m = 0; m < kFragmentMomentCount; ++m) {
+      const double scale = topo.volumeM3 * std::pow(0.3, monomialExponents(m)[0] + monomialExponents(m)[1] + monomialExponents(m)[2]);
+      EXPECT_NEAR(moments[static_cast<size_t>(l * kFragmentMomentCount + m)], expected.value().values[m], 1e-12 * scale)
+          << "fragment " << l << ", monomial " << m;
+    }
+    total += moments[static_cast<size_t>(l * kFragmentMomentCount)];
+  }
+  EXPECT_NEAR(total, topo.volumeM3, 1e-12 * topo.volumeM3);
+}
+
+TEST_F(FragmentSurfacesTest, FragmentMomentsFromTetsEqualThoseOfTheirSurfaces) {
+  const Eigen::Vector3d c = mesh.nodes.colwise().mean();
+  std::vector<Eigen::Vector4d> planes;
+  for (const Eigen::Vector3d& n : {Eigen::Vector3d(1, 0.3, 0.1).normalized(), Eigen::Vector3d(-0.2, 1, 0.05).normalized()}) {
+    planes.emplace_back(n.x(), n.y(), n.z(), n.dot(c) + 0.0071);
+  }
+  const Eigen::VectorXd planeCuts = cutsByPlanes(mesh, topo, planes);
+  Eigen::VectorXi labels;
+  const int count = labelFragments(topo, planeCuts, mesh.nodes.rows(), labels);
+  ASSERT_GE(count, 3);
+  expectMomentsOfTheSurfaces(mesh, topo, labels, count, planeCuts);
+
+  std::mt19937_64 rng(11);
+  for (int trial = 0; trial < 3; ++trial) {
+    for (Eigen::Index i = 0; i < labels.size(); ++i) labels[i] = static_cast<int>(rng() % 4);
+    Eigen::VectorXd cuts(topo.edges.rows());
+    for (Eigen::Index e = 0; e < cuts.size(); ++e) cuts[e] = static_cast<double>(rng() % 1000) / 1000.0;
+    expectMomentsOfTheSurfaces(mesh, topo, labels, 4, cuts);
+  }
+  std::vector<double> moments;
+  EXPECT_EQ(fragmentVolumeMoments(mesh, topo, std::vector<double>(7), Eigen::Vector3d::Zero(), labels, 4,
+                                  Eigen::VectorXd::Constant(topo.edges.rows(), 0.5), moments)
+                .error()
+                .code,
+            ErrorCode::InvalidArgument);
+}
+
 TEST_F(FragmentSurfacesTest, BadInputsGiveTypedErrors) {
   Eigen::VectorXi labels = Eigen::VectorXi::Zero(mesh.nodes.rows());
   const Eigen::VectorXd cuts = Eigen::VectorXd::Constant(topo.edges.rows(), 0.5);

@@ -15,8 +15,8 @@
 # --pin writes this build's fingerprints into golden-fingerprints.txt instead of comparing: run it
 # after a change that is meant to change fractures, and commit the file with the change.
 set -euo pipefail
-cli=$1
-src=$2
+cli=$(realpath "$1")
+src=$(realpath "$2")  # both absolute: the runs happen in a scratch folder
 pin=${3:-}
 golden="$src/tests/tools/golden-fingerprints.txt"
 work=$(mktemp -d)

@@ -51,6 +51,12 @@ class FragmentMatcher {
   /// inward surface), EmptyMesh, NonFiniteValue, OpenMesh (as computeCanonicalFrames).
   Result<std::vector<FragmentMatch>> match(const TriangleMesh& surface, DescriptorKind kind, int k) const;
 
+  /// Same, with the solid's moments given (order ≥ 4, about momentsOriginM; the runtime sums them
+  /// over the fragment's tets and cut cells): the frames and the moment descriptor then need no
+  /// pass over the surface's faces (the voxel kinds still fill it). Same answer up to rounding.
+  Result<std::vector<FragmentMatch>> match(const TriangleMesh& surface, const VolumeMoments& moments,
+                                           const Eigen::Vector3d& momentsOriginM, DescriptorKind kind, int k) const;
+
   /// Same, from frames and descriptors already computed (one descriptor row per candidate frame,
   /// computed with the database's descriptor settings).
   Result<std::vector<FragmentMatch>> matchDescriptors(const CanonicalFrames& frames,

@@ -119,4 +119,15 @@ Status validateCanonicalFrameSettings(const CanonicalFrameSettings& settings);
 Result<CanonicalFrames> computeCanonicalFrames(const TriangleMesh& surface,
                                                const CanonicalFrameSettings& settings = {});
 
+/// The same from the solid's moments, given (order ≥ 4, about momentsOriginM, m), e.g. summed over
+/// its tetrahedra with addTetVolumeMoments: no pass over the faces. The surface gives only its
+/// bounding box (the origin the moments are moved to, and the scale of the zero-volume test), so
+/// both forms return the same frames up to rounding (where a symmetry leaves an axis or its sign
+/// to rounding, e.g. a box, they may keep different but equivalent candidates). The surface is not
+/// checked for closure.
+/// Errors: InvalidArgument (order below 4, zero or negative volume, settings), NonFiniteValue.
+Result<CanonicalFrames> computeCanonicalFrames(const TriangleMesh& surface, const VolumeMoments& moments,
+                                               const Eigen::Vector3d& momentsOriginM,
+                                               const CanonicalFrameSettings& settings = {});
+
 }  // namespace brittle

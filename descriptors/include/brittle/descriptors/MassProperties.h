@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include "brittle/descriptors/MeshTypes.h"
+#include "brittle/descriptors/VolumeMoments.h"
 
 namespace brittle {
 
@@ -31,6 +32,13 @@ MassProperties computeSurfaceMassProperties(const TriangleMesh& surface, double 
 
 /// Mass properties of a tetrahedral mesh (sum over tets, each with its signed volume).
 MassProperties computeTetMassProperties(const TetMesh& mesh, double densityKgPerM3);
+
+/// Mass properties from volume moments (order ≥ 2) about originM (in the mesh's frame, m), e.g.
+/// summed with addTetVolumeMoments: the same formulas as the two above, without a pass over a mesh.
+MassProperties massPropertiesFromMoments(const VolumeMoments& moments, const Eigen::Vector3d& originM,
+                                         double densityKgPerM3);
+/// The same from the first monomialCount(2) = 10 values of VolumeMoments::values (graded order).
+MassProperties massPropertiesFromMoments(const double* values, const Eigen::Vector3d& originM, double densityKgPerM3);
 
 /// Signed volume of tetrahedron (a, b, c, d): positive when (b−a)·((c−a)×(d−a)) > 0.
 inline double signedTetVolume(const Eigen::Vector3d& a, const Eigen::Vector3d& b,

@@ -18,6 +18,9 @@
 // h_n is built by the recurrences h_n(A) = A h_{n−1}(A), h_n(A,B) = h_n(A) + B h_{n−1}(A,B),
 // h_n(A,B,C) = h_n(A,B) + C h_{n−1}(A,B,C), carried out on coefficient arrays in u. Checks:
 // n = 0 gives det/6 (the volume), n = 2 gives the V/20 (Σ pₖpₖᵀ + s sᵀ) of MassProperties.h.
+// A general tetrahedron (a, b, c, d) is the same with det = (b−a)·((c−a)×(d−a)) and h_n of four
+// arguments (one more recurrence): addTetVolumeMoments, for solids given as tets (the runtime sums
+// a fragment's moments over its tets and cut cells instead of its dense surface).
 #pragma once
 
 #include <Eigen/Core>
@@ -72,6 +75,15 @@ struct VolumeMoments {
 /// edge has no reverse partner, i.e. the surface has a boundary).
 Result<VolumeMoments> computeVolumeMoments(const TriangleMesh& surface, int maxOrder,
                                            const Eigen::Vector3d& originM);
+
+/// Adds the exact moments up to maxOrder of the tetrahedron (a, b, c, d), its vertices given
+/// relative to the moments' origin, into values[0 .. monomialCount(maxOrder)) (the normalisation
+/// of VolumeMoments::values). Signed: positive when (b−a)·((c−a)×(d−a)) > 0. Summing it over a
+/// tet mesh gives the moments of the solid, as computeVolumeMoments does over its boundary.
+/// Precondition: 0 ≤ maxOrder ≤ kMaxMomentOrder. Order 4 (descriptors and frames) has its own
+/// unrolled kernel.
+void addTetVolumeMoments(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                         const Eigen::Vector3d& d, int maxOrder, double* values);
 
 /// Moments of the same solid in the coordinates y = A (x − b), given its moments in x:
 /// ∫ y^β dy = |det A| Σ_α [x^α] (A(x − b))^β · m_α. Exact up to rounding; the order is kept.
