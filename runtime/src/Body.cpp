@@ -20,7 +20,7 @@ const Result<StaticCorrection>& Body::staticCorrection() const {
   return *mCorrection;
 }
 
-const std::vector<double>& Body::tetMoments() const {
+const TetMoments& Body::tetMoments() const {
   std::call_once(mMomentsOnce, [this] { mTetMoments = tetVolumeMoments(asset.tetMesh, centreM); });
   return mTetMoments;
 }

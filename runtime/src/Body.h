@@ -19,6 +19,7 @@
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
 #include "brittle/descriptors/Result.h"
+#include "brittle/runtime/FragmentSurfaces.h"
 #include "brittle/runtime/StaticCorrection.h"
 #include "brittle/runtime/TetTopology.h"
 
@@ -39,7 +40,7 @@ struct Body {
 
   /// Each tet's volume moments about centreM (FragmentSurfaces.h: tetVolumeMoments), from which a
   /// breaking impact sums its fragments' moments; made on first use, as the static correction.
-  const std::vector<double>& tetMoments() const;
+  const TetMoments& tetMoments() const;
 
   /// The factorised K of the static correction (StaticCorrection.h), built on first use; waits
   /// when another thread is building it. Its errors are those of StaticCorrection::build.
@@ -58,7 +59,7 @@ struct Body {
   mutable std::atomic<bool> mCorrectionScheduled{false};
   mutable std::optional<Result<StaticCorrection>> mCorrection;
   mutable std::once_flag mMomentsOnce;
-  mutable std::vector<double> mTetMoments;
+  mutable TetMoments mTetMoments;
 };
 
 /// A body made on first use: a fragment's new object, whose modal data (its own analysis, or its

@@ -188,31 +188,46 @@ bool oddPermutation(int i, int j, int k, int l) {
 
 }  // namespace
 
-std::vector<double> tetVolumeMoments(const TetMesh& mesh, const Eigen::Vector3d& originM) {
-  std::vector<double> out(static_cast<size_t>(mesh.tets.rows()) * kFragmentMomentCount, 0.0);
+TetMoments tetVolumeMoments(const TetMesh& mesh, const Eigen::Vector3d& originM) {
+  TetMoments out;
+  out.originM = originM;
+  out.perTet.assign(static_cast<size_t>(mesh.tets.rows()) * kFragmentMomentCount, 0.0);
   for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
     Eigen::Vector3d p[4];
     for (int i = 0; i < 4; ++i) p[i] = mesh.nodes.row(mesh.tets(t, i)).transpose() - originM;
-    addTetVolumeMoments(p[0], p[1], p[2], p[3], kFragmentMomentOrder, out.data() + t * kFragmentMomentCount);
+    double* block = out.perTet.data() + t * kFragmentMomentCount;
+    addTetVolumeMoments(p[0], p[1], p[2], p[3], kFragmentMomentOrder, block);
+    for (int m = 0; m < kFragmentMomentCount; ++m) out.total[static_cast<size_t>(m)] += block[m];
   }
   return out;
 }
 
-Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, const std::vector<double>& tetMoments,
-                             const Eigen::Vector3d& originM, const Eigen::VectorXi& nodeLabels, int labelCount,
-                             const Eigen::VectorXd& edgeCuts, std::vector<double>& moments) {
+Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, const TetMoments& tetMoments,
+                             const Eigen::VectorXi& nodeLabels, int labelCount, const Eigen::VectorXd& edgeCuts,
+                             std::vector<double>& moments) {
   if (Status st = checkLabelsAndCuts(mesh, topology, nodeLabels, labelCount, edgeCuts); !st) return st;
   constexpr int count = kFragmentMomentCount;
-  if (tetMoments.size() != static_cast<size_t>(mesh.tets.rows()) * count) {
+  if (tetMoments.perTet.size() != static_cast<size_t>(mesh.tets.rows()) * count) {
     return makeError(ErrorCode::InvalidArgument, "fragment moments: tetMoments needs one block per tet");
   }
   moments.assign(static_cast<size_t>(labelCount) * count, 0.0);
+  if (labelCount == 0) return Ok{};
+  // The fragment with the most nodes is left out of the sums and is the body minus the others.
+  // Its block serves as a node count first.
+  for (Eigen::Index n = 0; n < nodeLabels.size(); ++n) moments[static_cast<size_t>(nodeLabels[n]) * count] += 1.0;
+  int body = 0;
+  for (int l = 1; l < labelCount; ++l) {
+    if (moments[static_cast<size_t>(l) * count] > moments[static_cast<size_t>(body) * count]) body = l;
+  }
+  for (int l = 0; l < labelCount; ++l) moments[static_cast<size_t>(l) * count] = 0.0;
+  const Eigen::Vector3d& originM = tetMoments.originM;
   double cell[count];
   for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
     int label[4];
     for (int i = 0; i < 4; ++i) label[i] = nodeLabels[mesh.tets(t, i)];
-    const double* whole = tetMoments.data() + t * count;
+    const double* whole = tetMoments.perTet.data() + t * count;
     if (label[0] == label[1] && label[1] == label[2] && label[2] == label[3]) {
+      if (label[0] == body) continue;
       double* into = moments.data() + static_cast<size_t>(label[0]) * count;
       for (int m = 0; m < count; ++m) into[m] += whole[m];
       continue;
@@ -257,8 +272,10 @@ Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, c
       for (int j = 0; j < 4; ++j) size += label[j] == label[i] ? 1 : 0;
       if (size > restSize) rest = i, restSize = size;
     }
-    double* restInto = moments.data() + static_cast<size_t>(label[rest]) * count;
-    for (int m = 0; m < count; ++m) restInto[m] += whole[m];
+    double* restInto = label[rest] == body ? nullptr : moments.data() + static_cast<size_t>(label[rest]) * count;
+    if (restInto) {
+      for (int m = 0; m < count; ++m) restInto[m] += whole[m];
+    }
     for (int i = 0; i < 4; ++i) {
       if (label[i] == label[rest]) continue;
       // Node i's corner cell: the sub-tets (x_i, e_ij, f_ijk, c) of the flags i ⊂ ij ⊂ ijk, each
@@ -276,12 +293,24 @@ Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, c
           }
         }
       }
-      double* into = moments.data() + static_cast<size_t>(label[i]) * count;
-      for (int m = 0; m < count; ++m) into[m] += cell[m], restInto[m] -= cell[m];
+      if (label[i] != body) {
+        double* into = moments.data() + static_cast<size_t>(label[i]) * count;
+        for (int m = 0; m < count; ++m) into[m] += cell[m];
+      }
+      if (restInto) {
+        for (int m = 0; m < count; ++m) restInto[m] -= cell[m];
+      }
     }
+  }
+  double* bodyInto = moments.data() + static_cast<size_t>(body) * count;
+  for (int m = 0; m < count; ++m) bodyInto[m] = tetMoments.total[static_cast<size_t>(m)];
+  for (int l = 0; l < labelCount; ++l) {
+    if (l == body) continue;
+    for (int m = 0; m < count; ++m) bodyInto[m] -= moments[static_cast<size_t>(l) * count + m];
   }
   return Ok{};
 }
+
 
 void FragmentSurfaceWorkspace::reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index edges,
                                        Eigen::Index boundaryFaces) {

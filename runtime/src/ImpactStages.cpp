@@ -166,7 +166,7 @@ Status surfaceStage(const ImpactJob& job, ImpactWorkspace& ws, ImpactResult& res
   }
   // Mass properties (and the matcher's moments) summed over the fragments' tets and cut cells,
   // which is exact for the same solids and far cheaper than a pass over their dense surfaces.
-  if (Status st = fragmentVolumeMoments(body.asset.tetMesh, body.topology, body.tetMoments(), body.centreM,
+  if (Status st = fragmentVolumeMoments(body.asset.tetMesh, body.topology, body.tetMoments(),
                                         result.fracture.nodeLabels, count, result.fracture.edgeCuts, ws.fragmentMoments);
       !st) {
     return st;

@@ -11,11 +11,14 @@ struct StaticCorrection::Data {
   TetMesh mesh;
   Material material;
   SparseMatrixd mass;
-  Eigen::MatrixXd rigid;     // 3N by 6, M-orthonormal
-  Eigen::MatrixXd modes;     // 3N by r
-  Eigen::VectorXd lambdas;   // r, shifted by μ
+  Eigen::MatrixXd rigid;        // Ψ: 3N by 6, M-orthonormal
+  Eigen::MatrixXd massRigid;    // M Ψ
+  Eigen::MatrixXd reliefForward;  // L⁻¹ P M Ψ: the inertia relief after the forward solve
+  Eigen::MatrixXd modes;        // Φ: 3N by r
+  Eigen::MatrixXd modesMassRigid;  // Φᵀ M Ψ: r by 6 (zero up to rounding for elastic modes)
+  Eigen::VectorXd lambdas;      // r, shifted by μ
   Eigen::SimplicialLDLT<SparseMatrixd> solver;
-  Eigen::VectorXd inverseD;  // of the LDLᵀ factor (vectorD() returns a copy)
+  Eigen::VectorXd inverseD;     // of the LDLᵀ factor (vectorD() returns a copy)
   std::vector<Eigen::Matrix<double, 6, 12>> elementStress;  // C B_e per element
 };
 
@@ -37,6 +40,18 @@ Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const
     return makeError(ErrorCode::FactorizationFailed, "static correction: K + μM of '" + asset.name + "' did not factorise");
   }
   data->inverseD = data->solver.vectorD().cwiseInverse();
+  // The inertia relief's share of every forward solve, once: f_e = f − MΨΨᵀf, so
+  // L⁻¹P f_e = L⁻¹P f − (L⁻¹P MΨ) Ψᵀf, and an impact's forward solve stays as sparse as its load.
+  // (Not (K + μM)⁻¹MΨ after the whole solve: that is Ψ/μ, and taking it away from (K + μM)⁻¹f
+  // would cancel six digits of the elastic part.)
+  data->massRigid = data->mass * data->rigid;
+  if (data->solver.permutationP().size() > 0) {
+    data->reliefForward = data->solver.permutationP() * data->massRigid;
+  } else {
+    data->reliefForward = data->massRigid;
+  }
+  data->solver.matrixL().solveInPlace(data->reliefForward);
+  data->modesMassRigid = data->modes.transpose() * data->massRigid;
   const Eigen::Matrix<double, 6, 6> c = isotropicElasticity(material.youngsModulusPa, material.poissonRatio);
   const TetMesh& m = asset.tetMesh;
   data->elementStress.resize(static_cast<size_t>(m.tets.rows()));
@@ -60,33 +75,34 @@ Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, do
                                          double& compliance, Workspace& w) const {
   const Data& d = *mData;
   const Eigen::Index dofs = 3 * d.mesh.nodes.rows();
-  // Every product below writes into a sized buffer (noalias, fixed-size rigid coefficients).
+  const Eigen::Index r = d.modes.cols();
+  // Every product below writes into a sized buffer (noalias, fixed-size rigid coefficients). The
+  // load touches a few nodes, so Ψᵀf and Φᵀf are sums over them.
   w.load.setZero(dofs);
+  w.modal.setZero(r);
+  Eigen::Matrix<double, 6, 1> rigid = Eigen::Matrix<double, 6, 1>::Zero();
   double sum = 0.0;
   for (const auto& [node, weight] : weights) {
     if (node < 0 || node >= d.mesh.nodes.rows()) return makeError(ErrorCode::InvalidArgument, "static correction: node out of range");
-    w.load.segment<3>(3 * node) += weight * direction;
+    const Eigen::Vector3d f = weight * direction;
+    w.load.segment<3>(3 * node) += f;
+    rigid.noalias() += d.rigid.middleRows<3>(3 * node).transpose() * f;
+    w.modal.noalias() += d.modes.middleRows(3 * node, 3).transpose() * f;
     sum += weight;
   }
   if (std::abs(sum - 1.0) > 1e-9) return makeError(ErrorCode::InvalidArgument, "static correction: weights must sum to 1");
-  Eigen::Matrix<double, 6, 1> rigid;
   w.scratch.resize(dofs);
-  w.relieved.resize(dofs);
   w.displacement.resize(dofs);
-  w.modal.resize(d.modes.cols());
-  // Inertia relief: f_e = f − M Ψ Ψᵀ f.
-  rigid.noalias() = d.rigid.transpose() * w.load;
-  w.scratch.noalias() = d.rigid * rigid;
-  w.relieved.noalias() = d.mass * w.scratch;
-  w.relieved = w.load - w.relieved;
-  // u = (K + μM)⁻¹ f_e from the factors P(K + μM)Pᵀ = L D Lᵀ, step by step: Eigen's solve()
-  // permutes its result in place, and that allocates a mask on every call.
+  // u = (K + μM)⁻¹ f_e from the factors P(K + μM)Pᵀ = L D Lᵀ, step by step: Eigen's solve() permutes
+  // its result in place, and that allocates a mask on every call. The forward solve skips the
+  // zeros of a sparse right-hand side, so it costs only the load's reach in the elimination tree.
   if (d.solver.permutationP().size() > 0) {
-    w.scratch.noalias() = d.solver.permutationP() * w.relieved;
+    w.scratch.noalias() = d.solver.permutationP() * w.load;
   } else {
-    w.scratch = w.relieved;
+    w.scratch = w.load;
   }
   d.solver.matrixL().solveInPlace(w.scratch);
+  w.scratch.noalias() -= d.reliefForward * rigid;  // inertia relief: the solve of f_e from here on
   w.scratch.array() *= d.inverseD.array();
   d.solver.matrixU().solveInPlace(w.scratch);
   if (d.solver.permutationPinv().size() > 0) {
@@ -95,11 +111,11 @@ Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, do
     w.displacement = w.scratch;
   }
   // The elastic part only: u −= Ψ Ψᵀ M u.
-  w.scratch.noalias() = d.mass * w.displacement;
-  rigid.noalias() = d.rigid.transpose() * w.scratch;
-  w.displacement.noalias() -= d.rigid * rigid;
-  // Minus the kept modes: u −= Φ (Φᵀ f_e / λ).
-  w.modal.noalias() = d.modes.transpose() * w.relieved;
+  Eigen::Matrix<double, 6, 1> rigidPart;
+  rigidPart.noalias() = d.massRigid.transpose() * w.displacement;
+  w.displacement.noalias() -= d.rigid * rigidPart;
+  // Minus the kept modes: u −= Φ (Φᵀ f_e / λ), Φᵀf_e = Φᵀf − ΦᵀMΨ Ψᵀf.
+  w.modal.noalias() -= d.modesMassRigid * rigid;
   w.modal.array() /= d.lambdas.array();
   w.displacement.noalias() -= d.modes * w.modal;
   compliance = w.load.dot(w.displacement);

@@ -131,7 +131,7 @@ void expectMomentsOfTheSurfaces(const TetMesh& mesh, const TetTopology& topo, co
                                 const Eigen::VectorXd& cuts) {
   const Eigen::Vector3d origin(0.14, 0.11, 0.04);
   std::vector<double> moments;
-  ASSERT_TRUE(fragmentVolumeMoments(mesh, topo, tetVolumeMoments(mesh, origin), origin, labels, count, cuts, moments));
+  ASSERT_TRUE(fragmentVolumeMoments(mesh, topo, tetVolumeMoments(mesh, origin), labels, count, cuts, moments));
   ASSERT_EQ(moments.size(), static_cast<size_t>(count * kFragmentMomentCount));
   auto surfaces = buildFragmentSurfaces(mesh, topo, labels, count, cuts);
   ASSERT_TRUE(surfaces) << surfaces.error().message;
@@ -169,7 +169,7 @@ TEST_F(FragmentSurfacesTest, FragmentMomentsFromTetsEqualThoseOfTheirSurfaces) {
     expectMomentsOfTheSurfaces(mesh, topo, labels, 4, cuts);
   }
   std::vector<double> moments;
-  EXPECT_EQ(fragmentVolumeMoments(mesh, topo, std::vector<double>(7), Eigen::Vector3d::Zero(), labels, 4,
+  EXPECT_EQ(fragmentVolumeMoments(mesh, topo, TetMoments{Eigen::Vector3d::Zero(), std::vector<double>(7), {}}, labels, 4,
                                   Eigen::VectorXd::Constant(topo.edges.rows(), 0.5), moments)
                 .error()
                 .code,

@@ -58,23 +58,28 @@ Status buildFragmentSurfaces(const TetMesh& mesh, const TetTopology& topology, c
 inline constexpr int kFragmentMomentOrder = 4;
 inline constexpr int kFragmentMomentCount = monomialCount(kFragmentMomentOrder);
 
-/// Volume moments of every tet about originM: #T blocks of kFragmentMomentCount values (graded
-/// order, as VolumeMoments::values).
-std::vector<double> tetVolumeMoments(const TetMesh& mesh, const Eigen::Vector3d& originM);
+/// Volume moments of every tet about one origin, and their sum (the body's).
+struct TetMoments {
+  Eigen::Vector3d originM = Eigen::Vector3d::Zero();
+  std::vector<double> perTet;  // #T blocks of kFragmentMomentCount values (graded order, as VolumeMoments::values)
+  std::array<double, kFragmentMomentCount> total{};  // Σ perTet, summed in tet order
+};
+TetMoments tetVolumeMoments(const TetMesh& mesh, const Eigen::Vector3d& originM);
 
-/// Volume moments of each fragment about originM, those of the solids buildFragmentSurfaces bounds
-/// (equal up to rounding), without a pass over their surfaces. A tet whose nodes share a label adds
-/// its stored moments (tetMoments, from tetVolumeMoments with the same origin). A tet whose nodes
-/// carry several labels is split into the same corner cells as the surfaces are, each six sub-tets
-/// (node, edge point, face point, tet point; on an edge or face the crack does not cross, the
-/// midpoint or centroid, which only moves a boundary inside one fragment): its largest group of
-/// nodes (ties: the one with the lowest local node) takes the tet's moments minus the others'
-/// cells. Cost: a pass over the tets and 6–18 sub-tets per cut tet.
+/// Volume moments of each fragment about tetMoments.originM, those of the solids
+/// buildFragmentSurfaces bounds (equal up to rounding), without a pass over their surfaces. The
+/// fragment with the most nodes (ties: the lowest label) is the body minus the others, so the cost
+/// follows the smaller fragments and the cut band, not the body. For the others: a tet whose nodes
+/// share a label adds its stored moments; a tet whose nodes carry several labels is split into the
+/// same corner cells as the surfaces are, each six sub-tets (node, edge point, face point, tet
+/// point; on an edge or face the crack does not cross, the midpoint or centroid, which only moves
+/// a boundary inside one fragment): its largest group of nodes (ties: the one with the lowest local
+/// node) takes the tet's moments minus the others' cells. Cost: 6–18 sub-tets per cut tet.
 /// Output: moments resized to labelCount blocks of kFragmentMomentCount values (its storage kept).
 /// Errors: those of buildFragmentSurfaces for the labels and cuts; InvalidArgument when tetMoments
 /// does not have one block per tet.
-Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, const std::vector<double>& tetMoments,
-                             const Eigen::Vector3d& originM, const Eigen::VectorXi& nodeLabels, int labelCount,
+Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, const TetMoments& tetMoments,
+                             const Eigen::VectorXi& nodeLabels, int labelCount,
                              const Eigen::VectorXd& edgeCuts, std::vector<double>& moments);
 
 }  // namespace brittle

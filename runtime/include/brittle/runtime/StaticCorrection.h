@@ -9,9 +9,11 @@
 // projected out (relative error μ/λ_j ≤ 10⁻⁶). The stress per newton, σ̂ = C B u_t, is added to the
 // modal stress as σ_e(t) = S_e q(t) + σ̂_e F(t).
 //
-// K and M are assembled and K + μM is factorised (sparse LDLᵀ) once per object when it is loaded,
-// and each element's C B_e (6 × 12) is kept; an impact costs one solve and one pass over the
-// elements. With a Workspace reused across impacts, that costs no heap allocation.
+// K and M are assembled and K + μM is factorised (sparse LDLᵀ) once per object when it is loaded;
+// L⁻¹PMΨ (the inertia relief's share of every forward solve) and each element's C B_e (6 × 12) are
+// kept. An impact then solves with its own sparse load: a forward solve over the load's reach in
+// the elimination tree, one full backward solve, and one pass over the elements. With a Workspace
+// reused across impacts, that costs no heap allocation.
 #pragma once
 
 #include <Eigen/Core>
@@ -33,7 +35,7 @@ class StaticCorrection {
 
   /// Buffers of stressPerNewton, sized on first use.
   struct Workspace {
-    Eigen::VectorXd load, relieved, displacement, scratch, modal;
+    Eigen::VectorXd load, displacement, scratch, modal;
   };
 
   /// Stress per newton (6T, Voigt, Pa/N) of the truncated modes for a unit force along `direction`
