@@ -64,6 +64,47 @@ TetMesh makeBoxTetMesh(double sx, double sy, double sz, int nx, int ny, int nz) 
   return m;
 }
 
+TetMesh makeFiveTetBox(double sx, double sy, double sz) {
+  TetMesh m;
+  m.nodes.resize(8, 3);
+  for (int i = 0; i < 8; ++i) m.nodes.row(i) << (i & 1 ? sx : 0.0), (i & 2 ? sy : 0.0), (i & 4 ? sz : 0.0);
+  // Each corner tet is an even corner with its three neighbours; all are listed positively.
+  m.tets.resize(5, 4);
+  m.tets << 1, 2, 4, 7,  //
+      0, 1, 2, 4,        //
+      3, 2, 1, 7,        //
+      5, 1, 4, 7,        //
+      6, 4, 2, 7;
+  return m;
+}
+
+bool isClosedAndOriented(const TriangleMesh& surface) {
+  std::map<std::pair<int, int>, int> count;
+  for (Eigen::Index f = 0; f < surface.faces.rows(); ++f) {
+    for (int k = 0; k < 3; ++k) ++count[{surface.faces(f, k), surface.faces(f, (k + 1) % 3)}];
+  }
+  for (const auto& [e, c] : count) {
+    const auto it = count.find({e.second, e.first});
+    if (c != 1 || it == count.end() || it->second != 1) return false;
+  }
+  return true;
+}
+
+Material makeGlassMaterial(const std::string& name) {
+  Material m;
+  m.name = name;
+  m.youngsModulusPa = 70e9;
+  m.poissonRatio = 0.22;
+  m.densityKgPerM3 = 2500.0;
+  m.tensileStrengthPa = 50e6;
+  m.fractureEnergyJPerM2 = 8.0;
+  m.rayleighAlphaPerS = 2.0;
+  m.rayleighBetaS = 1e-7;
+  m.restitution = 0.5;
+  m.source = "test fixture";
+  return m;
+}
+
 void writeOff(const TriangleMesh& mesh, const std::filesystem::path& path) {
   std::ofstream out(path);
   out.precision(17);

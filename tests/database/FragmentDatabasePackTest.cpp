@@ -10,22 +10,10 @@
 namespace brittle {
 namespace {
 
-Material referenceMaterial() {
-  Material m;
-  m.name = "reference";
-  m.youngsModulusPa = 70e9;
-  m.poissonRatio = 0.2;
-  m.densityKgPerM3 = 2500.0;
-  m.tensileStrengthPa = 45e6;
-  m.fractureEnergyJPerM2 = 7.5;
-  m.restitution = 0.5;
-  return m;
-}
-
 // Boxes of distinct proportions, stored in their primary canonical frame, descriptors only.
 FragmentDatabase makeDatabase() {
   FragmentDatabase db;
-  db.referenceMaterial = referenceMaterial();
+  db.referenceMaterial = testing::makeGlassMaterial("reference");
   db.seed = 3;
   const std::vector<Eigen::Vector3d> sizes = {{1, 1.3, 1.7}, {1, 2, 4}, {1, 1.1, 3}, {0.3, 1, 1.5}};
   for (DescriptorKind kind : kAllDescriptorKinds) {

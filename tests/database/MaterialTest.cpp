@@ -8,24 +8,12 @@
 #include <string>
 #include <vector>
 
+#include "brittle/testing/Fixtures.h"
+
 namespace brittle {
 namespace {
 
-// Soda-lime glass, roughly; every value physical.
-Material glass() {
-  Material m;
-  m.name = "glass";
-  m.youngsModulusPa = 70e9;
-  m.poissonRatio = 0.22;
-  m.densityKgPerM3 = 2500.0;
-  m.tensileStrengthPa = 50e6;
-  m.fractureEnergyJPerM2 = 8.0;
-  m.rayleighAlphaPerS = 2.0;
-  m.rayleighBetaS = 1e-7;
-  m.restitution = 0.5;
-  m.source = "test fixture";
-  return m;
-}
+using testing::makeGlassMaterial;
 
 struct FieldCase {
   const char* field;  // the snake_case name the message must contain
@@ -48,12 +36,12 @@ std::vector<FieldCase> fieldCases() {
   };
 }
 
-TEST(Material, PhysicalMaterialIsValid) { EXPECT_TRUE(validateMaterial(glass()).ok()); }
+TEST(Material, PhysicalMaterialIsValid) { EXPECT_TRUE(validateMaterial(makeGlassMaterial()).ok()); }
 
 TEST(Material, EachNonsenseFieldIsRejectedByName) {
   for (const FieldCase& c : fieldCases()) {
     for (double bad : c.badValues) {
-      Material m = glass();
+      Material m = makeGlassMaterial();
       c.set(m, bad);
       const Status s = validateMaterial(m);
       ASSERT_FALSE(s.ok()) << c.field << " = " << bad;
@@ -66,7 +54,7 @@ TEST(Material, EachNonsenseFieldIsRejectedByName) {
 }
 
 TEST(Material, NanIsReportedAsNotFinite) {
-  Material m = glass();
+  Material m = makeGlassMaterial();
   m.densityKgPerM3 = std::numeric_limits<double>::quiet_NaN();
   const Status s = validateMaterial(m);
   ASSERT_FALSE(s.ok());
@@ -75,7 +63,7 @@ TEST(Material, NanIsReportedAsNotFinite) {
 
 TEST(Material, IncompressibleLimitIsRejected) {
   // ν = 0.5 makes the bulk modulus infinite (λ = Eν/((1+ν)(1−2ν))); ν just below is legal.
-  Material m = glass();
+  Material m = makeGlassMaterial();
   m.poissonRatio = 0.5;
   EXPECT_EQ(validateMaterial(m).error().code, ErrorCode::InvalidMaterial);
   m.poissonRatio = std::nextafter(0.5, 0.0);
@@ -83,7 +71,7 @@ TEST(Material, IncompressibleLimitIsRejected) {
 }
 
 TEST(Material, BoundaryValuesAreAccepted) {
-  Material m = glass();
+  Material m = makeGlassMaterial();
   m.rayleighAlphaPerS = 0.0;
   m.rayleighBetaS = 0.0;
   m.restitution = 0.0;
@@ -94,7 +82,7 @@ TEST(Material, BoundaryValuesAreAccepted) {
 }
 
 TEST(Material, EmptyNameIsRejected) {
-  Material m = glass();
+  Material m = makeGlassMaterial();
   m.name.clear();
   const Status s = validateMaterial(m);
   ASSERT_FALSE(s.ok());
@@ -112,7 +100,7 @@ TEST(Material, FractureEnergyFromToughnessMatchesPlaneStrainFormula) {
 }
 
 TEST(Material, RayleighDampingRatio) {
-  Material m = glass();
+  Material m = makeGlassMaterial();
   m.rayleighAlphaPerS = 2.0;
   m.rayleighBetaS = 1e-5;
   // ζ = (α/ω + βω)/2 = (0.002 + 0.01)/2 at ω = 1000 rad/s.

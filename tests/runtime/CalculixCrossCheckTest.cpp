@@ -28,11 +28,9 @@
 #include <regex>
 #include <sstream>
 
-#include "brittle/precompute/BakePipeline.h"
-#include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/runtime/FullFemReference.h"
 #include "brittle/runtime/World.h"
-#include "brittle/testing/Fixtures.h"
+#include "brittle/testing/BakeFixtures.h"
 
 namespace brittle {
 namespace {
@@ -45,15 +43,8 @@ struct Impact {
 
 Impact plateImpact() {
   Impact c;
-  c.material = materialPreset("glass").value();
-  ObjectBakeSettings b;
-  b.name = "plate";
-  b.material = c.material;
-  b.tetMesh.targetTets = 1500;
-  b.modal.modeCount = 10;
-  Pack pack;
-  pack.materials.push_back(c.material);
-  pack.objects.push_back(bakeSurface(testing::makeBoxSurface(0.1, 0.1, 0.01), b).value());
+  c.material = testing::presetGlass();
+  Pack pack = testing::makeGlassPlatePack(1500, 10, 0.1).value();
   c.mesh = pack.objects[0].tetMesh;
   WorldSettings s;
   s.fracture.matchFragments = false;

@@ -1,10 +1,14 @@
-// Crack propagation's building blocks: crumb merging against the one-merge-at-a-time definition,
-// and the pruned stress scan against the full one.
+// CrackPropagation.h: the pruned stress scan against the full one, crack growth and its Griffith
+// energy stop on a bar in uniform tension, crumb merging (against the one-merge-at-a-time
+// definition and on hand-made cuts), and typed errors.
 #include "brittle/runtime/CrackPropagation.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <initializer_list>
 #include <limits>
 #include <random>
 
@@ -87,27 +91,248 @@ TEST(CrackPropagation, CrumbMergingEqualsRelabellingAfterEveryMerge) {
 }
 
 TEST(CrackPropagation, PrunedScanEqualsTheFullScanOnRandomFields) {
-  std::mt19937_64 rng(11);
-  std::normal_distribution<double> g(0.0, 1.0);
-  for (int trial = 0; trial < 20; ++trial) {
-    const int elements = 200, modes = 8, instants = 30;
-    MatrixXdRow stressModes(6 * elements, modes);
-    for (Eigen::Index i = 0; i < stressModes.size(); ++i) stressModes.data()[i] = 1e6 * g(rng);
-    Eigen::MatrixXd q(instants, modes);
-    for (Eigen::Index i = 0; i < q.size(); ++i) q.data()[i] = g(rng);
-    Eigen::VectorXd staticStress(6 * elements);
-    for (Eigen::Index i = 0; i < staticStress.size(); ++i) staticStress[i] = 1e3 * g(rng);
-    std::vector<double> force(instants);
-    for (double& f : force) f = 100.0 * std::abs(g(rng));
-    const Eigen::MatrixXd bounds = stressModeBounds(stressModes, modes);
-    const double threshold = 2.5e6 + 1e5 * trial;
-    const StressScan full = scanStresses(stressModes, bounds, q, staticStress, force, threshold, false);
-    const StressScan pruned = scanStresses(stressModes, bounds, q, staticStress, force, threshold, true);
-    EXPECT_EQ(pruned.peakPrincipalPa, full.peakPrincipalPa);
-    EXPECT_EQ(pruned.peakElement, full.peakElement);
-    EXPECT_EQ(pruned.peakInstant, full.peakInstant);
-    EXPECT_EQ(pruned.seeds, full.seeds);
-    EXPECT_LE(pruned.evaluations, full.evaluations);
+  // Several generator seeds; fields with and without the static correction; thresholds from below
+  // the typical peak (many seeds) to above every σ₁ (none).
+  int withSeeds = 0, withoutSeeds = 0;
+  for (uint64_t rngSeed : {11u, 12u, 13u, 14u}) {
+    std::mt19937_64 rng(rngSeed);
+    std::normal_distribution<double> g(0.0, 1.0);
+    for (int trial = 0; trial < 6; ++trial) {
+      SCOPED_TRACE(::testing::Message() << "seed " << rngSeed << ", trial " << trial);
+      const int elements = 200, modes = 8, instants = 30;
+      MatrixXdRow stressModes(6 * elements, modes);
+      for (Eigen::Index i = 0; i < stressModes.size(); ++i) stressModes.data()[i] = 1e6 * g(rng);
+      Eigen::MatrixXd q(instants, modes);
+      for (Eigen::Index i = 0; i < q.size(); ++i) q.data()[i] = g(rng);
+      const bool correction = trial % 2 == 0;
+      Eigen::VectorXd staticStress;
+      if (correction) {
+        staticStress.resize(6 * elements);
+        for (Eigen::Index i = 0; i < staticStress.size(); ++i) staticStress[i] = 1e3 * g(rng);
+      }
+      std::vector<double> force(instants);
+      for (double& f : force) f = 100.0 * std::abs(g(rng));
+      const Eigen::MatrixXd bounds = stressModeBounds(stressModes, modes);
+      const double threshold = trial == 5 ? 1e9 : 2.5e6 + 4e5 * trial;
+      const StressScan full = scanStresses(stressModes, bounds, q, staticStress, force, threshold, false);
+      const StressScan pruned = scanStresses(stressModes, bounds, q, staticStress, force, threshold, true);
+      EXPECT_EQ(pruned.peakPrincipalPa, full.peakPrincipalPa);
+      EXPECT_EQ(pruned.peakElement, full.peakElement);
+      EXPECT_EQ(pruned.peakInstant, full.peakInstant);
+      EXPECT_EQ(pruned.seeds, full.seeds);
+      EXPECT_LE(pruned.evaluations, full.evaluations);
+      EXPECT_EQ(full.evaluations, int64_t{elements} * instants + elements);  // every pair, then every seed candidate
+      // The full scan's peak is the definition: σ₁ of that element at that instant, the largest.
+      StressField field{&stressModes, q.row(full.peakInstant).transpose(), correction ? &staticStress : nullptr,
+                        force[static_cast<size_t>(full.peakInstant)]};
+      // (Within rounding: the scan and StressField::at may sum the product in different orders.)
+      const double peak = full.peakPrincipalPa;
+      EXPECT_NEAR(maxPrincipalStress(field.at(full.peakElement)), peak, 1e-12 * peak);
+      for (size_t i = 0; i < full.seeds.size(); ++i) {
+        const double s1 = maxPrincipalStress(field.at(full.seeds[i]));
+        EXPECT_GE(s1, threshold * (1 - 1e-12));
+        EXPECT_LE(s1, peak * (1 + 1e-12));
+        if (i > 0) {
+          EXPECT_LE(s1, maxPrincipalStress(field.at(full.seeds[i - 1])) * (1 + 1e-12));
+        }
+      }
+      (full.seeds.empty() ? withoutSeeds : withSeeds) += 1;
+    }
+  }
+  EXPECT_GT(withSeeds, 0);
+  EXPECT_GT(withoutSeeds, 0);
+}
+
+// A uniform tension σ_xx along a box of 8 × 2 × 2 cells (0.05 m each): every element is a seed
+// and the principal direction is x everywhere, so one crack (maxCracks = 1, no noise) grows along
+// the plane x = 0.0375 through the centroid of element 0 and costs G_c × 0.1 × 0.1 m² to cross the
+// bar.
+struct UniformTension {
+  static constexpr double kTensionPa = 60e6, kStrengthPa = 45e6, kGcJPerM2 = 8.0, kCrossSectionM2 = 0.1 * 0.1;
+  static constexpr double kCellSectionM2 = 0.05 * 0.05;  // bounds the section of one tet
+  static constexpr double kPlaneX = 0.75 * 0.05;
+  TetMesh mesh = testing::makeBoxTetMesh(0.4, 0.1, 0.1, 8, 2, 2);
+  TetTopology topo = buildTetTopology(mesh).value();
+  MatrixXdRow stressModes = MatrixXdRow::Zero(6 * mesh.tets.rows(), 1);
+  Eigen::MatrixXd q = Eigen::MatrixXd::Constant(1, 1, kTensionPa);
+  StressScan scan;
+  StressField field;
+  CrackSettings settings;
+
+  UniformTension() {
+    for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) stressModes(6 * e, 0) = 1.0;  // σ_xx per unit q
+    scan = scanStresses(stressModes, stressModeBounds(stressModes, 1), q, Eigen::VectorXd(), {0.0}, kStrengthPa, true);
+    field.stressModes = &stressModes;
+    field.q = q.row(0).transpose();
+    settings.maxCracks = 1;
+    settings.noiseRad = 0.0;
+    settings.minFragmentNodes = 1;
+  }
+  Result<FractureState> grow(double budgetJ) const {
+    return propagateCracks(mesh, topo, scan, field, kStrengthPa, kGcJPerM2, budgetJ, settings);
+  }
+};
+
+TEST(CrackPropagation, EnoughEnergyRunsTheCrackThroughTheBar) {
+  const UniformTension c;
+  ASSERT_EQ(c.scan.seeds.size(), static_cast<size_t>(c.mesh.tets.rows()));
+  ASSERT_EQ(c.scan.seeds.front(), 0);
+  auto r = c.grow(1.0);  // 12 times what crossing the bar costs
+  ASSERT_TRUE(r) << r.error().message;
+  const FractureState& s = r.value();
+  EXPECT_FALSE(s.arrestedByEnergy);
+  EXPECT_EQ(s.crackCount, 1);
+  EXPECT_EQ(s.energyBudgetJ, 1.0);
+  EXPECT_NEAR(s.crackAreaM2, UniformTension::kCrossSectionM2, 1e-12 * UniformTension::kCrossSectionM2);
+  EXPECT_NEAR(s.energySpentJ, UniformTension::kGcJPerM2 * s.crackAreaM2, 1e-12 * s.energySpentJ);
+  // Two pieces, split at the plane: the nodes at x = 0 and the rest.
+  ASSERT_EQ(s.fragmentCount, 2);
+  for (Eigen::Index i = 0; i < c.mesh.nodes.rows(); ++i) {
+    EXPECT_EQ(s.nodeLabels[i], c.mesh.nodes(i, 0) < UniformTension::kPlaneX ? 0 : 1) << "node " << i;
+  }
+  // Every cut edge crosses the plane, at the point where it does.
+  for (Eigen::Index e = 0; e < c.topo.edges.rows(); ++e) {
+    const double a = c.mesh.nodes(c.topo.edges(e, 0), 0) - UniformTension::kPlaneX;
+    const double b = c.mesh.nodes(c.topo.edges(e, 1), 0) - UniformTension::kPlaneX;
+    if ((a < 0) == (b < 0)) {
+      EXPECT_TRUE(std::isnan(s.edgeCuts[e])) << "edge " << e;
+    } else {
+      EXPECT_NEAR(s.edgeCuts[e], a / (a - b), 1e-12) << "edge " << e;
+    }
+  }
+}
+
+TEST(CrackPropagation, GriffithStopSpendsNoMoreThanTheBudget) {
+  const UniformTension c;
+  const double full = UniformTension::kGcJPerM2 * UniformTension::kCrossSectionM2;
+  const double oneCut = UniformTension::kGcJPerM2 * UniformTension::kCellSectionM2;  // > any one element's cost
+  const FractureState through = c.grow(2.0 * full).value();
+  ASSERT_FALSE(through.arrestedByEnergy);
+  double lastArea = -1.0, lastBudget = 0.0;
+  bool lastArrested = true;
+  for (double fraction : {0.0, 0.05, 0.3, 0.6, 0.9, 0.999, 1.5}) {
+    SCOPED_TRACE(fraction);
+    const double budget = fraction * full;
+    auto r = c.grow(budget);
+    ASSERT_TRUE(r) << r.error().message;
+    const FractureState& s = r.value();
+    EXPECT_LE(s.energySpentJ, budget);
+    EXPECT_NEAR(s.energySpentJ, UniformTension::kGcJPerM2 * s.crackAreaM2, 1e-12 * full);
+    if (fraction < 1.0) {
+      // Stopped by the energy, by the cut that would have overspent it: less than one element's
+      // cost is left.
+      EXPECT_TRUE(s.arrestedByEnergy);
+      EXPECT_LT(budget - s.energySpentJ, oneCut);
+      EXPECT_LT(s.crackAreaM2, UniformTension::kCrossSectionM2);
+      if (fraction <= 0.6) {
+        EXPECT_EQ(s.fragmentCount, 1) << "a crack stopped halfway leaves the bar whole";
+      }
+    } else {
+      EXPECT_FALSE(s.arrestedByEnergy);
+      EXPECT_NEAR(s.crackAreaM2, UniformTension::kCrossSectionM2, 1e-12 * UniformTension::kCrossSectionM2);
+      EXPECT_EQ(s.fragmentCount, 2);
+    }
+    if (fraction == 0.0) {
+      EXPECT_EQ(s.crackAreaM2, 0.0);
+      EXPECT_EQ(s.crackCount, 0);
+      EXPECT_TRUE(s.cutElements.empty());
+      EXPECT_TRUE(s.edgeCuts.array().isNaN().all());
+    }
+    // More energy, more crack: once the budget has grown by more than any one element costs, an
+    // arrested crack gets at least one more element. The crack grows in the same order whatever
+    // the budget: a smaller one's cuts come first.
+    if (lastArrested && budget - lastBudget >= oneCut) {
+      EXPECT_GT(s.crackAreaM2, lastArea);
+    } else {
+      EXPECT_GE(s.crackAreaM2, lastArea);
+    }
+    lastArea = s.crackAreaM2;
+    lastBudget = budget;
+    lastArrested = s.arrestedByEnergy;
+    ASSERT_LE(s.cutElements.size(), through.cutElements.size());
+    EXPECT_TRUE(std::equal(s.cutElements.begin(), s.cutElements.end(), through.cutElements.begin()));
+  }
+}
+
+TEST(CrackPropagation, CrumbsACrackCutsOffAreMergedBack) {
+  // The crack through the bar cuts off the 3 × 3 nodes at x = 0: a fragment of 9 nodes.
+  UniformTension c;
+  c.settings.minFragmentNodes = 9;
+  const FractureState kept = c.grow(1.0).value();
+  EXPECT_EQ(kept.fragmentCount, 2);
+  EXPECT_EQ(kept.mergedCrumbs, 0);
+  c.settings.minFragmentNodes = 10;
+  const FractureState merged = c.grow(1.0).value();
+  EXPECT_EQ(merged.fragmentCount, 1);
+  EXPECT_EQ(merged.mergedCrumbs, 1);
+  EXPECT_TRUE(merged.edgeCuts.array().isNaN().all()) << "the edges between them are whole again";
+  EXPECT_TRUE((merged.nodeLabels.array() == 0).all());
+  EXPECT_EQ(merged.crackAreaM2, kept.crackAreaM2);  // the energy was spent all the same
+}
+
+TEST(CrackPropagation, ACrumbJoinsTheFragmentItWasCutFrom) {
+  // A 0.4 × 0.2 × 0.2 m box of 4 × 2 × 2 cells (node (i, j, k) = i + 5 (j + 3 k)) cut by the plane
+  // x = 0.25 into 27 and 18 nodes, and its corner node 44 = (0.4, 0.2, 0.2) chipped off alone.
+  const TetMesh box = testing::makeBoxTetMesh(0.4, 0.2, 0.2, 4, 2, 2);
+  const TetTopology topo = buildTetTopology(box).value();
+  Eigen::VectorXd cuts = Eigen::VectorXd::Constant(topo.edges.rows(), std::numeric_limits<double>::quiet_NaN());
+  int planeCuts = 0;
+  for (Eigen::Index e = 0; e < topo.edges.rows(); ++e) {
+    const int32_t a = topo.edges(e, 0), b = topo.edges(e, 1);
+    if ((box.nodes(a, 0) < 0.25) != (box.nodes(b, 0) < 0.25)) {
+      cuts[e] = 0.5;
+      ++planeCuts;
+    } else if (a == 44 || b == 44) {
+      cuts[e] = 0.5;
+    }
+  }
+  Eigen::VectorXi labels;
+  int count = labelFragments(topo, cuts, box.nodes.rows(), labels);
+  ASSERT_EQ(count, 3);
+  EXPECT_EQ(labels[0], 0);
+  EXPECT_EQ(labels[3], 1);  // the lowest node right of the plane
+  EXPECT_EQ(labels[44], 2);
+  // Below 8 nodes: the chip goes back to the right part, the only one it touches.
+  Eigen::VectorXd chipped = cuts;
+  EXPECT_EQ(mergeCrumbs(topo, 8, chipped, labels, count), 1);
+  ASSERT_EQ(count, 2);
+  EXPECT_EQ(labels[44], labels[3]);
+  EXPECT_EQ((labels.array() == 0).count(), 27);
+  EXPECT_EQ((labels.array() == 1).count(), 18);
+  EXPECT_EQ(chipped.size() - chipped.array().isNaN().count(), planeCuts) << "only the plane's cuts are left";
+  // Below 20 nodes the right part is a crumb as well, and joins the left one.
+  EXPECT_EQ(mergeCrumbs(topo, 20, chipped, labels, count), 1);
+  EXPECT_EQ(count, 1);
+  EXPECT_TRUE((labels.array() == 0).all());
+  EXPECT_TRUE(chipped.array().isNaN().all());
+  // A mesh that is a single fragment has nothing to merge, however large minNodes is.
+  EXPECT_EQ(mergeCrumbs(topo, 1000, chipped, labels, count), 0);
+  EXPECT_EQ(count, 1);
+}
+
+TEST(CrackPropagation, BadSettingsAndMaterialValuesGiveTypedErrors) {
+  const UniformTension c;
+  // True when the growth is refused with InvalidArgument.
+  auto refused = [&](double strengthPa, double gc, double budget, const CrackSettings& settings) {
+    auto r = propagateCracks(c.mesh, c.topo, c.scan, c.field, strengthPa, gc, budget, settings);
+    return !r && r.error().code == ErrorCode::InvalidArgument;
+  };
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  const double s = UniformTension::kStrengthPa, gc = UniformTension::kGcJPerM2;
+  EXPECT_FALSE(refused(s, gc, 1.0, c.settings));
+  EXPECT_TRUE(refused(0.0, gc, 1.0, c.settings));
+  EXPECT_TRUE(refused(nan, gc, 1.0, c.settings));
+  EXPECT_TRUE(refused(s, 0.0, 1.0, c.settings));
+  EXPECT_TRUE(refused(s, -gc, 1.0, c.settings));
+  EXPECT_TRUE(refused(s, gc, inf, c.settings));
+  EXPECT_TRUE(refused(s, gc, nan, c.settings));
+  for (auto broken : std::initializer_list<void (*)(CrackSettings&)>{
+           [](CrackSettings& x) { x.maxCracks = -1; }, [](CrackSettings& x) { x.directionBlend = 1.5; },
+           [](CrackSettings& x) { x.directionBlend = -0.1; }, [](CrackSettings& x) { x.noiseRad = -0.1; },
+           [](CrackSettings& x) { x.propagationStressRatio = std::numeric_limits<double>::quiet_NaN(); }}) {
+    CrackSettings bad = c.settings;
+    broken(bad);
+    EXPECT_TRUE(refused(s, gc, 1.0, bad));
   }
 }
 

@@ -4,21 +4,17 @@
 
 #include <gtest/gtest.h>
 
-#include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/ModalAnalysis.h"
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/FragmentSurfaces.h"
 #include "brittle/runtime/TetTopology.h"
-#include "brittle/testing/Fixtures.h"
+#include "brittle/testing/BakeFixtures.h"
 
 namespace brittle {
 namespace {
 
-const Material& glass() {
-  static const Material m = materialPreset("glass").value();
-  return m;
-}
+using testing::presetGlass;
 
 // The sub-mesh of `label`, with every crossed edge cut at `cut`.
 Result<FragmentSubMesh> subMesh(const TetMesh& mesh, const Eigen::VectorXi& labels, int label, double cut = 0.5) {
@@ -48,10 +44,10 @@ TEST(FragmentModes, OneLabelIsTheWholeMeshAndItsModesAreTheBakedOnes) {
   EXPECT_DOUBLE_EQ(sub.value().droppedVolumeM3, 0.0);
 
   // The bake's path: ARPACK on the same K and M.
-  const FemSystem fem = assembleFem(bar, glass(), FemSettings{}).value();
+  const FemSystem fem = assembleFem(bar, presetGlass(), FemSettings{}).value();
   ModalSettings ms;
   ms.modeCount = 12;
-  ms.shiftRad2PerS2 = defaultShift(bar.nodes, glass());
+  ms.shiftRad2PerS2 = defaultShift(bar.nodes, presetGlass());
   auto baked = computeModes(fem, bar.nodes, ms);
   ASSERT_TRUE(baked) << baked.error().message;
 
@@ -59,7 +55,7 @@ TEST(FragmentModes, OneLabelIsTheWholeMeshAndItsModesAreTheBakedOnes) {
     ExactModesSettings es;
     es.modeCount = 12;
     es.denseMaxDof = denseMaxDof;
-    auto own = exactFragmentAsset(sub.value(), glass(), es, "bar");
+    auto own = exactFragmentAsset(sub.value(), presetGlass(), es, "bar");
     ASSERT_TRUE(own) << own.error().message;
     const ModalBasis& m = own.value().modal;
     ASSERT_EQ(m.frequenciesHz.size(), 12);
@@ -93,8 +89,8 @@ TEST(FragmentModes, TwoHalvesPartitionTheBarAndRingLikeHalfBeams) {
 
   ExactModesSettings es;
   es.modeCount = 4;
-  auto whole = exactFragmentAsset(subMesh(bar, Eigen::VectorXi::Zero(bar.nodes.rows()), 0).value(), glass(), es, "bar");
-  auto half = exactFragmentAsset(left.value(), glass(), es, "half");
+  auto whole = exactFragmentAsset(subMesh(bar, Eigen::VectorXi::Zero(bar.nodes.rows()), 0).value(), presetGlass(), es, "bar");
+  auto half = exactFragmentAsset(left.value(), presetGlass(), es, "half");
   ASSERT_TRUE(whole && half) << (whole ? half.error().message : whole.error().message);
   const double ratio = half.value().modal.frequenciesHz[0] / whole.value().modal.frequenciesHz[0];
   EXPECT_GT(ratio, 3.4);
@@ -126,7 +122,7 @@ TEST(FragmentModes, SubMeshesHoldTheVolumesOfTheFragmentSurfaces) {
     total += v;
     ExactModesSettings es;
     es.modeCount = 6;
-    auto own = exactFragmentAsset(sub.value(), glass(), es, "piece");
+    auto own = exactFragmentAsset(sub.value(), presetGlass(), es, "piece");
     ASSERT_TRUE(own) << own.error().message;
     EXPECT_LT(own.value().modal.residuals.maxCoeff(), 1e-8);
   }
@@ -149,7 +145,7 @@ TEST(FragmentModes, BadInputsGiveTypedErrors) {
   auto sub = subMesh(bar, Eigen::VectorXi::Zero(bar.nodes.rows()), 0).value();
   ExactModesSettings bad;
   bad.modeCount = 0;
-  EXPECT_EQ(exactFragmentAsset(sub, glass(), bad, "x").error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(exactFragmentAsset(sub, presetGlass(), bad, "x").error().code, ErrorCode::InvalidArgument);
 
   // Two tets that share one node only: nine zero modes, not six.
   FragmentSubMesh hinge;
@@ -160,7 +156,7 @@ TEST(FragmentModes, BadInputsGiveTypedErrors) {
   ASSERT_GT(meshVolume(hinge.mesh), 0.0);
   ExactModesSettings es;
   es.modeCount = 3;
-  EXPECT_EQ(exactFragmentAsset(hinge, glass(), es, "hinge").error().code, ErrorCode::RigidModeMismatch);
+  EXPECT_EQ(exactFragmentAsset(hinge, presetGlass(), es, "hinge").error().code, ErrorCode::RigidModeMismatch);
 
 }
 
@@ -179,7 +175,7 @@ TEST(FragmentModes, ALabelInTwoPiecesKeepsTheLargerConnectedOne) {
   for (Eigen::Index i = 0; i < sub.value().mesh.nodes.rows(); ++i) EXPECT_LT(sub.value().mesh.nodes(i, 0), 0.251);
   ExactModesSettings es;
   es.modeCount = 3;
-  EXPECT_TRUE(exactFragmentAsset(sub.value(), glass(), es, "end"));  // one connected solid: six rigid modes
+  EXPECT_TRUE(exactFragmentAsset(sub.value(), presetGlass(), es, "end"));  // one connected solid: six rigid modes
 }
 
 }  // namespace

@@ -2,7 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <map>
 #include <random>
 
 #include "brittle/descriptors/MassProperties.h"
@@ -15,18 +14,7 @@ namespace {
 
 double volumeOf(const TriangleMesh& m) { return computeSurfaceMassProperties(m, 1.0).volumeM3; }
 
-// Every directed edge has exactly one opposite: closed and consistently oriented.
-bool closedAndOriented(const TriangleMesh& m) {
-  std::map<std::pair<int, int>, int> count;
-  for (Eigen::Index f = 0; f < m.faces.rows(); ++f) {
-    for (int k = 0; k < 3; ++k) ++count[{m.faces(f, k), m.faces(f, (k + 1) % 3)}];
-  }
-  for (const auto& [e, c] : count) {
-    const auto it = count.find({e.second, e.first});
-    if (c != 1 || it == count.end() || it->second != 1) return false;
-  }
-  return true;
-}
+using testing::isClosedAndOriented;
 
 // Cuts every edge that crosses one of the planes n·x = d (first plane wins), as a crack would.
 Eigen::VectorXd cutsByPlanes(const TetMesh& mesh, const TetTopology& topo, const std::vector<Eigen::Vector4d>& planes) {
@@ -50,18 +38,6 @@ class FragmentSurfacesTest : public ::testing::Test {
   TetTopology topo = buildTetTopology(mesh).value();
 };
 
-TEST_F(FragmentSurfacesTest, TopologyOfABox) {
-  EXPECT_NEAR(topo.volumeM3, 0.3 * 0.2 * 0.1, 1e-15);
-  EXPECT_NEAR(topo.nodeAreasM2.sum(), 2 * (0.3 * 0.2 + 0.3 * 0.1 + 0.2 * 0.1), 1e-14);
-  TriangleMesh surface{mesh.nodes, topo.boundaryTriangles};
-  EXPECT_TRUE(closedAndOriented(surface));
-  EXPECT_NEAR(volumeOf(surface), topo.volumeM3, 1e-15);
-  // Euler: V − E + F − T = 1 for a ball.
-  EXPECT_EQ(mesh.nodes.rows() - topo.edges.rows() + (4 * mesh.tets.rows() + static_cast<Eigen::Index>(topo.boundaryFaces.size())) / 2 -
-                mesh.tets.rows(),
-            1);
-}
-
 TEST_F(FragmentSurfacesTest, OnePlaneSplitsTheBoxExactlyAlongIt) {
   // The box spans [0, 0.3] in x with 0.05 cells: x = 0.163 cuts edges at parameter 0.26.
   const double x0 = mesh.nodes.col(0).minCoeff() + 0.163;
@@ -72,7 +48,7 @@ TEST_F(FragmentSurfacesTest, OnePlaneSplitsTheBoxExactlyAlongIt) {
   ASSERT_TRUE(surfaces) << surfaces.error().message;
   double total = 0.0;
   for (const TriangleMesh& s : surfaces.value()) {
-    EXPECT_TRUE(closedAndOriented(s));
+    EXPECT_TRUE(isClosedAndOriented(s));
     const Status valid = validateSurfaceMesh(s);
     EXPECT_TRUE(valid) << valid.error().message;
     total += volumeOf(s);
@@ -99,7 +75,7 @@ TEST_F(FragmentSurfacesTest, ThreePlanesGiveClosedFragmentsThatConserveVolume) {
   ASSERT_TRUE(surfaces) << surfaces.error().message;
   double total = 0.0;
   for (const TriangleMesh& s : surfaces.value()) {
-    EXPECT_TRUE(closedAndOriented(s));
+    EXPECT_TRUE(isClosedAndOriented(s));
     EXPECT_GT(volumeOf(s), 0.0);
     total += volumeOf(s);
   }
@@ -117,7 +93,7 @@ TEST_F(FragmentSurfacesTest, AnyLabellingPartitionsTheVolume) {
     ASSERT_TRUE(surfaces) << surfaces.error().message;
     double total = 0.0;
     for (const TriangleMesh& s : surfaces.value()) {
-      EXPECT_TRUE(closedAndOriented(s));
+      EXPECT_TRUE(isClosedAndOriented(s));
       total += volumeOf(s);
     }
     EXPECT_NEAR(total, topo.volumeM3, 1e-9 * topo.volumeM3);

@@ -11,10 +11,8 @@
 #include <cerrno>
 #include <cstddef>
 
-#include "brittle/precompute/BakePipeline.h"
-#include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/runtime/World.h"
-#include "brittle/testing/Fixtures.h"
+#include "brittle/testing/BakeFixtures.h"
 
 #if defined(__SANITIZE_ADDRESS__)
 #define BRITTLE_COUNT_ALLOCATIONS 0
@@ -75,17 +73,9 @@ class HotPathAllocationTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     if (!BRITTLE_COUNT_ALLOCATIONS) return;  // every test skips: no bake
-    Material glass = materialPreset("glass").value();
-    ObjectBakeSettings b;
-    b.name = "plate";
-    b.material = glass;
-    b.tetMesh.targetTets = 1500;
-    b.modal.modeCount = 20;
-    auto plate = bakeSurface(testing::makeBoxSurface(0.3, 0.3, 0.01), b);
+    auto plate = testing::makeGlassPlatePack(1500, 20);
     ASSERT_TRUE(plate) << plate.error().message;
-    sPack = new Pack;
-    sPack->materials.push_back(glass);
-    sPack->objects.push_back(std::move(plate).value());
+    sPack = new Pack(std::move(plate).value());
   }
   static void TearDownTestSuite() { delete sPack; }
   static Pack* sPack;

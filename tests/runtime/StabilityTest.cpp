@@ -13,7 +13,9 @@
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/ModalAnalysis.h"
 #include "brittle/runtime/FemAssembly.h"
+#include "brittle/descriptors/VolumeMoments.h"
 #include "brittle/runtime/World.h"
+#include "brittle/testing/BakeFixtures.h"
 #include "brittle/testing/DatabaseFixtures.h"
 #include "brittle/testing/Fixtures.h"
 
@@ -21,7 +23,7 @@ namespace brittle {
 namespace {
 
 Material variant(const std::string& name, double youngsModulusPa) {
-  Material m = materialPreset("glass").value();
+  Material m = testing::presetGlass();
   m.name = name;
   m.youngsModulusPa = youngsModulusPa;
   return m;
@@ -44,7 +46,7 @@ class StabilityTest : public ::testing::Test {
       sPack->materials.push_back(material);
       sPack->objects.push_back(std::move(asset).value());
     };
-    add("cube", testing::makeBoxSurface(0.1, 0.1, 0.1), materialPreset("glass").value(), 1500);
+    add("cube", testing::makeBoxSurface(0.1, 0.1, 0.1), testing::presetGlass(), 1500);
     add("stiff", testing::makeBoxSurface(0.1, 0.1, 0.1), variant("stiff", 7e15), 1500);
     add("soft", testing::makeBoxSurface(0.1, 0.1, 0.1), variant("soft", 7e4), 1500);
     add("needle", testing::makeBoxSurface(0.2, 0.006, 0.006), variant("needle-glass", 70e9), 1500);
@@ -174,11 +176,23 @@ TEST_F(StabilityTest, NeedleBreaksIntoValidPiecesAndTinyFragmentsStayClosed) {
   d.normalWorld = Eigen::Vector3d::UnitZ();
   d.impactorMassKg = 0.05;
   d.impactorRadiusM = 0.005;
+  const double needle = volumeOf("needle");
   for (double speed : {5.0, 200.0}) {
     SCOPED_TRACE(speed);
     d.speedMps = speed;
-    auto r = hit("needle", d);
+    auto r = hit("needle", d);  // also checks finite values and that the volumes add up
     ASSERT_TRUE(r) << r.error().message;
+    ASSERT_TRUE(r.value().broken);
+    EXPECT_GT(r.value().fragments.size(), 1u);
+    for (const FragmentResult& f : r.value().fragments) {
+      SCOPED_TRACE(::testing::Message() << "fragment of " << f.massProperties.volumeM3 / needle << " of the needle");
+      // Closed as the descriptors require (no directed edge without its reverse: OpenMesh
+      // otherwise), and closed, manifold and consistently oriented edge by edge.
+      const auto moments = computeVolumeMoments(f.surface, 0, f.massProperties.centerOfMassM);
+      ASSERT_TRUE(moments) << moments.error().message;
+      EXPECT_NEAR(moments.value()(0, 0, 0), f.massProperties.volumeM3, 1e-9 * f.massProperties.volumeM3);
+      EXPECT_TRUE(testing::isClosedAndOriented(f.surface));
+    }
   }
 }
 

@@ -8,11 +8,10 @@
 #include <cstdio>
 
 #include "brittle/precompute/BakePipeline.h"
-#include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/FullFemReference.h"
 #include "brittle/runtime/World.h"
-#include "brittle/testing/Fixtures.h"
+#include "brittle/testing/BakeFixtures.h"
 
 namespace brittle {
 namespace {
@@ -25,14 +24,8 @@ struct Case {
 
 Case runPlateCase(int modes) {
   Case c;
-  const Material glass = materialPreset("glass").value();
-  ObjectBakeSettings b;
-  b.name = "plate";
-  b.material = glass;
-  b.tetMesh.targetTets = 3000;
-  b.modal.modeCount = modes;
-  c.pack.materials.push_back(glass);
-  c.pack.objects.push_back(bakeSurface(testing::makeBoxSurface(0.3, 0.3, 0.01), b).value());
+  const Material& glass = testing::presetGlass();
+  c.pack = testing::makeGlassPlatePack(3000, modes).value();
   for (bool correction : {true, false}) {
     WorldSettings s;
     s.fracture.staticCorrection = correction;
@@ -82,7 +75,7 @@ TEST(StaticCorrection, BringsThePeakStressWithin15PercentOfTheFullFemReference) 
 }
 
 TEST(StaticCorrection, TypedErrors) {
-  const Material glass = materialPreset("glass").value();
+  const Material& glass = testing::presetGlass();
   ObjectBakeSettings b;
   b.name = "box";
   b.material = glass;
@@ -107,7 +100,7 @@ TEST(StaticCorrection, TypedErrors) {
 // from a dense generalised eigen-decomposition of the same K and M: the sparse solve (its forward
 // half over the load's reach, the inertia relief added after it) agrees to rounding.
 TEST(StaticCorrection, EqualsTheSumOverTheModesLeftOutFromADenseDecomposition) {
-  const Material glass = materialPreset("glass").value();
+  const Material& glass = testing::presetGlass();
   ObjectBakeSettings b;
   b.name = "box";
   b.material = glass;

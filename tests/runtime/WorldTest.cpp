@@ -10,8 +10,8 @@
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/BaseShapes.h"
 #include "brittle/precompute/FragmentDatabaseBake.h"
-#include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshValidation.h"
+#include "brittle/testing/BakeFixtures.h"
 #include "brittle/testing/DatabaseFixtures.h"
 #include "brittle/testing/Fixtures.h"
 
@@ -37,17 +37,9 @@ class WorldTest : public ::testing::Test {
   // A glass plate 0.3 × 0.3 × 0.01 m (the case, coarser) and a small fragment database,
   // baked once for the suite.
   static void SetUpTestSuite() {
-    Material glass = materialPreset("glass").value();
-    ObjectBakeSettings b;
-    b.name = "plate";
-    b.material = glass;
-    b.tetMesh.targetTets = 3000;
-    b.modal.modeCount = 20;
-    auto plate = bakeSurface(testing::makeBoxSurface(0.3, 0.3, 0.01), b);
+    auto plate = testing::makeGlassPlatePack(3000, 20);
     ASSERT_TRUE(plate) << plate.error().message;
-    sPack = new Pack;
-    sPack->materials.push_back(glass);
-    sPack->objects.push_back(std::move(plate).value());
+    sPack = new Pack(std::move(plate).value());
     auto database = bakeFragmentDatabase(testing::shippedShapesDatabase({"box", "plate", "wedge", "blob"}, 16, 400, 12));
     ASSERT_TRUE(database) << database.error().message;
     sPack->database = std::move(database).value();

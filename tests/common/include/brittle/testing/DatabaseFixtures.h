@@ -1,5 +1,5 @@
 // DatabaseFixtures.h — small fragment databases from the shipped base shapes, for the suites that
-// bake one (fragments, runtime, player). Header-only: its users link brittle::precompute.
+// bake one (database, precompute, runtime, player). Header-only: its users link brittle::precompute.
 #pragma once
 
 #include <string>

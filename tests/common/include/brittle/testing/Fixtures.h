@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "brittle/database/Material.h"
 #include "brittle/descriptors/MeshTypes.h"
 
 namespace brittle::testing {
@@ -19,6 +20,21 @@ TriangleMesh makeIcosphere(double radius, int level);
 /// Structured tet mesh of the box [0,sx]×[0,sy]×[0,sz] with nx×ny×nz cells, 6 positive tets per
 /// cell (Kuhn subdivision, conforming).
 TetMesh makeBoxTetMesh(double sx, double sy, double sz, int nx, int ny, int nz);
+
+/// The unit cube scaled to [0,sx]×[0,sy]×[0,sz] split into 5 positive tets: four corner tets
+/// (volume sx·sy·sz/6 each) around a central one (sx·sy·sz/3) whose four faces they share. Node i
+/// is the corner (i&1, i&2, i&4); the face diagonals all join the odd corners 1, 2, 4 and 7. The
+/// central tet is tet 0.
+TetMesh makeFiveTetBox(double sx, double sy, double sz);
+
+/// Every directed edge (i, j) of the triangles has exactly one reverse (j, i) and appears once:
+/// the surface is closed, edge-manifold and consistently oriented.
+bool isClosedAndOriented(const TriangleMesh& surface);
+
+/// A glass written out field by field, for suites that do not link the preset library
+/// (precompute's MaterialLibrary): E = 70 GPa, ν = 0.22, ρ = 2500 kg/m³, σ_t = 50 MPa,
+/// G_c = 8 J/m², Rayleigh α = 2 1/s and β = 1e-7 s, restitution 0.5. It passes validateMaterial.
+Material makeGlassMaterial(const std::string& name = "glass");
 
 /// Writes a mesh as OFF (vertices and triangles only).
 void writeOff(const TriangleMesh& mesh, const std::filesystem::path& path);

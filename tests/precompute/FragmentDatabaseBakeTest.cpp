@@ -13,16 +13,16 @@
 #include <fstream>
 #include <set>
 
-#include "FragmentTestSupport.h"
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/Pack.h"
 #include "brittle/precompute/MeshValidation.h"
 #include "brittle/testing/AssetChecks.h"
+#include "brittle/testing/DatabaseFixtures.h"
 
 namespace brittle {
 namespace {
 
-class FragmentDatabaseTest : public ::testing::Test {
+class FragmentDatabaseBakeTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     ASSERT_GE(testing::shippedBaseShapes().size(), 6u);
@@ -35,7 +35,7 @@ class FragmentDatabaseTest : public ::testing::Test {
   std::filesystem::path dir = testing::makeTempDir("fragdb");
 };
 
-TEST_F(FragmentDatabaseTest, EveryEntryIsACanonicalClosedUnitVolumeFragmentWithModes) {
+TEST_F(FragmentDatabaseBakeTest, EveryEntryIsACanonicalClosedUnitVolumeFragmentWithModes) {
   const FragmentDatabase& db = *physical;
   ASSERT_EQ(db.entries.size(), 8u);
   EXPECT_TRUE(db.hasPhysics());
@@ -73,7 +73,7 @@ TEST_F(FragmentDatabaseTest, EveryEntryIsACanonicalClosedUnitVolumeFragmentWithM
   }
 }
 
-TEST_F(FragmentDatabaseTest, SameSeedSameDatabaseForAnyThreadCount) {
+TEST_F(FragmentDatabaseBakeTest, SameSeedSameDatabaseForAnyThreadCount) {
   DatabaseBakeSettings s = testing::smallDatabaseSettings(12, false);
   s.threads = 1;
   auto one = bakeFragmentDatabase(s);
@@ -92,7 +92,7 @@ TEST_F(FragmentDatabaseTest, SameSeedSameDatabaseForAnyThreadCount) {
   }
 }
 
-TEST_F(FragmentDatabaseTest, PackRoundTripIsBitExact) {
+TEST_F(FragmentDatabaseBakeTest, PackRoundTripIsBitExact) {
   Pack pack;
   pack.database = *physical;
   // One kind stores an HNSW index (M in `trees`, ef in `checks`): it must come back as such.
@@ -161,7 +161,7 @@ class StopAfter final : public ProgressSink {
   int mDone = 0;
 };
 
-TEST_F(FragmentDatabaseTest, CheckpointedBakeEqualsTheUninterruptedOne) {
+TEST_F(FragmentDatabaseBakeTest, CheckpointedBakeEqualsTheUninterruptedOne) {
   DatabaseCheckpointSettings c;
   c.directory = dir / "chunks";
   c.chunkEntries = 3;  // 3 + 3 + 2
@@ -175,7 +175,7 @@ TEST_F(FragmentDatabaseTest, CheckpointedBakeEqualsTheUninterruptedOne) {
   testing::expectSameDatabase(db.value(), *physical);  // bake timings aside, so not the bytes
 }
 
-TEST_F(FragmentDatabaseTest, InterruptedBakeResumesFromItsFinishedChunks) {
+TEST_F(FragmentDatabaseBakeTest, InterruptedBakeResumesFromItsFinishedChunks) {
   DatabaseBakeSettings s = testing::smallDatabaseSettings(12, false);
   s.threads = 1;
   const std::string reference = packBytes(bakeFragmentDatabase(s).value(), dir / "reference.h5");
@@ -204,7 +204,7 @@ TEST_F(FragmentDatabaseTest, InterruptedBakeResumesFromItsFinishedChunks) {
   EXPECT_EQ(report.entriesBaked, 0);
 }
 
-TEST_F(FragmentDatabaseTest, CheckpointsRefuseOtherSettingsAndRebakeDamagedChunks) {
+TEST_F(FragmentDatabaseBakeTest, CheckpointsRefuseOtherSettingsAndRebakeDamagedChunks) {
   DatabaseBakeSettings s = testing::smallDatabaseSettings(6, false);
   DatabaseCheckpointSettings c;
   c.directory = dir / "chunks";
@@ -270,7 +270,7 @@ TEST_F(FragmentDatabaseTest, CheckpointsRefuseOtherSettingsAndRebakeDamagedChunk
 
 // Ranks bake disjoint chunks into one directory; any rank's chunks plus the others' assemble into
 // the single-process database.
-TEST_F(FragmentDatabaseTest, RanksBakeDisjointChunksThatAssembleIntoTheSameDatabase) {
+TEST_F(FragmentDatabaseBakeTest, RanksBakeDisjointChunksThatAssembleIntoTheSameDatabase) {
   DatabaseBakeSettings s = testing::smallDatabaseSettings(7, false);
   const std::string reference = packBytes(bakeFragmentDatabase(s).value(), dir / "reference.h5");
   DatabaseCheckpointSettings c;
@@ -296,7 +296,7 @@ TEST_F(FragmentDatabaseTest, RanksBakeDisjointChunksThatAssembleIntoTheSameDatab
 // A real pack (8 entries with tets, modes and stress modes) damaged in many places: every flipped
 // byte and every truncation gives a typed pack error or, where the byte is unused by HDF5, the
 // same database; never a crash, a hang, an exception or a half-read pack.
-TEST_F(FragmentDatabaseTest, FlippedBytesAndTruncationsGiveTypedErrorsOrTheSameDatabase) {
+TEST_F(FragmentDatabaseBakeTest, FlippedBytesAndTruncationsGiveTypedErrorsOrTheSameDatabase) {
   const std::string bytes = packBytes(*physical, dir / "whole.h5");
   ASSERT_GT(bytes.size(), 10000u);
   const std::set<ErrorCode> packErrors = {ErrorCode::PackIoError, ErrorCode::PackFormatMismatch,
@@ -338,7 +338,7 @@ TEST_F(FragmentDatabaseTest, FlippedBytesAndTruncationsGiveTypedErrorsOrTheSameD
 
 // A writer killed between its temporary file and the rename leaves the file behind; the next
 // write of that pack removes it (its pid is gone) and keeps a live writer's.
-TEST_F(FragmentDatabaseTest, StaleTemporaryFilesOfKilledWritersAreRemoved) {
+TEST_F(FragmentDatabaseBakeTest, StaleTemporaryFilesOfKilledWritersAreRemoved) {
   const auto target = dir / "db.h5";
   char host[256] = {};
   ASSERT_EQ(::gethostname(host, sizeof host - 1), 0);
@@ -365,7 +365,7 @@ TEST_F(FragmentDatabaseTest, StaleTemporaryFilesOfKilledWritersAreRemoved) {
   EXPECT_TRUE(readPack(target));
 }
 
-TEST_F(FragmentDatabaseTest, DamagedDatabaseGivesTypedErrors) {
+TEST_F(FragmentDatabaseBakeTest, DamagedDatabaseGivesTypedErrors) {
   Pack pack;
   pack.database = *physical;
   const auto path = dir / "db.h5";
@@ -390,7 +390,7 @@ TEST_F(FragmentDatabaseTest, DamagedDatabaseGivesTypedErrors) {
   EXPECT_FALSE(std::filesystem::exists(dir / "bad.h5"));
 }
 
-TEST_F(FragmentDatabaseTest, ManifestDatabaseSectionAndErrors) {
+TEST_F(FragmentDatabaseBakeTest, ManifestDatabaseSectionAndErrors) {
   std::ofstream(dir / "m.json") << R"({"database": {"shapes": ")" +
                                        (testing::sourceDir() / "assets/shapes/base-shapes.json").string() +
                                        R"(", "only": ["box", "sphere"], "entries": 5, "seed": 3, "tets": 300, "modes": 4,)"

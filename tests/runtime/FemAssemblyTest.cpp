@@ -2,17 +2,16 @@
 
 #include <gtest/gtest.h>
 
-#include "brittle/precompute/MaterialLibrary.h"
-#include "brittle/testing/Fixtures.h"
+#include "brittle/testing/BakeFixtures.h"
 
 namespace brittle {
 namespace {
 
-Material glass() { return materialPreset("glass").value(); }
+using testing::presetGlass;
 
 TEST(FemAssembly, StiffnessIsSymmetricAndAnnihilatesRigidMotion) {
   const auto mesh = testing::makeBoxTetMesh(0.3, 0.2, 0.1, 3, 2, 2);
-  auto sys = assembleFem(mesh, glass(), {});
+  auto sys = assembleFem(mesh, presetGlass(), {});
   ASSERT_TRUE(sys.ok()) << sys.error().message;
   const SparseMatrixd& k = sys.value().stiffness;
   EXPECT_NEAR((SparseMatrixd(k.transpose()) - k).norm(), 0.0, 1e-12 * k.norm());
@@ -24,9 +23,9 @@ TEST(FemAssembly, StiffnessIsSymmetricAndAnnihilatesRigidMotion) {
 
 TEST(FemAssembly, MassMatricesCarryTheTotalMass) {
   const auto mesh = testing::makeBoxTetMesh(0.3, 0.2, 0.1, 3, 2, 2);
-  const double expected = glass().densityKgPerM3 * 0.3 * 0.2 * 0.1;
+  const double expected = presetGlass().densityKgPerM3 * 0.3 * 0.2 * 0.1;
   for (bool lumped : {false, true}) {
-    auto sys = assembleFem(mesh, glass(), FemSettings{lumped});
+    auto sys = assembleFem(mesh, presetGlass(), FemSettings{lumped});
     ASSERT_TRUE(sys.ok());
     Eigen::VectorXd ux = Eigen::VectorXd::Zero(sys.value().mass.rows());
     for (Eigen::Index i = 0; i < mesh.nodes.rows(); ++i) ux(3 * i) = 1.0;
@@ -39,7 +38,7 @@ TEST(FemAssembly, ConsistentMassCarriesTheExactRotationalInertia) {
   // the kinetic energy of a rotation is exact: ω·Jω with the tet mesh's inertia about the
   // centroid of the nodes. Lumping moves mass to the nodes and gets it wrong.
   const auto mesh = testing::makeBoxTetMesh(0.3, 0.2, 0.1, 3, 2, 2);
-  const Material m = glass();
+  const Material m = presetGlass();
   const double mass = m.densityKgPerM3 * 0.3 * 0.2 * 0.1;
   const double jz = mass * (0.3 * 0.3 + 0.2 * 0.2) / 12.0;  // box centre = node centroid here
   for (bool lumped : {false, true}) {
@@ -62,7 +61,7 @@ TEST(FemAssembly, ConsistentMassCarriesTheExactRotationalInertia) {
 TEST(FemAssembly, PatchTestUniformStrainGivesUniformStress) {
   // Linear displacement u = ε x reproduces a uniform strain exactly on P1 elements.
   const auto mesh = testing::makeBoxTetMesh(1.0, 1.0, 1.0, 2, 2, 2);
-  const Material m = glass();
+  const Material m = presetGlass();
   Eigen::Matrix3d grad;
   grad << 1e-4, 2e-5, 0, 0, -3e-5, 1e-5, 4e-5, 0, 2e-5;
   MatrixXdRow u(3 * mesh.nodes.rows(), 1);
@@ -83,7 +82,7 @@ TEST(FemAssembly, PatchTestUniformStrainGivesUniformStress) {
 TEST(FemAssembly, RejectsDegenerateAndInvertedTets) {
   auto mesh = testing::makeBoxTetMesh(1.0, 1.0, 1.0, 1, 1, 1);
   std::swap(mesh.tets(2, 0), mesh.tets(2, 1));
-  auto inverted = assembleFem(mesh, glass(), {});
+  auto inverted = assembleFem(mesh, presetGlass(), {});
   ASSERT_FALSE(inverted.ok());
   EXPECT_EQ(inverted.error().code, ErrorCode::DegenerateElement);
   EXPECT_NE(inverted.error().message.find("tet 2"), std::string::npos);
@@ -91,10 +90,10 @@ TEST(FemAssembly, RejectsDegenerateAndInvertedTets) {
   auto flat = testing::makeBoxTetMesh(2.0, 1.0, 0.5, 1, 1, 1);
   EXPECT_DOUBLE_EQ(degenerateTetVolumeM3(flat.nodes), 1e-12);
   flat.nodes.row(flat.tets(0, 3)) = (flat.nodes.row(flat.tets(0, 0)) + flat.nodes.row(flat.tets(0, 1)) + flat.nodes.row(flat.tets(0, 2))) / 3.0;
-  auto degenerate = assembleFem(flat, glass(), {});
+  auto degenerate = assembleFem(flat, presetGlass(), {});
   ASSERT_FALSE(degenerate.ok());
   EXPECT_EQ(degenerate.error().code, ErrorCode::DegenerateElement);
-  Material bad = glass();
+  Material bad = presetGlass();
   bad.poissonRatio = 0.5;
   EXPECT_EQ(assembleFem(testing::makeBoxTetMesh(1, 1, 1, 1, 1, 1), bad, {}).error().code, ErrorCode::InvalidMaterial);
 }

@@ -3,9 +3,9 @@
 
 #include <gtest/gtest.h>
 
-#include "FragmentTestSupport.h"
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/MeshValidation.h"
+#include "brittle/testing/DatabaseFixtures.h"
 
 namespace brittle {
 namespace {

@@ -1,5 +1,5 @@
-// FragmentTestSupport.h — random similarity transforms for the fragment tests (small databases:
-// DatabaseFixtures.h).
+// FragmentTestSupport.h — random similarity transforms for the matcher and scaling-law tests
+// (small databases: DatabaseFixtures.h).
 #pragma once
 
 #include <Eigen/Geometry>
