@@ -16,6 +16,7 @@
 #include <memory>
 #include <unistd.h>
 
+#include "brittle/core/Random.h"
 #include "brittle/database/Pack.h"
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/AtomicFile.h"
@@ -25,13 +26,6 @@
 
 namespace brittle {
 namespace {
-
-uint64_t splitmix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
 
 // Progress from many worker threads: one lock, fraction = entries done / entries.
 class SharedProgress {
@@ -83,7 +77,7 @@ TetMeshSettings DatabaseBakeSettings::defaultFragmentTetMeshSettings() {
 uint64_t fragmentEntrySeed(uint64_t seed, int64_t entry) { return splitmix64(seed + static_cast<uint64_t>(entry)); }
 
 bool isRuntimeFragmentEntry(uint64_t entrySeed, double fraction) {
-  return static_cast<double>(splitmix64(entrySeed ^ 0x52554e54494d45ull) >> 11) * 0x1.0p-53 < fraction;
+  return unitInterval(splitmix64(entrySeed ^ 0x52554e54494d45ull)) < fraction;
 }
 
 Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std::string& name,

@@ -9,6 +9,8 @@
 #include <random>
 #include <vector>
 
+#include "brittle/core/Random.h"
+
 namespace brittle::detail {
 
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -27,6 +29,6 @@ inline double secondsSince(Clock::time_point start) {
 }
 
 /// The top 53 bits of one draw, as a double in [0, 1).
-inline double unit(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+inline double unit(std::mt19937_64& rng) { return unitInterval(rng()); }
 
 }  // namespace brittle::detail

@@ -6,7 +6,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 #include "brittle/precompute/Progress.h"
 #include "brittle/runtime/World.h"
 

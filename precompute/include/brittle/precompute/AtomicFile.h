@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <string_view>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

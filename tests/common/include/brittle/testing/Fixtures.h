@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/core/MeshTypes.h"
 
 namespace brittle::testing {
 
