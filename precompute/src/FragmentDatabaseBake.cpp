@@ -16,10 +16,11 @@
 #include <memory>
 #include <unistd.h>
 
+#include "brittle/core/AtomicFile.h"
+#include "brittle/core/JsonChecks.h"
 #include "brittle/core/Random.h"
 #include "brittle/database/Pack.h"
 #include "brittle/descriptors/MassProperties.h"
-#include "brittle/precompute/AtomicFile.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshValidation.h"
@@ -514,9 +515,7 @@ Result<std::optional<DatabaseBakeSettings>> loadDatabaseManifest(const std::file
     static const std::set<std::string> kKeys = {"shapes", "only", "entries", "seed", "tets", "modes",
                                                 "descriptors_only", "moment_order", "voxel_resolution",
                                                 "runtime_fraction"};
-    for (const auto& [key, value] : d.items()) {
-      if (!kKeys.count(key)) return makeError(ErrorCode::ParseError, where + ": unknown key \"" + key + "\"");
-    }
+    if (Status st = checkKnownKeys(d, kKeys, where); !st) return st.error();
     if (!d.contains("shapes")) return makeError(ErrorCode::ParseError, where + ": \"shapes\" is required");
     for (const auto& [key, lo, hi] : {std::tuple{"entries", 1.0, 1e7}, std::tuple{"seed", 0.0, 9.007199254740992e15},
                                        std::tuple{"tets", 100.0, 1e6}, std::tuple{"modes", 1.0, 200.0},

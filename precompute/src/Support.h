@@ -1,10 +1,9 @@
 // Support.h — small helpers shared inside precompute (private): the median the sizing code
-// reports, wall-clock seconds for progress and reports, and a uniform draw in [0, 1) that is the
-// same on every standard library (std::uniform_real_distribution is not).
+// reports, and a uniform draw in [0, 1) that is the same on every standard library
+// (std::uniform_real_distribution is not). Wall-clock seconds come from core/Timing.h.
 #pragma once
 
 #include <algorithm>
-#include <chrono>
 #include <limits>
 #include <random>
 #include <vector>
@@ -21,11 +20,6 @@ inline double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-using Clock = std::chrono::steady_clock;
-inline double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
 /// The top 53 bits of one draw, as a double in [0, 1).
