@@ -12,7 +12,10 @@ set(BRITTLE_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/brittle)
 # Dependencies outside the system directories keep their link directories, as in the build tree.
 file(RELATIVE_PATH brittleLibFromBin /${CMAKE_INSTALL_BINDIR} /${CMAKE_INSTALL_LIBDIR})
 
-set(brittleInstalledTargets "")
+# core is header-only (an INTERFACE target): its headers and its export entry, no library file.
+set_target_properties(brittle_core PROPERTIES EXPORT_NAME core)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/core/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+set(brittleInstalledTargets brittle_core)
 foreach(module descriptors database runtime precompute)
   set_target_properties(brittle_${module} PROPERTIES EXPORT_NAME ${module}
     INSTALL_RPATH "$ORIGIN" INSTALL_RPATH_USE_LINK_PATH ON)

@@ -1,27 +1,20 @@
 // PackWriter.cpp — writes a Pack as an HDF5 file in schema v2 (database/PACK_SCHEMA.md).
 //
 // The whole pack is validated before a byte is written, then written to a temporary file in the
-// target's directory, flushed to disk and renamed over the target. A reader therefore sees either
-// the old pack or the new one, never a half-written file.
-#include <fcntl.h>
-#include <signal.h>
+// target's directory, flushed to disk and renamed over the target (core/AtomicFile.h). A reader
+// therefore sees either the old pack or the new one, never a half-written file.
 #include <hdf5.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <cerrno>
 #include <cstdint>
-#include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <set>
 #include <string>
-#include <system_error>
 #include <vector>
 
 #include "Hdf5Util.h"
+#include "brittle/core/AtomicFile.h"
 #include "brittle/database/Pack.h"
 
 
@@ -610,67 +603,6 @@ void writeFile(const Pack& pack, const fs::path& file) {
   if (!h5.close()) failHdf5("cannot close (flush) '" + file.string() + "'");
 }
 
-// The rename is only atomic with respect to a crash if the new file's data reached the disk
-// first; otherwise the rename could survive a power loss while the data does not.
-void syncToDisk(const fs::path& file) {
-  const int fd = ::open(file.c_str(), O_RDONLY);
-  if (fd < 0) failIo("cannot reopen '" + file.string() + "' to sync it: " + std::strerror(errno));
-  const int rc = ::fsync(fd);
-  const int savedErrno = errno;
-  ::close(fd);
-  if (rc != 0) failIo("cannot sync '" + file.string() + "' to disk: " + std::strerror(savedErrno));
-}
-
-// Makes the rename itself durable. Best effort: some file systems refuse fsync on a directory,
-// and by then the pack is already whole on disk.
-void syncDirectory(const fs::path& dir) {
-  const int fd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (fd < 0) return;
-  (void)::fsync(fd);
-  ::close(fd);
-}
-
-std::string hostName() {
-  char name[256] = {};
-  if (::gethostname(name, sizeof name - 1) != 0) return "host";
-  std::string out(name);
-  std::replace(out.begin(), out.end(), '-', '_');  // '-' separates the fields of the name below
-  return out;
-}
-
-// "<target>.tmp-<host>-<pid>-<n>": the host and pid keep two processes apart (also on a shared
-// file system), the counter two threads of one process.
-std::string temporaryPrefix(const fs::path& target) {
-  return target.filename().string() + ".tmp-" + hostName() + "-";
-}
-
-fs::path temporaryPathFor(const fs::path& target) {
-  static std::atomic<unsigned> counter{0};
-  return target.parent_path() /
-         (temporaryPrefix(target) + std::to_string(::getpid()) + "-" + std::to_string(counter++));
-}
-
-// A writer killed between creating its temporary file and the rename (SIGKILL, power loss)
-// leaves the file behind. Before writing, remove those of this target whose writer, on this
-// host, is gone. Best effort: a file that cannot be removed stays.
-void removeStaleTemporaries(const fs::path& target) {
-  const std::string prefix = temporaryPrefix(target);
-  std::error_code ec;
-  const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind(prefix, 0) != 0) continue;
-    const std::string rest = name.substr(prefix.size());  // "<pid>-<n>"
-    const auto dash = rest.find('-');
-    if (dash == 0 || dash == std::string::npos || rest.find_first_not_of("0123456789-") != std::string::npos) continue;
-    const long pid = std::strtol(rest.substr(0, dash).c_str(), nullptr, 10);
-    if (pid <= 0 || pid == ::getpid()) continue;
-    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to judge
-    std::error_code ignored;
-    fs::remove(entry.path(), ignored);
-  }
-}
-
 }  // namespace
 
 Status writePack(const Pack& pack, const fs::path& path) {
@@ -681,23 +613,18 @@ Status writePack(const Pack& pack, const fs::path& path) {
     return makeError(ErrorCode::PackIoError, "cannot write pack '" + path.string() + "': not a file name");
   }
   hdf5::ErrorSilencer silencer;
-  fs::path temporary;
-  std::error_code ignored;
-  try {
-    removeStaleTemporaries(path);
-    temporary = temporaryPathFor(path);
-    writeFile(pack, temporary);
-    syncToDisk(temporary);
-    std::error_code ec;
-    fs::rename(temporary, path, ec);
-    if (ec) failIo("cannot rename '" + temporary.string() + "' to '" + path.string() + "': " + ec.message());
-    syncDirectory(path.parent_path());
-  } catch (const WriteFailure& failure) {
-    if (!temporary.empty()) fs::remove(temporary, ignored);
-    return makeError(failure.error.code, "cannot write pack '" + path.string() + "': " + failure.error.message);
-  } catch (const std::exception& e) {
-    if (!temporary.empty()) fs::remove(temporary, ignored);
-    return makeError(ErrorCode::PackIoError, "cannot write pack '" + path.string() + "': " + e.what());
+  Status written = writeAtomically(path, [&](const fs::path& temporary) -> Status {
+    try {
+      writeFile(pack, temporary);
+    } catch (const WriteFailure& failure) {
+      return failure.error;
+    } catch (const std::exception& e) {
+      return makeError(ErrorCode::PackIoError, e.what());
+    }
+    return Ok{};
+  });
+  if (!written) {
+    return makeError(written.error().code, "cannot write pack '" + path.string() + "': " + written.error().message);
   }
   return Ok{};
 }

@@ -4,18 +4,9 @@
 #include <cstdint>
 #include <string>
 
+#include "brittle/core/Random.h"
+
 namespace brittle::detail {
-namespace {
-
-// splitmix64 finaliser: a cheap bijective mix, so distinct vertices get unrelated hashes.
-uint64_t mix(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-}  // namespace
 
 Status checkClosedSurface(const TriangleMesh& surface) {
   const Eigen::Index nv = surface.vertices.rows(), nf = surface.faces.rows();
@@ -38,8 +29,9 @@ Status checkClosedSurface(const TriangleMesh& surface) {
                                                          std::to_string(i) + " out of range [0, " +
                                                          std::to_string(nv) + ")");
       }
-      h[k] = mix(static_cast<uint64_t>(i));
-      g[k] = mix(static_cast<uint64_t>(i) ^ 0x5bd1e9955bd1e995ULL);
+      // splitmix64 is a bijective mix: distinct vertices get unrelated hashes.
+      h[k] = splitmix64(static_cast<uint64_t>(i));
+      g[k] = splitmix64(static_cast<uint64_t>(i) ^ 0x5bd1e9955bd1e995ULL);
     }
     for (int k = 0; k < 3; ++k) {
       const int l = (k + 1) % 3;

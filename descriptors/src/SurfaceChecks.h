@@ -2,8 +2,8 @@
 #pragma once
 
 #include "brittle/descriptors/CanonicalFrame.h"
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 
 namespace brittle::detail {
 

@@ -7,6 +7,7 @@
 #include <set>
 #include <tuple>
 
+#include "brittle/core/JsonChecks.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/MaterialLibrary.h"
 
@@ -35,9 +36,7 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
       const auto& o = doc["objects"][i];
       const std::string where = "manifest " + path.filename().string() + ", object " + std::to_string(i);
       if (!o.is_object()) return makeError(ErrorCode::ParseError, where + ": not an object");
-      for (const auto& [key, value] : o.items()) {
-        if (!kKeys.count(key)) return makeError(ErrorCode::ParseError, where + ": unknown key \"" + key + "\"");
-      }
+      if (Status st = checkKnownKeys(o, kKeys, where); !st) return st.error();
       if (!o.contains("mesh") || !o.contains("material")) {
         return makeError(ErrorCode::ParseError, where + ": \"mesh\" and \"material\" are required");
       }

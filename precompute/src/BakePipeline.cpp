@@ -1,19 +1,14 @@
 #include "brittle/precompute/BakePipeline.h"
 
-#include <chrono>
 #include <set>
 
+#include "brittle/core/Timing.h"
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/MeshIO.h"
 #include "brittle/precompute/MeshValidation.h"
-#include "Support.h"
-
 
 namespace brittle {
 namespace {
-
-using detail::Clock;
-using detail::secondsSince;
 
 Error inObject(const std::string& name, const Error& e) {
   return Error{e.code, "object '" + name + "': " + e.message};
@@ -37,10 +32,10 @@ class NamedProgress final : public ProgressSink {
 }  // namespace
 
 static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeSettings& s, ProgressSink* progressIn,
-                                            ObjectBakeReport* report, Clock::time_point start);
+                                            ObjectBakeReport* report, SteadyClock::time_point start);
 
 Result<ObjectAsset> bakeObject(const ObjectBakeSettings& s, ProgressSink* progressIn, ObjectBakeReport* report) {
-  const auto start = Clock::now();
+  const auto start = SteadyClock::now();
   const std::string name = s.name.empty() ? s.meshPath.stem().string() : s.name;
   NamedProgress progress(progressIn, name);
   if (Status m = validateMaterial(s.material); !m) return inObject(name, m.error());
@@ -55,11 +50,11 @@ Result<ObjectAsset> bakeObject(const ObjectBakeSettings& s, ProgressSink* progre
 
 Result<ObjectAsset> bakeSurface(TriangleMesh mesh, const ObjectBakeSettings& s, ProgressSink* progressIn,
                                 ObjectBakeReport* report) {
-  return bakeSurfaceSince(std::move(mesh), s, progressIn, report, Clock::now());
+  return bakeSurfaceSince(std::move(mesh), s, progressIn, report, SteadyClock::now());
 }
 
 static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeSettings& s, ProgressSink* progressIn,
-                                            ObjectBakeReport* report, Clock::time_point start) {
+                                            ObjectBakeReport* report, SteadyClock::time_point start) {
   const std::string& name = s.name;
   NamedProgress progress(progressIn, name);
   ObjectBakeReport localReport;
@@ -89,7 +84,7 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
   rec.seed = static_cast<int64_t>(s.modal.seed);
   rec.generator = std::string("brittle ") + BRITTLE_VERSION;
 
-  auto t = Clock::now();
+  auto t = SteadyClock::now();
   auto tets = tetrahedralize(mesh, s.tetMesh, &progress);
   if (!tets) return inObject(name, tets.error());
   rec.meshingS = secondsSince(t);
@@ -100,13 +95,13 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
   asset.surfaceFaces = std::move(tets.value().surfaceFaces);
   asset.quality = tets.value().quality;
 
-  t = Clock::now();
+  t = SteadyClock::now();
   progress.report("assembling K and M", 0.0);
   auto system = assembleFem(asset.tetMesh, s.material, s.fem);
   if (!system) return inObject(name, system.error());
   rec.assemblyS = secondsSince(t);
 
-  t = Clock::now();
+  t = SteadyClock::now();
   ModalSettings modal = s.modal;
   if (modal.shiftRad2PerS2 == 0.0) modal.shiftRad2PerS2 = defaultShift(asset.tetMesh.nodes, s.material);
   rec.shift = modal.shiftRad2PerS2;
@@ -116,7 +111,7 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
   rep.modalStats = modes.value().stats;
   asset.modal = std::move(modes.value().basis);
 
-  t = Clock::now();
+  t = SteadyClock::now();
   progress.report("stress modes", 0.0);
   asset.stressModes = computeStressModes(asset.tetMesh, s.material, asset.modal.modes);
   rec.stressModesS = secondsSince(t);

@@ -1,5 +1,6 @@
 #include "brittle/precompute/BaseShapes.h"
 
+#include "brittle/core/JsonChecks.h"
 #include "brittle/descriptors/MeshRefinement.h"
 
 #include <algorithm>
@@ -205,9 +206,7 @@ Result<std::vector<BaseShapeDefinition>> loadBaseShapes(const std::filesystem::p
       return makeError(ErrorCode::ParseError, where + ": \"" + key + "\" " + what);
     };
     if (!j.is_object()) return makeError(ErrorCode::ParseError, where + ": not an object");
-    for (const auto& item : j.items()) {
-      if (!kKeys.count(item.key())) return bad(item.key(), "is not a known key");
-    }
+    if (auto key = findUnknownKey(j, kKeys)) return bad(*key, "is not a known key");
     for (const char* key : {"name", "kind", "size"}) {
       if (!j.contains(key)) return bad(key, "is required");
     }

@@ -3,13 +3,13 @@
 
 #include <ceres/ceres.h>
 
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <numbers>
 #include <optional>
 
+#include "brittle/core/Timing.h"
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/ModalAnalysis.h"
 #include "brittle/runtime/FemAssembly.h"
@@ -249,7 +249,7 @@ Result<std::vector<double>> naturalFrequenciesHz(const TetMesh& mesh, const Mate
 Result<CalibrationResult> calibrateMaterial(const TetMesh& mesh, const Material& base,
                                             const CalibrationMeasurements& measurements,
                                             const CalibrationSettings& settings, ProgressSink* progress) {
-  const auto started = std::chrono::steady_clock::now();
+  const auto started = SteadyClock::now();
   if (Status ok = checkInputs(mesh, base, measurements, settings); !ok) return ok.error();
   const std::vector<double>& measuredHz = measurements.frequenciesHz;
   const int count = static_cast<int>(measuredHz.size());
@@ -365,7 +365,7 @@ Result<CalibrationResult> calibrateMaterial(const TetMesh& mesh, const Material&
                            base.name + " (" + base.source + ")";
   if (Status valid = validateMaterial(result.material); !valid) return valid.error();
   result.modalSolves = sweep.solves();
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  result.seconds = secondsSince(started);
   reportProgress(progress, "calibrate", 1.0);
   return result;
 }

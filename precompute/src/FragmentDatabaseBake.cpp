@@ -16,22 +16,17 @@
 #include <memory>
 #include <unistd.h>
 
+#include "brittle/core/AtomicFile.h"
+#include "brittle/core/JsonChecks.h"
+#include "brittle/core/Random.h"
 #include "brittle/database/Pack.h"
 #include "brittle/descriptors/MassProperties.h"
-#include "brittle/precompute/AtomicFile.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshValidation.h"
 
 namespace brittle {
 namespace {
-
-uint64_t splitmix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
 
 // Progress from many worker threads: one lock, fraction = entries done / entries.
 class SharedProgress {
@@ -83,7 +78,7 @@ TetMeshSettings DatabaseBakeSettings::defaultFragmentTetMeshSettings() {
 uint64_t fragmentEntrySeed(uint64_t seed, int64_t entry) { return splitmix64(seed + static_cast<uint64_t>(entry)); }
 
 bool isRuntimeFragmentEntry(uint64_t entrySeed, double fraction) {
-  return static_cast<double>(splitmix64(entrySeed ^ 0x52554e54494d45ull) >> 11) * 0x1.0p-53 < fraction;
+  return unitInterval(splitmix64(entrySeed ^ 0x52554e54494d45ull)) < fraction;
 }
 
 Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std::string& name,
@@ -520,9 +515,7 @@ Result<std::optional<DatabaseBakeSettings>> loadDatabaseManifest(const std::file
     static const std::set<std::string> kKeys = {"shapes", "only", "entries", "seed", "tets", "modes",
                                                 "descriptors_only", "moment_order", "voxel_resolution",
                                                 "runtime_fraction"};
-    for (const auto& [key, value] : d.items()) {
-      if (!kKeys.count(key)) return makeError(ErrorCode::ParseError, where + ": unknown key \"" + key + "\"");
-    }
+    if (Status st = checkKnownKeys(d, kKeys, where); !st) return st.error();
     if (!d.contains("shapes")) return makeError(ErrorCode::ParseError, where + ": \"shapes\" is required");
     for (const auto& [key, lo, hi] : {std::tuple{"entries", 1.0, 1e7}, std::tuple{"seed", 0.0, 9.007199254740992e15},
                                        std::tuple{"tets", 100.0, 1e6}, std::tuple{"modes", 1.0, 200.0},

@@ -1,9 +1,9 @@
 // FragmentSizing.cpp — what a scene's fragments need: sceneFragments, chooseDebrisThreshold and
 // chooseSearch (ModelSizing.h).
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
+#include "brittle/core/Timing.h"
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/precompute/ModelSizing.h"
@@ -156,12 +156,12 @@ Result<SearchSizing> chooseSearch(const FragmentDatabase& database, const std::v
       t.checks = checks;
       std::vector<double> errors, times;
       for (size_t i = 0; i < fragments.size(); ++i) {
-        const auto start = std::chrono::steady_clock::now();
+        const auto start = SteadyClock::now();
         auto m = matcher.value().match(fragments[i].surface, kind, 1);
         if (!m) continue;
         auto placed = instantiateEntry(database.entries[static_cast<size_t>(m.value().front().entry)],
                                        database.referenceMaterial, *material[i], m.value().front().queryFrame);
-        times.push_back(1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        times.push_back(1e3 * secondsSince(start));
         if (!placed || placed.value().modal.frequenciesHz.size() < 3) continue;
         const Eigen::Vector3d hz = placed.value().modal.frequenciesHz.head<3>();
         errors.push_back(((hz - fragments[i].frequenciesHz).array().abs() / fragments[i].frequenciesHz.array()).maxCoeff());

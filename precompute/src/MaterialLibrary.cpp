@@ -1,7 +1,5 @@
 #include "brittle/precompute/MaterialLibrary.h"
 
-#include "brittle/precompute/AtomicFile.h"
-
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -9,6 +7,9 @@
 #include <system_error>
 
 #include <nlohmann/json.hpp>
+
+#include "brittle/core/AtomicFile.h"
+#include "brittle/core/JsonChecks.h"
 
 namespace brittle {
 namespace {
@@ -208,7 +209,7 @@ constexpr const char* kAllKeys[] = {kKeyName,     kKeyYoungs, kKeyPoisson,   kKe
                                     kKeyBeta,     kKeyRestitution, kKeySource};
 
 Error materialFileError(const std::filesystem::path& path, const std::string& what) {
-  return makeError(ErrorCode::ParseError, "material file " + path.string() + ": " + what);
+  return parseError("material file " + path.string(), what);
 }
 
 Result<double> readNumber(const nlohmann::json& doc, const char* key, const std::filesystem::path& path) {
@@ -228,11 +229,7 @@ Result<std::string> readString(const nlohmann::json& doc, const char* key, const
 
 Result<Material> materialFromJson(const nlohmann::json& doc, const std::filesystem::path& path) {
   if (!doc.is_object()) return materialFileError(path, "the top level must be a JSON object");
-  for (const auto& item : doc.items()) {
-    const bool known = std::any_of(std::begin(kAllKeys), std::end(kAllKeys),
-                                   [&](const char* k) { return item.key() == k; });
-    if (!known) return materialFileError(path, "unknown key \"" + item.key() + "\"");
-  }
+  if (auto key = findUnknownKey(doc, kAllKeys)) return materialFileError(path, unknownKeyMessage(*key));
 
   Material m;
   struct NumberField {

@@ -7,23 +7,20 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <mutex>
 #include <numbers>
 #include <numeric>
 #include <random>
 #include <vector>
-#include "Support.h"
+
+#include "brittle/core/Timing.h"
 
 namespace brittle {
 namespace {
 
 // Largest accepted relative residual ‖Kφ − λMφ‖/‖Kφ‖ before a solve is redone at machine precision.
 constexpr double kMaxResidual = 1e-8;
-
-using detail::Clock;
-using detail::secondsSince;
 
 class CholmodFactor final : public ShiftInvertFactor {
  public:
@@ -174,7 +171,7 @@ Result<std::unique_ptr<ShiftInvertFactor>> ShiftInvertFactor::create(const Spars
 
 Result<ModalResult> computeModes(const FemSystem& sys, const Points& nodes, const ModalSettings& s,
                                  ProgressSink* progress) {
-  const auto start = Clock::now();
+  const auto start = SteadyClock::now();
   if (Status ok = checkModeCount(sys, s.modeCount); !ok) return ok.error();
   if (!(s.shiftRad2PerS2 < 0.0)) {
     return makeError(ErrorCode::InvalidArgument, "the ARPACK shift must be negative (set it from defaultShift())");
@@ -206,7 +203,7 @@ Result<ModalResult> computeModes(const FemSystem& sys, const Points& nodes, cons
   // Recursive: the machine-precision fallback calls computeModes again on the same thread.
   static std::recursive_mutex arpackMutex;
   const std::lock_guard<std::recursive_mutex> arpackLock(arpackMutex);
-  const auto iterStart = Clock::now();
+  const auto iterStart = SteadyClock::now();
   Eigen::VectorXd tmp(n);
   for (int attempt = 0; attempt <= s.retries; ++attempt) {
     ncv = std::min(ncv, n);
@@ -293,7 +290,7 @@ Result<ModalResult> computeModes(const FemSystem& sys, const Points& nodes, cons
 }
 
 Result<ModalResult> computeModesDense(const FemSystem& sys, const Points& nodes, const ModalSettings& s) {
-  const auto start = Clock::now();
+  const auto start = SteadyClock::now();
   if (Status ok = checkModeCount(sys, s.modeCount); !ok) return ok.error();
   const Eigen::MatrixXd k(sys.stiffness), m(sys.mass);
   Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> solver(k, m);

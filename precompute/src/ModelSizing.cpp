@@ -2,7 +2,6 @@
 #include "brittle/precompute/ModelSizing.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -10,7 +9,8 @@
 #include <optional>
 #include <random>
 
-#include "brittle/precompute/AtomicFile.h"
+#include "brittle/core/AtomicFile.h"
+#include "brittle/core/Timing.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/runtime/FullFemReference.h"
 #include "brittle/runtime/World.h"
@@ -20,7 +20,6 @@ namespace brittle {
 namespace {
 
 using detail::kInf;
-using detail::secondsSince;
 using detail::unit;
 using detail::median;
 
@@ -135,11 +134,11 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
           FullFemSettings fs;
           fs.stepsPerContact = settings.referenceStepsPerContact;
           fs.extraS = r.value().ringDownS;
-          const auto start = std::chrono::steady_clock::now();
+          const auto start = SteadyClock::now();
           auto ref = solveFullFemImpact(asset.tetMesh, material, r.value().loadWeights, r.value().forceDirectionLocal,
                                         r.value().contact, fs);
           if (!ref) return ref.error();
-          out.referenceS += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+          out.referenceS += secondsSince(start);
           reference[i] = ref.value().peakPrincipalPa;
           reportProgress(progress, stage + ": full-FEM reference",
                          static_cast<double>(i + 1) / static_cast<double>(impacts.size()));
@@ -170,7 +169,7 @@ std::string objectName(const ObjectBakeSettings& s) { return s.name.empty() ? s.
 /// Bakes the objects (and the database, when given) into a pack, written to `path`.
 Result<Pack> bakeAndWrite(const std::vector<ObjectBakeSettings>& objects, const FragmentDatabase* database,
                           const std::filesystem::path& path, ProgressSink* progress, double* seconds, int64_t* bytes) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = SteadyClock::now();
   auto pack = bakePack(objects, progress);
   if (!pack) return pack.error();
   *seconds = secondsSince(start);
@@ -213,7 +212,7 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
   // The database is the same on both sides: baked once, counted in both bake times.
   std::optional<FragmentDatabase> db;
   if (database) {
-    const auto start = std::chrono::steady_clock::now();
+    const auto start = SteadyClock::now();
     auto baked = bakeFragmentDatabase(*database, progress);
     if (!baked) return baked.error();
     report.databaseBakeS = secondsSince(start);
@@ -248,7 +247,7 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
   }
   // What the fragments need: the debris threshold, and the descriptor and search precision the
   // sized pack's database stores.
-  const auto fragmentStart = std::chrono::steady_clock::now();
+  const auto fragmentStart = SteadyClock::now();
   std::vector<FragmentRecord> fragments;
   std::vector<Material> materials;
   for (size_t k = 0; k < used.size(); ++k) {

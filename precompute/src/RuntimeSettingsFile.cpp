@@ -7,13 +7,14 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "brittle/core/JsonChecks.h"
 #include "brittle/descriptors/ShapeDescriptors.h"
 
 namespace brittle {
 namespace {
 
 Error settingsFileError(std::string_view source, const std::string& what) {
-  return makeError(ErrorCode::ParseError, "runtime settings " + std::string(source) + ": " + what);
+  return parseError("runtime settings " + std::string(source), what);
 }
 
 }  // namespace
@@ -57,7 +58,7 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
     } else if (key == "modes") {
       if (Status st = integer(key, s.modeCount); !st) return st.error();
     } else {
-      return settingsFileError(sourceName, "unknown key \"" + key + "\"");
+      return settingsFileError(sourceName, unknownKeyMessage(key));
     }
   }
   return s;

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "brittle/core/JsonChecks.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/ModelSizing.h"
 #include "Support.h"
@@ -16,16 +17,11 @@ namespace {
 
 using detail::kInf;
 
-Error sceneFileError(const std::string& where, const std::string& what) {
-  return makeError(ErrorCode::ParseError, "requirements " + where + ": " + what);
-}
+Error sceneFileError(const std::string& where, const std::string& what) { return parseError("requirements " + where, what); }
 
 Status checkKeys(const nlohmann::json& o, const std::set<std::string>& keys, const std::string& where) {
   if (!o.is_object()) return sceneFileError(where, "not an object");
-  for (const auto& [key, value] : o.items()) {
-    if (!keys.count(key)) return sceneFileError(where, "unknown key \"" + key + "\"");
-  }
-  return Ok{};
+  return checkKnownKeys(o, keys, "requirements " + where);
 }
 
 }  // namespace

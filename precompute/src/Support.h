@@ -1,13 +1,14 @@
 // Support.h — small helpers shared inside precompute (private): the median the sizing code
-// reports, wall-clock seconds for progress and reports, and a uniform draw in [0, 1) that is the
-// same on every standard library (std::uniform_real_distribution is not).
+// reports, and a uniform draw in [0, 1) that is the same on every standard library
+// (std::uniform_real_distribution is not). Wall-clock seconds come from core/Timing.h.
 #pragma once
 
 #include <algorithm>
-#include <chrono>
 #include <limits>
 #include <random>
 #include <vector>
+
+#include "brittle/core/Random.h"
 
 namespace brittle::detail {
 
@@ -21,12 +22,7 @@ inline double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-using Clock = std::chrono::steady_clock;
-inline double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 /// The top 53 bits of one draw, as a double in [0, 1).
-inline double unit(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+inline double unit(std::mt19937_64& rng) { return unitInterval(rng()); }
 
 }  // namespace brittle::detail

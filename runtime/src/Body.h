@@ -18,7 +18,7 @@
 
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 #include "brittle/runtime/FragmentSurfaces.h"
 #include "brittle/runtime/StaticCorrection.h"
 #include "brittle/runtime/TetTopology.h"

@@ -1,13 +1,13 @@
 #include "ImpactStages.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <string>
 
 #include "ContactGeometry.h"
+#include "brittle/core/Timing.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/runtime/FragmentModes.h"
 #include "brittle/runtime/FragmentSurfaces.h"
@@ -19,9 +19,6 @@
 
 namespace brittle::detail {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 Error inStage(const char* stage, const Error& e) { return Error{e.code, std::string(stage) + ": " + e.message}; }
 
@@ -340,35 +337,35 @@ Status computeImpact(const ImpactJob& submitted, ImpactWorkspace& ws, ImpactResu
   }
   Flow flow;
   StageTimes& t = result.times;
-  auto t0 = Clock::now();
+  auto t0 = SteadyClock::now();
   if (Status st = contactStage(job, flow, result); !st) return st;  // its errors name the impact already
-  t.contactS = since(t0);
+  t.contactS = secondsSince(t0);
 
-  t0 = Clock::now();
+  t0 = SteadyClock::now();
   if (Status st = prepareStage(job, flow, result); !st) return inStage("static correction", st.error());
-  t.prepareS = since(t0);
+  t.prepareS = secondsSince(t0);
 
-  t0 = Clock::now();
+  t0 = SteadyClock::now();
   if (Status st = modalStage(job, flow, ws, result); !st) return inStage("modal response", st.error());
-  t.modalS = since(t0);
+  t.modalS = secondsSince(t0);
 
-  t0 = Clock::now();
+  t0 = SteadyClock::now();
   if (Status st = stressStage(job, flow, ws, result); !st) return inStage("stress scan", st.error());
-  t.stressS = since(t0);
+  t.stressS = secondsSince(t0);
   if (ws.scan.seeds.empty()) return Ok{};
 
-  t0 = Clock::now();
+  t0 = SteadyClock::now();
   if (Status st = crackStage(job, flow, ws, result); !st) return inStage("crack growth", st.error());
-  t.propagationS = since(t0);
+  t.propagationS = secondsSince(t0);
   if (result.fracture.fragmentCount < 2) return Ok{};
 
-  t0 = Clock::now();
+  t0 = SteadyClock::now();
   if (Status st = surfaceStage(job, ws, result); !st) return inStage("fragment surfaces", st.error());
-  t.surfacesS = since(t0);
+  t.surfacesS = secondsSince(t0);
 
-  t0 = Clock::now();
+  t0 = SteadyClock::now();
   newBodiesStage(job, ws, result, born);
-  t.matchingS = since(t0);
+  t.matchingS = secondsSince(t0);
   result.broken = true;
   return Ok{};
 }

@@ -12,6 +12,7 @@
 
 #include "Body.h"
 #include "ImpactStages.h"
+#include "brittle/core/Random.h"
 
 namespace brittle {
 namespace {
@@ -20,13 +21,6 @@ using detail::Body;
 using detail::BodySource;
 using detail::makeBody;
 
-
-uint64_t mix(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
 
 struct Slot {
   uint32_t generation = 0;
@@ -158,7 +152,7 @@ struct World::Impl {
     job.rotation = s.rotation;
     job.translation = s.translation;
     job.desc = desc;
-    job.crackSeed = mix(settings.seed ^ mix(settings.fracture.crack.seed + impacts++));
+    job.crackSeed = splitmix64(settings.seed ^ splitmix64(settings.fracture.crack.seed + impacts++));
     job.settings = &settings.fracture;
     job.matcher = matcher ? &*matcher : nullptr;
     job.database = &pack.database;

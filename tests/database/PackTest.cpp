@@ -16,6 +16,7 @@
 #include <thread>
 #include <vector>
 
+#include "brittle/core/Random.h"
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/testing/Fixtures.h"
 
@@ -29,13 +30,8 @@ namespace fs = std::filesystem;
 // splitmix64: a fixed, platform-independent sequence (std distributions are not).
 class Bits {
  public:
-  explicit Bits(uint64_t seed) : mState(seed) {}
-  uint64_t next() {
-    uint64_t z = (mState += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  }
+  explicit Bits(uint64_t seed) : mStream(seed) {}
+  uint64_t next() { return mStream.next(); }
   // Any finite double, from random bits: subnormals, −0, huge and tiny values all occur, which is
   // what a bit-exact round trip must survive.
   double anyFinite() {
@@ -46,10 +42,10 @@ class Bits {
       if (std::isfinite(d)) return d;
     }
   }
-  double uniform(double lo, double hi) { return lo + (hi - lo) * static_cast<double>(next() >> 11) * 0x1p-53; }
+  double uniform(double lo, double hi) { return lo + (hi - lo) * unitInterval(next()); }
 
  private:
-  uint64_t mState;
+  SplitMix64 mStream;
 };
 
 Material makeMaterial(const std::string& name, double youngsPa, double nu, double rho) {

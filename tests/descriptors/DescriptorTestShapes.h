@@ -10,7 +10,7 @@
 #include <utility>
 
 #include "brittle/descriptors/MeshRefinement.h"
-#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/core/MeshTypes.h"
 
 namespace brittle::testing {
 

@@ -14,7 +14,7 @@
 #include <string_view>
 #include <system_error>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 
 namespace brittle::fuzz {
 

@@ -22,7 +22,7 @@ step() { echo "== $* ($SECONDS s)"; }
 step "install the build into $prefix"
 "$cmake" --install "$build" --prefix "$prefix"
 config=$(find "$prefix" -name brittleConfig.cmake -print -quit)
-for f in "$prefix/bin/brittle" "$prefix/include/brittle/runtime/World.h" "$config"; do
+for f in "$prefix/bin/brittle" "$prefix/include/brittle/core/Result.h" "$prefix/include/brittle/runtime/World.h" "$config"; do
   [ -f "$f" ] || { echo "not installed: $f" >&2; exit 1; }
 done
 

@@ -20,7 +20,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -28,6 +27,7 @@
 #include <regex>
 #include <sstream>
 
+#include "brittle/core/Timing.h"
 #include "brittle/runtime/FullFemReference.h"
 #include "brittle/runtime/World.h"
 #include "brittle/testing/BakeFixtures.h"
@@ -181,18 +181,18 @@ TEST(CalculixCrossCheck, TheFullFemReferenceMatchesCalculixOnAPlateImpact) {
   fs.stepsPerContact = 40;
   fs.durationS = 3.0 * c.result.contact.durationS;  // the contact and as long again twice: ccx refactorises per increment
   const double h = c.result.contact.durationS / fs.stepsPerContact;
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = SteadyClock::now();
   auto ours = solveFullFemImpact(c.mesh, c.material, c.result.loadWeights, c.result.forceDirectionLocal, c.result.contact, fs);
-  const double oursS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double oursS = secondsSince(start);
   ASSERT_TRUE(ours) << ours.error().message;
 
   const auto dir = testing::makeTempDir("calculix");
   writeDeck(dir / "check.inp", c, h, ours.value().steps);
   const std::string command = "cd '" + dir.string() +
                               "' && CCX_NPROC_EQUATION_SOLVER=1 OMP_NUM_THREADS=1 ccx -i check > ccx.log 2>&1";
-  const auto ccxStart = std::chrono::steady_clock::now();
+  const auto ccxStart = SteadyClock::now();
   const int status = std::system(command.c_str());
-  const double ccxS = std::chrono::duration<double>(std::chrono::steady_clock::now() - ccxStart).count();
+  const double ccxS = secondsSince(ccxStart);
   ASSERT_EQ(status, 0) << "ccx failed (is calculix-ccx installed? tools/setup.sh installs it); see " << (dir / "ccx.log");
   const CcxPeak theirs = readPeak(dir / "check.dat");
   ASSERT_EQ(theirs.increments, ours.value().steps);

@@ -2,9 +2,9 @@
 #pragma once
 
 #include <algorithm>
-#include <chrono>
 #include <vector>
 
+#include "brittle/core/Timing.h"
 #include "brittle/precompute/BaseShapes.h"
 
 namespace brittle::bench {
@@ -35,9 +35,9 @@ template <typename F>
 double medianSeconds(int repeats, F&& f) {
   std::vector<double> t;
   for (int i = 0; i < repeats; ++i) {
-    const auto start = std::chrono::steady_clock::now();
+    const auto start = SteadyClock::now();
     f();
-    t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    t.push_back(secondsSince(start));
   }
   return percentile(t, 0.5);
 }

@@ -3,7 +3,6 @@
 #include "BenchSupport.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <limits>
@@ -11,6 +10,7 @@
 #include <random>
 #include <string>
 
+#include "brittle/core/Timing.h"
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/runtime/FragmentModes.h"
@@ -19,7 +19,6 @@
 namespace brittle::bench {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 
 double maxRelative3(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   if (a.size() < 3 || b.size() < 3) return std::numeric_limits<double>::quiet_NaN();
@@ -169,13 +168,13 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
           Result<ObjectAsset> reference = makeError(ErrorCode::InvalidArgument, "no sub-mesh");
           double referenceS = std::numeric_limits<double>::quiet_NaN();
           if (sub && sub.value().mesh.tets.rows() <= s.referenceMaxTets) {
-            const auto t0 = Clock::now();
+            const auto t0 = SteadyClock::now();
             FragmentSubMesh fine;
             fine.mesh = refine(sub.value().mesh);
             ExactModesSettings rs;
             rs.modeCount = 3;
             reference = exactFragmentAsset(fine, material, rs, name + ".f" + std::to_string(i) + ".fine");
-            referenceS = std::chrono::duration<double>(Clock::now() - t0).count();
+            referenceS = secondsSince(t0);
           }
           const double nan = std::numeric_limits<double>::quiet_NaN();
           const Eigen::VectorXd none;

@@ -22,7 +22,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 
 namespace brittle::bench {
 

@@ -3,12 +3,12 @@
 #include "BenchSupport.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <random>
 #include <string>
 
+#include "brittle/core/Timing.h"
 #include "brittle/database/Pack.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/MaterialLibrary.h"
@@ -80,11 +80,11 @@ Status runImpactBench(const ImpactBenchSettings& s) {
           if (Status st = world.value().impact(d, result); !st) return st.error();
           const ImpactResult& r = result;
           const StageTimes& t = r.times;
-          const auto b0 = std::chrono::steady_clock::now();
+          const auto b0 = SteadyClock::now();
           for (const FragmentResult& f : r.fragments) {  // makes each new object's modal data
             if (f.object.valid()) (void)world.value().objectAsset(f.object);
           }
-          const double bodiesS = std::chrono::duration<double>(std::chrono::steady_clock::now() - b0).count();
+          const double bodiesS = secondsSince(b0);
           const double ms[] = {t.contactS, t.modalS, t.stressS, t.propagationS, t.surfacesS, t.matchingS, t.totalS(),
                                t.totalS() - t.surfacesS - t.propagationS, bodiesS, t.totalS() + bodiesS};
           for (size_t k = 0; k < 10; ++k) stage[k].push_back(1e3 * ms[k]);
@@ -125,10 +125,6 @@ double arrayBytes(const ObjectAsset& a) {
          4.0 * static_cast<double>(a.tetMesh.tets.size());
 }
 
-double secondsSince(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
 }  // namespace
 
 Status runPlacementBench(const PlacementBenchSettings& s) {
@@ -137,7 +133,7 @@ Status runPlacementBench(const PlacementBenchSettings& s) {
   std::vector<double> reads;
   Pack pack;
   for (int r = 0; r < s.repeats; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = SteadyClock::now();
     auto read = readPack(s.pack);
     if (!read) return read.error();
     reads.push_back(secondsSince(t0));
@@ -156,11 +152,11 @@ Status runPlacementBench(const PlacementBenchSettings& s) {
       one.objects.push_back(a);
       auto world = World::create(std::move(one), WorldSettings{});
       if (!world) return world.error();
-      const auto t0 = std::chrono::steady_clock::now();
+      const auto t0 = SteadyClock::now();
       auto id = world.value().addObject({.asset = a.name});
       place.push_back(secondsSince(t0));
       if (!id) return id.error();
-      const auto t1 = std::chrono::steady_clock::now();
+      const auto t1 = SteadyClock::now();
       if (Status st = world.value().waitUntilPrepared(); !st) return st.error();
       prepare.push_back(secondsSince(t1));
     }

@@ -1,12 +1,12 @@
 #include "IntegratorBench.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <numbers>
 
+#include "brittle/core/Timing.h"
 #include "brittle/runtime/ModalResponse.h"
 
 namespace brittle::bench {
@@ -85,9 +85,9 @@ Status runIntegratorBench(const IntegratorBenchSettings& s) {
   for (ModalIntegrator integrator : kIntegrators) {
     std::vector<double> seconds;
     for (int rep = 0; rep < s.timingRepeats; ++rep) {
-      const auto start = std::chrono::steady_clock::now();
+      const auto start = SteadyClock::now();
       if (Status st = integrateModalResponse(omega, damping, loads, t, f, q, integrator); !st) return st;
-      seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      seconds.push_back(secondsSince(start));
     }
     std::nth_element(seconds.begin(), seconds.begin() + seconds.size() / 2, seconds.end());
     const double median = seconds[seconds.size() / 2];

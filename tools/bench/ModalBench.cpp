@@ -17,11 +17,11 @@
 #include <Spectra/MatOp/SparseSymMatProd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <fstream>
 #include <iostream>
 
 #include "BenchSupport.h"
+#include "brittle/core/Timing.h"
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshIO.h"
@@ -31,7 +31,6 @@
 namespace {
 
 using namespace brittle;
-using Clock = std::chrono::steady_clock;
 
 // Spectra's shift-invert operator backed by our factorisation of K − σM.
 class FactorOp {

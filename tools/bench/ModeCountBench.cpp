@@ -3,11 +3,11 @@
 #include "BenchSupport.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <random>
 
+#include "brittle/core/Timing.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/runtime/FullFemReference.h"
@@ -34,13 +34,13 @@ Status runModeCountBench(const ModeCountBenchSettings& s) {
   b.material = glass;
   b.tetMesh.targetTets = s.tets;
   b.modal.modeCount = *std::max_element(s.modes.begin(), s.modes.end());
-  const auto bakeStart = std::chrono::steady_clock::now();
+  const auto bakeStart = SteadyClock::now();
   auto asset = bakeSurface(boxSurface(0.3, 0.3, 0.01), b);
   if (!asset) return asset.error();
   if (!s.quiet) {
     std::fprintf(stderr, "bench modes: plate baked, %lld tets, %d modes, %.1f s\n",
                  static_cast<long long>(asset.value().tetMesh.tets.rows()), b.modal.modeCount,
-                 std::chrono::duration<double>(std::chrono::steady_clock::now() - bakeStart).count());
+                 secondsSince(bakeStart));
   }
   Pack pack;
   pack.materials.push_back(glass);
@@ -87,11 +87,11 @@ Status runModeCountBench(const ModeCountBenchSettings& s) {
             FullFemSettings fs;
             fs.stepsPerContact = s.referenceStepsPerContact;
             fs.extraS = r.value().ringDownS;
-            const auto start = std::chrono::steady_clock::now();
+            const auto start = SteadyClock::now();
             auto ref = solveFullFemImpact(mesh, glass, r.value().loadWeights, r.value().forceDirectionLocal,
                                           r.value().contact, fs);
             if (!ref) return ref.error();
-            referenceS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            referenceS = secondsSince(start);
             reference = ref.value();
           }
         }

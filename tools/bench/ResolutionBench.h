@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 
 namespace brittle::bench {
 

@@ -7,13 +7,13 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <map>
 #include <optional>
 #include <random>
 
+#include "brittle/core/Timing.h"
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/descriptors/MeshRefinement.h"
@@ -24,8 +24,6 @@
 namespace brittle::bench {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 struct Query {
   TriangleMesh surface;
@@ -109,21 +107,21 @@ Status runSearchBench(const SearchBenchSettings& s) {
   // Databases: every kind up to fullSize entries, moments only beyond (same seed: same fragments).
   FragmentDatabase full, big;
   if (fullSize > 0) {
-    auto t = Clock::now();
+    auto t = SteadyClock::now();
     bake.entryCount = fullSize;
     auto db = bakeFragmentDatabase(bake);
     if (!db) return db.error();
     full = std::move(db).value();
-    log(s.quiet, "database: %lld entries with every descriptor in %.1f s\n", static_cast<long long>(fullSize), seconds(t));
+    log(s.quiet, "database: %lld entries with every descriptor in %.1f s\n", static_cast<long long>(fullSize), secondsSince(t));
   }
   if (maxSize > fullSize) {
-    auto t = Clock::now();
+    auto t = SteadyClock::now();
     bake.entryCount = maxSize;
     bake.kinds = {true, false, false};
     auto db = bakeFragmentDatabase(bake);
     if (!db) return db.error();
     big = std::move(db).value();
-    log(s.quiet, "database: %lld entries with moments in %.1f s\n", static_cast<long long>(maxSize), seconds(t));
+    log(s.quiet, "database: %lld entries with moments in %.1f s\n", static_cast<long long>(maxSize), secondsSince(t));
   }
 
   // Queries: new fragments (another seed) in random poses and sizes.
@@ -147,7 +145,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
   std::vector<double> frameUs, cutUs;
   double triangles = 0.0;
   for (int q = 0; q < s.queries; ++q) {
-    const auto cutStart = Clock::now();
+    const auto cutStart = SteadyClock::now();
     // Like the database bake, a draw that yields no acceptable fragment is redrawn from the next seed.
     uint64_t querySeed = fragmentEntrySeed(s.seed + 0x5eed0000ull, q);
     const size_t shape = static_cast<size_t>(q) % bases.size();
@@ -160,7 +158,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
       fragment = draw();
     }
     if (!fragment) return fragment.error();
-    cutUs.push_back(1e6 * seconds(cutStart));
+    cutUs.push_back(1e6 * secondsSince(cutStart));
     Eigen::Vector4d g;
     for (int c = 0; c < 4; ++c) g[c] = normal(rng);  // one draw per statement: fixed order
     const Eigen::Matrix3d r = Eigen::Quaterniond(g[0], g[1], g[2], g[3]).normalized().toRotationMatrix();
@@ -171,16 +169,16 @@ Status runSearchBench(const SearchBenchSettings& s) {
     query.surface = subdivideToAtLeast(fragment.value(), s.minQueryTriangles);
     query.surface.vertices = ((query.surface.vertices * r.transpose()) * scale).rowwise() + offset.transpose();
     triangles += static_cast<double>(query.surface.faces.rows());
-    auto t = Clock::now();
+    auto t = SteadyClock::now();
     auto frames = computeCanonicalFrames(query.surface, bake.descriptors.frame);
     if (!frames) return frames.error();
-    frameUs.push_back(1e6 * seconds(t));
+    frameUs.push_back(1e6 * secondsSince(t));
     query.frames = std::move(frames).value();
     for (DescriptorKind kind : kAllDescriptorKinds) {
-      t = Clock::now();
+      t = SteadyClock::now();
       auto d = computeShapeDescriptors(query.surface, query.frames, kind, bake.descriptors);
       if (!d) return d.error();
-      const double us = 1e6 * seconds(t);
+      const double us = 1e6 * secondsSince(t);
       costUs[static_cast<size_t>(kind)].push_back(us / static_cast<double>(query.frames.candidates.size()));
       totalUs[static_cast<size_t>(kind)].push_back(frameUs.back() + us);  // everything from a raw mesh
       query.descriptors[static_cast<size_t>(kind)] = std::move(d).value();
@@ -267,16 +265,16 @@ Status runSearchBench(const SearchBenchSettings& s) {
         ms.enabled[static_cast<size_t>(kind)] = true;
         ms.entryLimit = n;
         ms.indexOverride[static_cast<size_t>(kind)] = choice.settings;
-        auto t = Clock::now();
+        auto t = SteadyClock::now();
         auto matcher = FragmentMatcher::build(db, ms);
         if (!matcher) return matcher.error();
-        const double buildS = seconds(t);
+        const double buildS = secondsSince(t);
         std::vector<double> times;
         std::vector<FragmentMatch> top;
         for (const Query& q : queries) {
-          t = Clock::now();
+          t = SteadyClock::now();
           auto m = matcher.value().matchDescriptors(q.frames, q.descriptors[static_cast<size_t>(kind)], kind, 1);
-          times.push_back(1e6 * seconds(t));
+          times.push_back(1e6 * secondsSince(t));
           if (!m) return m.error();
           top.push_back(m.value().front());
         }

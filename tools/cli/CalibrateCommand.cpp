@@ -8,6 +8,7 @@
 
 #include "CliSupport.h"
 #include "Commands.h"
+#include "brittle/core/JsonChecks.h"
 #include "brittle/database/Pack.h"
 #include "brittle/precompute/Calibration.h"
 #include "brittle/precompute/MaterialLibrary.h"
@@ -27,7 +28,7 @@ struct CalibrateOptions {
 Result<CalibrationMeasurements> readMeasurements(const std::string& path) {
   std::ifstream in(path);
   if (!in) return makeError(ErrorCode::FileNotFound, "measurements file not found: " + path);
-  auto bad = [&](const std::string& what) { return makeError(ErrorCode::ParseError, "measurements " + path + ": " + what); };
+  auto bad = [&](const std::string& what) { return parseError("measurements " + path, what); };
   nlohmann::json doc;
   try {
     doc = nlohmann::json::parse(in);
@@ -48,7 +49,7 @@ Result<CalibrationMeasurements> readMeasurements(const std::string& path) {
       if (!value.is_number()) return bad("\"mass_kg\" must be a number");
       m.massKg = value.get<double>();
     } else {
-      return bad("unknown key \"" + key + "\" (frequencies_hz, decay_rates_per_s, mass_kg)");
+      return bad(unknownKeyMessage(key) + " (frequencies_hz, decay_rates_per_s, mass_kg)");
     }
   }
   return m;

@@ -47,7 +47,7 @@ int reportError(const Error& error) {
 }
 
 TerminalProgress::TerminalProgress(bool quiet)
-    : mQuiet(quiet), mTty(::isatty(STDERR_FILENO) != 0), mStart(std::chrono::steady_clock::now()) {}
+    : mQuiet(quiet), mTty(::isatty(STDERR_FILENO) != 0), mStart(SteadyClock::now()) {}
 
 TerminalProgress::~TerminalProgress() { finish(); }
 
@@ -56,7 +56,7 @@ void TerminalProgress::report(std::string_view stage, double fraction) {
   const int percent = static_cast<int>(fraction * 100.0 + 0.5);
   const bool newStage = stage != mStage;
   if (!newStage && percent == mPercent) return;
-  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - mStart).count();
+  const double elapsed = secondsSince(mStart);
   if (mTty) {
     std::fprintf(stderr, "\r\033[K[%7.1fs] %.*s %3d%%", elapsed, static_cast<int>(stage.size()), stage.data(), percent);
     std::fflush(stderr);

@@ -1,12 +1,12 @@
 // CliSupport.h — what every brittle subcommand shares: exit codes, error printing, progress.
 #pragma once
 
-#include <chrono>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
+#include "brittle/core/Timing.h"
 #include "brittle/precompute/Progress.h"
 #include "brittle/runtime/World.h"
 
@@ -46,7 +46,7 @@ class TerminalProgress final : public ProgressSink {
   bool mTty;
   std::string mStage;
   int mPercent = -1;
-  std::chrono::steady_clock::time_point mStart;
+  SteadyClock::time_point mStart;
 };
 
 }  // namespace brittle::cli

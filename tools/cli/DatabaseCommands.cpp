@@ -14,6 +14,7 @@
 #include "CliSupport.h"
 #include "Commands.h"
 #include "Distributed.h"
+#include "brittle/core/Timing.h"
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/precompute/FragmentDatabaseBake.h"
@@ -204,9 +205,9 @@ Runner addQueryCommand(CLI::App& app) {
     auto matcher = FragmentMatcher::build(db, settings);
     if (!matcher) return reportError(matcher.error());
     const int k = static_cast<int>(std::min<int64_t>(o->k, static_cast<int64_t>(db.entries.size())));
-    const auto start = std::chrono::steady_clock::now();
+    const auto start = SteadyClock::now();
     auto matches = matcher.value().match(surface.value(), kind, k);
-    const double matchS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double matchS = secondsSince(start);
     if (!matches) return reportError(matches.error());
 
     nlohmann::json doc;

@@ -1,6 +1,6 @@
 #include "Distributed.h"
 
-#include "brittle/precompute/AtomicFile.h"
+#include "brittle/core/AtomicFile.h"
 
 #include <cstdlib>
 #include <fstream>

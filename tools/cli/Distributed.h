@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <string>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 
 namespace brittle::cli {
 

@@ -9,7 +9,7 @@
 
 #include "CliSupport.h"
 #include "Commands.h"
-#include "brittle/precompute/AtomicFile.h"
+#include "brittle/core/AtomicFile.h"
 #include "brittle/precompute/ModelSizing.h"
 #include "brittle/precompute/RuntimeSettingsFile.h"
 

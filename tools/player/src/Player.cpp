@@ -17,13 +17,13 @@
 #include <set>
 #include <thread>
 
+#include "brittle/core/Timing.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/runtime/Fingerprint.h"
 
 namespace brittle {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 btVector3 bt(const Eigen::Vector3d& v) { return btVector3(v.x(), v.y(), v.z()); }
@@ -37,7 +37,6 @@ Eigen::Matrix3d eig(const btMatrix3x3& m) {
 btMatrix3x3 bt(const Eigen::Matrix3d& m) {
   return btMatrix3x3(m(0, 0), m(0, 1), m(0, 2), m(1, 0), m(1, 1), m(1, 2), m(2, 0), m(2, 1), m(2, 2));
 }
-double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 // Principal axes: inertia = P diag(d) Pᵀ with P a rotation (det +1), d clamped away from zero so
 // that slivers of debris stay integrable.
@@ -333,17 +332,17 @@ class Simulation {
     FrameStats fs;
     fs.frame = frame;
     if (mSettings.realTime) {
-      if (frame == 0) mPaceStart = Clock::now();
-      std::this_thread::sleep_until(mPaceStart + std::chrono::duration_cast<Clock::duration>(
+      if (frame == 0) mPaceStart = SteadyClock::now();
+      std::this_thread::sleep_until(mPaceStart + std::chrono::duration_cast<SteadyClock::duration>(
                                                      std::chrono::duration<double>(static_cast<double>(frame) * mScene.timeStepS)));
     }
     if (!mInFlight.empty()) {
-      const auto t0 = Clock::now();
+      const auto t0 = SteadyClock::now();
       fs.fractured = applyDue(frame, out);
-      fs.fractureS += seconds(t0, Clock::now());
+      fs.fractureS += secondsSince(t0);
     }
     for (int s = 0; s < mScene.substeps; ++s) {
-      const auto t0 = Clock::now();
+      const auto t0 = SteadyClock::now();
       for (Body& b : mBodies) {
         if (!b.alive) continue;
         b.preVelocity = eig(b.rigid->getLinearVelocity());
@@ -351,11 +350,11 @@ class Simulation {
       }
       mBullet->stepSimulation(h, 0);
       timeS = (static_cast<double>(frame) + (s + 1.0) / mScene.substeps) * mScene.timeStepS;
-      const auto t1 = Clock::now();
+      const auto t1 = SteadyClock::now();
       fs.fractured = processContacts(frame, timeS, fs.fractureS, out) || fs.fractured;
-      const auto t2 = Clock::now();
-      fs.bulletS += seconds(t0, t1);
-      fs.fractureS += seconds(t1, t2);
+      const auto t2 = SteadyClock::now();
+      fs.bulletS += secondsBetween(t0, t1);
+      fs.fractureS += secondsBetween(t1, t2);
     }
     fs.timeS = timeS;
     fs.bodies = 0;
@@ -427,7 +426,7 @@ class Simulation {
   // maxImpactsPerStep of them handed to the runtime, within the frame's fracture budget (spentS:
   // fracture time this frame before this step). Returns whether a body broke.
   bool processContacts(int64_t frame, double timeS, double spentS, PlayResult& out) {
-    const auto start = Clock::now();
+    const auto start = SteadyClock::now();
     std::map<int32_t, Candidate> best;  // by body: deterministic order
     auto consider = [&](const Candidate& c) {
       auto [it, inserted] = best.try_emplace(c.body, c);
@@ -471,7 +470,7 @@ class Simulation {
         continue;
       }
       bool fast = false;
-      if (mSettings.fractureBudgetS > 0.0 && spentS + seconds(start, Clock::now()) >= mSettings.fractureBudgetS) {
+      if (mSettings.fractureBudgetS > 0.0 && spentS + secondsSince(start) >= mSettings.fractureBudgetS) {
         if (c.waited < mSettings.maxBudgetWaits) {
           ++c.waited;
           mDeferred.push_back(c);
@@ -600,10 +599,10 @@ class Simulation {
         mInFlight[kept++] = f;
         continue;
       }
-      const auto t0 = Clock::now();
+      const auto t0 = SteadyClock::now();
       const Status st = mWorld.collectImpact(f.ticket, mResult);
       ImpactEvent& e = out.events[f.event];
-      e.waitS = seconds(t0, Clock::now());
+      e.waitS = secondsSince(t0);
       e.appliedFrame = frame;
       mBodies[static_cast<size_t>(f.candidate.body)].fracturing = false;
       broke = applyResult(st, f.candidate, frame, out, e, &f) || broke;
@@ -763,7 +762,7 @@ class Simulation {
   std::vector<Body> mBodies;
   std::vector<Candidate> mDeferred;
   std::vector<InFlight> mInFlight;  // submitted impacts, in submission order
-  Clock::time_point mPaceStart;      // realTime: the wall time of frame 0
+  SteadyClock::time_point mPaceStart;  // realTime: the wall time of frame 0
   PlayResult mOut;
   int64_t mFrame = 0;
   int64_t mDeferredCount = 0;
@@ -814,7 +813,7 @@ Result<std::unique_ptr<PlaySession>> PlaySession::create(Pack pack, const Scene&
     const bool known = std::any_of(pack.objects.begin(), pack.objects.end(), [&](const ObjectAsset& a) { return a.name == o.asset; });
     if (!known) return makeError(ErrorCode::InvalidArgument, "scene '" + scene.name + "': object '" + o.name + "' names asset '" + o.asset + "', which the pack does not have");
   }
-  const auto t0 = Clock::now();
+  const auto t0 = SteadyClock::now();
   auto impl = std::make_unique<Impl>();
   impl->scene = scene;
   std::vector<Material> materials = pack.materials;
@@ -832,7 +831,7 @@ Result<std::unique_ptr<PlaySession>> PlaySession::create(Pack pack, const Scene&
   // level load would be: no first impact waits for it.
   if (Status st = impl->sim->waitUntilPrepared(); !st) return st.error();
   impl->sim->begin();
-  impl->loadS = seconds(t0, Clock::now());
+  impl->loadS = secondsSince(t0);
   return std::unique_ptr<PlaySession>(new PlaySession(std::move(impl)));
 }
 

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "brittle/core/JsonChecks.h"
 #include "brittle/precompute/MaterialLibrary.h"
 
 namespace brittle {
@@ -34,13 +35,9 @@ class Reader {
       fail(ErrorCode::ParseError, path, "expected an object");
       return false;
     }
-    for (const auto& [key, value] : j.items()) {
-      bool known = false;
-      for (std::string_view a : allowed) known = known || key == a;
-      if (!known) {
-        fail(ErrorCode::ParseError, join(path, key), "unknown key");
-        return false;
-      }
+    if (auto key = findUnknownKey(j, allowed)) {
+      fail(ErrorCode::ParseError, join(path, *key), "unknown key");
+      return false;
     }
     return true;
   }

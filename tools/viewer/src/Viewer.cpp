@@ -7,17 +7,16 @@
 #include <imgui_impl_opengl2.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
 
+#include "brittle/core/Timing.h"
 #include "brittle/viewer/Renderer.h"
 
 namespace brittle {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 
 std::string& glfwMessage() {
   static std::string message;
@@ -158,7 +157,7 @@ Result<ViewerReport> runViewer(const Pack& pack, const Scene& scene, const Playe
   bool paused = false, quit = false, stepOnce = false;
   FrameStats last;
   double accumulated = 0.0;
-  auto previous = Clock::now();
+  auto previous = SteadyClock::now();
   Eigen::Vector2d pressAt(-1, -1), lastCursor(0, 0);
   bool leftDown = false, dragged = false;
 
@@ -269,8 +268,8 @@ Result<ViewerReport> runViewer(const Pack& pack, const Scene& scene, const Playe
 
     // The simulation: one frame per drawn frame when scripted, real time otherwise.
     PlaySession& sim = *session.value();
-    const auto now = Clock::now();
-    const double elapsed = std::chrono::duration<double>(now - previous).count();
+    const auto now = SteadyClock::now();
+    const double elapsed = secondsBetween(previous, now);
     previous = now;
     if (stepOnce || (!paused && scripted)) {
       last = sim.stepFrame();

@@ -10,18 +10,19 @@
 #include <set>
 #include <sstream>
 
+#include "brittle/core/JsonChecks.h"
 #include "brittle/precompute/MaterialLibrary.h"
 
 namespace brittle {
 namespace {
 
-Error parseError(std::string_view source, const std::string& where, const std::string& what) {
-  return makeError(ErrorCode::ParseError, "script " + std::string(source) + ": " + where + ": " + what);
+Error scriptError(std::string_view source, const std::string& where, const std::string& what) {
+  return parseError("script " + std::string(source) + ": " + where, what);
 }
 
 Result<double> number(const nlohmann::json& o, const char* key, std::string_view source, const std::string& where) {
   const auto& v = o.at(key);
-  if (!v.is_number()) return parseError(source, where + "." + key, "must be a number");
+  if (!v.is_number()) return scriptError(source, where + "." + key, "must be a number");
   const double x = v.get<double>();
   if (!std::isfinite(x)) return makeError(ErrorCode::InvalidArgument, "script " + std::string(source) + ": " + where + "." + key + " must be finite");
   return x;
@@ -29,10 +30,10 @@ Result<double> number(const nlohmann::json& o, const char* key, std::string_view
 
 Result<Eigen::Vector3d> vector3(const nlohmann::json& o, const char* key, std::string_view source, const std::string& where) {
   const auto& v = o.at(key);
-  if (!v.is_array() || v.size() != 3) return parseError(source, where + "." + key, "must be [x, y, z]");
+  if (!v.is_array() || v.size() != 3) return scriptError(source, where + "." + key, "must be [x, y, z]");
   Eigen::Vector3d x;
   for (int i = 0; i < 3; ++i) {
-    if (!v[static_cast<size_t>(i)].is_number()) return parseError(source, where + "." + key, "must hold numbers");
+    if (!v[static_cast<size_t>(i)].is_number()) return scriptError(source, where + "." + key, "must hold numbers");
     x[i] = v[static_cast<size_t>(i)].get<double>();
   }
   if (!x.allFinite()) return makeError(ErrorCode::InvalidArgument, "script " + std::string(source) + ": " + where + "." + key + " must be finite");
@@ -59,12 +60,11 @@ Result<ViewerScript> parseViewerScript(std::string_view json, std::string_view s
   try {
     doc = nlohmann::json::parse(json);
   } catch (const std::exception& e) {
-    return parseError(source, "document", e.what());
+    return scriptError(source, "document", e.what());
   }
-  if (!doc.is_object()) return parseError(source, "document", "not a JSON object");
-  for (const auto& [key, value] : doc.items())
-    if (key != "events") return parseError(source, "document", "unknown key \"" + key + "\"");
-  if (!doc.contains("events") || !doc["events"].is_array()) return parseError(source, "events", "must be an array");
+  if (!doc.is_object()) return scriptError(source, "document", "not a JSON object");
+  if (auto key = findUnknownKey(doc, {"events"})) return scriptError(source, "document", unknownKeyMessage(*key));
+  if (!doc.contains("events") || !doc["events"].is_array()) return scriptError(source, "events", "must be an array");
   const std::vector<std::pair<std::string, ScriptAction>> actions = {
       {"throw", ScriptAction::Throw}, {"screenshot", ScriptAction::Screenshot}, {"camera", ScriptAction::Camera},
       {"pause", ScriptAction::Pause}, {"resume", ScriptAction::Resume},         {"step", ScriptAction::Step},
@@ -82,21 +82,22 @@ Result<ViewerScript> parseViewerScript(std::string_view json, std::string_view s
   for (size_t i = 0; i < events.size(); ++i) {
     const std::string where = "events[" + std::to_string(i) + "]";
     const auto& e = events[i];
-    if (!e.is_object()) return parseError(source, where, "not an object");
-    if (!e.contains("action") || !e["action"].is_string()) return parseError(source, where + ".action", "missing or not a string");
+    if (!e.is_object()) return scriptError(source, where, "not an object");
+    if (!e.contains("action") || !e["action"].is_string()) return scriptError(source, where + ".action", "missing or not a string");
     const std::string name = e["action"].get<std::string>();
     const auto found = std::find_if(actions.begin(), actions.end(), [&](const auto& a) { return a.first == name; });
-    if (found == actions.end()) return parseError(source, where + ".action", "unknown action \"" + name + "\"");
+    if (found == actions.end()) return scriptError(source, where + ".action", "unknown action \"" + name + "\"");
     ScriptEvent ev;
     ev.action = found->second;
-    for (const auto& [key, value] : e.items())
-      if (!allowed.at(ev.action).count(key)) return parseError(source, where, "unknown key \"" + key + "\" for " + name);
-    if (!e.contains("frame") || !e["frame"].is_number_integer()) return parseError(source, where + ".frame", "missing or not an integer");
+    if (auto key = findUnknownKey(e, allowed.at(ev.action))) {
+      return scriptError(source, where, unknownKeyMessage(*key) + " for " + name);
+    }
+    if (!e.contains("frame") || !e["frame"].is_number_integer()) return scriptError(source, where + ".frame", "missing or not an integer");
     ev.frame = e["frame"].get<int64_t>();
     if (ev.frame < 0) return makeError(ErrorCode::InvalidArgument, "script " + std::string(source) + ": " + where + ".frame must be ≥ 0");
     try {
       if (ev.action == ScriptAction::Throw) {
-        if (!e.contains("from") || !e.contains("to")) return parseError(source, where, "a throw needs \"from\" and \"to\"");
+        if (!e.contains("from") || !e.contains("to")) return scriptError(source, where, "a throw needs \"from\" and \"to\"");
         auto from = vector3(e, "from", source, where);
         if (!from) return from.error();
         auto to = vector3(e, "to", source, where);
@@ -112,12 +113,12 @@ Result<ViewerScript> parseViewerScript(std::string_view json, std::string_view s
           *out = x.value();
         }
         if (e.contains("material")) {
-          if (!e["material"].is_string()) return parseError(source, where + ".material", "must be a string");
+          if (!e["material"].is_string()) return scriptError(source, where + ".material", "must be a string");
           ev.material = e["material"].get<std::string>();
         }
         if (auto m = materialPreset(ev.material); !m) return Error{ErrorCode::UnknownMaterial, "script " + std::string(source) + ": " + where + ": " + m.error().message};
       } else if (ev.action == ScriptAction::Screenshot) {
-        if (!e.contains("file") || !e["file"].is_string()) return parseError(source, where + ".file", "missing or not a string");
+        if (!e.contains("file") || !e["file"].is_string()) return scriptError(source, where + ".file", "missing or not a string");
         ev.file = e["file"].get<std::string>();
         if (ev.file.empty()) return makeError(ErrorCode::InvalidArgument, "script " + std::string(source) + ": " + where + ".file is empty");
       } else if (ev.action == ScriptAction::Camera) {
@@ -131,7 +132,7 @@ Result<ViewerScript> parseViewerScript(std::string_view json, std::string_view s
         if (ev.pitchDeg && !(std::abs(*ev.pitchDeg) < 90.0)) return makeError(ErrorCode::InvalidArgument, "script " + std::string(source) + ": " + where + ".pitch_deg must be in (−90, 90)");
       }
     } catch (const std::exception& ex) {
-      return parseError(source, where, ex.what());
+      return scriptError(source, where, ex.what());
     }
     script.events.push_back(std::move(ev));
   }

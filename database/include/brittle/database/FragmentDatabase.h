@@ -18,7 +18,7 @@
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
 #include "brittle/descriptors/DescriptorTypes.h"
-#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/core/MeshTypes.h"
 #include "brittle/descriptors/ShapeDescriptors.h"
 
 namespace brittle {

@@ -18,7 +18,7 @@
 #include "brittle/database/DescriptorIndex.h"
 #include "brittle/database/FragmentDatabase.h"
 #include "brittle/descriptors/CanonicalFrame.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

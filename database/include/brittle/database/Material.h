@@ -4,7 +4,7 @@
 #include <Eigen/Core>
 #include <string>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "brittle/descriptors/MassProperties.h"
-#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/core/MeshTypes.h"
 
 namespace brittle {
 

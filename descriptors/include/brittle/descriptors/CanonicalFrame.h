@@ -43,8 +43,8 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 #include "brittle/descriptors/VolumeMoments.h"
 
 namespace brittle {

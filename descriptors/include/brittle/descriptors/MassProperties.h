@@ -10,7 +10,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/core/MeshTypes.h"
 #include "brittle/descriptors/VolumeMoments.h"
 
 namespace brittle {

@@ -9,7 +9,7 @@
 
 #include <cstdint>
 
-#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/core/MeshTypes.h"
 
 namespace brittle {
 

@@ -13,9 +13,9 @@
 
 #include "brittle/descriptors/CanonicalFrame.h"
 #include "brittle/descriptors/DescriptorTypes.h"
-#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/core/MeshTypes.h"
 #include "brittle/descriptors/MomentDescriptor.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 #include "brittle/descriptors/VoxelDescriptor.h"
 
 namespace brittle {

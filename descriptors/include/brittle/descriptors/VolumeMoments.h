@@ -26,8 +26,8 @@
 #include <Eigen/Core>
 #include <array>
 
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

@@ -28,8 +28,8 @@
 
 #include "brittle/descriptors/CanonicalFrame.h"
 #include "brittle/descriptors/DescriptorTypes.h"
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

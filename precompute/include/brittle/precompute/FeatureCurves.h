@@ -13,7 +13,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/core/MeshTypes.h"
 
 namespace brittle {
 

@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

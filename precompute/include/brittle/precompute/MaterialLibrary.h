@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "brittle/database/Material.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

@@ -17,8 +17,8 @@
 
 #include <filesystem>
 
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

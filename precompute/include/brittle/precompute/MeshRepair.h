@@ -4,8 +4,8 @@
 // from the face winding), and self-intersections are resolved into their union.
 #pragma once
 
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 #include "brittle/precompute/Progress.h"
 
 namespace brittle {

@@ -1,8 +1,8 @@
 // MeshValidation.h — checks that a surface mesh bounds one solid that can be tetrahedralised.
 #pragma once
 
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

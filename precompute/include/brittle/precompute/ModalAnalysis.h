@@ -15,7 +15,7 @@
 
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/precompute/Progress.h"
 

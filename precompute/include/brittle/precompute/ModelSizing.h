@@ -49,7 +49,7 @@
 
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/FragmentDatabaseBake.h"
 #include "brittle/precompute/Progress.h"

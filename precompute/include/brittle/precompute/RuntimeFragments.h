@@ -16,8 +16,8 @@
 
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 #include "brittle/precompute/BaseShapes.h"
 #include "brittle/precompute/Progress.h"
 

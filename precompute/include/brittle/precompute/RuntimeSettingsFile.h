@@ -16,7 +16,7 @@
 #include <string>
 #include <string_view>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 #include "brittle/runtime/World.h"
 
 namespace brittle {

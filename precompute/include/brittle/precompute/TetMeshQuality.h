@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "brittle/database/ObjectAsset.h"
-#include "brittle/descriptors/MeshTypes.h"
+#include "brittle/core/MeshTypes.h"
 
 namespace brittle {
 

@@ -24,8 +24,8 @@
 #include <vector>
 
 #include "brittle/database/ObjectAsset.h"
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 #include "brittle/precompute/Progress.h"
 
 namespace brittle {

@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "brittle/database/ObjectAsset.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 #include "brittle/runtime/TetTopology.h"
 
 namespace brittle {

@@ -10,8 +10,8 @@
 
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

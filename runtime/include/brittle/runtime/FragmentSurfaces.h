@@ -20,8 +20,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 #include "brittle/descriptors/VolumeMoments.h"
 #include "brittle/runtime/TetTopology.h"
 

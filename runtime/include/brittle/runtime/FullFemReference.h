@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "brittle/database/Material.h"
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 #include "brittle/runtime/HertzContact.h"
 
 namespace brittle {

@@ -20,7 +20,7 @@
 #include <Eigen/Core>
 #include <limits>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

@@ -12,7 +12,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

@@ -10,8 +10,8 @@
 #include <array>
 #include <vector>
 
-#include "brittle/descriptors/MeshTypes.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

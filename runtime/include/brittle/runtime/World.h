@@ -54,7 +54,7 @@
 
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/Pack.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 #include "brittle/runtime/CrackPropagation.h"
 #include "brittle/runtime/HertzContact.h"
 #include "brittle/runtime/StaticCorrection.h"

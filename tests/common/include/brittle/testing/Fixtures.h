@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "brittle/core/MeshTypes.h"
 #include "brittle/database/Material.h"
-#include "brittle/descriptors/MeshTypes.h"
 
 namespace brittle::testing {
 

@@ -9,7 +9,7 @@
 
 #include <filesystem>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 #include "brittle/player/Player.h"
 
 namespace brittle {

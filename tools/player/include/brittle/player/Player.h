@@ -49,7 +49,7 @@
 #include <vector>
 
 #include "brittle/database/Pack.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 #include "brittle/player/Scene.h"
 #include "brittle/runtime/World.h"
 

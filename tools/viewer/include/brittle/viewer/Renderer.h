@@ -16,7 +16,7 @@
 #include <optional>
 #include <vector>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 #include "brittle/player/Player.h"
 
 namespace brittle {

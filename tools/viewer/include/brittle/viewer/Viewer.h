@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "brittle/database/Pack.h"
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 #include "brittle/player/Player.h"
 #include "brittle/viewer/ViewerScript.h"
 

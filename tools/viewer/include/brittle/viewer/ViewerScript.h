@@ -23,7 +23,7 @@
 #include <string_view>
 #include <vector>
 
-#include "brittle/descriptors/Result.h"
+#include "brittle/core/Result.h"
 
 namespace brittle {
 

@@ -3,7 +3,7 @@
 // Bad data never throws across a module boundary: functions return Result<T>, which holds either
 // a value or an Error with a typed code and a message that names the file, element or field.
 // Broken invariants are asserts; exceptions may exist inside offline code but are caught at the
-// module boundary. descriptors/ is the lowest module, so this header lives here.
+// module boundary. core/ is the lowest module and header-only, so errorCodeName is inline.
 #pragma once
 
 #include <cassert>
@@ -53,7 +53,38 @@ enum class ErrorCode {
 };
 
 /// Stable snake_case identifier of a code, e.g. "open_mesh".
-std::string_view errorCodeName(ErrorCode code);
+inline std::string_view errorCodeName(ErrorCode code) {
+  switch (code) {
+    case ErrorCode::FileNotFound: return "file_not_found";
+    case ErrorCode::UnknownFormat: return "unknown_format";
+    case ErrorCode::ParseError: return "parse_error";
+    case ErrorCode::EmptyMesh: return "empty_mesh";
+    case ErrorCode::NonFiniteValue: return "non_finite_value";
+    case ErrorCode::OpenMesh: return "open_mesh";
+    case ErrorCode::NonManifold: return "non_manifold";
+    case ErrorCode::InconsistentOrientation: return "inconsistent_orientation";
+    case ErrorCode::InwardFacing: return "inward_facing";
+    case ErrorCode::DegenerateFace: return "degenerate_face";
+    case ErrorCode::SelfIntersection: return "self_intersection";
+    case ErrorCode::RepairFailed: return "repair_failed";
+    case ErrorCode::MeshingFailed: return "meshing_failed";
+    case ErrorCode::DegenerateElement: return "degenerate_element";
+    case ErrorCode::FactorizationFailed: return "factorization_failed";
+    case ErrorCode::EigenNotConverged: return "eigen_not_converged";
+    case ErrorCode::RigidModeMismatch: return "rigid_mode_mismatch";
+    case ErrorCode::UnknownMaterial: return "unknown_material";
+    case ErrorCode::InvalidMaterial: return "invalid_material";
+    case ErrorCode::PackIoError: return "pack_io_error";
+    case ErrorCode::PackFormatMismatch: return "pack_format_mismatch";
+    case ErrorCode::PackVersionMismatch: return "pack_version_mismatch";
+    case ErrorCode::PackCorrupt: return "pack_corrupt";
+    case ErrorCode::PackShapeMismatch: return "pack_shape_mismatch";
+    case ErrorCode::InvalidArgument: return "invalid_argument";
+    case ErrorCode::Cancelled: return "cancelled";
+    case ErrorCode::CapacityExceeded: return "capacity_exceeded";
+  }
+  return "unknown";
+}
 
 struct Error {
   ErrorCode code;
