@@ -74,14 +74,19 @@ TEST(StaticCorrection, BringsThePeakStressWithin15PercentOfTheFullFemReference) 
   }
 }
 
-TEST(StaticCorrection, TypedErrors) {
-  const Material& glass = testing::presetGlass();
+// A preset-glass box of about 300 tets.
+ObjectAsset bakeGlassBox(double x, double y, double z, int modes) {
   ObjectBakeSettings b;
   b.name = "box";
-  b.material = glass;
+  b.material = testing::presetGlass();
   b.tetMesh.targetTets = 300;
-  b.modal.modeCount = 4;
-  const ObjectAsset box = bakeSurface(testing::makeBoxSurface(0.1, 0.1, 0.1), b).value();
+  b.modal.modeCount = modes;
+  return bakeSurface(testing::makeBoxSurface(x, y, z), b).value();
+}
+
+TEST(StaticCorrection, TypedErrors) {
+  const Material& glass = testing::presetGlass();
+  const ObjectAsset box = bakeGlassBox(0.1, 0.1, 0.1, 4);
   auto sc = StaticCorrection::build(box, glass, 4);
   ASSERT_TRUE(sc) << sc.error().message;
   Eigen::VectorXd stress;
@@ -101,12 +106,7 @@ TEST(StaticCorrection, TypedErrors) {
 // half over the load's reach, the inertia relief added after it) agrees to rounding.
 TEST(StaticCorrection, EqualsTheSumOverTheModesLeftOutFromADenseDecomposition) {
   const Material& glass = testing::presetGlass();
-  ObjectBakeSettings b;
-  b.name = "box";
-  b.material = glass;
-  b.tetMesh.targetTets = 300;
-  b.modal.modeCount = 6;
-  const ObjectAsset box = bakeSurface(testing::makeBoxSurface(0.1, 0.06, 0.04), b).value();
+  const ObjectAsset box = bakeGlassBox(0.1, 0.06, 0.04, 6);
   const int kept = 6;
   auto sc = StaticCorrection::build(box, glass, kept);
   ASSERT_TRUE(sc) << sc.error().message;
