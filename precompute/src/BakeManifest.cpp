@@ -1,6 +1,8 @@
-// BakeManifest.cpp — loadBakeManifest (BakePipeline.h). Kept apart from BakePipeline.cpp so
+// BakeManifest.cpp — loadBakeManifest (BakeManifest.h). Kept apart from BakePipeline.cpp so
 // that the manifest parser links without the mesher and the modal solver: the fuzz targets
 // (tests/fuzz) build it from its own sources.
+#include "brittle/precompute/BakeManifest.h"
+
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -8,7 +10,6 @@
 #include <tuple>
 
 #include "brittle/core/JsonChecks.h"
-#include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/MaterialLibrary.h"
 
 namespace brittle {

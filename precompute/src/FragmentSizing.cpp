@@ -1,5 +1,7 @@
 // FragmentSizing.cpp — what a scene's fragments need: sceneFragments, chooseDebrisThreshold and
-// chooseSearch (ModelSizing.h).
+// chooseSearch (FragmentSizing.h).
+#include "brittle/precompute/FragmentSizing.h"
+
 #include <algorithm>
 #include <cmath>
 

@@ -11,8 +11,8 @@
 
 #include "brittle/core/AtomicFile.h"
 #include "brittle/core/Timing.h"
+#include "brittle/precompute/FullFemReference.h"
 #include "brittle/precompute/MaterialLibrary.h"
-#include "brittle/runtime/FullFemReference.h"
 #include "brittle/runtime/World.h"
 #include "Support.h"
 

@@ -1,6 +1,8 @@
-// SceneRequirements.cpp — loadSceneRequirements (ModelSizing.h). Kept apart from ModelSizing.cpp
+// SceneRequirements.cpp — loadSceneRequirements (SceneRequirements.h). Kept apart from ModelSizing.cpp
 // so that the reader links without the bake, the runtime and the reference solver: the fuzz
 // targets (tests/fuzz) build it from its own sources.
+#include "brittle/precompute/SceneRequirements.h"
+
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -9,7 +11,6 @@
 
 #include "brittle/core/JsonChecks.h"
 #include "brittle/precompute/MaterialLibrary.h"
-#include "brittle/precompute/ModelSizing.h"
 #include "Support.h"
 
 namespace brittle {

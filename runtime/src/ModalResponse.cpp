@@ -43,41 +43,6 @@ Eigen::Matrix<double, 2, 4> exactStepMatrix(double w, double z, double h) {
   return p;
 }
 
-const char* modalIntegratorName(ModalIntegrator integrator) {
-  switch (integrator) {
-    case ModalIntegrator::Exact: return "exact";
-    case ModalIntegrator::ExplicitEuler: return "explicit-euler";
-    case ModalIntegrator::SymplecticEuler: return "symplectic-euler";
-    case ModalIntegrator::ImplicitEuler: return "implicit-euler";
-  }
-  return "unknown";
-}
-
-Eigen::Matrix<double, 2, 4> stepMatrix(ModalIntegrator integrator, double w, double z, double h) {
-  Eigen::Matrix<double, 2, 4> p = Eigen::Matrix<double, 2, 4>::Zero();
-  const double k = w * w, c = 2.0 * z * w;
-  switch (integrator) {
-    case ModalIntegrator::Exact: return exactStepMatrix(w, z, h);
-    case ModalIntegrator::ExplicitEuler:
-      p << 1.0, h, 0.0, 0.0,  //
-          -h * k, 1.0 - h * c, h, 0.0;
-      return p;
-    case ModalIntegrator::SymplecticEuler:
-      // q̇₁ = −hk q₀ + (1 − hc) q̇₀ + h p₀; q₁ = q₀ + h q̇₁.
-      p << 1.0 - h * h * k, h * (1.0 - h * c), h * h, 0.0,  //
-          -h * k, 1.0 - h * c, h, 0.0;
-      return p;
-    case ModalIntegrator::ImplicitEuler: {
-      // [1, −h; hk, 1 + hc] [q₁; q̇₁] = [q₀; q̇₀ + h p₁].
-      const double det = 1.0 + h * c + h * h * k;
-      p << (1.0 + h * c) / det, h / det, 0.0, h * h / det,  //
-          -h * k / det, 1.0 / det, 0.0, h / det;
-      return p;
-    }
-  }
-  return p;
-}
-
 void impactTimeGrid(double tc, int pulseSteps, double ringDownS, int ringDownSteps, std::vector<double>& t) {
   t.clear();
   t.reserve(static_cast<size_t>(pulseSteps + ringDownSteps + 1));
@@ -93,7 +58,7 @@ std::vector<double> impactTimeGrid(double tc, int pulseSteps, double ringDownS, 
 
 Status integrateModalResponse(const Eigen::VectorXd& w, const Eigen::VectorXd& z, const Eigen::VectorXd& g,
                               const std::vector<double>& t, const std::vector<double>& f, Eigen::MatrixXd& q,
-                              ModalIntegrator integrator) {
+                              StepMatrixFunction stepMatrix) {
   const Eigen::Index r = w.size();
   if (z.size() != r || g.size() != r) return makeError(ErrorCode::InvalidArgument, "modal response: ω, ζ and load sizes differ");
   if (t.size() != f.size() || t.empty()) return makeError(ErrorCode::InvalidArgument, "modal response: times and forces differ in size");
@@ -114,7 +79,7 @@ Status integrateModalResponse(const Eigen::VectorXd& w, const Eigen::VectorXd& z
       const double h = t[static_cast<size_t>(k)] - t[static_cast<size_t>(k - 1)];
       // Grids have a few step sizes (equal up to rounding): recompute the map only when h changes.
       if (std::abs(h - lastH) > 1e-9 * h) {
-        p = stepMatrix(integrator, w[j], z[j], h);
+        p = stepMatrix(w[j], z[j], h);
         lastH = h;
       }
       const double p0 = g[j] * f[static_cast<size_t>(k - 1)], p1 = g[j] * f[static_cast<size_t>(k)];

@@ -1,4 +1,4 @@
-// Fuzz target: loadBakeManifest (BakePipeline.h) on arbitrary bytes. The manifest sits next to a
+// Fuzz target: loadBakeManifest (BakeManifest.h) on arbitrary bytes. The manifest sits next to a
 // valid custom material file, "custom.json", so that inputs can reach the material-file branch;
 // the meshes it names are not read by the loader. Every object it returns must carry a valid
 // material and settings inside the documented ranges.
@@ -6,7 +6,7 @@
 #include <cstdint>
 
 #include "FuzzSupport.h"
-#include "brittle/precompute/BakePipeline.h"
+#include "brittle/precompute/BakeManifest.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   brittle::fuzz::writeCustomMaterialFile();

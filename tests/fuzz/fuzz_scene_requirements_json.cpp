@@ -1,4 +1,4 @@
-// Fuzz target: loadSceneRequirements (ModelSizing.h) on arbitrary bytes. The file sits next to a
+// Fuzz target: loadSceneRequirements (SceneRequirements.h) on arbitrary bytes. The file sits next to a
 // valid custom material file, "custom.json", so that impactors can reach the material-file
 // branch. Whatever it accepts must be inside the documented ranges: a target in (0, 1), at least
 // one object with 0 < lowest ≤ highest finite speed, and impactors that are the ground or a
@@ -8,7 +8,7 @@
 #include <cstdint>
 
 #include "FuzzSupport.h"
-#include "brittle/precompute/ModelSizing.h"
+#include "brittle/precompute/SceneRequirements.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   brittle::fuzz::writeCustomMaterialFile();

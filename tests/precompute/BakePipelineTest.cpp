@@ -4,6 +4,7 @@
 
 #include <fstream>
 
+#include "brittle/precompute/BakeManifest.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/testing/AssetChecks.h"
 #include "brittle/testing/Fixtures.h"

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "brittle/database/Pack.h"
+#include "brittle/precompute/BakeManifest.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/testing/DatabaseFixtures.h"
 #include "brittle/testing/Fixtures.h"

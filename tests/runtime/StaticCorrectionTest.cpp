@@ -8,8 +8,8 @@
 #include <cstdio>
 
 #include "brittle/precompute/BakePipeline.h"
+#include "brittle/precompute/FullFemReference.h"
 #include "brittle/runtime/FemAssembly.h"
-#include "brittle/runtime/FullFemReference.h"
 #include "brittle/runtime/World.h"
 #include "brittle/testing/BakeFixtures.h"
 

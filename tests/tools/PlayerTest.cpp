@@ -16,6 +16,7 @@
 
 #include "brittle/player/GltfReplay.h"
 #include "brittle/player/Scene.h"
+#include "brittle/precompute/BakeManifest.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/BaseShapes.h"
 #include "brittle/precompute/FragmentDatabaseBake.h"

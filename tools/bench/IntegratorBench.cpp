@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "brittle/core/Timing.h"
+#include "brittle/precompute/ModalIntegrators.h"
 #include "brittle/runtime/ModalResponse.h"
 
 namespace brittle::bench {

@@ -9,8 +9,8 @@
 
 #include "brittle/core/Timing.h"
 #include "brittle/precompute/BakePipeline.h"
+#include "brittle/precompute/FullFemReference.h"
 #include "brittle/precompute/MaterialLibrary.h"
-#include "brittle/runtime/FullFemReference.h"
 #include "brittle/runtime/World.h"
 
 namespace brittle::bench {

@@ -5,6 +5,7 @@
 
 #include "CliSupport.h"
 #include "Commands.h"
+#include "brittle/precompute/BakeManifest.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/FragmentDatabaseBake.h"
 #include "brittle/precompute/MaterialLibrary.h"

@@ -10,6 +10,7 @@
 #include "CliSupport.h"
 #include "Commands.h"
 #include "brittle/core/AtomicFile.h"
+#include "brittle/precompute/BakeManifest.h"
 #include "brittle/precompute/ModelSizing.h"
 #include "brittle/precompute/RuntimeSettingsFile.h"
 

@@ -26,22 +26,10 @@ Eigen::Matrix<double, 2, 4> exactStepMatrix(double omegaRadPerS, double dampingR
 /// The same map from the matrix exponential alone (the reference the closed form is tested against).
 Eigen::Matrix<double, 2, 4> exactStepMatrixByExponential(double omegaRadPerS, double dampingRatio, double stepS);
 
-/// How the modal response is stepped. The runtime uses Exact; the others exist to measure what it
-/// gains (`brittle bench integrators`): each is the textbook one-step map for q̈ + 2ζωq̇ + ω²q = p.
-///   ExplicitEuler:   q₁ = q₀ + h q̇₀,  q̇₁ = q̇₀ + h (p₀ − 2ζω q̇₀ − ω² q₀). Unstable for every
-///                    h when ζ = 0 (|amplification| = √(1 + (ωh)²)).
-///   SymplecticEuler: q̇₁ as above, then q₁ = q₀ + h q̇₁. Stable for ωh ≤ 2 (undamped), first order.
-///   ImplicitEuler:   q₁ = q₀ + h q̇₁,  q̇₁ = q̇₀ + h (p₁ − 2ζω q̇₁ − ω² q₁). Stable for every h
-///                    but damps: |amplification| = 1/√(1 + (ωh)²) when ζ = 0.
-///   Exact:           exactStepMatrix (|amplification| = e^(−ζωh) ≤ 1 for every h).
-enum class ModalIntegrator { Exact, ExplicitEuler, SymplecticEuler, ImplicitEuler };
-
-/// "exact", "explicit-euler", "symplectic-euler", "implicit-euler".
-const char* modalIntegratorName(ModalIntegrator integrator);
-
-/// The one-step map [q₁; q̇₁] = P · [q₀; q̇₀; p₀; p₁] of `integrator` (inputs as exactStepMatrix).
-Eigen::Matrix<double, 2, 4> stepMatrix(ModalIntegrator integrator, double omegaRadPerS, double dampingRatio,
-                                       double stepS);
+/// A one-step map [q₁; q̇₁] = P · [q₀; q̇₀; p₀; p₁] (inputs as exactStepMatrix). The runtime steps
+/// with exactStepMatrix; the textbook schemes it is measured against live offline
+/// (brittle/precompute/ModalIntegrators.h).
+using StepMatrixFunction = Eigen::Matrix<double, 2, 4> (*)(double omegaRadPerS, double dampingRatio, double stepS);
 
 /// The time grid of an impact: `pulseSteps` equal steps over the contact [0, t_c], then
 /// `ringDownSteps` equal steps over ringDownS after it. Returns the instants (s), starting at 0.
@@ -54,11 +42,11 @@ void impactTimeGrid(double contactDurationS, int pulseSteps, double ringDownS, i
 /// rest there) under the force forceN[k] (N) at those instants, linear in between.
 /// omega, zeta, modalLoad: r each (rad/s, 1, m/√kg·… per N). Output q: K by r.
 /// q is resized only when its shape changes, so a reused q costs no allocation.
-/// `integrator` picks the stepping (the runtime's is Exact).
+/// `stepMatrix` is the one-step map (the runtime's is exactStepMatrix).
 /// Errors: InvalidArgument (sizes differ, non-finite values, ω ≤ 0, ζ < 0, times not increasing).
 Status integrateModalResponse(const Eigen::VectorXd& omegaRadPerS, const Eigen::VectorXd& dampingRatio,
                               const Eigen::VectorXd& modalLoad, const std::vector<double>& timesS,
                               const std::vector<double>& forceN, Eigen::MatrixXd& q,
-                              ModalIntegrator integrator = ModalIntegrator::Exact);
+                              StepMatrixFunction stepMatrix = &exactStepMatrix);
 
 }  // namespace brittle

@@ -207,7 +207,8 @@ struct ImpactResult {
   int modesUsed = 0;
   bool staticCorrectionUsed = false;   ///< false when it is off, or skipped by a fast impact
   /// The contact load: nodes with weights summing to 1, force along forceDirectionLocal (the
-  /// object's frame). What FullFemReference.h needs to solve the same impact.
+  /// object's frame). What the offline full-FEM reference (brittle/precompute/FullFemReference.h) needs
+  /// to solve the same impact.
   std::vector<std::pair<int32_t, double>> loadWeights;
   Eigen::Vector3d forceDirectionLocal = Eigen::Vector3d::Zero();
   double ringDownS = 0.0;              ///< the window simulated after the contact

@@ -28,7 +28,7 @@
 #include <sstream>
 
 #include "brittle/core/Timing.h"
-#include "brittle/runtime/FullFemReference.h"
+#include "brittle/precompute/FullFemReference.h"
 #include "brittle/runtime/World.h"
 #include "brittle/testing/BakeFixtures.h"
 

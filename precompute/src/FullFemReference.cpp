@@ -1,4 +1,4 @@
-#include "brittle/runtime/FullFemReference.h"
+#include "brittle/precompute/FullFemReference.h"
 
 #include <Eigen/SparseCholesky>
 #include <cmath>

@@ -1,0 +1,68 @@
+// SceneRequirements.h — what a scene asks of its pack (read by loadSceneRequirements), and the
+// settings of the sizing that answers it (ModelSizing.h, FragmentSizing.h).
+//
+// A scene's requirements file says which objects the scene uses, the range of impacts each one
+// takes (speeds and impactors) and the accuracy it needs:
+//
+//   { "peak_stress_error": 0.15,        // worst |σ_modal / σ_reference − 1| allowed
+//     "match_frequency_error": 0.25,     // median error of a matched fragment's first 3 frequencies
+//     "refracture": true,                // fragments must break again: the pack needs a database
+//     "objects": [
+//       { "name": "glass-plate", "speeds_mps": [2, 10],
+//         "impactors": [ { "mass_kg": 0.1, "radius_m": 0.02, "material": "steel" } ] },
+//       { "name": "brick", "speeds_mps": [3, 12], "impactors": [ { "ground": true } ] } ] }
+//
+// An impactor is a sphere (mass, radius, material preset or JSON file; default steel) or the
+// ground (immovable and flat). Objects the file does not name are not baked.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "brittle/core/Result.h"
+#include "brittle/database/Material.h"
+
+namespace brittle {
+
+struct SceneImpactor {
+  double massKg = 0.1;                                          ///< +∞: immovable
+  double radiusM = 0.02;                                        ///< +∞: flat
+  Material material;                                            ///< steel unless given
+  bool ground() const { return massKg == std::numeric_limits<double>::infinity(); }
+};
+
+struct SceneObjectRange {
+  std::string name;                    ///< an object of the bake manifest
+  double minSpeedMps = 1.0, maxSpeedMps = 10.0;
+  std::vector<SceneImpactor> impactors;
+};
+
+struct SceneRequirements {
+  double peakStressError = 0.15;
+  /// Median error allowed on a matched fragment's first three frequencies, against the fragment's
+  /// own modes ("match_frequency_error"; what picks the descriptor and the search precision).
+  double matchFrequencyError = 0.25;
+  bool refracture = true;
+  std::vector<SceneObjectRange> objects;
+};
+
+/// Reads a requirements file. Material file names are relative to its directory.
+/// Errors: FileNotFound, ParseError (naming the key: unknown keys, 0 < error < 1, 0 < min ≤ max
+/// speed, positive mass and radius, at least one object and impactor, no name twice),
+/// UnknownMaterial, InvalidMaterial.
+Result<SceneRequirements> loadSceneRequirements(const std::filesystem::path& path);
+
+struct ModelSizingSettings {
+  std::vector<int> modeLadder = {5, 10, 15, 20, 30, 40, 60, 80, 100};  ///< ascending after validation
+  int points = 3;                    ///< surface points per impactor and speed
+  std::vector<int> searchChecks = {4, 16, 64, 0};  ///< kd-forest checks tried (0: the exact search)
+  int fragmentsPerImpact = 12;       ///< fragments studied per top-speed impact, spread over their sizes
+  int referenceStepsPerContact = 60; ///< Newmark steps per contact time
+  int timingRepeats = 3;             ///< impacts timed per mode count and impact (median)
+  uint64_t seed = 1;
+};
+
+}  // namespace brittle
