@@ -33,25 +33,32 @@ Result<FragmentMatcher> FragmentMatcher::build(const FragmentDatabase& database,
   return matcher;
 }
 
-Result<std::vector<FragmentMatch>> FragmentMatcher::match(const TriangleMesh& surface, DescriptorKind kind,
-                                                          int k) const {
-  const ShapeDescriptorSettings& settings = mDatabase->descriptorSettings;
-  auto frames = computeCanonicalFrames(surface, settings.frame);
+namespace {
+
+// Descriptors of the surface in frames computed by the caller, then the search.
+Result<std::vector<FragmentMatch>> matchInFrames(const FragmentMatcher& matcher, const TriangleMesh& surface,
+                                                 const Result<CanonicalFrames>& frames,
+                                                 const ShapeDescriptorSettings& settings, DescriptorKind kind, int k) {
   if (!frames) return frames.error();
   auto descriptors = computeShapeDescriptors(surface, frames.value(), kind, settings);
   if (!descriptors) return descriptors.error();
-  return matchDescriptors(frames.value(), descriptors.value(), kind, k);
+  return matcher.matchDescriptors(frames.value(), descriptors.value(), kind, k);
+}
+
+}  // namespace
+
+Result<std::vector<FragmentMatch>> FragmentMatcher::match(const TriangleMesh& surface, DescriptorKind kind,
+                                                          int k) const {
+  const ShapeDescriptorSettings& settings = mDatabase->descriptorSettings;
+  return matchInFrames(*this, surface, computeCanonicalFrames(surface, settings.frame), settings, kind, k);
 }
 
 Result<std::vector<FragmentMatch>> FragmentMatcher::match(const TriangleMesh& surface, const VolumeMoments& moments,
                                                           const Eigen::Vector3d& momentsOriginM, DescriptorKind kind,
                                                           int k) const {
   const ShapeDescriptorSettings& settings = mDatabase->descriptorSettings;
-  auto frames = computeCanonicalFrames(surface, moments, momentsOriginM, settings.frame);
-  if (!frames) return frames.error();
-  auto descriptors = computeShapeDescriptors(surface, frames.value(), kind, settings);
-  if (!descriptors) return descriptors.error();
-  return matchDescriptors(frames.value(), descriptors.value(), kind, k);
+  return matchInFrames(*this, surface, computeCanonicalFrames(surface, moments, momentsOriginM, settings.frame),
+                       settings, kind, k);
 }
 
 Result<std::vector<FragmentMatch>> FragmentMatcher::matchDescriptors(const CanonicalFrames& frames,
