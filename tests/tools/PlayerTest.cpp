@@ -97,6 +97,14 @@ TEST_P(PlayerTest, BreaksDeterministicallyAboveTheFloorWithoutGainingEnergy) {
   // slop and the collision margin).
   const double floor = s.floor->heightM;
   for (const BodyState& body : a.bodies) EXPECT_GE(body.lowestPointM, floor - 0.01) << body.name;
+  // Fragments' collision hulls keep at most hullMaxVertices vertices (and at least a tetrahedron's).
+  for (const BodyState& body : a.bodies) {
+    if (body.kind == BodyKind::Impactor) continue;
+    EXPECT_GE(body.hullVertices, 4) << body.name;
+    if (body.kind != BodyKind::Object) {
+      EXPECT_LE(body.hullVertices, settings.hullMaxVertices) << body.name;
+    }
+  }
 
   // Energy: E = Σ ½mv² + ½ωᵀIω − m g·x over the dynamic bodies after each frame (FrameStats).
   // Between two fracture events (a fracture replaces a body by fragments with new velocities, and
@@ -158,6 +166,29 @@ TEST(PlayerLatencyTest, TheBallGoesThroughThePaneWhateverTheLatency) {
   const PlayResult automatic = play(s);
   ASSERT_FALSE(automatic.events.empty());
   EXPECT_EQ(automatic.events.front().appliedFrame - automatic.events.front().frame, 8);
+}
+
+// Capped collision hulls: the exact hulls of the pane's fragments have more vertices than the cap
+// (so the cap does something), the capped ones keep at most the cap, and the ball still goes
+// through the pane.
+TEST(PlayerHullTest, FragmentHullsKeepAtMostTheCap) {
+  ASSERT_NE(smallPack(), nullptr);
+  const Scene s = defaultScene("ball-through-pane");
+  auto largestHull = [&](int cap) {
+    PlayerSettings settings;
+    settings.hullMaxVertices = cap;
+    const PlayResult r = play(s, settings);
+    EXPECT_GE(r.breaks, 1) << cap;
+    int32_t largest = 0;
+    for (const BodyState& b : r.bodies)
+      if (b.kind == BodyKind::Fragment || b.kind == BodyKind::Debris) largest = std::max(largest, b.hullVertices);
+    return largest;
+  };
+  const int32_t exact = largestHull(0);
+  std::printf("largest fragment hull: %d vertices exact, capped at 16 and 24\n", exact);
+  EXPECT_GT(exact, 24);
+  EXPECT_LE(largestHull(24), 24);
+  EXPECT_LE(largestHull(16), 16);
 }
 
 // The replay: every body is a node, and every node is animated over the whole run (translation,
@@ -321,6 +352,9 @@ TEST(PlayerErrorsTest, UnknownAssetAndBadSettingsAreTyped) {
   bad = {};
   bad.impactThresholdMps = -1.0;
   EXPECT_FALSE(validatePlayerSettings(bad));
+  bad = {};
+  bad.hullMaxVertices = 3;  // not even a tetrahedron
+  EXPECT_EQ(validatePlayerSettings(bad).error().code, ErrorCode::InvalidArgument);
 }
 
 }  // namespace

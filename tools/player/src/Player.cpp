@@ -4,6 +4,7 @@
 #include <btBulletDynamicsCommon.h>
 
 #include <Eigen/Eigenvalues>
+#include <LinearMath/btConvexHull.h>
 #include <LinearMath/btConvexHullComputer.h>
 #include <oneapi/tbb/parallel_for.h>
 
@@ -154,7 +155,7 @@ struct Hull {
   double sizeM = 0.0;  ///< largest distance of a surface point from the centre of mass
 };
 
-Hull convexHull(const TriangleMesh& surface, const MassProperties& mass) {
+Hull convexHull(const TriangleMesh& surface, const MassProperties& mass, int maxVertices) {
   Hull h;
   principalAxes(mass.inertiaKgM2, h.axes, h.moments);
   btAlignedObjectArray<btVector3> all;
@@ -164,8 +165,21 @@ Hull convexHull(const TriangleMesh& surface, const MassProperties& mass) {
     h.sizeM = std::max(h.sizeM, x.norm());
     all.push_back(bt(x));
   }
-  btConvexHullComputer conv;
+  btConvexHullComputer conv;  // O(n log n); the capped hull is then built from its vertices alone
   conv.compute(&all[0].getX(), sizeof(btVector3), all.size(), 0.f, 0.f);
+  if (maxVertices > 0 && conv.vertices.size() > maxVertices) {
+    // HullLibrary is quadratic in its input (its duplicate check), hence the exact hull first.
+    HullDesc desc(QF_DEFAULT, static_cast<unsigned>(conv.vertices.size()), &conv.vertices[0]);
+    desc.mMaxVertices = static_cast<unsigned>(maxVertices);
+    HullLibrary library;
+    HullResult result;
+    const bool capped = library.CreateConvexHull(desc, result) == QE_OK && result.mNumOutputVertices >= 4;
+    if (capped) {
+      for (unsigned i = 0; i < result.mNumOutputVertices; ++i) h.points.push_back(result.m_OutputVertices[static_cast<int>(i)]);
+    }
+    library.ReleaseResult(result);
+    if (capped) return h;  // else a degenerate point set: the exact hull copes with it
+  }
   for (int i = 0; i < conv.vertices.size(); ++i) h.points.push_back(conv.vertices[i]);
   return h;
 }
@@ -213,7 +227,7 @@ class Simulation {
   // A hull body from a surface in its local frame, placed with the local frame at (rotation, translation).
   Body& addHullBody(BodyState state, const TriangleMesh& surface, const MassProperties& mass, bool isStatic,
                     const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {
-    return addHullBody(std::move(state), surface, mass, convexHull(surface, mass), isStatic, rotation, translation);
+    return addHullBody(std::move(state), surface, mass, convexHull(surface, mass, 0), isStatic, rotation, translation);
   }
 
   Body& addHullBody(BodyState state, const TriangleMesh& surface, const MassProperties& mass, const Hull& hull,
@@ -229,6 +243,7 @@ class Simulation {
     b.sizeM = hull.sizeM;
     auto shape = std::make_unique<btConvexHullShape>();
     for (int i = 0; i < hull.points.size(); ++i) shape->addPoint(hull.points[i], false);
+    b.state.hullVertices = hull.points.size();
     shape->recalcLocalAabb();
     shape->setMargin(mSettings.collisionMarginM);
     b.shape = std::move(shape);
@@ -669,7 +684,7 @@ class Simulation {
     // are then added in order.
     std::vector<Hull> hulls(mResult.fragments.size());
     tbb::parallel_for(size_t{0}, hulls.size(), [&](size_t i) {
-      hulls[i] = convexHull(mResult.fragments[i].surface, mResult.fragments[i].massProperties);
+      hulls[i] = convexHull(mResult.fragments[i].surface, mResult.fragments[i].massProperties, mSettings.hullMaxVertices);
     });
     for (size_t i = 0; i < mResult.fragments.size(); ++i) {
       const FragmentResult& f = mResult.fragments[i];
@@ -795,6 +810,7 @@ Status validatePlayerSettings(const PlayerSettings& s) {
   if (!(s.frictionCoefficient >= 0.0) || !std::isfinite(s.frictionCoefficient)) return bad("frictionCoefficient must be finite and ≥ 0");
   if (!(s.collisionMarginM > 0.0 && s.collisionMarginM <= 0.05)) return bad("collisionMarginM must be in (0, 0.05]");
   if (!(s.pointToleranceFraction > 0.0 && s.pointToleranceFraction <= 1.0)) return bad("pointToleranceFraction must be in (0, 1]");
+  if (s.hullMaxVertices != 0 && (s.hullMaxVertices < 8 || s.hullMaxVertices > 4096)) return bad("hullMaxVertices must be 0 or in [8, 4096]");
   return validateWorldSettings(s.world);
 }
 

@@ -74,6 +74,14 @@ struct PlayerSettings {
   int fractureLatencyFrames = -1;
   double frictionCoefficient = 0.5;
   double collisionMarginM = 0.001;  ///< Bullet's margin around hulls and boxes
+  /// Most vertices of a fragment's collision hull; 0: the exact hull of its surface. Bullet's
+  /// narrow phase walks a hull's vertices for every support point, so a pile of fragments with
+  /// exact hulls (about 60 vertices, up to 144, on the pane) costs most of a frame. A capped hull is
+  /// built farthest point first from the exact one (Bullet's HullLibrary): its vertices are the
+  /// exact hull's, it lies inside it, and it keeps the extreme points that set how a fragment rests
+  /// and rolls. The scene's own objects keep their exact hulls: their first contacts are the
+  /// scene's main impacts, and where they touch decides how they break.
+  int hullMaxVertices = 24;
   /// Fraction of a body's size the contact point may lie off its surface in the runtime: Bullet's
   /// hull is convex and the surface need not be, and a matched fragment's runtime shape is its
   /// database entry, not its exact surface.
@@ -89,7 +97,7 @@ struct PlayerSettings {
 
 /// Range checks: threshold > 0, cooldown ≥ 0, maxImpactsPerStep ≥ 1, fractureBudgetS ≥ 0,
 /// maxBudgetWaits ≥ 0, fractureLatencyFrames in [−1, 600], friction ≥ 0, margin in
-/// (0, 0.05], tolerance fraction in (0, 1], and validateWorldSettings. Error: InvalidArgument.
+/// (0, 0.05], hullMaxVertices 0 or in [8, 4096], tolerance fraction in (0, 1], and validateWorldSettings. Error: InvalidArgument.
 Status validatePlayerSettings(const PlayerSettings& settings);
 
 enum class BodyKind { Object, Fragment, Debris, Impactor };
@@ -152,6 +160,7 @@ struct BodyState {
   std::vector<Eigen::Quaterniond> rotations;
   std::vector<Eigen::Vector3d> translationsM;
   double lowestPointM = 0.0;     ///< lowest world z of its surface (or shape) at the end
+  int32_t hullVertices = 0;      ///< vertices of its collision hull (impactors and the floor: 0)
 };
 
 struct PlayResult {
