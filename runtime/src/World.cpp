@@ -367,9 +367,10 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
     PendingImpact* raw = p.get();
     w.pending.emplace(ticket.id, std::move(p));
     w.workers().execute([&] {
-      raw->group.run([raw] {
+      raw->group.run([raw, ticket, &hook = w.settings.onImpactComputed] {
         try {
           raw->status = detail::computeImpact(raw->job, *raw->workspace, raw->result, raw->born);
+          if (*raw->status && hook) hook(ticket, raw->result);
         } catch (const std::exception& e) {
           raw->status = invalidArgument(std::string("impact failed on a worker: ") + e.what());
         }

@@ -6,6 +6,9 @@
 
 #include <cstring>
 #include <functional>
+#include <map>
+#include <mutex>
+#include <stdexcept>
 
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/BaseShapes.h"
@@ -487,6 +490,58 @@ TEST_F(WorldTest, AFailedImpactLeavesTheWorldAsItWas) {
   EXPECT_TRUE(capped.isAlive(capPlate));
   few.maxFragmentsPerImpact = 1;
   EXPECT_EQ(World::create(Pack{}, few).error().code, ErrorCode::InvalidArgument);
+}
+
+// The host's hook on the workers: called once per submitted impact that was computed, before it
+// is ready, with the fragments collectImpact then returns; not called for impact(); a hook that
+// throws fails the impact, which leaves the object as it was.
+TEST_F(WorldTest, TheComputedHookSeesEachSubmittedResultBeforeItIsReady) {
+  struct Seen {
+    std::mutex mutex;
+    std::map<uint64_t, std::vector<double>> volumes;  // per ticket: the fragments' volumes
+  };
+  auto seen = std::make_shared<Seen>();
+  WorldSettings settings;
+  settings.onImpactComputed = [seen](ImpactTicket t, const ImpactResult& r) {
+    std::vector<double> v;
+    for (const FragmentResult& f : r.fragments) v.push_back(f.massProperties.volumeM3);
+    std::lock_guard<std::mutex> lock(seen->mutex);
+    EXPECT_TRUE(seen->volumes.emplace(t.id, std::move(v)).second) << "called twice for ticket " << t.id;
+  };
+  World world = makeWorld(settings);
+  const ObjectId a = world.addObject({.asset = "plate"}).value(), b = world.addObject({.asset = "plate"}).value();
+  auto ta = world.submitImpact(ball(a, 60.0));
+  auto tb = world.submitImpact(ball(b, 1.0));  // does not break: called all the same
+  ASSERT_TRUE(ta && tb);
+  ImpactResult ra, rb;
+  ASSERT_TRUE(world.collectImpact(ta.value(), ra));
+  ASSERT_TRUE(world.collectImpact(tb.value(), rb));
+  ASSERT_TRUE(ra.broken);
+  EXPECT_FALSE(rb.broken);
+  {
+    std::lock_guard<std::mutex> lock(seen->mutex);
+    ASSERT_EQ(seen->volumes.size(), 2u);
+    const std::vector<double>& va = seen->volumes.at(ta.value().id);
+    ASSERT_EQ(va.size(), ra.fragments.size());
+    for (size_t i = 0; i < va.size(); ++i) EXPECT_EQ(va[i], ra.fragments[i].massProperties.volumeM3);
+    EXPECT_TRUE(seen->volumes.at(tb.value().id).empty());
+  }
+  const ObjectId c = world.addObject({.asset = "plate"}).value();
+  ASSERT_TRUE(world.impact(ball(c, 60.0)));
+  EXPECT_EQ(seen->volumes.size(), 2u);
+
+  WorldSettings throwing;
+  throwing.onImpactComputed = [](ImpactTicket, const ImpactResult&) { throw std::runtime_error("host hook failed"); };
+  World failing = makeWorld(throwing);
+  const ObjectId d = failing.addObject({.asset = "plate"}).value();
+  auto td = failing.submitImpact(ball(d, 60.0));
+  ASSERT_TRUE(td);
+  ImpactResult rd;
+  const Status st = failing.collectImpact(td.value(), rd);
+  ASSERT_FALSE(st);
+  EXPECT_NE(st.error().message.find("host hook failed"), std::string::npos) << st.error().message;
+  EXPECT_TRUE(failing.isAlive(d));
+  EXPECT_EQ(failing.objectCount(), 1);
 }
 
 TEST_F(WorldTest, EveryFragmentSaysWhatItBecameAndWhy) {

@@ -168,6 +168,28 @@ TEST(PlayerLatencyTest, TheBallGoesThroughThePaneWhateverTheLatency) {
   EXPECT_EQ(automatic.events.front().appliedFrame - automatic.events.front().frame, 8);
 }
 
+// A result is collected as soon as its work is done (its hulls then built on a worker) or at its
+// frame, whichever comes first; which one depends on the machine's speed and must not change the
+// play. Paced in wall time with two workers, results are mostly ready early; unpaced with one, the
+// play reaches each frame first and waits.
+TEST(PlayerLatencyTest, ThePlayIsTheSameWhetherResultsLandEarlyOrAtTheirFrame) {
+  ASSERT_NE(smallPack(), nullptr);
+  const Scene s = defaultScene("ball-through-pane");
+  PlayerSettings waiting;
+  waiting.world.workerThreads = 1;
+  PlayerSettings paced;
+  paced.realTime = true;
+  paced.world.workerThreads = 2;
+  const PlayResult a = play(s, waiting), b = play(s, paced);
+  EXPECT_GE(a.breaks, 1);
+  EXPECT_EQ(a.poseHash, b.poseHash);
+  EXPECT_EQ(a.impacts, b.impacts);
+  EXPECT_EQ(a.breaks, b.breaks);
+  EXPECT_EQ(a.bodiesAtEnd, b.bodiesAtEnd);
+  ASSERT_EQ(a.events.size(), b.events.size());
+  for (size_t i = 0; i < a.events.size(); ++i) EXPECT_EQ(a.events[i].appliedFrame, b.events[i].appliedFrame) << i;
+}
+
 // Capped collision hulls: the exact hulls of the pane's fragments have more vertices than the cap
 // (so the cap does something), the capped ones keep at most the cap, and the ball still goes
 // through the pane.

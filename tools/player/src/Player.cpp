@@ -15,6 +15,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <set>
 #include <thread>
 
@@ -109,6 +110,8 @@ struct Candidate {
 };
 
 // An impact submitted to the World's workers, applied at the start of applyFrame.
+struct Landing;
+
 struct InFlight {
   ImpactTicket ticket;
   Candidate candidate;
@@ -117,6 +120,7 @@ struct InFlight {
   // The other body at the contact (after the step), and its velocities before it.
   btTransform otherTransform = btTransform::getIdentity();
   Eigen::Vector3d otherPreVelocity = Eigen::Vector3d::Zero(), otherPreAngular = Eigen::Vector3d::Zero();
+  std::shared_ptr<Landing> landing;  ///< its outcome, once collected
 };
 
 // Fragments born in the same step start interpenetrating (the convex hulls of concave fragments
@@ -184,10 +188,50 @@ Hull convexHull(const TriangleMesh& surface, const MassProperties& mass, int max
   return h;
 }
 
+// The fragments' hulls, in parallel.
+void buildHulls(const ImpactResult& r, int maxVertices, std::vector<Hull>& hulls) {
+  hulls.resize(r.fragments.size());
+  tbb::parallel_for(size_t{0}, hulls.size(), [&](size_t i) {
+    hulls[i] = convexHull(r.fragments[i].surface, r.fragments[i].massProperties, maxVertices);
+  });
+}
+
+// Hulls of submitted impacts' fragments, built on the World's workers as part of each impact's
+// work (WorldSettings::onImpactComputed), by ticket until the impact is collected. A hull depends
+// on the fragment alone, so where it is built changes nothing.
+struct HullStore {
+  std::mutex mutex;
+  std::map<uint64_t, std::vector<Hull>> byTicket;
+
+  void put(ImpactTicket t, std::vector<Hull> hulls) {
+    std::lock_guard<std::mutex> lock(mutex);
+    byTicket[t.id] = std::move(hulls);
+  }
+  bool take(ImpactTicket t, std::vector<Hull>& hulls) {
+    std::lock_guard<std::mutex> lock(mutex);
+    const auto it = byTicket.find(t.id);
+    if (it == byTicket.end()) return false;
+    hulls = std::move(it->second);
+    byTicket.erase(it);
+    return true;
+  }
+};
+
+// A submitted impact's outcome, collected from the World as soon as its work is done (in
+// submission order, never past one still running, so the World hands out object ids in the same
+// order on a fast or a slow machine), with its fragments' hulls. It takes effect at its frame;
+// what remains for that frame is adding the bodies to Bullet.
+struct Landing {
+  Status status = Ok{};
+  ImpactResult result;
+  std::vector<Hull> hulls;
+  bool hullsBuilt = false;
+};
+
 class Simulation {
  public:
-  Simulation(World world, const Scene& scene, const PlayerSettings& settings)
-      : mWorld(std::move(world)), mScene(scene), mSettings(settings) {
+  Simulation(World world, const Scene& scene, const PlayerSettings& settings, std::shared_ptr<HullStore> hulls)
+      : mWorld(std::move(world)), mScene(scene), mSettings(settings), mHulls(std::move(hulls)) {
     if (mSettings.fractureLatencyFrames < 0) {  // automatic: about two 60 Hz frames of play
       mSettings.fractureLatencyFrames = std::max(1, static_cast<int>(std::lround(kAutoLatencyS / mScene.timeStepS)));
     }
@@ -353,6 +397,7 @@ class Simulation {
     }
     if (!mInFlight.empty()) {
       const auto t0 = SteadyClock::now();
+      collectReady();
       fs.fractured = applyDue(frame, out);
       fs.fractureS += secondsSince(t0);
     }
@@ -577,9 +622,15 @@ class Simulation {
       const Status st = mWorld.impact(d, mResult);
       e.appliedFrame = frame;
       out.events.push_back(std::move(e));
-      return applyResult(st, c, frame, out, out.events.back());
+      return applyResult(st, mResult, nullptr, c, frame, out, out.events.back());
     }
-    auto ticket = mWorld.submitImpact(d);
+    // The player counts its own impacts in flight, collected or not, against the World's
+    // capacity: the World's count falls as results are collected early, which depends on the
+    // machine's speed, and a refusal must not.
+    Result<ImpactTicket> ticket = makeError(ErrorCode::CapacityExceeded,
+                                            "impact refused: maxPendingImpacts = " +
+                                                std::to_string(mSettings.world.maxPendingImpacts) + " impacts in flight");
+    if (mInFlight.size() < static_cast<size_t>(mSettings.world.maxPendingImpacts)) ticket = mWorld.submitImpact(d);
     if (!ticket) {
       e.error = ticket.error().message;
       ++out.failedImpacts;
@@ -603,6 +654,24 @@ class Simulation {
     return false;
   }
 
+  // Submitted impacts whose work is done, collected at once in submission order, up to the first
+  // one still running.
+  void collectReady() {
+    for (InFlight& f : mInFlight) {
+      if (f.landing) continue;
+      if (!mWorld.impactReady(f.ticket)) return;
+      land(f);
+    }
+  }
+
+  // Collects f's outcome (waiting if its work is not done), with the hulls built on the workers.
+  void land(InFlight& f) {
+    f.landing = std::make_shared<Landing>();
+    Landing& l = *f.landing;
+    l.status = mWorld.collectImpact(f.ticket, l.result);
+    l.hullsBuilt = mHulls && mHulls->take(f.ticket, l.hulls) && l.hulls.size() == l.result.fragments.size();
+  }
+
   // Submitted impacts due at the start of `frame`, in the order they were submitted: collected
   // (waiting if not done) and applied. Returns whether a body broke.
   bool applyDue(int64_t frame, PlayResult& out) {
@@ -615,12 +684,13 @@ class Simulation {
         continue;
       }
       const auto t0 = SteadyClock::now();
-      const Status st = mWorld.collectImpact(f.ticket, mResult);
+      if (!f.landing) land(f);  // waits for the work
+      Landing& l = *f.landing;
       ImpactEvent& e = out.events[f.event];
       e.waitS = secondsSince(t0);
       e.appliedFrame = frame;
       mBodies[static_cast<size_t>(f.candidate.body)].fracturing = false;
-      broke = applyResult(st, f.candidate, frame, out, e, &f) || broke;
+      broke = applyResult(l.status, l.result, l.hullsBuilt ? &l.hulls : nullptr, f.candidate, frame, out, e, &f) || broke;
     }
     mInFlight.resize(kept);
     if (broke) updateSiblingPairs();
@@ -628,29 +698,37 @@ class Simulation {
   }
 
   // An impact's outcome: the event's figures, and the fragments in place of a broken body.
-  bool applyResult(const Status& st, const Candidate& c, int64_t frame, PlayResult& out, ImpactEvent& e,
-                   const InFlight* flight = nullptr) {
+  // hulls: the fragments' hulls when they were built already.
+  bool applyResult(const Status& st, const ImpactResult& r, const std::vector<Hull>* hulls, const Candidate& c,
+                   int64_t frame, PlayResult& out, ImpactEvent& e, const InFlight* flight = nullptr) {
     if (!st) {
       e.error = st.error().message;
       ++out.failedImpacts;
       return false;
     }
-    e.broken = mResult.broken;
-    e.staticCorrection = mResult.staticCorrectionUsed;
-    e.modesUsed = mResult.modesUsed;
-    e.peakPrincipalStressPa = mResult.peakPrincipalStressPa;
-    e.times = mResult.times;
-    if (mResult.broken) {
+    e.broken = r.broken;
+    e.staticCorrection = r.staticCorrectionUsed;
+    e.modesUsed = r.modesUsed;
+    e.peakPrincipalStressPa = r.peakPrincipalStressPa;
+    e.times = r.times;
+    if (r.broken) {
       ++out.breaks;
-      e.fragments = static_cast<int32_t>(mResult.fragments.size());
-      for (const FragmentResult& f : mResult.fragments) e.debris += f.debris ? 1 : 0;
-      spawnFragments(c, frame, flight);
+      e.fragments = static_cast<int32_t>(r.fragments.size());
+      for (const FragmentResult& f : r.fragments) e.debris += f.debris ? 1 : 0;
+      if (hulls) {
+        spawnFragments(r, *hulls, c, frame, flight);
+      } else {
+        std::vector<Hull> built;
+        buildHulls(r, mSettings.hullMaxVertices, built);
+        spawnFragments(r, built, c, frame, flight);
+      }
     }
-    return mResult.broken;
+    return r.broken;
   }
 
   // flight: the submitted impact (latency ≥ 1), whose impactor is put back where it touched.
-  void spawnFragments(const Candidate& c, int64_t frame, const InFlight* flight) {
+  void spawnFragments(const ImpactResult& r, const std::vector<Hull>& hulls, const Candidate& c, int64_t frame,
+                      const InFlight* flight) {
     // Index, not reference: adding bodies grows mBodies.
     const size_t parentIndex = static_cast<size_t>(c.body);
     Eigen::Matrix3d rotation;
@@ -680,14 +758,8 @@ class Simulation {
         o.rigid->setAngularVelocity(bt(flight->otherPreAngular));
       }
     }
-    // The fragments' hulls, in parallel (the largest cost of a break on this thread); the bodies
-    // are then added in order.
-    std::vector<Hull> hulls(mResult.fragments.size());
-    tbb::parallel_for(size_t{0}, hulls.size(), [&](size_t i) {
-      hulls[i] = convexHull(mResult.fragments[i].surface, mResult.fragments[i].massProperties, mSettings.hullMaxVertices);
-    });
-    for (size_t i = 0; i < mResult.fragments.size(); ++i) {
-      const FragmentResult& f = mResult.fragments[i];
+    for (size_t i = 0; i < r.fragments.size(); ++i) {
+      const FragmentResult& f = r.fragments[i];
       const Body& parent = mBodies[parentIndex];
       BodyState state;
       state.name = parent.state.name + "/" + std::to_string(i);
@@ -777,6 +849,7 @@ class Simulation {
   std::vector<Body> mBodies;
   std::vector<Candidate> mDeferred;
   std::vector<InFlight> mInFlight;  // submitted impacts, in submission order
+  std::shared_ptr<HullStore> mHulls;
   SteadyClock::time_point mPaceStart;  // realTime: the wall time of frame 0
   PlayResult mOut;
   int64_t mFrame = 0;
@@ -835,9 +908,16 @@ Result<std::unique_ptr<PlaySession>> PlaySession::create(Pack pack, const Scene&
   std::vector<Material> materials = pack.materials;
   WorldSettings ws = settings.world;
   ws.seed = scene.seed;
+  auto hulls = std::make_shared<HullStore>();
+  ws.onImpactComputed = [hulls, cap = settings.hullMaxVertices](ImpactTicket t, const ImpactResult& r) {
+    if (!r.broken) return;
+    std::vector<Hull> built;
+    buildHulls(r, cap, built);
+    hulls->put(t, std::move(built));
+  };
   auto world = World::create(std::move(pack), ws);
   if (!world) return world.error();
-  impl->sim = std::make_unique<Simulation>(std::move(world).value(), impl->scene, settings);
+  impl->sim = std::make_unique<Simulation>(std::move(world).value(), impl->scene, settings, hulls);
   impl->sim->setMaterials(std::move(materials));
   if (Status st = impl->sim->addFloor(); !st) return st.error();
   for (const SceneObject& o : impl->scene.objects)

@@ -46,6 +46,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -101,6 +102,15 @@ struct FractureSettings {
   DescriptorKind descriptor = DescriptorKind::Moment;
 };
 
+/// A submitted impact (World::submitImpact). Default-constructed tickets are invalid.
+struct ImpactTicket {
+  uint64_t id = 0;
+  bool valid() const { return id != 0; }
+  bool operator==(const ImpactTicket&) const = default;
+};
+
+struct ImpactResult;
+
 /// Capacities are declared up front, as in Jolt: a call that would exceed one returns
 /// ErrorCode::CapacityExceeded and changes nothing.
 struct WorldSettings {
@@ -118,6 +128,14 @@ struct WorldSettings {
   /// correction) on a worker and returns at once; the object's first impact waits for it if it
   /// is not done. false: addObject factorises on the caller's thread and returns its errors.
   bool prepareInBackground = true;
+  /// Called on a worker when the work of a submitted impact is done, before impactReady turns
+  /// true, with the result collectImpact will hand over (the fragments' surfaces and mass
+  /// properties are final; object ids are not assigned yet). A host builds what it needs per
+  /// fragment there, off its own thread: its physics engine's collision hulls (the player's are
+  /// its largest cost of a break), render meshes. Calls for different impacts may run at once,
+  /// and it must not call the World. Should it throw, collectImpact returns the error and changes
+  /// nothing. Not called for World::impact (the host has the result at once).
+  std::function<void(ImpactTicket, const ImpactResult&)> onImpactComputed;
   FractureSettings fracture;
 };
 
@@ -216,13 +234,6 @@ struct ImpactResult {
   FractureState fracture;
   std::vector<FragmentResult> fragments;  ///< empty unless broken; ordered by fragment label
   StageTimes times;
-};
-
-/// A submitted impact (World::submitImpact). Default-constructed tickets are invalid.
-struct ImpactTicket {
-  uint64_t id = 0;
-  bool valid() const { return id != 0; }
-  bool operator==(const ImpactTicket&) const = default;
 };
 
 class World {
