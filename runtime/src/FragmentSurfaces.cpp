@@ -1,6 +1,7 @@
 #include "brittle/runtime/FragmentSurfaces.h"
 
 #include <Eigen/Geometry>
+#include <oneapi/tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <array>
@@ -202,33 +203,23 @@ TetMoments tetVolumeMoments(const TetMesh& mesh, const Eigen::Vector3d& originM)
   return out;
 }
 
-Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, const TetMoments& tetMoments,
-                             const Eigen::VectorXi& nodeLabels, int labelCount, const Eigen::VectorXd& edgeCuts,
-                             std::vector<double>& moments) {
-  if (Status st = checkLabelsAndCuts(mesh, topology, nodeLabels, labelCount, edgeCuts); !st) return st;
+namespace {
+
+// Adds the moments of tets [begin, end) to their fragments' blocks in `sums` (labelCount blocks,
+// zeroed by the caller), leaving out the fragment `body`.
+void addRangeMoments(const TetMesh& mesh, const TetTopology& topology, const TetMoments& tetMoments,
+                     const Eigen::VectorXi& nodeLabels, const Eigen::VectorXd& edgeCuts, int body, Eigen::Index begin,
+                     Eigen::Index end, double* sums) {
   constexpr int count = kFragmentMomentCount;
-  if (tetMoments.perTet.size() != static_cast<size_t>(mesh.tets.rows()) * count) {
-    return makeError(ErrorCode::InvalidArgument, "fragment moments: tetMoments needs one block per tet");
-  }
-  moments.assign(static_cast<size_t>(labelCount) * count, 0.0);
-  if (labelCount == 0) return Ok{};
-  // The fragment with the most nodes is left out of the sums and is the body minus the others.
-  // Its block serves as a node count first.
-  for (Eigen::Index n = 0; n < nodeLabels.size(); ++n) moments[static_cast<size_t>(nodeLabels[n]) * count] += 1.0;
-  int body = 0;
-  for (int l = 1; l < labelCount; ++l) {
-    if (moments[static_cast<size_t>(l) * count] > moments[static_cast<size_t>(body) * count]) body = l;
-  }
-  for (int l = 0; l < labelCount; ++l) moments[static_cast<size_t>(l) * count] = 0.0;
   const Eigen::Vector3d& originM = tetMoments.originM;
   double cell[count];
-  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+  for (Eigen::Index t = begin; t < end; ++t) {
     int label[4];
     for (int i = 0; i < 4; ++i) label[i] = nodeLabels[mesh.tets(t, i)];
     const double* whole = tetMoments.perTet.data() + t * count;
     if (label[0] == label[1] && label[1] == label[2] && label[2] == label[3]) {
       if (label[0] == body) continue;
-      double* into = moments.data() + static_cast<size_t>(label[0]) * count;
+      double* into = sums + static_cast<size_t>(label[0]) * count;
       for (int m = 0; m < count; ++m) into[m] += whole[m];
       continue;
     }
@@ -272,7 +263,7 @@ Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, c
       for (int j = 0; j < 4; ++j) size += label[j] == label[i] ? 1 : 0;
       if (size > restSize) rest = i, restSize = size;
     }
-    double* restInto = label[rest] == body ? nullptr : moments.data() + static_cast<size_t>(label[rest]) * count;
+    double* restInto = label[rest] == body ? nullptr : sums + static_cast<size_t>(label[rest]) * count;
     if (restInto) {
       for (int m = 0; m < count; ++m) restInto[m] += whole[m];
     }
@@ -294,13 +285,54 @@ Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, c
         }
       }
       if (label[i] != body) {
-        double* into = moments.data() + static_cast<size_t>(label[i]) * count;
+        double* into = sums + static_cast<size_t>(label[i]) * count;
         for (int m = 0; m < count; ++m) into[m] += cell[m];
       }
       if (restInto) {
         for (int m = 0; m < count; ++m) restInto[m] -= cell[m];
       }
     }
+  }
+}
+
+}  // namespace
+
+Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, const TetMoments& tetMoments,
+                             const Eigen::VectorXi& nodeLabels, int labelCount, const Eigen::VectorXd& edgeCuts,
+                             std::vector<double>& moments) {
+  std::vector<double> chunkSums;
+  return fragmentVolumeMoments(mesh, topology, tetMoments, nodeLabels, labelCount, edgeCuts, chunkSums, moments);
+}
+
+Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, const TetMoments& tetMoments,
+                             const Eigen::VectorXi& nodeLabels, int labelCount, const Eigen::VectorXd& edgeCuts,
+                             std::vector<double>& chunkSums, std::vector<double>& moments) {
+  if (Status st = checkLabelsAndCuts(mesh, topology, nodeLabels, labelCount, edgeCuts); !st) return st;
+  constexpr int count = kFragmentMomentCount;
+  if (tetMoments.perTet.size() != static_cast<size_t>(mesh.tets.rows()) * count) {
+    return makeError(ErrorCode::InvalidArgument, "fragment moments: tetMoments needs one block per tet");
+  }
+  moments.assign(static_cast<size_t>(labelCount) * count, 0.0);
+  if (labelCount == 0) return Ok{};
+  // The fragment with the most nodes is left out of the sums and is the body minus the others.
+  // Its block serves as a node count first.
+  for (Eigen::Index n = 0; n < nodeLabels.size(); ++n) moments[static_cast<size_t>(nodeLabels[n]) * count] += 1.0;
+  int body = 0;
+  for (int l = 1; l < labelCount; ++l) {
+    if (moments[static_cast<size_t>(l) * count] > moments[static_cast<size_t>(body) * count]) body = l;
+  }
+  for (int l = 0; l < labelCount; ++l) moments[static_cast<size_t>(l) * count] = 0.0;
+  // Fixed ranges, each into its own sums, added in range order.
+  const size_t block = static_cast<size_t>(labelCount) * count;
+  chunkSums.assign(block * kMomentChunks, 0.0);
+  const Eigen::Index tets = mesh.tets.rows();
+  tbb::parallel_for(0, kMomentChunks, [&](int c) {
+    addRangeMoments(mesh, topology, tetMoments, nodeLabels, edgeCuts, body, tets * c / kMomentChunks,
+                    tets * (c + 1) / kMomentChunks, chunkSums.data() + block * static_cast<size_t>(c));
+  });
+  for (int c = 0; c < kMomentChunks; ++c) {
+    const double* sums = chunkSums.data() + block * static_cast<size_t>(c);
+    for (size_t m = 0; m < block; ++m) moments[m] += sums[m];
   }
   double* bodyInto = moments.data() + static_cast<size_t>(body) * count;
   for (int m = 0; m < count; ++m) bodyInto[m] = tetMoments.total[static_cast<size_t>(m)];
@@ -310,7 +342,6 @@ Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, c
   }
   return Ok{};
 }
-
 
 void FragmentSurfaceWorkspace::reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index edges,
                                        Eigen::Index boundaryFaces) {

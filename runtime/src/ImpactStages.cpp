@@ -15,6 +15,7 @@
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/parallel_invoke.h>
 #include <oneapi/tbb/task_arena.h>
 
 namespace brittle::detail {
@@ -156,18 +157,25 @@ Status surfaceStage(const ImpactJob& job, ImpactWorkspace& ws, ImpactResult& res
     return makeError(ErrorCode::CapacityExceeded, std::to_string(count) + " fragments exceed maxFragmentsPerImpact = " +
                                                       std::to_string(job.maxFragments) + " (the object is left unbroken)");
   }
-  if (Status st = buildFragmentSurfaces(body.asset.tetMesh, body.topology, result.fracture.nodeLabels, count,
-                                        result.fracture.edgeCuts, ws.surfaceBuffers, ws.surfaces);
-      !st) {
-    return st;
-  }
-  // Mass properties (and the matcher's moments) summed over the fragments' tets and cut cells,
-  // which is exact for the same solids and far cheaper than a pass over their dense surfaces.
-  if (Status st = fragmentVolumeMoments(body.asset.tetMesh, body.topology, body.tetMoments(),
-                                        result.fracture.nodeLabels, count, result.fracture.edgeCuts, ws.fragmentMoments);
-      !st) {
-    return st;
-  }
+  // The surfaces, and beside them mass properties (and the matcher's moments) summed over the
+  // fragments' tets and cut cells, which is exact for the same solids and far cheaper than a pass
+  // over their dense surfaces. Each writes only its own buffers, so the two run at once.
+  Status surfaces = Ok{}, moments = Ok{};
+  auto both = [&] {
+    tbb::parallel_invoke(
+        [&] {
+          surfaces = buildFragmentSurfaces(body.asset.tetMesh, body.topology, result.fracture.nodeLabels, count,
+                                           result.fracture.edgeCuts, ws.surfaceBuffers, ws.surfaces);
+        },
+        [&] {
+          moments = fragmentVolumeMoments(body.asset.tetMesh, body.topology, body.tetMoments(), result.fracture.nodeLabels,
+                                          count, result.fracture.edgeCuts, ws.momentChunkSums, ws.fragmentMoments);
+        });
+  };
+  if (job.workers) job.workers->execute(both);
+  else both();
+  if (!surfaces) return surfaces;
+  if (!moments) return moments;
   result.fragments.resize(static_cast<size_t>(count));
   for (size_t i = 0; i < result.fragments.size(); ++i) {
     FragmentResult& fr = result.fragments[i];

@@ -52,6 +52,7 @@ struct ImpactWorkspace {
   FragmentSurfaceWorkspace surfaceBuffers;
   std::vector<TriangleMesh> surfaces;
   std::vector<double> fragmentMoments;  ///< per fragment, kFragmentMomentCount moments about the body's centre
+  std::vector<double> momentChunkSums;  ///< fragmentVolumeMoments' per-range sums
   /// Reserves the crack and surface buffers for a body of the given mesh and topology.
   void reserve(const TetMesh& mesh, const TetTopology& topology, const FractureSettings& settings);
 };

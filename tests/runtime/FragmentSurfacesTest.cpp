@@ -1,6 +1,7 @@
 #include "brittle/runtime/FragmentSurfaces.h"
 
 #include <gtest/gtest.h>
+#include <oneapi/tbb/task_arena.h>
 
 #include <random>
 
@@ -150,6 +151,30 @@ TEST_F(FragmentSurfacesTest, FragmentMomentsFromTetsEqualThoseOfTheirSurfaces) {
                 .error()
                 .code,
             ErrorCode::InvalidArgument);
+}
+
+// The fixed ranges are summed in their order whatever runs them: one thread, two, or the default
+// arena give the same bits.
+TEST_F(FragmentSurfacesTest, FragmentMomentsAreTheSameBitsOnAnyNumberOfThreads) {
+  std::mt19937_64 rng(5);
+  Eigen::VectorXi labels(mesh.nodes.rows());
+  for (Eigen::Index i = 0; i < labels.size(); ++i) labels[i] = static_cast<int>(rng() % 5);
+  Eigen::VectorXd cuts(topo.edges.rows());
+  for (Eigen::Index e = 0; e < cuts.size(); ++e) cuts[e] = static_cast<double>(rng() % 1000) / 1000.0;
+  const TetMoments tetMoments = tetVolumeMoments(mesh, mesh.nodes.colwise().mean().transpose());
+  auto momentsOn = [&](int threads) {
+    std::vector<double> moments, chunkSums;
+    tbb::task_arena arena(threads);
+    arena.execute([&] { EXPECT_TRUE(fragmentVolumeMoments(mesh, topo, tetMoments, labels, 5, cuts, chunkSums, moments)); });
+    return moments;
+  };
+  const std::vector<double> one = momentsOn(1);
+  ASSERT_EQ(one.size(), 5u * kFragmentMomentCount);
+  EXPECT_EQ(momentsOn(2), one);
+  EXPECT_EQ(momentsOn(4), one);
+  std::vector<double> plain;
+  ASSERT_TRUE(fragmentVolumeMoments(mesh, topo, tetMoments, labels, 5, cuts, plain));
+  EXPECT_EQ(plain, one);
 }
 
 TEST_F(FragmentSurfacesTest, BadInputsGiveTypedErrors) {

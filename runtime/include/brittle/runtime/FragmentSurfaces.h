@@ -78,8 +78,20 @@ TetMoments tetVolumeMoments(const TetMesh& mesh, const Eigen::Vector3d& originM)
 /// Output: moments resized to labelCount blocks of kFragmentMomentCount values (its storage kept).
 /// Errors: those of buildFragmentSurfaces for the labels and cuts; InvalidArgument when tetMoments
 /// does not have one block per tet.
+///
+/// The tets are summed in kMomentChunks fixed ranges of tet ids, in parallel where the caller runs
+/// in a oneTBB arena with more than one thread, each range into its own sums, which are then added
+/// in range order: the bits do not depend on the number of threads.
 Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, const TetMoments& tetMoments,
                              const Eigen::VectorXi& nodeLabels, int labelCount,
                              const Eigen::VectorXd& edgeCuts, std::vector<double>& moments);
+
+inline constexpr int kMomentChunks = 16;
+
+/// The same with the per-range sums in `chunkSums` (kept between calls: once grown to the most
+/// fragments, summing allocates nothing).
+Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, const TetMoments& tetMoments,
+                             const Eigen::VectorXi& nodeLabels, int labelCount, const Eigen::VectorXd& edgeCuts,
+                             std::vector<double>& chunkSums, std::vector<double>& moments);
 
 }  // namespace brittle
