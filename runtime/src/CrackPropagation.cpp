@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/Eigenvalues>
+#include <oneapi/tbb/parallel_for.h>
 #include <algorithm>
 #include <limits>
 #include <cmath>
@@ -181,13 +182,28 @@ void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eig
     w.seedBound.noalias() = bounds.leftCols(r) * w.qAbsT.col(k);
     if (correction) w.seedBound += w.forceAbs[k] * w.staticNorm;
   }
-  for (Eigen::Index e = 0; e < t && k >= 0; ++e) {
-    if (prune && w.seedBound[e] < threshold) continue;
-    const Voigt s = voigt(e, k);
-    if (prune && (kD.asDiagonal() * s).norm() < threshold) continue;
-    ++scan.evaluations;
-    const double s1 = maxPrincipalStress(s);
-    if (s1 >= threshold) w.seeds.emplace_back(s1, static_cast<int32_t>(e));
+  // Every element over σ_t at that instant: in fixed ranges, each into its own list, gathered in
+  // range order (a shattering impact evaluates most of the body here).
+  constexpr int kRanges = 16;
+  w.rangeSeeds.resize(kRanges);
+  w.rangeEvaluations.assign(kRanges, 0);
+  auto seedRange = [&](int c) {
+    std::vector<std::pair<double, int32_t>>& out = w.rangeSeeds[static_cast<size_t>(c)];
+    out.clear();
+    if (k < 0) return;
+    for (Eigen::Index e = t * c / kRanges; e < t * (c + 1) / kRanges; ++e) {
+      if (prune && w.seedBound[e] < threshold) continue;
+      const Voigt s = voigt(e, k);
+      if (prune && (kD.asDiagonal() * s).norm() < threshold) continue;
+      ++w.rangeEvaluations[static_cast<size_t>(c)];
+      const double s1 = maxPrincipalStress(s);
+      if (s1 >= threshold) out.emplace_back(s1, static_cast<int32_t>(e));
+    }
+  };
+  tbb::parallel_for(0, kRanges, seedRange);
+  for (int c = 0; c < kRanges; ++c) {
+    scan.evaluations += w.rangeEvaluations[static_cast<size_t>(c)];
+    w.seeds.insert(w.seeds.end(), w.rangeSeeds[static_cast<size_t>(c)].begin(), w.rangeSeeds[static_cast<size_t>(c)].end());
   }
   std::sort(w.seeds.begin(), w.seeds.end(), [](const auto& a, const auto& b) {
     return a.first != b.first ? a.first > b.first : a.second < b.second;

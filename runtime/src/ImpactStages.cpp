@@ -23,6 +23,14 @@ namespace {
 
 Error inStage(const char* stage, const Error& e) { return Error{e.code, std::string(stage) + ": " + e.message}; }
 
+// Runs f in the World's arena, where the stages' parallel loops take its threads (already there
+// for a submitted impact), or on the caller's thread alone.
+template <class F>
+void inArena(const ImpactJob& job, F&& f) {
+  if (job.workers) job.workers->execute(f);
+  else f();
+}
+
 // What the stages pass on to one another.
 struct Flow {
   Eigen::Vector3d pointLocal, normalLocal;
@@ -172,8 +180,7 @@ Status surfaceStage(const ImpactJob& job, ImpactWorkspace& ws, ImpactResult& res
                                           count, result.fracture.edgeCuts, ws.momentChunkSums, ws.fragmentMoments);
         });
   };
-  if (job.workers) job.workers->execute(both);
-  else both();
+  inArena(job, both);
   if (!surfaces) return surfaces;
   if (!moments) return moments;
   result.fragments.resize(static_cast<size_t>(count));
@@ -301,8 +308,7 @@ void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResul
       for (size_t i = r.begin(); i != r.end(); ++i) make(i);
     });
   };
-  if (job.workers) job.workers->execute(all);
-  else all();
+  inArena(job, all);
 }
 
 }  // namespace
@@ -358,7 +364,9 @@ Status computeImpact(const ImpactJob& submitted, ImpactWorkspace& ws, ImpactResu
   t.modalS = secondsSince(t0);
 
   t0 = SteadyClock::now();
-  if (Status st = stressStage(job, flow, ws, result); !st) return inStage("stress scan", st.error());
+  Status stress = Ok{};
+  inArena(job, [&] { stress = stressStage(job, flow, ws, result); });
+  if (!stress) return inStage("stress scan", stress.error());
   t.stressS = secondsSince(t0);
   if (ws.scan.seeds.empty()) return Ok{};
 

@@ -62,9 +62,14 @@ struct StressScanWorkspace {
   Eigen::VectorXd qMax, staticNorm, forceAbs;  ///< r, T, K
   Eigen::VectorXd elementBound, instantBound, seedBound;  ///< T, K, T
   std::vector<std::pair<double, int32_t>> heap, seeds;
+  std::vector<std::vector<std::pair<double, int32_t>>> rangeSeeds;  ///< per fixed range of elements
+  std::vector<int64_t> rangeEvaluations;
 };
 
-/// The same scan into `out` (its seeds keep their capacity), with the buffers of `workspace`.
+/// The same scan into `out` (its seeds keep their capacity), with the buffers of `workspace`. The
+/// seeds are gathered over fixed ranges of elements, in parallel where the caller runs in a oneTBB
+/// arena with more than one thread, and in range order: the scan is the same on any number of
+/// threads.
 void scanStresses(const MatrixXdRow& stressModes, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
                   const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double thresholdPa, bool prune,
                   StressScanWorkspace& workspace, StressScan& out);
