@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+#include <random>
+
 #include "brittle/runtime/QuadraticTetMesh.h"
 #include "brittle/testing/BakeFixtures.h"
 #include "brittle/testing/TetQuadrature.h"
@@ -248,6 +251,47 @@ TEST(FemAssemblyP2, QuadraticFieldIsRepresentedExactly) {
     for (int k = 0; k < 4; ++k) {
       const Eigen::Vector3d x = mesh.nodes.row(mesh.tets(t, k)).transpose();
       EXPECT_TRUE(s.middleRows(24 * t + 6 * k, 6).isApprox(c * strainOf(x), 1e-10)) << "tet " << t << " corner " << k;
+    }
+  }
+}
+
+TEST(FemAssemblyP2, CornerStressesBoundTheStressEverywhereInTheElement) {
+  // The stress of a straight-sided P2 tet is linear, so any convex function of it (the largest
+  // principal stress, the norm) peaks at a corner: what the stress scan's bounds rely on.
+  const auto mesh = quadraticBox(0.3, 0.2, 0.1, 2, 1, 1);
+  const Material m = presetGlass();
+  const auto c = isotropicElasticity(m.youngsModulusPa, m.poissonRatio);
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  MatrixXdRow u(3 * mesh.nodes.rows(), 1);
+  for (Eigen::Index i = 0; i < u.rows(); ++i) u(i, 0) = 1e-6 * (2.0 * unit(random) - 1.0);
+  const MatrixXdRow s = computeStressModes(mesh, m, u);
+  auto largestPrincipal = [](const Eigen::Matrix<double, 6, 1>& v) {
+    Eigen::Matrix3d t;
+    t << v(0), v(5), v(4), v(5), v(1), v(3), v(4), v(3), v(2);
+    return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(t, Eigen::EigenvaluesOnly).eigenvalues()(2);
+  };
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    double cornerPrincipal = -1e300, cornerNorm = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Matrix<double, 6, 1> corner = s.middleRows(24 * t + 6 * k, 6);
+      cornerPrincipal = std::max(cornerPrincipal, largestPrincipal(corner));
+      cornerNorm = std::max(cornerNorm, corner.norm());
+    }
+    Eigen::Matrix<double, 30, 1> ue;
+    for (int a = 0; a < 10; ++a) ue.segment<3>(3 * a) = u.middleRows(3 * mesh.tets(t, a), 3);
+    for (int sample = 0; sample < 50; ++sample) {
+      Eigen::Vector4d l(unit(random), unit(random), unit(random), unit(random));
+      l /= l.sum();
+      const auto b = quadraticTetStrainDisplacement(mesh.nodes.row(mesh.tets(t, 0)).transpose(), mesh.nodes.row(mesh.tets(t, 1)).transpose(),
+                                                    mesh.nodes.row(mesh.tets(t, 2)).transpose(), mesh.nodes.row(mesh.tets(t, 3)).transpose(), l, nullptr);
+      const Eigen::Matrix<double, 6, 1> inside = c * b * ue;
+      EXPECT_LE(largestPrincipal(inside), cornerPrincipal + 1e-9 * cornerNorm) << "tet " << t;
+      EXPECT_LE(inside.norm(), cornerNorm * (1.0 + 1e-12)) << "tet " << t;
+      // And it is the linear interpolation of the corner values.
+      Eigen::Matrix<double, 6, 1> interpolated = Eigen::Matrix<double, 6, 1>::Zero();
+      for (int k = 0; k < 4; ++k) interpolated += l(k) * s.middleRows(24 * t + 6 * k, 6).transpose();
+      EXPECT_LT((inside - interpolated).norm(), 1e-9 * cornerNorm) << "tet " << t;
     }
   }
 }
