@@ -2,8 +2,10 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace brittle {
@@ -108,6 +110,198 @@ MatrixXdRow computeStressModes(const TetMesh& mesh, const Material& material, co
                                          nullptr);
     for (int a = 0; a < 4; ++a) phiE.middleRows(3 * a, 3) = modes.middleRows(3 * mesh.tets(t, a), 3);
     s.middleRows(6 * t, 6) = c * b * phiE;
+  }
+  return s;
+}
+
+namespace {
+
+/// Gradients of the barycentric coordinates (rows, 1/m) of the tet p0..p3, and its signed volume.
+Eigen::Matrix<double, 4, 3> barycentricGradients(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
+                                                 const Eigen::Vector3d& p3, double* volumeM3) {
+  Eigen::Matrix3d edges;
+  edges.col(0) = p1 - p0;
+  edges.col(1) = p2 - p0;
+  edges.col(2) = p3 - p0;
+  if (volumeM3) *volumeM3 = edges.determinant() / 6.0;
+  const Eigen::Matrix3d inv = edges.inverse();
+  Eigen::Matrix<double, 4, 3> grad;
+  grad.bottomRows<3>() = inv;
+  grad.row(0) = -(grad.row(1) + grad.row(2) + grad.row(3));
+  return grad;
+}
+
+/// B (6 by 30) from the barycentric gradients at the point λ.
+Eigen::Matrix<double, 6, 30> quadraticB(const Eigen::Matrix<double, 4, 3>& g, const Eigen::Vector4d& l) {
+  // ∇N_i = (4λ_i − 1)∇λ_i at the corners, ∇N = 4(λ_i∇λ_j + λ_j∇λ_i) at mid-edge nodes.
+  Eigen::Matrix<double, 10, 3> d;
+  for (int i = 0; i < 4; ++i) d.row(i) = (4.0 * l(i) - 1.0) * g.row(i);
+  for (int k = 0; k < 6; ++k) {
+    const auto [i, j] = kQuadraticTetEdges[static_cast<size_t>(k)];
+    d.row(4 + k) = 4.0 * (l(i) * g.row(j) + l(j) * g.row(i));
+  }
+  Eigen::Matrix<double, 6, 30> b = Eigen::Matrix<double, 6, 30>::Zero();
+  for (int n = 0; n < 10; ++n) {
+    const double dx = d(n, 0), dy = d(n, 1), dz = d(n, 2);
+    const int c = 3 * n;
+    b(0, c + 0) = dx;
+    b(1, c + 1) = dy;
+    b(2, c + 2) = dz;
+    b(3, c + 1) = dz;
+    b(3, c + 2) = dy;
+    b(4, c + 0) = dz;
+    b(4, c + 2) = dx;
+    b(5, c + 0) = dy;
+    b(5, c + 1) = dx;
+  }
+  return b;
+}
+
+/// The 4-point rule of degree 2 on a tet (Keast): λ = permutations of (a, b, b, b), weight V/4.
+const std::array<Eigen::Vector4d, 4>& degreeTwoPoints() {
+  static const std::array<Eigen::Vector4d, 4> points = [] {
+    const double a = (5.0 + 3.0 * std::sqrt(5.0)) / 20.0, b = (5.0 - std::sqrt(5.0)) / 20.0;
+    std::array<Eigen::Vector4d, 4> p;
+    for (int q = 0; q < 4; ++q) {
+      p[static_cast<size_t>(q)].setConstant(b);
+      p[static_cast<size_t>(q)](q) = a;
+    }
+    return p;
+  }();
+  return points;
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 10, 1> quadraticTetShapeFunctions(const Eigen::Vector4d& l) {
+  Eigen::Matrix<double, 10, 1> n;
+  for (int i = 0; i < 4; ++i) n(i) = l(i) * (2.0 * l(i) - 1.0);
+  for (int k = 0; k < 6; ++k) {
+    const auto [i, j] = kQuadraticTetEdges[static_cast<size_t>(k)];
+    n(4 + k) = 4.0 * l(i) * l(j);
+  }
+  return n;
+}
+
+Eigen::Matrix<double, 6, 30> quadraticTetStrainDisplacement(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                                                            const Eigen::Vector3d& p2, const Eigen::Vector3d& p3,
+                                                            const Eigen::Vector4d& barycentric, double* volumeM3) {
+  return quadraticB(barycentricGradients(p0, p1, p2, p3, volumeM3), barycentric);
+}
+
+const Eigen::Matrix<double, 10, 10>& quadraticTetUnitMass() {
+  static const Eigen::Matrix<double, 10, 10> m = [] {
+    // ∫N_a N_b dV / V in units of 1/420, by how the two nodes relate.
+    auto sharesCorner = [](int edge, int corner) {
+      const auto [i, j] = kQuadraticTetEdges[static_cast<size_t>(edge)];
+      return i == corner || j == corner;
+    };
+    Eigen::Matrix<double, 10, 10> out;
+    for (int a = 0; a < 10; ++a) {
+      for (int b = 0; b < 10; ++b) {
+        double k = 0.0;
+        if (a < 4 && b < 4) {
+          k = a == b ? 6.0 : 1.0;
+        } else if (a < 4 || b < 4) {
+          const int corner = std::min(a, b), edge = std::max(a, b) - 4;
+          k = sharesCorner(edge, corner) ? -4.0 : -6.0;
+        } else if (a == b) {
+          k = 32.0;
+        } else {
+          const auto [i, j] = kQuadraticTetEdges[static_cast<size_t>(b - 4)];
+          k = (sharesCorner(a - 4, i) || sharesCorner(a - 4, j)) ? 16.0 : 8.0;
+        }
+        out(a, b) = k / 420.0;
+      }
+    }
+    return out;
+  }();
+  return m;
+}
+
+Result<FemSystem> assembleFem(const QuadraticTetMesh& mesh, const Material& material, const FemSettings& settings) {
+  if (Status s = validateMaterial(material); !s) return s.error();
+  const Eigen::Index n = mesh.nodes.rows();
+  if (n == 0 || mesh.tets.rows() == 0) return makeError(ErrorCode::DegenerateElement, "tet mesh is empty");
+  const double minVolume = degenerateTetVolumeM3(mesh.nodes);
+  const auto c = isotropicElasticity(material.youngsModulusPa, material.poissonRatio);
+  const double rho = material.densityKgPerM3;
+  const Eigen::Matrix<double, 10, 10>& unitMass = quadraticTetUnitMass();
+  const Eigen::Matrix<double, 10, 1> lumped = unitMass.diagonal() / unitMass.diagonal().sum();
+
+  std::vector<Eigen::Triplet<double>> kTriplets, mTriplets;
+  kTriplets.reserve(static_cast<size_t>(mesh.tets.rows()) * 900);
+  mTriplets.reserve(static_cast<size_t>(mesh.tets.rows()) * (settings.lumpedMass ? 30 : 300));
+  std::array<int32_t, 10> v{};
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    for (int a = 0; a < 10; ++a) {
+      v[static_cast<size_t>(a)] = mesh.tets(t, a);
+      if (v[static_cast<size_t>(a)] < 0 || v[static_cast<size_t>(a)] >= n) {
+        return makeError(ErrorCode::DegenerateElement,
+                         "tet " + std::to_string(t) + " refers to node " + std::to_string(v[static_cast<size_t>(a)]));
+      }
+    }
+    std::array<Eigen::Vector3d, 4> p;
+    for (int a = 0; a < 4; ++a) p[static_cast<size_t>(a)] = mesh.nodes.row(v[static_cast<size_t>(a)]).transpose();
+    double volume = 0.0;
+    const Eigen::Matrix<double, 4, 3> g = barycentricGradients(p[0], p[1], p[2], p[3], &volume);
+    if (!(volume > minVolume)) {
+      return makeError(ErrorCode::DegenerateElement, "tet " + std::to_string(t) + " has volume " +
+                                                         std::to_string(volume) + " m^3 (degenerate or inverted)");
+    }
+    for (int k = 0; k < 6; ++k) {
+      const auto [i, j] = kQuadraticTetEdges[static_cast<size_t>(k)];
+      const Eigen::Vector3d mid = mesh.nodes.row(v[static_cast<size_t>(4 + k)]).transpose();
+      const Eigen::Vector3d edge = p[static_cast<size_t>(j)] - p[static_cast<size_t>(i)];
+      if (!((mid - 0.5 * (p[static_cast<size_t>(i)] + p[static_cast<size_t>(j)])).norm() <= 1e-9 * edge.norm())) {
+        return makeError(ErrorCode::InvalidArgument, "tet " + std::to_string(t) + ": node " +
+                                                         std::to_string(v[static_cast<size_t>(4 + k)]) +
+                                                         " is not the midpoint of its edge (only straight-sided P2 tets are supported)");
+      }
+    }
+    Eigen::Matrix<double, 30, 30> ke = Eigen::Matrix<double, 30, 30>::Zero();
+    for (const Eigen::Vector4d& l : degreeTwoPoints()) {
+      const Eigen::Matrix<double, 6, 30> b = quadraticB(g, l);
+      ke.noalias() += (0.25 * volume) * (b.transpose() * (c * b));
+    }
+    for (int a = 0; a < 10; ++a)
+      for (int i = 0; i < 3; ++i)
+        for (int bb = 0; bb < 10; ++bb)
+          for (int j = 0; j < 3; ++j)
+            kTriplets.emplace_back(3 * v[static_cast<size_t>(a)] + i, 3 * v[static_cast<size_t>(bb)] + j, ke(3 * a + i, 3 * bb + j));
+    if (settings.lumpedMass) {
+      for (int a = 0; a < 10; ++a)
+        for (int i = 0; i < 3; ++i)
+          mTriplets.emplace_back(3 * v[static_cast<size_t>(a)] + i, 3 * v[static_cast<size_t>(a)] + i, rho * volume * lumped(a));
+    } else {
+      for (int a = 0; a < 10; ++a)
+        for (int bb = 0; bb < 10; ++bb)
+          for (int i = 0; i < 3; ++i)
+            mTriplets.emplace_back(3 * v[static_cast<size_t>(a)] + i, 3 * v[static_cast<size_t>(bb)] + i, rho * volume * unitMass(a, bb));
+    }
+  }
+  FemSystem sys;
+  sys.stiffness.resize(3 * n, 3 * n);
+  sys.mass.resize(3 * n, 3 * n);
+  sys.stiffness.setFromTriplets(kTriplets.begin(), kTriplets.end());
+  sys.mass.setFromTriplets(mTriplets.begin(), mTriplets.end());
+  return sys;
+}
+
+MatrixXdRow computeStressModes(const QuadraticTetMesh& mesh, const Material& material, const MatrixXdRow& modes) {
+  const auto c = isotropicElasticity(material.youngsModulusPa, material.poissonRatio);
+  const Eigen::Index r = modes.cols();
+  constexpr int kRows = 6 * kQuadraticTetStressPoints;
+  MatrixXdRow s(kRows * mesh.tets.rows(), r);
+  Eigen::Matrix<double, 30, Eigen::Dynamic> phiE(30, r);
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    const Eigen::Matrix<double, 4, 3> g =
+        barycentricGradients(mesh.nodes.row(mesh.tets(t, 0)).transpose(), mesh.nodes.row(mesh.tets(t, 1)).transpose(),
+                             mesh.nodes.row(mesh.tets(t, 2)).transpose(), mesh.nodes.row(mesh.tets(t, 3)).transpose(), nullptr);
+    for (int a = 0; a < 10; ++a) phiE.middleRows(3 * a, 3) = modes.middleRows(3 * mesh.tets(t, a), 3);
+    for (int corner = 0; corner < kQuadraticTetStressPoints; ++corner) {
+      s.middleRows(kRows * t + 6 * corner, 6) = c * quadraticB(g, Eigen::Vector4d::Unit(corner)) * phiE;
+    }
   }
   return s;
 }

@@ -1,5 +1,5 @@
 // Free-free beam 1 × 0.1 × 0.1 m of glass against beam theory, through the real pipeline
-// (Mesh_3 → P1 FEM → ARPACK).
+// (Mesh_3 → P1 or P2 FEM → ARPACK).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "brittle/runtime/FemAssembly.h"
+#include "brittle/runtime/QuadraticTetMesh.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/ModalAnalysis.h"
 #include "brittle/precompute/TetMesher.h"
@@ -32,7 +33,7 @@ double axialShare(const Eigen::VectorXd& phi) {
   return x / all;
 }
 
-BeamFrequencies solveBeam(double cellSize) {
+BeamFrequencies solveBeam(double cellSize, bool quadratic = false) {
   const Material glass = materialPreset("glass").value();
   TetMeshSettings ts;
   ts.targetTets = 0;
@@ -42,11 +43,13 @@ BeamFrequencies solveBeam(double cellSize) {
     ADD_FAILURE() << tets.error().message;
     return {};
   }
-  auto sys = assembleFem(tets.value().mesh, glass, {}).value();
+  const QuadraticTetMesh p2 = quadratic ? makeQuadraticTetMesh(tets.value().mesh).value() : QuadraticTetMesh{};
+  const Points& nodes = quadratic ? p2.nodes : tets.value().mesh.nodes;
+  auto sys = (quadratic ? assembleFem(p2, glass, {}) : assembleFem(tets.value().mesh, glass, {})).value();
   ModalSettings ms;
   ms.modeCount = 10;
-  ms.shiftRad2PerS2 = defaultShift(tets.value().mesh.nodes, glass);
-  auto modes = computeModes(sys, tets.value().mesh.nodes, ms);
+  ms.shiftRad2PerS2 = defaultShift(nodes, glass);
+  auto modes = computeModes(sys, nodes, ms);
   if (!modes.ok()) {
     ADD_FAILURE() << modes.error().message;
     return {};
@@ -98,6 +101,32 @@ TEST(BeamFrequency, FreeFreeBeamMatchesTheoryAndConvergesUnderRefinement) {
   }
   EXPECT_NEAR(runs.back().axial / axialTheory, 1.0, 0.02);
   EXPECT_NEAR(bendingOf(runs.back()) / bendingTheory, 1.0, 0.05);
+}
+
+// The first bending pair converges to 526.0 Hz (issue 17: CalculiX C3D10, converged; P1 at 16k
+// tets reads 542.3 Hz, +3.1 %). brittle's own P2 (an upper bound on every mesh), from
+//   brittle_validation_tests --gtest_also_run_disabled_tests --gtest_filter=BeamFrequency.DISABLED_*
+// h 0.05 m, 573 tets: 526.28 Hz; 1 502 tets 526.18; 3 342 tets 526.149; 9 211 tets 526.137;
+// 23 794 tets 526.134 Hz (axial 2644.874 Hz throughout). So the limit is 526.13 Hz or just below,
+// 0.03 % above the 526.0 used here.
+constexpr double kBeamBendingHz = 526.0;
+
+TEST(BeamFrequency, P2BendingPairIsWithinOnePercentAtAFewHundredTets) {
+  const BeamFrequencies f = solveBeam(0.05, true);
+  const double bending = 0.5 * (f.bending0 + f.bending1);
+  std::printf("P2, %ld tets: bending %.2f/%.2f Hz (%+.3f%% against %.1f Hz), axial %.2f Hz\n", static_cast<long>(f.tets), f.bending0,
+              f.bending1, 100.0 * (bending / kBeamBendingHz - 1.0), kBeamBendingHz, f.axial);
+  EXPECT_LE(f.tets, 2000);  // the issue: 2k C3D10 elements come within 0.01 %
+  EXPECT_NEAR(bending / kBeamBendingHz, 1.0, 0.01);
+}
+
+// Not run by default: P2 under refinement, for the reference above.
+TEST(BeamFrequency, DISABLED_P2Converged) {
+  for (double h : {0.05, 0.035, 0.025, 0.0175, 0.0125}) {
+    const BeamFrequencies f = solveBeam(h, true);
+    std::printf("P2, h %.4f m, %ld tets: bending %.3f/%.3f Hz, axial %.3f Hz\n", h, static_cast<long>(f.tets), f.bending0, f.bending1, f.axial);
+    std::fflush(stdout);
+  }
 }
 
 }  // namespace

@@ -31,9 +31,13 @@
 #include "brittle/precompute/FullFemReference.h"
 #include "brittle/runtime/World.h"
 #include "brittle/testing/BakeFixtures.h"
+#include "brittle/testing/Calculix.h"
 
 namespace brittle {
 namespace {
+
+using testing::ccxNumber;
+using testing::fortranDouble;
 
 struct Impact {
   TetMesh mesh;
@@ -60,12 +64,6 @@ Impact plateImpact() {
   return c;
 }
 
-std::string number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.13e", v);  // ccx reads fields of at most 20 characters
-  return buffer;
-}
-
 /// The deck: C3D4 at 0.8ρ plus nodal point masses (the consistent mass), Rayleigh damping, the
 /// pulse tabulated at every step, the load on the contact nodes.
 void writeDeck(const std::filesystem::path& path, const Impact& c, double h, int64_t steps) {
@@ -74,7 +72,7 @@ void writeDeck(const std::filesystem::path& path, const Impact& c, double h, int
   std::ofstream out(path);
   out << "*HEADING\nbrittle full-FEM reference cross-check\n*NODE, NSET=NALL\n";
   for (Eigen::Index n = 0; n < mesh.nodes.rows(); ++n) {
-    out << n + 1 << ", " << number(mesh.nodes(n, 0)) << ", " << number(mesh.nodes(n, 1)) << ", " << number(mesh.nodes(n, 2)) << "\n";
+    out << n + 1 << ", " << ccxNumber(mesh.nodes(n, 0)) << ", " << ccxNumber(mesh.nodes(n, 1)) << ", " << ccxNumber(mesh.nodes(n, 2)) << "\n";
   }
   out << "*ELEMENT, TYPE=C3D4, ELSET=ETET\n";
   std::vector<double> nodeMass(static_cast<size_t>(mesh.nodes.rows()), 0.0);
@@ -93,34 +91,27 @@ void writeDeck(const std::filesystem::path& path, const Impact& c, double h, int
   for (Eigen::Index n = 0; n < mesh.nodes.rows(); ++n) {
     out << "*ELEMENT, TYPE=MASS, ELSET=EM" << n + 1 << "\n" << first + n << ", " << n + 1 << "\n";
   }
-  out << "*MATERIAL, NAME=GLASS\n*ELASTIC\n" << number(m.youngsModulusPa) << ", " << number(m.poissonRatio) << "\n";
-  out << "*DENSITY\n" << number(0.8 * m.densityKgPerM3) << "\n";
-  out << "*DAMPING, ALPHA=" << number(m.rayleighAlphaPerS) << ", BETA=" << number(m.rayleighBetaS) << "\n";
+  out << "*MATERIAL, NAME=GLASS\n*ELASTIC\n" << ccxNumber(m.youngsModulusPa) << ", " << ccxNumber(m.poissonRatio) << "\n";
+  out << "*DENSITY\n" << ccxNumber(0.8 * m.densityKgPerM3) << "\n";
+  out << "*DAMPING, ALPHA=" << ccxNumber(m.rayleighAlphaPerS) << ", BETA=" << ccxNumber(m.rayleighBetaS) << "\n";
   out << "*SOLID SECTION, ELSET=ETET, MATERIAL=GLASS\n";
   for (Eigen::Index n = 0; n < mesh.nodes.rows(); ++n) {
-    out << "*MASS, ELSET=EM" << n + 1 << "\n" << number(nodeMass[static_cast<size_t>(n)]) << "\n";
+    out << "*MASS, ELSET=EM" << n + 1 << "\n" << ccxNumber(nodeMass[static_cast<size_t>(n)]) << "\n";
   }
   out << "*AMPLITUDE, NAME=PULSE\n";
   for (int64_t n = 0; n <= steps; ++n) {
     const double t = static_cast<double>(n) * h;
-    out << number(t) << ", " << number(hertzPulseForceN(c.result.contact, t)) << "\n";
+    out << ccxNumber(t) << ", " << ccxNumber(hertzPulseForceN(c.result.contact, t)) << "\n";
   }
-  out << number(static_cast<double>(steps + 10) * h) << ", " << number(0.0) << "\n";
-  out << "*STEP, INC=" << steps + 10 << "\n*DYNAMIC, DIRECT, ALPHA=0.\n" << number(h) << ", "
-      << number(static_cast<double>(steps) * h) << "\n*CLOAD, AMPLITUDE=PULSE\n";
+  out << ccxNumber(static_cast<double>(steps + 10) * h) << ", " << ccxNumber(0.0) << "\n";
+  out << "*STEP, INC=" << steps + 10 << "\n*DYNAMIC, DIRECT, ALPHA=0.\n" << ccxNumber(h) << ", "
+      << ccxNumber(static_cast<double>(steps) * h) << "\n*CLOAD, AMPLITUDE=PULSE\n";
   for (const auto& [node, w] : c.result.loadWeights) {
     for (int j = 0; j < 3; ++j) {
-      if (c.result.forceDirectionLocal[j] != 0.0) out << node + 1 << ", " << j + 1 << ", " << number(w * c.result.forceDirectionLocal[j]) << "\n";
+      if (c.result.forceDirectionLocal[j] != 0.0) out << node + 1 << ", " << j + 1 << ", " << ccxNumber(w * c.result.forceDirectionLocal[j]) << "\n";
     }
   }
   out << "*EL PRINT, ELSET=ETET\nS\n*END STEP\n";
-}
-
-/// A Fortran E-format field; ccx drops the "E" of three-digit exponents ("1.234567-100").
-double fortranDouble(std::string s) {
-  const auto sign = s.find_first_of("+-", 1);
-  if (sign != std::string::npos && s.find_first_of("Ee") == std::string::npos) s.insert(sign, "E");
-  return std::stod(s);
 }
 
 struct CcxPeak {
@@ -188,10 +179,8 @@ TEST(CalculixCrossCheck, TheFullFemReferenceMatchesCalculixOnAPlateImpact) {
 
   const auto dir = testing::makeTempDir("calculix");
   writeDeck(dir / "check.inp", c, h, ours.value().steps);
-  const std::string command = "cd '" + dir.string() +
-                              "' && CCX_NPROC_EQUATION_SOLVER=1 OMP_NUM_THREADS=1 ccx -i check > ccx.log 2>&1";
   const auto ccxStart = SteadyClock::now();
-  const int status = std::system(command.c_str());
+  const int status = testing::runCcx(dir, "check");
   const double ccxS = secondsSince(ccxStart);
   ASSERT_EQ(status, 0) << "ccx failed (is calculix-ccx installed? tools/setup.sh installs it); see " << (dir / "ccx.log");
   const CcxPeak theirs = readPeak(dir / "check.dat");

@@ -1,8 +1,16 @@
-// FemAssembly.h — linear (P1) tetrahedral finite elements for isotropic linear elasticity.
+// FemAssembly.h — tetrahedral finite elements for isotropic linear elasticity: linear (P1,
+// 4 nodes) and straight-sided quadratic (P2, 10 nodes, MeshTypes.h's QuadraticTetMesh).
 //
 // Degrees of freedom are interleaved per node: dof 3n+i is displacement component i (x, y, z) of
 // node n. Strains and stresses use Voigt order (xx, yy, zz, yz, xz, xy) with engineering shear
 // strains (γ = 2ε). Units: m, Pa, kg; K in N/m, M in kg.
+//
+// Integration is exact for both orders. P1: B is constant, M has its closed form. P2 (affine
+// geometry, so ∇N is linear): K's integrand B^T C B has degree 2 and the 4-point degree-2 rule
+// integrates it exactly; the consistent M (degree 4) uses its closed form, ∫N_a N_b dV from
+// ∫λ^a λ^b λ^c λ^d dV = 6V a!b!c!d!/(a+b+c+d+3)!. (CalculiX integrates the C3D10 mass with the
+// 4-point rule, which is not exact; tests/precompute/CalculixFrequencyTest.cpp says how its deck
+// is made to match the exact matrix.)
 #pragma once
 
 #include <Eigen/Core>
@@ -18,7 +26,10 @@ namespace brittle {
 using SparseMatrixd = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
 struct FemSettings {
-  bool lumpedMass = false;  ///< row-sum lumping (ρV/4 per node) instead of the consistent mass
+  /// A diagonal mass instead of the consistent one: the consistent diagonal scaled to the element
+  /// mass (HRZ lumping). For P1 that is row-sum lumping, ρV/4 per node. For P2 it gives ρV/36
+  /// per corner and 4ρV/27 per mid-edge node (row sums would give the corners negative masses).
+  bool lumpedMass = false;
 };
 
 struct FemSystem {
@@ -44,8 +55,44 @@ Result<FemSystem> assembleFem(const TetMesh& mesh, const Material& material, con
 /// the stress (Pa) of element e per unit modal coordinate. modes is 3N by r.
 MatrixXdRow computeStressModes(const TetMesh& mesh, const Material& material, const MatrixXdRow& modes);
 
+/// The ten P2 shape functions (C3D10 order) at the point with barycentric coordinates λ (λ_i
+/// weighs corner i, Σλ = 1): N_i = λ_i(2λ_i − 1) at the corners, N = 4λ_iλ_j at the midpoint of
+/// edge (i, j).
+Eigen::Matrix<double, 10, 1> quadraticTetShapeFunctions(const Eigen::Vector4d& barycentric);
+
+/// 6 by 30 strain-displacement matrix B (1/m) of a straight-sided P2 tet with corners p0..p3 at
+/// the point with barycentric coordinates λ, and the tet's volume (m³, signed). Columns 3a..3a+2
+/// belong to local node a (C3D10 order).
+Eigen::Matrix<double, 6, 30> quadraticTetStrainDisplacement(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                                                            const Eigen::Vector3d& p2, const Eigen::Vector3d& p3,
+                                                            const Eigen::Vector4d& barycentric, double* volumeM3);
+
+/// The consistent mass of a P2 tet per unit density and volume, ∫N_a N_b dV / V (10 by 10,
+/// C3D10 order, entries k/420 with k = 6, 1, −4, −6, 32, 16, 8 by how nodes a and b relate).
+const Eigen::Matrix<double, 10, 10>& quadraticTetUnitMass();
+
+/// Assembles K and M of a straight-sided P2 mesh (K and M are 3N by 3N, N = mesh.nodes.rows()).
+/// Errors: DegenerateElement (a tet whose corners have volume ≤ degenerateTetVolumeM3(nodes) or
+/// are inverted, naming the tet; a node index out of range), InvalidArgument (a mid-edge node off
+/// its edge's midpoint by more than 1e-9 of the edge's length: curved P2 is not supported),
+/// InvalidMaterial.
+Result<FemSystem> assembleFem(const QuadraticTetMesh& mesh, const Material& material, const FemSettings& settings);
+
+/// Stress points of a P2 element: its 4 corners. The stress of a straight-sided P2 tet is linear
+/// in space, so it is known everywhere from its corner values, and every convex function of it
+/// (a norm, the largest principal stress) takes its maximum over the element at a corner: bounds
+/// and maxima taken over these points hold for the whole element.
+inline constexpr int kQuadraticTetStressPoints = 4;
+
+/// Per-element stress modes of a P2 mesh: a 24T by r matrix. Rows 24e + 6c .. 24e + 6c + 5 give
+/// the stress (Pa, Voigt) at corner c (local node c, c = 0..3) of element e per unit modal
+/// coordinate. modes is 3N by r. The mesh must pass assembleFem.
+MatrixXdRow computeStressModes(const QuadraticTetMesh& mesh, const Material& material, const MatrixXdRow& modes);
+
 /// The six rigid-body modes of the mesh (3 translations, 3 infinitesimal rotations about the
-/// centroid of the nodes), as a 3N by 6 matrix with M-orthonormal columns.
+/// centroid of the nodes), as a 3N by 6 matrix with M-orthonormal columns. Nodal values of the
+/// rigid fields, so it holds for any element whose interpolation reproduces linear fields: P1 and
+/// straight-sided P2 (pass all P2 nodes, mid-edge ones included).
 Eigen::MatrixXd rigidBodyModes(const Points& nodes, const SparseMatrixd& mass);
 
 }  // namespace brittle
