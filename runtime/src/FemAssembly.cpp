@@ -9,6 +9,20 @@
 #include <vector>
 
 namespace brittle {
+namespace {
+
+// K and M (3n by 3n) from their element contributions; duplicates are summed.
+FemSystem systemFromTriplets(Eigen::Index n, const std::vector<Eigen::Triplet<double>>& k,
+                             const std::vector<Eigen::Triplet<double>>& m) {
+  FemSystem sys;
+  sys.stiffness.resize(3 * n, 3 * n);
+  sys.mass.resize(3 * n, 3 * n);
+  sys.stiffness.setFromTriplets(k.begin(), k.end());
+  sys.mass.setFromTriplets(m.begin(), m.end());
+  return sys;
+}
+
+}  // namespace
 
 Eigen::Matrix<double, 6, 12> tetStrainDisplacement(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
                                                    const Eigen::Vector3d& p2, const Eigen::Vector3d& p3,
@@ -91,12 +105,7 @@ Result<FemSystem> assembleFem(const TetMesh& mesh, const Material& material, con
             mTriplets.emplace_back(3 * v[a] + i, 3 * v[bb] + i, rho * volume / 20.0 * (a == bb ? 2.0 : 1.0));
     }
   }
-  FemSystem sys;
-  sys.stiffness.resize(3 * n, 3 * n);
-  sys.mass.resize(3 * n, 3 * n);
-  sys.stiffness.setFromTriplets(kTriplets.begin(), kTriplets.end());
-  sys.mass.setFromTriplets(mTriplets.begin(), mTriplets.end());
-  return sys;
+  return systemFromTriplets(n, kTriplets, mTriplets);
 }
 
 MatrixXdRow computeStressModes(const TetMesh& mesh, const Material& material, const MatrixXdRow& modes) {
@@ -280,12 +289,7 @@ Result<FemSystem> assembleFem(const QuadraticTetMesh& mesh, const Material& mate
             mTriplets.emplace_back(3 * v[static_cast<size_t>(a)] + i, 3 * v[static_cast<size_t>(bb)] + i, rho * volume * unitMass(a, bb));
     }
   }
-  FemSystem sys;
-  sys.stiffness.resize(3 * n, 3 * n);
-  sys.mass.resize(3 * n, 3 * n);
-  sys.stiffness.setFromTriplets(kTriplets.begin(), kTriplets.end());
-  sys.mass.setFromTriplets(mTriplets.begin(), mTriplets.end());
-  return sys;
+  return systemFromTriplets(n, kTriplets, mTriplets);
 }
 
 MatrixXdRow computeStressModes(const QuadraticTetMesh& mesh, const Material& material, const MatrixXdRow& modes) {

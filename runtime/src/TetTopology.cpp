@@ -15,6 +15,29 @@ std::array<int, 3> tetFaceNodes(int face) {
   return kFaces[static_cast<size_t>(face)];
 }
 
+TetEdges numberTetEdges(const Tetrahedra& tets) {
+  const Eigen::Index t = tets.rows();
+  std::unordered_map<uint64_t, int32_t> edgeIds;  // only looked up: the order is the tets'
+  edgeIds.reserve(static_cast<size_t>(t) * 2);
+  std::vector<std::array<int32_t, 2>> edges;
+  edges.reserve(static_cast<size_t>(t) * 2);
+  TetEdges out;
+  out.tetEdges.resize(t, 6);
+  for (Eigen::Index e = 0; e < t; ++e) {
+    for (int k = 0; k < 6; ++k) {
+      int32_t p = tets(e, kTetEdges[static_cast<size_t>(k)][0]), q = tets(e, kTetEdges[static_cast<size_t>(k)][1]);
+      if (p > q) std::swap(p, q);
+      const uint64_t key = (static_cast<uint64_t>(p) << 32) | static_cast<uint32_t>(q);
+      auto [it, inserted] = edgeIds.try_emplace(key, static_cast<int32_t>(edges.size()));
+      if (inserted) edges.push_back({p, q});
+      out.tetEdges(e, k) = it->second;
+    }
+  }
+  out.edges.resize(static_cast<Eigen::Index>(edges.size()), 2);
+  for (size_t i = 0; i < edges.size(); ++i) out.edges.row(static_cast<Eigen::Index>(i)) << edges[i][0], edges[i][1];
+  return out;
+}
+
 Result<TetTopology> buildTetTopology(const TetMesh& mesh) {
   const auto n = mesh.nodes.rows(), t = mesh.tets.rows();
   if (t == 0) return makeError(ErrorCode::InvalidArgument, "tet topology: no tetrahedra");
@@ -22,13 +45,12 @@ Result<TetTopology> buildTetTopology(const TetMesh& mesh) {
     return makeError(ErrorCode::InvalidArgument, "tet topology: node index out of range");
   }
   TetTopology topo;
-  topo.tetEdges.resize(t, 6);
+  TetEdges numbered = numberTetEdges(mesh.tets);
+  topo.edges = std::move(numbered.edges);
+  topo.tetEdges = std::move(numbered.tetEdges);
   topo.neighbours.setConstant(t, 4, -1);
   topo.tetVolumesM3.resize(t);
   topo.nodeAreasM2.setZero(n);
-  std::unordered_map<uint64_t, int32_t> edgeIds;
-  edgeIds.reserve(static_cast<size_t>(t) * 2);
-  std::vector<std::array<int32_t, 2>> edges;
   // Faces keyed by their sorted nodes; the value is the first (tet, face) seen.
   struct FaceKey {
     std::array<int32_t, 3> v;
@@ -50,14 +72,6 @@ Result<TetTopology> buildTetTopology(const TetMesh& mesh) {
       return makeError(ErrorCode::InvalidArgument, "tet topology: tet " + std::to_string(e) + " is not positively oriented");
     }
     topo.tetVolumesM3[e] = volume;
-    for (int k = 0; k < 6; ++k) {
-      int32_t p = mesh.tets(e, kTetEdges[k][0]), q = mesh.tets(e, kTetEdges[k][1]);
-      if (p > q) std::swap(p, q);
-      const uint64_t key = (static_cast<uint64_t>(p) << 32) | static_cast<uint32_t>(q);
-      auto [it, inserted] = edgeIds.try_emplace(key, static_cast<int32_t>(edges.size()));
-      if (inserted) edges.push_back({p, q});
-      topo.tetEdges(e, k) = it->second;
-    }
     for (int f = 0; f < 4; ++f) {
       const auto local = tetFaceNodes(f);
       FaceKey key{{mesh.tets(e, local[0]), mesh.tets(e, local[1]), mesh.tets(e, local[2])}};
@@ -73,13 +87,11 @@ Result<TetTopology> buildTetTopology(const TetMesh& mesh) {
       topo.neighbours(other, otherFace) = static_cast<int32_t>(e);
     }
   }
-  topo.edges.resize(static_cast<Eigen::Index>(edges.size()), 2);
   double edgeLength = 0.0;
-  for (size_t i = 0; i < edges.size(); ++i) {
-    topo.edges.row(static_cast<Eigen::Index>(i)) << edges[i][0], edges[i][1];
-    edgeLength += (mesh.nodes.row(edges[i][0]) - mesh.nodes.row(edges[i][1])).norm();
+  for (Eigen::Index i = 0; i < topo.edges.rows(); ++i) {
+    edgeLength += (mesh.nodes.row(topo.edges(i, 0)) - mesh.nodes.row(topo.edges(i, 1))).norm();
   }
-  topo.meanEdgeLengthM = edgeLength / static_cast<double>(edges.size());
+  topo.meanEdgeLengthM = edgeLength / static_cast<double>(topo.edges.rows());
   for (Eigen::Index e = 0; e < t; ++e) {
     for (int f = 0; f < 4; ++f) {
       if (topo.neighbours(e, f) < 0) topo.boundaryFaces.push_back({static_cast<int32_t>(e), f});

@@ -34,6 +34,16 @@ struct TetTopology {
 /// from node i when the tet is positively oriented.
 std::array<int, 3> tetFaceNodes(int face);
 
+/// The mesh's edges, numbered in order of first appearance over (tet, kTetEdges): node pairs
+/// (low, high), and per tet the ids of its edges kTetEdges[0..5]. The numbering TetTopology uses,
+/// and the one a quadratic mesh's mid-edge nodes follow (QuadraticTetMesh.h). Node ids must be in
+/// range.
+struct TetEdges {
+  Eigen::Matrix<int32_t, Eigen::Dynamic, 2, Eigen::RowMajor> edges;
+  Eigen::Matrix<int32_t, Eigen::Dynamic, 6, Eigen::RowMajor> tetEdges;
+};
+TetEdges numberTetEdges(const Tetrahedra& tets);
+
 /// Builds the topology. Errors: InvalidArgument (node ids out of range, a non-positive tet, a face
 /// shared by more than two tets).
 Result<TetTopology> buildTetTopology(const TetMesh& mesh);
