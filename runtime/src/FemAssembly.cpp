@@ -22,6 +22,42 @@ FemSystem systemFromTriplets(Eigen::Index n, const std::vector<Eigen::Triplet<do
   return sys;
 }
 
+/// Gradients of the barycentric coordinates (rows, 1/m) of the tet p0..p3, and its signed volume.
+Eigen::Matrix<double, 4, 3> barycentricGradients(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
+                                                 const Eigen::Vector3d& p3, double* volumeM3) {
+  Eigen::Matrix3d edges;
+  edges.col(0) = p1 - p0;
+  edges.col(1) = p2 - p0;
+  edges.col(2) = p3 - p0;
+  if (volumeM3) *volumeM3 = edges.determinant() / 6.0;
+  const Eigen::Matrix3d inv = edges.inverse();
+  Eigen::Matrix<double, 4, 3> grad;
+  grad.bottomRows<3>() = inv;
+  grad.row(0) = -(grad.row(1) + grad.row(2) + grad.row(3));
+  return grad;
+}
+
+/// B (6 by 3n) from the n nodal shape-function gradients (rows, 1/m), Voigt order with engineering
+/// shear strains: γ_yz = ∂u_y/∂z + ∂u_z/∂y, γ_xz, γ_xy.
+template <int Nodes>
+Eigen::Matrix<double, 6, 3 * Nodes> strainDisplacement(const Eigen::Matrix<double, Nodes, 3>& d) {
+  Eigen::Matrix<double, 6, 3 * Nodes> b = Eigen::Matrix<double, 6, 3 * Nodes>::Zero();
+  for (int n = 0; n < Nodes; ++n) {
+    const double dx = d(n, 0), dy = d(n, 1), dz = d(n, 2);
+    const int c = 3 * n;
+    b(0, c + 0) = dx;
+    b(1, c + 1) = dy;
+    b(2, c + 2) = dz;
+    b(3, c + 1) = dz;
+    b(3, c + 2) = dy;
+    b(4, c + 0) = dz;
+    b(4, c + 2) = dx;
+    b(5, c + 0) = dy;
+    b(5, c + 1) = dx;
+  }
+  return b;
+}
+
 }  // namespace
 
 Eigen::Matrix<double, 6, 12> tetStrainDisplacement(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
@@ -29,33 +65,7 @@ Eigen::Matrix<double, 6, 12> tetStrainDisplacement(const Eigen::Vector3d& p0, co
                                                    double* volumeM3) {
   // Shape function gradients: rows of the inverse of the edge matrix give ∇N1..∇N3,
   // and ∇N0 = −(∇N1 + ∇N2 + ∇N3).
-  Eigen::Matrix3d edges;
-  edges.col(0) = p1 - p0;
-  edges.col(1) = p2 - p0;
-  edges.col(2) = p3 - p0;
-  const double det = edges.determinant();
-  if (volumeM3) *volumeM3 = det / 6.0;
-  const Eigen::Matrix3d inv = edges.inverse();
-  Eigen::Matrix<double, 4, 3> grad;
-  grad.row(1) = inv.row(0);
-  grad.row(2) = inv.row(1);
-  grad.row(3) = inv.row(2);
-  grad.row(0) = -(grad.row(1) + grad.row(2) + grad.row(3));
-  Eigen::Matrix<double, 6, 12> b = Eigen::Matrix<double, 6, 12>::Zero();
-  for (int n = 0; n < 4; ++n) {
-    const double dx = grad(n, 0), dy = grad(n, 1), dz = grad(n, 2);
-    const int c = 3 * n;
-    b(0, c + 0) = dx;
-    b(1, c + 1) = dy;
-    b(2, c + 2) = dz;
-    b(3, c + 1) = dz;  // γ_yz = ∂u_y/∂z + ∂u_z/∂y
-    b(3, c + 2) = dy;
-    b(4, c + 0) = dz;  // γ_xz
-    b(4, c + 2) = dx;
-    b(5, c + 0) = dy;  // γ_xy
-    b(5, c + 1) = dx;
-  }
-  return b;
+  return strainDisplacement<4>(barycentricGradients(p0, p1, p2, p3, volumeM3));
 }
 
 double degenerateTetVolumeM3(const Points& nodes) {
@@ -125,20 +135,6 @@ MatrixXdRow computeStressModes(const TetMesh& mesh, const Material& material, co
 
 namespace {
 
-/// Gradients of the barycentric coordinates (rows, 1/m) of the tet p0..p3, and its signed volume.
-Eigen::Matrix<double, 4, 3> barycentricGradients(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
-                                                 const Eigen::Vector3d& p3, double* volumeM3) {
-  Eigen::Matrix3d edges;
-  edges.col(0) = p1 - p0;
-  edges.col(1) = p2 - p0;
-  edges.col(2) = p3 - p0;
-  if (volumeM3) *volumeM3 = edges.determinant() / 6.0;
-  const Eigen::Matrix3d inv = edges.inverse();
-  Eigen::Matrix<double, 4, 3> grad;
-  grad.bottomRows<3>() = inv;
-  grad.row(0) = -(grad.row(1) + grad.row(2) + grad.row(3));
-  return grad;
-}
 
 /// B (6 by 30) from the barycentric gradients at the point λ.
 Eigen::Matrix<double, 6, 30> quadraticB(const Eigen::Matrix<double, 4, 3>& g, const Eigen::Vector4d& l) {
@@ -149,21 +145,7 @@ Eigen::Matrix<double, 6, 30> quadraticB(const Eigen::Matrix<double, 4, 3>& g, co
     const auto [i, j] = kQuadraticTetEdges[static_cast<size_t>(k)];
     d.row(4 + k) = 4.0 * (l(i) * g.row(j) + l(j) * g.row(i));
   }
-  Eigen::Matrix<double, 6, 30> b = Eigen::Matrix<double, 6, 30>::Zero();
-  for (int n = 0; n < 10; ++n) {
-    const double dx = d(n, 0), dy = d(n, 1), dz = d(n, 2);
-    const int c = 3 * n;
-    b(0, c + 0) = dx;
-    b(1, c + 1) = dy;
-    b(2, c + 2) = dz;
-    b(3, c + 1) = dz;
-    b(3, c + 2) = dy;
-    b(4, c + 0) = dz;
-    b(4, c + 2) = dx;
-    b(5, c + 0) = dy;
-    b(5, c + 1) = dx;
-  }
-  return b;
+  return strainDisplacement<10>(d);
 }
 
 /// The 4-point rule of degree 2 on a tet (Keast): λ = permutations of (a, b, b, b), weight V/4.
