@@ -50,11 +50,11 @@ Status runImpactBench(const ImpactBenchSettings& s) {
         ws.seed = s.seed;
         ws.fracture.modeCount = modes;
         ws.fracture.pruneStresses = prune;
-        // Without a database fragments stay surfaces; with one they become objects, and the World
-        // has one worker (this thread) so that making their bodies can be timed.
+        // Without a database fragments stay surfaces; with one they become objects, whose bodies
+        // are timed apart (the first call that needs each waits for it).
         ws.fracture.matchFragments = !database.empty();
         ws.fracture.exactModesMaxTets = s.exactModesMaxTets;
-        ws.workerThreads = 1;
+        ws.workerThreads = s.threads;
         auto world = World::create(Pack(pack), ws);
         if (!world) return world.error();
         if (auto warm = world.value().addObject({.asset = "pane"}); !warm) return warm.error();  // factorises K

@@ -31,6 +31,9 @@ struct ImpactBenchSettings {
   std::filesystem::path csv = "docs/results/data/impact_latency.csv";
   std::filesystem::path databasePack;  ///< empty: no database, fragments stay surfaces
   int exactModesMaxTets = 150;         ///< with a database: the World's default
+  /// The World's worker threads (0: one per core). The impact's parallel stages (the seed scan,
+  /// surfaces beside moments, new bodies) use them; with 1 an impact runs on this thread alone.
+  int threads = 0;
   bool quiet = false;
 };
 

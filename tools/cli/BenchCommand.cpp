@@ -75,6 +75,8 @@ Runner addBenchCommand(CLI::App& app) {
   impact->add_option("--exact-max-tets", is->exactModesMaxTets,
                      "With a database: fragments of at most this many parent tets get their own modes (0: all matched)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  impact->add_option("--threads", is->threads, "The World's worker threads (0: one per core; 1: each impact on one thread)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   impact->add_flag("--quiet", is->quiet, "No progress lines");
   auto* integrators = cmd->add_subcommand(
       "integrators", "Error and stability of the modal time integrators against the time step (ωh from 0.01 to 100)");
