@@ -109,9 +109,9 @@ struct Candidate {
   bool operator<(const Candidate& o) const { return speedMps != o.speedMps ? speedMps > o.speedMps : body < o.body; }
 };
 
-// An impact submitted to the World's workers, applied at the start of applyFrame.
 struct Landing;
 
+// An impact submitted to the World's workers, applied at the start of applyFrame.
 struct InFlight {
   ImpactTicket ticket;
   Candidate candidate;
