@@ -64,7 +64,7 @@ Runner addPlayCommand(CLI::App& app) {
                   "player's thread; -1: the frames nearest to 33 ms)")
       ->capture_default_str()->check(CLI::Range(-1, 600));
   cmd->add_option("--hull-vertices", o->settings.hullMaxVertices,
-                  "Most vertices of a fragment's collision hull, farthest point first (0: the exact hull)")
+                  "Most vertices of a fragment's collision hull: its extreme vertices in this many directions (0: the exact hull)")
       ->capture_default_str()->check(CLI::Range(0, 4096));
   cmd->add_option("--settings", o->runtimeSettings, "Runtime settings (JSON, as brittle size writes them); flags given here win");
   cmd->add_option("--frames", o->framesDir, "Also draw frames into this directory (frame_NNNNNN.png; needs a display: xvfb-run)");

@@ -16,6 +16,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <numbers>
 #include <set>
 #include <thread>
 
@@ -169,21 +170,51 @@ Hull convexHull(const TriangleMesh& surface, const MassProperties& mass, int max
     h.sizeM = std::max(h.sizeM, x.norm());
     all.push_back(bt(x));
   }
-  btConvexHullComputer conv;  // O(n log n); the capped hull is then built from its vertices alone
-  conv.compute(&all[0].getX(), sizeof(btVector3), all.size(), 0.f, 0.f);
-  if (maxVertices > 0 && conv.vertices.size() > maxVertices) {
-    // HullLibrary is quadratic in its input (its duplicate check), hence the exact hull first.
-    HullDesc desc(QF_DEFAULT, static_cast<unsigned>(conv.vertices.size()), &conv.vertices[0]);
-    desc.mMaxVertices = static_cast<unsigned>(maxVertices);
-    HullLibrary library;
-    HullResult result;
-    const bool capped = library.CreateConvexHull(desc, result) == QE_OK && result.mNumOutputVertices >= 4;
-    if (capped) {
-      for (unsigned i = 0; i < result.mNumOutputVertices; ++i) h.points.push_back(result.m_OutputVertices[static_cast<int>(i)]);
+  if (maxVertices > 0) {
+    // Candidates: the surface's extreme vertex in each of 4·maxVertices fixed directions of its
+    // principal frame (a spherical Fibonacci lattice; ties: the lowest vertex), a pass over the
+    // vertices per direction instead of the exact hull of a dense surface. Then at most
+    // maxVertices of them, farthest point first (Bullet's HullLibrary, quadratic in its input,
+    // hence the candidates): hull vertices all, so the shape lies inside the exact hull.
+    const int directions = 4 * maxVertices;
+    std::vector<int> chosen;
+    chosen.reserve(static_cast<size_t>(directions));
+    const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+    for (int k = 0; k < directions; ++k) {
+      const double z = 1.0 - (2.0 * k + 1.0) / directions, r = std::sqrt(std::max(0.0, 1.0 - z * z));
+      const btVector3 dir(static_cast<btScalar>(r * std::cos(golden * k)), static_cast<btScalar>(r * std::sin(golden * k)),
+                          static_cast<btScalar>(z));
+      int best = 0;
+      btScalar bestDot = all[0].dot(dir);
+      for (int v = 1; v < all.size(); ++v) {
+        const btScalar d = all[v].dot(dir);
+        if (d > bestDot) best = v, bestDot = d;
+      }
+      if (std::find(chosen.begin(), chosen.end(), best) == chosen.end()) chosen.push_back(best);
     }
-    library.ReleaseResult(result);
-    if (capped) return h;  // else a degenerate point set: the exact hull copes with it
+    std::sort(chosen.begin(), chosen.end());
+    btAlignedObjectArray<btVector3> candidates;
+    for (int v : chosen) candidates.push_back(all[v]);
+    if (candidates.size() >= 4 && candidates.size() <= maxVertices) {
+      h.points = candidates;
+      return h;
+    }
+    if (candidates.size() > maxVertices) {
+      HullDesc desc(QF_DEFAULT, static_cast<unsigned>(candidates.size()), &candidates[0]);
+      desc.mMaxVertices = static_cast<unsigned>(maxVertices);
+      HullLibrary library;
+      HullResult result;
+      const bool capped = library.CreateConvexHull(desc, result) == QE_OK && result.mNumOutputVertices >= 4;
+      if (capped) {
+        for (unsigned i = 0; i < result.mNumOutputVertices; ++i) h.points.push_back(result.m_OutputVertices[static_cast<int>(i)]);
+      }
+      library.ReleaseResult(result);
+      if (capped) return h;
+    }
+    // Fewer than four distinct extremes (a sliver), or a degenerate set: the exact hull below.
   }
+  btConvexHullComputer conv;
+  conv.compute(&all[0].getX(), sizeof(btVector3), all.size(), 0.f, 0.f);
   for (int i = 0; i < conv.vertices.size(); ++i) h.points.push_back(conv.vertices[i]);
   return h;
 }

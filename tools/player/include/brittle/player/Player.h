@@ -76,11 +76,12 @@ struct PlayerSettings {
   double collisionMarginM = 0.001;  ///< Bullet's margin around hulls and boxes
   /// Most vertices of a fragment's collision hull; 0: the exact hull of its surface. Bullet's
   /// narrow phase walks a hull's vertices for every support point, so a pile of fragments with
-  /// exact hulls (about 60 vertices, up to 144, on the pane) costs most of a frame. A capped hull is
-  /// built farthest point first from the exact one (Bullet's HullLibrary): its vertices are the
-  /// exact hull's, it lies inside it, and it keeps the extreme points that set how a fragment rests
-  /// and rolls. The scene's own objects keep their exact hulls: their first contacts are the
-  /// scene's main impacts, and where they touch decides how they break.
+  /// exact hulls (about 60 vertices, up to 144, on the pane) costs most of a frame, and the exact
+  /// hulls of a shattered pane's dense surfaces cost ~80 ms to build. The capped hull is the
+  /// surface's extreme vertex in each of hullMaxVertices fixed directions of the fragment's
+  /// principal frame: it lies inside the exact hull, touches it in those directions, and costs a
+  /// pass over the vertices per direction. The scene's own objects keep their exact hulls: their
+  /// first contacts are the scene's main impacts, and where they touch decides how they break.
   int hullMaxVertices = 24;
   /// Fraction of a body's size the contact point may lie off its surface in the runtime: Bullet's
   /// hull is convex and the surface need not be, and a matched fragment's runtime shape is its
