@@ -20,6 +20,26 @@ Eigen::Matrix3d tensor(const Voigt& s) {
   return t;
 }
 
+// σ_e = S_e q over the first r modes: S's rows 6e..6e+5 (row-major, contiguous) against q, in one
+// pass with six running sums in mode order. Eigen's general matrix-vector kernel costs several times
+// the 6r products for so small a block, and the scan and the cracks make tens of thousands of
+// these; plain sums in a fixed order also give the same bits wherever the buffers lie.
+Voigt elementStress(const MatrixXdRow& S, Eigen::Index e, const double* q, Eigen::Index r) {
+  const Eigen::Index stride = S.cols();
+  const double* row = S.data() + 6 * e * stride;
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, s4 = 0.0, s5 = 0.0;
+  for (Eigen::Index j = 0; j < r; ++j) {
+    const double qj = q[j];
+    s0 += row[j] * qj;
+    s1 += row[stride + j] * qj;
+    s2 += row[2 * stride + j] * qj;
+    s3 += row[3 * stride + j] * qj;
+    s4 += row[4 * stride + j] * qj;
+    s5 += row[5 * stride + j] * qj;
+  }
+  return (Voigt() << s0, s1, s2, s3, s4, s5).finished();
+}
+
 bool crosses(const Eigen::Vector4d& d) { return d.maxCoeff() > 0.0 && d.minCoeff() < 0.0; }
 
 // Area of the section of the tet where the nodal values d change sign, projected on n: a triangle
@@ -90,7 +110,7 @@ Eigen::MatrixXd stressModeBounds(const MatrixXdRow& s, int modes) {
 }
 
 Voigt StressField::at(int32_t e) const {
-  Voigt s = stressModes->block(6 * e, 0, 6, q.size()) * q;
+  Voigt s = elementStress(*stressModes, e, q.data(), q.size());
   if (staticStress && staticStress->size() > 0) s += staticStress->segment<6>(6 * e) * forceN;
   return s;
 }
@@ -114,8 +134,9 @@ void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eig
   scan.seeds.clear();
   scan.evaluations = 0;
   // σ_e at instant k, and its Frobenius norm ‖Dσ‖ (a bound on σ₁ that needs no eigen solve).
+  w.qT = q.transpose();  // r by K: each instant's modal coordinates contiguous
   auto voigt = [&](Eigen::Index e, Eigen::Index k) {
-    Voigt s = S.block(6 * e, 0, 6, r) * q.row(k).transpose();
+    Voigt s = elementStress(S, e, w.qT.col(k).data(), r);
     if (correction) s += staticStress.segment<6>(6 * e) * forceN[static_cast<size_t>(k)];
     return s;
   };

@@ -59,6 +59,7 @@ StressScan scanStresses(const MatrixXdRow& stressModes, const Eigen::MatrixXd& b
 /// grown to the largest body scanned.
 struct StressScanWorkspace {
   Eigen::MatrixXd qAbsT;                       ///< r by K: |q|ᵀ
+  Eigen::MatrixXd qT;                          ///< r by K: qᵀ
   Eigen::VectorXd qMax, staticNorm, forceAbs;  ///< r, T, K
   Eigen::VectorXd elementBound, instantBound, seedBound;  ///< T, K, T
   std::vector<std::pair<double, int32_t>> heap, seeds;
