@@ -22,6 +22,14 @@ namespace brittle::detail {
 
 namespace {
 
+// The whole mesh file as text. Error: FileNotFound.
+Result<std::string> readMeshText(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in && !in.eof()) return makeError(ErrorCode::FileNotFound, "cannot read mesh file " + path.string());
+  return text;
+}
+
 // ----- OFF, read by brittle itself -----------------------------------------------------------
 // CGAL 5.5's OFF scanner is not safe on bad input (found by tests/fuzz): it reads past the end of
 // a vector on a COFF colour line, casts out-of-range face indices from double to size_t, and
@@ -70,9 +78,9 @@ std::optional<T> parseWhole(std::string_view token) {
 
 Result<PolygonSoup> readOff(const std::filesystem::path& path) {
   const std::string file = path.filename().string();
-  std::ifstream in(path, std::ios::binary);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (!in && !in.eof()) return makeError(ErrorCode::FileNotFound, "cannot read mesh file " + path.string());
+  auto read = readMeshText(path);
+  if (!read) return read.error();
+  const std::string& text = read.value();
   const std::vector<OffLine> lines = splitOffLines(text);
   auto bad = [&](size_t line, const std::string& what) {
     return makeError(ErrorCode::ParseError, file + " line " + std::to_string(line) + ": " + what);
@@ -304,9 +312,9 @@ class PlyBody {
 
 Result<PolygonSoup> readPly(const std::filesystem::path& path) {
   const std::string file = path.filename().string();
-  std::ifstream in(path, std::ios::binary);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (!in && !in.eof()) return makeError(ErrorCode::FileNotFound, "cannot read mesh file " + path.string());
+  auto read = readMeshText(path);
+  if (!read) return read.error();
+  const std::string& text = read.value();
   auto bad = [&](const std::string& what) { return makeError(ErrorCode::ParseError, file + ": " + what); };
 
   // The header: text lines up to "end_header".

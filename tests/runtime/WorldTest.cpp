@@ -9,6 +9,7 @@
 #include <map>
 #include <mutex>
 #include <stdexcept>
+#include <thread>
 
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/BaseShapes.h"
@@ -513,6 +514,12 @@ TEST_F(WorldTest, TheComputedHookSeesEachSubmittedResultBeforeItIsReady) {
   auto ta = world.submitImpact(ball(a, 60.0));
   auto tb = world.submitImpact(ball(b, 1.0));  // does not break: called all the same
   ASSERT_TRUE(ta && tb);
+  // Once impactReady says so, the hook has run already (before collectImpact is called).
+  for (const ImpactTicket t : {ta.value(), tb.value()}) {
+    while (!world.impactReady(t)) std::this_thread::yield();
+    std::lock_guard<std::mutex> lock(seen->mutex);
+    EXPECT_EQ(seen->volumes.count(t.id), 1u) << "ticket " << t.id << " is ready before its hook ran";
+  }
   ImpactResult ra, rb;
   ASSERT_TRUE(world.collectImpact(ta.value(), ra));
   ASSERT_TRUE(world.collectImpact(tb.value(), rb));

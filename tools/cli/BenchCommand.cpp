@@ -17,6 +17,18 @@
 #include "brittle/precompute/BaseShapes.h"
 
 namespace brittle::cli {
+namespace {
+
+// Runs a benchmark that writes one CSV: its directory made first, its error reported, its path printed.
+template <class Run>
+int writeCsv(const std::filesystem::path& csv, Run run) {
+  if (csv.has_parent_path()) std::filesystem::create_directories(csv.parent_path());
+  if (Status st = run(); !st) return reportError(st.error());
+  std::cout << "wrote " << csv.string() << "\n";
+  return kExitOk;
+}
+
+}  // namespace
 
 Runner addBenchCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
@@ -138,30 +150,10 @@ Runner addBenchCommand(CLI::App& app) {
   exact->add_option("--csv", xb->csv, "Output CSV")->capture_default_str();
   exact->add_flag("--quiet", xb->quiet, "No progress lines");
   return [s, shapes, kinds, indices, impact, is, place, pb, integrators, ib, modes, mb, resolution, rb, fracture, fb, exact, xb]() -> int {
-    if (exact->parsed()) {
-      if (xb->csv.has_parent_path()) std::filesystem::create_directories(xb->csv.parent_path());
-      if (Status st = bench::runExactModesBench(*xb); !st) return reportError(st.error());
-      std::cout << "wrote " << xb->csv.string() << "\n";
-      return kExitOk;
-    }
-    if (fracture->parsed()) {
-      if (fb->csv.has_parent_path()) std::filesystem::create_directories(fb->csv.parent_path());
-      if (Status st = bench::runFractureStatsBench(*fb); !st) return reportError(st.error());
-      std::cout << "wrote " << fb->csv.string() << "\n";
-      return kExitOk;
-    }
-    if (resolution->parsed()) {
-      if (rb->csv.has_parent_path()) std::filesystem::create_directories(rb->csv.parent_path());
-      if (Status st = bench::runResolutionBench(*rb); !st) return reportError(st.error());
-      std::cout << "wrote " << rb->csv.string() << "\n";
-      return kExitOk;
-    }
-    if (modes->parsed()) {
-      if (mb->csv.has_parent_path()) std::filesystem::create_directories(mb->csv.parent_path());
-      if (Status st = bench::runModeCountBench(*mb); !st) return reportError(st.error());
-      std::cout << "wrote " << mb->csv.string() << "\n";
-      return kExitOk;
-    }
+    if (exact->parsed()) return writeCsv(xb->csv, [&] { return bench::runExactModesBench(*xb); });
+    if (fracture->parsed()) return writeCsv(fb->csv, [&] { return bench::runFractureStatsBench(*fb); });
+    if (resolution->parsed()) return writeCsv(rb->csv, [&] { return bench::runResolutionBench(*rb); });
+    if (modes->parsed()) return writeCsv(mb->csv, [&] { return bench::runModeCountBench(*mb); });
     if (integrators->parsed()) {
       for (const auto& path : {ib->csv, ib->timingCsv}) {
         if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
@@ -173,18 +165,8 @@ Runner addBenchCommand(CLI::App& app) {
       std::cout << "wrote " << ib->csv.string() << " and " << ib->timingCsv.string() << "\n";
       return kExitOk;
     }
-    if (place->parsed()) {
-      if (pb->csv.has_parent_path()) std::filesystem::create_directories(pb->csv.parent_path());
-      if (Status st = bench::runPlacementBench(*pb); !st) return reportError(st.error());
-      std::cout << "wrote " << pb->csv.string() << "\n";
-      return kExitOk;
-    }
-    if (impact->parsed()) {
-      if (is->csv.has_parent_path()) std::filesystem::create_directories(is->csv.parent_path());
-      if (Status st = bench::runImpactBench(*is); !st) return reportError(st.error());
-      std::cout << "wrote " << is->csv.string() << "\n";
-      return kExitOk;
-    }
+    if (place->parsed()) return writeCsv(pb->csv, [&] { return bench::runPlacementBench(*pb); });
+    if (impact->parsed()) return writeCsv(is->csv, [&] { return bench::runImpactBench(*is); });
     auto loaded = loadBaseShapes(*shapes);
     if (!loaded) return reportError(loaded.error());
     s->shapes = std::move(loaded).value();
