@@ -340,21 +340,16 @@ std::vector<int64_t> readOffsets(FileReader& r, const std::string& path, hsize_t
 }
 
 // Per-object block sizes of a flat modal array must be rowsPerItem × items × modes.
-void checkBlockSizes(const std::vector<int64_t>& valueOffsets, const std::string& path, int64_t rowsPerItem,
-                     const std::vector<int64_t>& itemOffsets, const std::vector<int64_t>& modeOffsets,
-                     const std::vector<std::string>& names) {
-  for (size_t i = 0; i + 1 < valueOffsets.size(); ++i) {
-    const int64_t items = itemOffsets[i + 1] - itemOffsets[i];
-    const int64_t modes = modeOffsets[i + 1] - modeOffsets[i];
-    int64_t expected = 0;
-    const bool overflow =
-        __builtin_mul_overflow(rowsPerItem, items, &expected) || __builtin_mul_overflow(expected, modes, &expected);
-    if (overflow || valueOffsets[i + 1] - valueOffsets[i] != expected) {
-      fail(ErrorCode::PackShapeMismatch, "dataset '" + path + "': object '" + names[i] + "' has " +
-                                             std::to_string(valueOffsets[i + 1] - valueOffsets[i]) +
-                                             " values, expected " + std::to_string(rowsPerItem) + " x " +
-                                             std::to_string(items) + " x " + std::to_string(modes));
-    }
+void checkBlockSize(const std::vector<int64_t>& valueOffsets, size_t i, const std::string& path, int64_t rowsPerItem,
+                    int64_t items, int64_t modes, const std::string& name) {
+  int64_t expected = 0;
+  const bool overflow =
+      __builtin_mul_overflow(rowsPerItem, items, &expected) || __builtin_mul_overflow(expected, modes, &expected);
+  if (overflow || valueOffsets[i + 1] - valueOffsets[i] != expected) {
+    fail(ErrorCode::PackShapeMismatch, "dataset '" + path + "': object '" + name + "' has " +
+                                           std::to_string(valueOffsets[i + 1] - valueOffsets[i]) + " values, expected " +
+                                           std::to_string(rowsPerItem) + " x " + std::to_string(items) + " x " +
+                                           std::to_string(modes));
   }
 }
 
@@ -434,13 +429,17 @@ std::vector<Material> readMaterials(FileReader& r, const std::string& prefix) {
   return materials;
 }
 
-std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, const std::vector<Material>& materials) {
+std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, const std::vector<Material>& materials,
+                                     int64_t version) {
   r.requireGroup(prefix);
   r.requireGroup(prefix + "/quality");
   r.requireGroup(prefix + "/bake");
   const std::vector<std::string> names = r.strings(prefix + "/name", kAny);
   const hsize_t o = names.size();
   const std::vector<std::string> materialNames = r.strings(prefix + "/material_name", o);
+  // Version 3 added the element order; older packs are all P1.
+  const std::vector<int32_t> orders =
+      version >= 3 ? r.i32(prefix + "/element_order", {o}).values : std::vector<int32_t>(o, 1);
 
   const Array<double> nodes = r.f64(prefix + "/nodes", {kAny, 3});
   const auto nodeOffsets = readOffsets(r, prefix + "/node_offsets", o, nodes.dims[0], prefix + "/nodes");
@@ -463,11 +462,9 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
   const auto orthonormality = r.f64(prefix + "/orthonormality_error", {o}).values;
   const Array<double> modes = r.f64(prefix + "/modes", {kAny});
   const auto modesOffsets = readOffsets(r, prefix + "/modes_value_offsets", o, modes.dims[0], prefix + "/modes");
-  checkBlockSizes(modesOffsets, prefix + "/modes", 3, nodeOffsets, modeOffsets, names);
   const Array<double> stressModes = r.f64(prefix + "/stress_modes", {kAny});
   const auto stressOffsets =
       readOffsets(r, prefix + "/stress_modes_value_offsets", o, stressModes.dims[0], prefix + "/stress_modes");
-  checkBlockSizes(stressOffsets, prefix + "/stress_modes", 6, tetOffsets, modeOffsets, names);
 
   const auto qNodes = r.i64(prefix + "/quality/node_count", {o}).values;
   const auto qTets = r.i64(prefix + "/quality/tet_count", {o}).values;
@@ -526,6 +523,14 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
     checkIndices(a.tetMesh.tets, prefix + "/tets", tetOffsets[i], n, a.name);
     a.surfaceFaces = Eigen::Map<const Triangles>(faces.values.data() + 3 * faceOffsets[i], f, 3);
     checkIndices(a.surfaceFaces, prefix + "/surface_faces", faceOffsets[i], n, a.name);
+    if (orders[i] != 1 && orders[i] != 2) {
+      fail(ErrorCode::PackCorrupt, "dataset '" + prefix + "/element_order' [" + std::to_string(i) + "] = " +
+                                       std::to_string(orders[i]) + " is neither 1 (P1) nor 2 (P2)");
+    }
+    a.elementOrder = static_cast<ElementOrder>(orders[i]);
+    const int64_t femNodes = femNodeCount(a.tetMesh, a.elementOrder);
+    checkBlockSize(modesOffsets, i, prefix + "/modes", 3, femNodes, m, a.name);
+    checkBlockSize(stressOffsets, i, prefix + "/stress_modes", 6 * stressPointsPerElement(a.elementOrder), t, m, a.name);
 
     MassProperties& mp = a.massProperties;
     mp.massKg = massKg[i];
@@ -543,8 +548,9 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
     modal.frequenciesHz = Eigen::Map<const Eigen::VectorXd>(frequencies.data() + modeOffsets[i], m);
     modal.residuals = Eigen::Map<const Eigen::VectorXd>(residuals.data() + modeOffsets[i], m);
     modal.orthonormalityError = orthonormality[i];
-    modal.modes = Eigen::Map<const MatrixXdRow>(modes.values.data() + modesOffsets[i], 3 * n, m);
-    a.stressModes = Eigen::Map<const MatrixXdRow>(stressModes.values.data() + stressOffsets[i], 6 * t, m);
+    modal.modes = Eigen::Map<const MatrixXdRow>(modes.values.data() + modesOffsets[i], 3 * femNodes, m);
+    a.stressModes = Eigen::Map<const MatrixXdRow>(stressModes.values.data() + stressOffsets[i],
+                                                  6 * stressPointsPerElement(a.elementOrder) * t, m);
 
     MeshQuality& q = a.quality;
     q.nodeCount = qNodes[i];
@@ -583,7 +589,7 @@ T scalar(const Array<T>& a) {
   return a.values.front();
 }
 
-FragmentDatabase readDatabase(FileReader& r) {
+FragmentDatabase readDatabase(FileReader& r, int64_t version) {
   r.requireGroup("/database");
   FragmentDatabase db;
   db.seed = static_cast<uint64_t>(scalar(r.i64("/database/seed", {1})));
@@ -592,7 +598,7 @@ FragmentDatabase readDatabase(FileReader& r) {
     fail(ErrorCode::PackShapeMismatch, "'/database/reference_material' must hold exactly one material");
   }
   db.referenceMaterial = reference.front();
-  std::vector<ObjectAsset> assets = readObjects(r, "/database/entries", reference);
+  std::vector<ObjectAsset> assets = readObjects(r, "/database/entries", reference, version);
   const hsize_t count = assets.size();
 
   r.requireGroup("/database/fragments");
@@ -711,9 +717,9 @@ Result<Pack> readPack(const fs::path& path) {
     const int64_t version = checkRoot(reader);
     Pack pack;
     pack.materials = readMaterials(reader, "/materials");
-    pack.objects = readObjects(reader, "/objects", pack.materials);
+    pack.objects = readObjects(reader, "/objects", pack.materials, version);
     // The database is optional from version 2 on; version 1 packs have none.
-    if (version >= 2 && reader.exists("/database")) pack.database = readDatabase(reader);
+    if (version >= 2 && reader.exists("/database")) pack.database = readDatabase(reader, version);
     return pack;
   } catch (const ReadFailure& failure) {
     return makeError(failure.error.code, label + ": " + failure.error.message);

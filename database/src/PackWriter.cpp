@@ -102,15 +102,20 @@ Status validateObject(const ObjectAsset& o, const std::string& label, const std:
                    std::to_string(m.frequenciesHz.size()) + " frequencies and " + std::to_string(m.residuals.size()) +
                    " residuals");
   }
-  if (m.modes.rows() != 3 * n || m.modes.cols() != r) {
-    return invalidArgument(label + ": modal.modes is " + std::to_string(m.modes.rows()) + " by " +
-                   std::to_string(m.modes.cols()) + ", expected 3N by r = " + std::to_string(3 * n) + " by " +
-                   std::to_string(r));
+  if (o.elementOrder != ElementOrder::P1 && o.elementOrder != ElementOrder::P2) {
+    return invalidArgument(label + ": elementOrder is neither P1 nor P2");
   }
-  if (o.stressModes.rows() != 6 * t || o.stressModes.cols() != r) {
+  const Eigen::Index fem = femNodeCount(o.tetMesh, o.elementOrder);
+  const Eigen::Index points = stressPointsPerElement(o.elementOrder);
+  if (m.modes.rows() != 3 * fem || m.modes.cols() != r) {
+    return invalidArgument(label + ": modal.modes is " + std::to_string(m.modes.rows()) + " by " +
+                   std::to_string(m.modes.cols()) + ", expected 3N by r = " + std::to_string(3 * fem) + " by " +
+                   std::to_string(r) + " (" + elementOrderName(o.elementOrder) + ")");
+  }
+  if (o.stressModes.rows() != 6 * points * t || o.stressModes.cols() != r) {
     return invalidArgument(label + ": stressModes is " + std::to_string(o.stressModes.rows()) + " by " +
-                   std::to_string(o.stressModes.cols()) + ", expected 6T by r = " + std::to_string(6 * t) + " by " +
-                   std::to_string(r));
+                   std::to_string(o.stressModes.cols()) + ", expected 6PT by r = " + std::to_string(6 * points * t) +
+                   " by " + std::to_string(r));
   }
 
   const MassProperties& mp = o.massProperties;
@@ -379,6 +384,9 @@ void writeObjects(FileWriter& w, const std::string& prefix, const ObjectList& ob
   w.strings(prefix + "/name", gather<std::string>(objects, [](const O& o) { return o.name; }));
   w.strings(prefix + "/material_name", gather<std::string>(objects, [](const O& o) { return o.materialName; }));
 
+  w.i32(prefix + "/element_order",
+        gather<int32_t>(objects, [](const O& o) { return static_cast<int32_t>(o.elementOrder); }), {count});
+
   // Meshes.
   const auto nodeOffsets = offsetsOf(objects, [](const O& o) { return o.tetMesh.nodes.rows(); });
   const auto tetOffsets = offsetsOf(objects, [](const O& o) { return o.tetMesh.tets.rows(); });
@@ -409,7 +417,7 @@ void writeObjects(FileWriter& w, const std::string& prefix, const ObjectList& ob
         gatherMatrix3(objects, [](const O& o) -> const Eigen::Matrix3d& { return o.massProperties.secondMomentM5; }),
         {count, 3, 3}, "m^5");
 
-  // Modal data. modes and stress_modes hold one row-major (3N by r) or (6T by r) block per
+  // Modal data. modes and stress_modes hold one row-major (3N by r) or (6PT by r) block per
   // object; r differs between objects, so they are flat and carry their own offsets.
   const auto modeOffsets = offsetsOf(objects, [](const O& o) { return o.modal.eigenvaluesRad2PerS2.size(); });
   const auto modesValueOffsets = offsetsOf(objects, [](const O& o) { return o.modal.modes.size(); });

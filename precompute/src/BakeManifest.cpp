@@ -31,7 +31,7 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
     if (!doc.is_object() || !doc.contains("objects") || !doc["objects"].is_array()) {
       return makeError(ErrorCode::ParseError, "manifest " + path.filename().string() + ": needs an \"objects\" array");
     }
-    static const std::set<std::string> kKeys = {"name", "mesh", "material", "tets", "modes", "repair", "lumped_mass", "seed",
+    static const std::set<std::string> kKeys = {"name", "mesh", "material", "tets", "modes", "element", "repair", "lumped_mass", "seed",
                                                 "sharp_features", "sliver_bound", "meshing_runs"};
     for (size_t i = 0; i < doc["objects"].size(); ++i) {
       const auto& o = doc["objects"][i];
@@ -63,6 +63,11 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
           return makeError(ErrorCode::ParseError, where + ": \"" + key + "\" must be a number in [" + std::to_string(lo) + ", " +
                                                       std::to_string(hi) + "]" + (std::string(key) == "sliver_bound" ? "" : ", integer"));
         }
+      }
+      if (o.contains("element")) {
+        const auto order = o["element"].is_string() ? parseElementOrder(o["element"].get<std::string>()) : std::nullopt;
+        if (!order) return makeError(ErrorCode::ParseError, where + ": \"element\" must be \"p1\" or \"p2\"");
+        s.elementOrder = *order;
       }
       s.tetMesh.targetTets = o.value("tets", s.tetMesh.targetTets);
       s.modal.modeCount = o.value("modes", s.modal.modeCount);

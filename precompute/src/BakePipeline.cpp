@@ -97,15 +97,18 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
 
   t = SteadyClock::now();
   progress.report("assembling K and M", 0.0);
-  auto system = assembleFem(asset.tetMesh, s.material, s.fem);
+  asset.elementOrder = s.elementOrder;
+  auto system = assembleFem(asset.tetMesh, s.elementOrder, s.material, s.fem);
   if (!system) return inObject(name, system.error());
+  auto nodes = femNodes(asset.tetMesh, s.elementOrder);
+  if (!nodes) return inObject(name, nodes.error());
   rec.assemblyS = secondsSince(t);
 
   t = SteadyClock::now();
   ModalSettings modal = s.modal;
   if (modal.shiftRad2PerS2 == 0.0) modal.shiftRad2PerS2 = defaultShift(asset.tetMesh.nodes, s.material);
   rec.shift = modal.shiftRad2PerS2;
-  auto modes = computeModes(system.value(), asset.tetMesh.nodes, modal, &progress);
+  auto modes = computeModes(system.value(), nodes.value(), modal, &progress);
   if (!modes) return inObject(name, modes.error());
   rec.modalS = secondsSince(t);
   rep.modalStats = modes.value().stats;
@@ -113,7 +116,9 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
 
   t = SteadyClock::now();
   progress.report("stress modes", 0.0);
-  asset.stressModes = computeStressModes(asset.tetMesh, s.material, asset.modal.modes);
+  auto stressModes = computeStressModes(asset.tetMesh, s.elementOrder, s.material, asset.modal.modes);
+  if (!stressModes) return inObject(name, stressModes.error());
+  asset.stressModes = std::move(stressModes).value();
   rec.stressModesS = secondsSince(t);
 
   asset.massProperties = computeTetMassProperties(asset.tetMesh, s.material.densityKgPerM3);

@@ -15,15 +15,18 @@ Result<FullFemResult> solveFullFemImpact(const TetMesh& mesh, const Material& ma
   if (settings.stepsPerContact < 2 || !(contact.durationS > 0.0)) {
     return makeError(ErrorCode::InvalidArgument, "full FEM reference: stepsPerContact ≥ 2 and a positive contact duration");
   }
-  auto fem = assembleFem(mesh, material, FemSettings{});
+  auto fem = assembleFem(mesh, settings.elementOrder, material, FemSettings{});
   if (!fem) return fem.error();
+  auto recovery = ElementStresses::make(mesh, settings.elementOrder, material);
+  if (!recovery) return recovery.error();
+  const ElementStresses& stresses = recovery.value();
   const SparseMatrixd& k = fem.value().stiffness;
   const SparseMatrixd& m = fem.value().mass;
   const Eigen::Index dofs = k.rows();
   Eigen::VectorXd pattern = Eigen::VectorXd::Zero(dofs);
   double sum = 0.0;
   for (const auto& [node, w] : weights) {
-    if (node < 0 || node >= mesh.nodes.rows()) return makeError(ErrorCode::InvalidArgument, "full FEM reference: node out of range");
+    if (node < 0 || node >= stresses.femNodeCount()) return makeError(ErrorCode::InvalidArgument, "full FEM reference: node out of range");
     pattern.segment<3>(3 * node) += w * direction;
     sum += w;
   }
@@ -39,15 +42,8 @@ Result<FullFemResult> solveFullFemImpact(const TetMesh& mesh, const Material& ma
   if (solver.info() != Eigen::Success) return makeError(ErrorCode::FactorizationFailed, "full FEM reference: factorisation failed");
 
   Eigen::VectorXd u = Eigen::VectorXd::Zero(dofs), v = u, a = u;  // at rest; F(0) = 0
-  const Eigen::Matrix<double, 6, 6> elasticity = isotropicElasticity(material.youngsModulusPa, material.poissonRatio);
-  std::vector<Eigen::Matrix<double, 6, 12>> cb(static_cast<size_t>(mesh.tets.rows()));
-  for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) {
-    double volume = 0.0;
-    cb[static_cast<size_t>(e)] =
-        elasticity * tetStrainDisplacement(mesh.nodes.row(mesh.tets(e, 0)).transpose(), mesh.nodes.row(mesh.tets(e, 1)).transpose(),
-                                           mesh.nodes.row(mesh.tets(e, 2)).transpose(), mesh.nodes.row(mesh.tets(e, 3)).transpose(),
-                                           &volume);
-  }
+  const int points = stresses.pointsPerElement();
+  Eigen::Matrix<double, 6, Eigen::Dynamic> sigma(6, points);
   FullFemResult result;
   result.steps = steps;
   result.peakPrincipalPa = -std::numeric_limits<double>::infinity();
@@ -63,13 +59,14 @@ Result<FullFemResult> solveFullFemImpact(const TetMesh& mesh, const Material& ma
     a = aNext;
     u = next;
     for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) {
-      Eigen::Matrix<double, 12, 1> ue;
-      for (int i = 0; i < 4; ++i) ue.segment<3>(3 * i) = u.segment<3>(3 * mesh.tets(e, i));
-      const double s1 = maxPrincipalStress(cb[static_cast<size_t>(e)] * ue);
-      if (s1 > result.peakPrincipalPa) {
-        result.peakPrincipalPa = s1;
-        result.peakElement = static_cast<int32_t>(e);
-        result.peakTimeS = t;
+      stresses.element(e, u, sigma.data());
+      for (int p = 0; p < points; ++p) {
+        const double s1 = maxPrincipalStress(sigma.col(p));
+        if (s1 > result.peakPrincipalPa) {
+          result.peakPrincipalPa = s1;
+          result.peakElement = static_cast<int32_t>(e);
+          result.peakTimeS = t;
+        }
       }
     }
   }

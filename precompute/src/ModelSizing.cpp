@@ -134,6 +134,7 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
           FullFemSettings fs;
           fs.stepsPerContact = settings.referenceStepsPerContact;
           fs.extraS = r.value().ringDownS;
+          fs.elementOrder = asset.elementOrder;
           const auto start = SteadyClock::now();
           auto ref = solveFullFemImpact(asset.tetMesh, material, r.value().loadWeights, r.value().forceDirectionLocal,
                                         r.value().contact, fs);

@@ -52,12 +52,21 @@ const Result<std::shared_ptr<const Body>>& BodySource::get() const {
 }
 
 Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount) {
-  if (asset.modal.modes.cols() == 0 || asset.stressModes.rows() != 6 * asset.tetMesh.tets.rows()) {
+  const int points = stressPointsPerElement(asset.elementOrder);
+  if (asset.modal.modes.cols() == 0 || asset.stressModes.rows() != 6 * points * asset.tetMesh.tets.rows()) {
     return makeError(ErrorCode::InvalidArgument,
                      "object '" + asset.name + "' has no modal data or stress modes of the wrong size");
   }
   auto topo = buildTetTopology(asset.tetMesh);
   if (!topo) return Error{topo.error().code, "object '" + asset.name + "': " + topo.error().message};
+  // P2 modes cover the corners and one node per edge (ObjectAsset.h).
+  const Eigen::Index femNodes =
+      asset.tetMesh.nodes.rows() + (asset.elementOrder == ElementOrder::P2 ? topo.value().edges.rows() : 0);
+  if (asset.modal.modes.rows() != 3 * femNodes) {
+    return makeError(ErrorCode::InvalidArgument, "object '" + asset.name + "' (" + elementOrderName(asset.elementOrder) +
+                                                     ") has modes of " + std::to_string(asset.modal.modes.rows()) +
+                                                     " rows, expected " + std::to_string(3 * femNodes));
+  }
   auto body = std::make_shared<Body>();
   body->topology = std::move(topo).value();
   body->material = material;

@@ -109,24 +109,40 @@ Eigen::MatrixXd stressModeBounds(const MatrixXdRow& s, int modes) {
   return b;
 }
 
-Voigt StressField::at(int32_t e) const {
-  Voigt s = elementStress(*stressModes, e, q.data(), q.size());
-  if (staticStress && staticStress->size() > 0) s += staticStress->segment<6>(6 * e) * forceN;
+Voigt StressField::atPoint(Eigen::Index point) const {
+  Voigt s = elementStress(*stressModes, point, q.data(), q.size());
+  if (staticStress && staticStress->size() > 0) s += staticStress->segment<6>(6 * point) * forceN;
   return s;
+}
+
+Voigt StressField::at(int32_t e) const {
+  if (pointsPerElement == 1) return atPoint(e);
+  Voigt best = atPoint(static_cast<Eigen::Index>(pointsPerElement) * e);
+  double bestS1 = maxPrincipalStress(best);
+  for (int c = 1; c < pointsPerElement; ++c) {
+    const Voigt s = atPoint(static_cast<Eigen::Index>(pointsPerElement) * e + c);
+    if (const double s1 = maxPrincipalStress(s); s1 > bestS1) {
+      best = s;
+      bestS1 = s1;
+    }
+  }
+  return best;
 }
 
 StressScan scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
                         const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double threshold,
-                        bool prune) {
+                        bool prune, int pointsPerElement) {
   StressScanWorkspace workspace;
   StressScan scan;
-  scanStresses(S, bounds, q, staticStress, forceN, threshold, prune, workspace, scan);
+  scanStresses(S, bounds, q, staticStress, forceN, threshold, prune, workspace, scan, pointsPerElement);
   return scan;
 }
 
 void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
                   const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double threshold, bool prune,
-                  StressScanWorkspace& w, StressScan& scan) {
+                  StressScanWorkspace& w, StressScan& scan, int pointsPerElement) {
+  // Every stress point is scanned as one "element" e of S's rows; the peak and the seeds are then
+  // reported by the element that holds the point.
   const Eigen::Index t = S.rows() / 6, steps = q.rows(), r = q.cols();
   const bool correction = staticStress.size() > 0;
   scan.peakPrincipalPa = 0.0;
@@ -195,6 +211,8 @@ void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eig
     }
   }
   scan.peakPrincipalPa = best;
+  const int32_t peakPoint = scan.peakElement;
+  if (peakPoint >= 0) scan.peakElement = peakPoint / pointsPerElement;
   // Seeds at the peak instant.
   const Eigen::Index k = scan.peakInstant;
   w.seeds.clear();
@@ -229,7 +247,18 @@ void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eig
   std::sort(w.seeds.begin(), w.seeds.end(), [](const auto& a, const auto& b) {
     return a.first != b.first ? a.first > b.first : a.second < b.second;
   });
-  for (const auto& [s1, e] : w.seeds) scan.seeds.push_back(e);
+  if (pointsPerElement == 1) {
+    for (const auto& [s1, e] : w.seeds) scan.seeds.push_back(e);
+    return;
+  }
+  // Each element once, at its strongest point.
+  w.seedTaken.assign(static_cast<size_t>(t / pointsPerElement), 0);
+  for (const auto& [s1, point] : w.seeds) {
+    const int32_t e = point / pointsPerElement;
+    if (w.seedTaken[static_cast<size_t>(e)]) continue;
+    w.seedTaken[static_cast<size_t>(e)] = 1;
+    scan.seeds.push_back(e);
+  }
 }
 
 void CrackWorkspace::reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index edges, int cracks) {

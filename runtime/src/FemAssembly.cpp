@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "brittle/runtime/QuadraticTetMesh.h"
+
 namespace brittle {
 namespace {
 
@@ -290,6 +292,80 @@ MatrixXdRow computeStressModes(const QuadraticTetMesh& mesh, const Material& mat
     }
   }
   return s;
+}
+
+Result<Points> femNodes(const TetMesh& mesh, ElementOrder order) {
+  if (order == ElementOrder::P1) return mesh.nodes;
+  auto quadratic = makeQuadraticTetMesh(mesh);
+  if (!quadratic) return quadratic.error();
+  return std::move(quadratic.value().nodes);
+}
+
+Result<FemSystem> assembleFem(const TetMesh& mesh, ElementOrder order, const Material& material,
+                              const FemSettings& settings) {
+  if (order == ElementOrder::P1) return assembleFem(mesh, material, settings);
+  auto quadratic = makeQuadraticTetMesh(mesh);
+  if (!quadratic) return quadratic.error();
+  return assembleFem(quadratic.value(), material, settings);
+}
+
+Result<MatrixXdRow> computeStressModes(const TetMesh& mesh, ElementOrder order, const Material& material,
+                                       const MatrixXdRow& modes) {
+  if (order == ElementOrder::P1) return computeStressModes(mesh, material, modes);
+  auto quadratic = makeQuadraticTetMesh(mesh);
+  if (!quadratic) return quadratic.error();
+  return computeStressModes(quadratic.value(), material, modes);
+}
+
+Result<ElementStresses> ElementStresses::make(const TetMesh& mesh, ElementOrder order, const Material& material) {
+  if (Status s = validateMaterial(material); !s) return s.error();
+  ElementStresses out;
+  out.mOrder = order;
+  out.mElasticity = isotropicElasticity(material.youngsModulusPa, material.poissonRatio);
+  const auto t = static_cast<size_t>(mesh.tets.rows());
+  auto corner = [&](Eigen::Index e, int a) -> Eigen::Vector3d { return mesh.nodes.row(mesh.tets(e, a)).transpose(); };
+  if (order == ElementOrder::P1) {
+    out.mFemNodes = mesh.nodes.rows();
+    out.mElements = mesh.tets;
+    out.mLinear.resize(t);
+    for (size_t e = 0; e < t; ++e) {
+      const auto i = static_cast<Eigen::Index>(e);
+      out.mLinear[e] = out.mElasticity * tetStrainDisplacement(corner(i, 0), corner(i, 1), corner(i, 2), corner(i, 3), nullptr);
+    }
+    return out;
+  }
+  auto quadratic = makeQuadraticTetMesh(mesh);
+  if (!quadratic) return quadratic.error();
+  out.mFemNodes = quadratic.value().nodes.rows();
+  out.mElements = quadratic.value().tets;
+  out.mGradients.resize(t);
+  for (size_t e = 0; e < t; ++e) {
+    const auto i = static_cast<Eigen::Index>(e);
+    out.mGradients[e] = barycentricGradients(corner(i, 0), corner(i, 1), corner(i, 2), corner(i, 3), nullptr);
+  }
+  return out;
+}
+
+void ElementStresses::element(Eigen::Index e, const Eigen::VectorXd& u, double* out) const {
+  if (mOrder == ElementOrder::P1) {
+    Eigen::Matrix<double, 12, 1> ue;
+    for (int a = 0; a < 4; ++a) ue.segment<3>(3 * a) = u.segment<3>(3 * mElements(e, a));
+    Eigen::Map<Eigen::Matrix<double, 6, 1>>(out).noalias() = mLinear[static_cast<size_t>(e)] * ue;
+    return;
+  }
+  Eigen::Matrix<double, 30, 1> ue;
+  for (int a = 0; a < 10; ++a) ue.segment<3>(3 * a) = u.segment<3>(3 * mElements(e, a));
+  const Eigen::Matrix<double, 4, 3>& g = mGradients[static_cast<size_t>(e)];
+  for (int c = 0; c < kQuadraticTetStressPoints; ++c) {
+    const Eigen::Matrix<double, 6, 1> strain = quadraticB(g, Eigen::Vector4d::Unit(c)) * ue;
+    Eigen::Map<Eigen::Matrix<double, 6, 1>>(out + 6 * c).noalias() = mElasticity * strain;
+  }
+}
+
+void ElementStresses::all(const Eigen::VectorXd& u, Eigen::VectorXd& stress) const {
+  const int rows = 6 * pointsPerElement();
+  stress.resize(rows * elementCount());
+  for (Eigen::Index e = 0; e < elementCount(); ++e) element(e, u, stress.data() + rows * e);
 }
 
 Eigen::MatrixXd rigidBodyModes(const Points& nodes, const SparseMatrixd& mass) {

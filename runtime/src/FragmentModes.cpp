@@ -259,11 +259,11 @@ Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Materia
   if (nodes < 4 || sub.mesh.tets.rows() < 1) return invalidArgument("fragment '" + name + "': fewer than 4 nodes");
   auto topology = buildTetTopology(sub.mesh);
   if (!topology) return topology.error();
-  auto fem = assembleFem(sub.mesh, material, FemSettings{});
+  auto fem = assembleFem(sub.mesh, settings.elementOrder, material, FemSettings{});
   if (!fem) return fem.error();
 
   // Six rigid modes plus the elastic ones; a mesh too small for that keeps what it has.
-  const auto dof = static_cast<int>(3 * nodes);
+  const auto dof = static_cast<int>(fem.value().stiffness.rows());
   const int wanted = std::min(settings.modeCount + 6, dof - 1);
   if (wanted <= 6) return invalidArgument("fragment '" + name + "': too few degrees of freedom for an elastic mode");
   ExactModesSettings s = settings;
@@ -310,7 +310,10 @@ Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Materia
   }
   const Eigen::MatrixXd gram = Eigen::MatrixXd(m.modes).transpose() * (fem.value().mass * Eigen::MatrixXd(m.modes));
   m.orthonormalityError = (gram - Eigen::MatrixXd::Identity(r, r)).cwiseAbs().maxCoeff();
-  a.stressModes = computeStressModes(sub.mesh, material, m.modes);
+  auto stressModes = computeStressModes(sub.mesh, settings.elementOrder, material, m.modes);
+  if (!stressModes) return stressModes.error();
+  a.stressModes = std::move(stressModes).value();
+  a.elementOrder = settings.elementOrder;
   a.bake.requestedModes = settings.modeCount;
   a.bake.factorization = dof <= s.denseMaxDof ? "dense" : "eigen-ldlt";
   return a;

@@ -122,14 +122,15 @@ Status stressStage(const ImpactJob& job, Flow& flow, ImpactWorkspace& ws, Impact
     }
   }
   StressScan& scan = ws.scan;
+  const int points = stressPointsPerElement(body.asset.elementOrder);
   if (flow.correction && fs.reportUncorrectedPeak) {
     // The truncated modes alone, for the report (peak only: no seeds needed).
     scanStresses(body.asset.stressModes, body.stressBounds, ws.q, kNoStatic, ws.force,
-                 std::numeric_limits<double>::infinity(), fs.pruneStresses, ws.scanBuffers, scan);
+                 std::numeric_limits<double>::infinity(), fs.pruneStresses, ws.scanBuffers, scan, points);
     result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
   }
   scanStresses(body.asset.stressModes, body.stressBounds, ws.q, flow.correction ? ws.staticStress : kNoStatic,
-               ws.force, body.material.tensileStrengthPa, fs.pruneStresses, ws.scanBuffers, scan);
+               ws.force, body.material.tensileStrengthPa, fs.pruneStresses, ws.scanBuffers, scan, points);
   result.peakPrincipalStressPa = scan.peakPrincipalPa;
   if (!flow.correction) result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
   result.peakElement = scan.peakElement;
@@ -145,6 +146,7 @@ Status crackStage(const ImpactJob& job, const Flow& flow, ImpactWorkspace& ws, I
   const StressScan& scan = ws.scan;
   StressField field;
   field.stressModes = &body.asset.stressModes;
+  field.pointsPerElement = stressPointsPerElement(body.asset.elementOrder);
   field.q = ws.q.row(scan.peakInstant).transpose();
   field.forceN = ws.force[static_cast<size_t>(scan.peakInstant)];
   if (flow.correction) field.staticStress = &ws.staticStress;
@@ -242,6 +244,7 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   const FractureSettings& fs = *job.settings;
   ExactModesSettings es;
   es.modeCount = fs.modeCount > 0 ? std::min(fs.modeCount, fs.exactModeCount) : fs.exactModeCount;
+  es.elementOrder = parent->body->asset.elementOrder;  // a fragment keeps its parent's element
   const int modeCount = fs.modeCount;
   const DescriptorKind kind = fs.descriptor;
   const FragmentMatcher* matcher = job.matcher;

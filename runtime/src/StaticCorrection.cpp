@@ -2,14 +2,14 @@
 
 #include <Eigen/SparseCholesky>
 #include <cmath>
+#include <string>
 
 #include "brittle/runtime/FemAssembly.h"
 
 namespace brittle {
 
 struct StaticCorrection::Data {
-  TetMesh mesh;
-  Material material;
+  Eigen::Index femNodes = 0;
   SparseMatrixd mass;
   Eigen::MatrixXd rigid;        // Ψ: 3N by 6, M-orthonormal
   Eigen::MatrixXd massRigid;    // M Ψ
@@ -19,17 +19,26 @@ struct StaticCorrection::Data {
   Eigen::VectorXd lambdas;      // r, shifted by μ
   Eigen::SimplicialLDLT<SparseMatrixd> solver;
   Eigen::VectorXd inverseD;     // of the LDLᵀ factor (vectorD() returns a copy)
-  std::vector<Eigen::Matrix<double, 6, 12>> elementStress;  // C B_e per element
+  ElementStresses recovery;     // σ at each element's stress points from u
 };
 
 Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const Material& material, int modes) {
-  auto fem = assembleFem(asset.tetMesh, material, FemSettings{});
+  auto fem = assembleFem(asset.tetMesh, asset.elementOrder, material, FemSettings{});
   if (!fem) return fem.error();
+  auto nodes = femNodes(asset.tetMesh, asset.elementOrder);
+  if (!nodes) return nodes.error();
+  auto recovery = ElementStresses::make(asset.tetMesh, asset.elementOrder, material);
+  if (!recovery) return recovery.error();
+  if (asset.modal.modes.rows() != 3 * nodes.value().rows()) {
+    return makeError(ErrorCode::InvalidArgument, "static correction: the modes of '" + asset.name + "' have " +
+                                                     std::to_string(asset.modal.modes.rows()) + " rows, expected " +
+                                                     std::to_string(3 * nodes.value().rows()));
+  }
   auto data = std::make_shared<Data>();
-  data->mesh = asset.tetMesh;
-  data->material = material;
+  data->femNodes = nodes.value().rows();
+  data->recovery = std::move(recovery).value();
   data->mass = fem.value().mass;
-  data->rigid = rigidBodyModes(asset.tetMesh.nodes, data->mass);
+  data->rigid = rigidBodyModes(nodes.value(), data->mass);
   const int r = std::min<int>(modes, static_cast<int>(asset.modal.modes.cols()));
   data->modes = asset.modal.modes.leftCols(r);
   const double mu = 1e-6 * asset.modal.eigenvaluesRad2PerS2[0];
@@ -52,14 +61,6 @@ Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const
   }
   data->solver.matrixL().solveInPlace(data->reliefForward);
   data->modesMassRigid = data->modes.transpose() * data->massRigid;
-  const Eigen::Matrix<double, 6, 6> c = isotropicElasticity(material.youngsModulusPa, material.poissonRatio);
-  const TetMesh& m = asset.tetMesh;
-  data->elementStress.resize(static_cast<size_t>(m.tets.rows()));
-  for (Eigen::Index t = 0; t < m.tets.rows(); ++t) {
-    data->elementStress[static_cast<size_t>(t)] =
-        c * tetStrainDisplacement(m.nodes.row(m.tets(t, 0)).transpose(), m.nodes.row(m.tets(t, 1)).transpose(),
-                                  m.nodes.row(m.tets(t, 2)).transpose(), m.nodes.row(m.tets(t, 3)).transpose(), nullptr);
-  }
   return StaticCorrection(std::move(data));
 }
 
@@ -74,7 +75,7 @@ Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, do
                                          const Eigen::Vector3d& direction, Eigen::VectorXd& stress,
                                          double& compliance, Workspace& w) const {
   const Data& d = *mData;
-  const Eigen::Index dofs = 3 * d.mesh.nodes.rows();
+  const Eigen::Index dofs = 3 * d.femNodes;
   const Eigen::Index r = d.modes.cols();
   // Every product below writes into a sized buffer (noalias, fixed-size rigid coefficients). The
   // load touches a few nodes, so Ψᵀf and Φᵀf are sums over them.
@@ -83,7 +84,7 @@ Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, do
   Eigen::Matrix<double, 6, 1> rigid = Eigen::Matrix<double, 6, 1>::Zero();
   double sum = 0.0;
   for (const auto& [node, weight] : weights) {
-    if (node < 0 || node >= d.mesh.nodes.rows()) return makeError(ErrorCode::InvalidArgument, "static correction: node out of range");
+    if (node < 0 || node >= d.femNodes) return makeError(ErrorCode::InvalidArgument, "static correction: node out of range");
     const Eigen::Vector3d f = weight * direction;
     w.load.segment<3>(3 * node) += f;
     rigid.noalias() += d.rigid.middleRows<3>(3 * node).transpose() * f;
@@ -119,12 +120,7 @@ Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, do
   w.modal.array() /= d.lambdas.array();
   w.displacement.noalias() -= d.modes * w.modal;
   compliance = w.load.dot(w.displacement);
-  stress.resize(6 * d.mesh.tets.rows());
-  Eigen::Matrix<double, 12, 1> ue;
-  for (Eigen::Index t = 0; t < d.mesh.tets.rows(); ++t) {
-    for (int a = 0; a < 4; ++a) ue.segment<3>(3 * a) = w.displacement.segment<3>(3 * d.mesh.tets(t, a));
-    stress.segment<6>(6 * t).noalias() = d.elementStress[static_cast<size_t>(t)] * ue;
-  }
+  d.recovery.all(w.displacement, stress);
   return Ok{};
 }
 

@@ -64,10 +64,11 @@ Material makeMaterial(const std::string& name, double youngsPa, double nu, doubl
 }
 
 ObjectAsset makeObject(const std::string& name, const Material& material, int nx, int ny, int nz, int modeCount,
-                       uint64_t seed) {
+                       uint64_t seed, ElementOrder order = ElementOrder::P1) {
   Bits bits(seed);
   ObjectAsset o;
   o.name = name;
+  o.elementOrder = order;
   o.materialName = material.name;
   o.tetMesh = testing::makeBoxTetMesh(0.3, 0.2, 0.1, nx, ny, nz);
   // Jitter coordinates so they use all mantissa bits.
@@ -101,9 +102,9 @@ ObjectAsset makeObject(const std::string& name, const Material& material, int nx
     m.residuals(k) = bits.uniform(0, 1e-9);
   }
   m.orthonormalityError = bits.uniform(0, 1e-12);
-  m.modes.resize(3 * n, modeCount);
+  m.modes.resize(3 * femNodeCount(o.tetMesh, order), modeCount);
   for (Eigen::Index i = 0; i < m.modes.size(); ++i) m.modes.data()[i] = bits.anyFinite();
-  o.stressModes.resize(6 * t, modeCount);
+  o.stressModes.resize(6 * stressPointsPerElement(order) * t, modeCount);
   for (Eigen::Index i = 0; i < o.stressModes.size(); ++i) o.stressModes.data()[i] = bits.anyFinite();
   if (o.stressModes.size() > 1) {
     o.stressModes(0, 0) = -0.0;
@@ -138,7 +139,7 @@ Pack makePack() {
                    "e",
                    6.6e10, 0.17, 2400.3));  // UTF-8 name
   p.objects.push_back(makeObject("plate", p.materials[0], 3, 2, 1, 7, 11));
-  p.objects.push_back(makeObject("cup", p.materials[1], 2, 2, 2, 4, 12));
+  p.objects.push_back(makeObject("cup", p.materials[1], 2, 2, 2, 4, 12, ElementOrder::P2));
   return p;
 }
 
@@ -178,6 +179,7 @@ void expectSamePack(const Pack& a, const Pack& b) {
     SCOPED_TRACE("object " + x.name);
     EXPECT_EQ(x.name, y.name);
     EXPECT_EQ(x.materialName, y.materialName);
+    EXPECT_EQ(x.elementOrder, y.elementOrder);
     expectSameDoubles(x.tetMesh.nodes, y.tetMesh.nodes, "nodes");
     EXPECT_TRUE(x.tetMesh.tets == y.tetMesh.tets);
     EXPECT_TRUE(x.surfaceFaces == y.surfaceFaces);
@@ -519,7 +521,44 @@ TEST_F(PackTest, WrongVersion) {
     EXPECT_GE(H5Awrite(attr, H5T_NATIVE_INT, &version), 0);
     H5Aclose(attr);
   });
-  expectReadError(ErrorCode::PackVersionMismatch, "pack version 3");
+  expectReadError(ErrorCode::PackVersionMismatch, "pack version " + std::to_string(kPackVersion + 1));
+}
+
+TEST_F(PackTest, VersionTwoPacksAreReadWithLinearElements) {
+  // Before version 3 there was no element order: every object is P1.
+  Pack pack = makePack();
+  pack.objects.pop_back();  // the P2 object
+  ASSERT_TRUE(writePack(pack, mPath).ok());
+  editPack(mPath, [](hid_t f) {
+    const hid_t attr = H5Aopen(f, "version", H5P_DEFAULT);
+    ASSERT_GE(attr, 0);
+    const int version = 2;
+    EXPECT_GE(H5Awrite(attr, H5T_NATIVE_INT, &version), 0);
+    H5Aclose(attr);
+    ASSERT_GE(H5Ldelete(f, "/objects/element_order", H5P_DEFAULT), 0);
+  });
+  const Result<Pack> read = readPack(mPath);
+  ASSERT_TRUE(read.ok()) << read.error().message;
+  expectSamePack(pack, read.value());
+}
+
+TEST_F(PackTest, ElementOrderOtherThanOneOrTwoIsCorrupt) {
+  writeValidPack();
+  editPack(mPath, [](hid_t f) { writeElement<int32_t>(f, "/objects/element_order", H5T_NATIVE_INT32, {0}, 3); });
+  expectReadError(ErrorCode::PackCorrupt, "/objects/element_order");
+}
+
+TEST_F(PackTest, ModesOfTheWrongElementOrderAreRefused) {
+  // The P1 object declared P2: its modes lack the mid-edge nodes and its stress modes the corners.
+  writeValidPack();
+  editPack(mPath, [](hid_t f) { writeElement<int32_t>(f, "/objects/element_order", H5T_NATIVE_INT32, {0}, 2); });
+  expectReadError(ErrorCode::PackShapeMismatch, "/objects/modes");
+  Pack pack = makePack();
+  pack.objects[1].elementOrder = ElementOrder::P1;  // P2-sized modes declared P1: the writer refuses
+  const Status s = writePack(pack, mPath);
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().code, ErrorCode::InvalidArgument);
+  EXPECT_NE(s.error().message.find("modal.modes"), std::string::npos) << s.error().message;
 }
 
 TEST_F(PackTest, MissingDataset) {

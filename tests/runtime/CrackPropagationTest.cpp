@@ -143,6 +143,58 @@ TEST(CrackPropagation, PrunedScanEqualsTheFullScanOnRandomFields) {
   EXPECT_GT(withoutSeeds, 0);
 }
 
+TEST(CrackPropagation, ScanOfFourPointsPerElementNamesEachElementOnceByItsStrongestPoint) {
+  // P2 stress modes (the 4 corners of each element): pruned equals full, the peak is the largest
+  // σ₁ over every element's points, and the seeds are exactly the elements whose strongest point
+  // reaches σ_t at the peak instant, each once, strongest first.
+  constexpr int kPoints = 4;
+  for (uint64_t rngSeed : {21u, 22u, 23u}) {
+    SCOPED_TRACE(::testing::Message() << "seed " << rngSeed);
+    std::mt19937_64 rng(rngSeed);
+    std::normal_distribution<double> g(0.0, 1.0);
+    const int elements = 120, modes = 6, instants = 20;
+    MatrixXdRow stressModes(6 * kPoints * elements, modes);
+    for (Eigen::Index i = 0; i < stressModes.size(); ++i) stressModes.data()[i] = 1e6 * g(rng);
+    Eigen::MatrixXd q(instants, modes);
+    for (Eigen::Index i = 0; i < q.size(); ++i) q.data()[i] = g(rng);
+    Eigen::VectorXd staticStress(6 * kPoints * elements);
+    for (Eigen::Index i = 0; i < staticStress.size(); ++i) staticStress[i] = 1e3 * g(rng);
+    std::vector<double> force(instants);
+    for (double& f : force) f = 100.0 * std::abs(g(rng));
+    const Eigen::MatrixXd bounds = stressModeBounds(stressModes, modes);
+    ASSERT_EQ(bounds.rows(), kPoints * elements);
+    const double threshold = 3e6;
+    const StressScan full = scanStresses(stressModes, bounds, q, staticStress, force, threshold, false, kPoints);
+    const StressScan pruned = scanStresses(stressModes, bounds, q, staticStress, force, threshold, true, kPoints);
+    EXPECT_EQ(pruned.peakPrincipalPa, full.peakPrincipalPa);
+    EXPECT_EQ(pruned.peakElement, full.peakElement);
+    EXPECT_EQ(pruned.peakInstant, full.peakInstant);
+    EXPECT_EQ(pruned.seeds, full.seeds);
+    ASSERT_GE(full.peakElement, 0);
+    ASSERT_LT(full.peakElement, elements);
+
+    StressField field{&stressModes, q.row(full.peakInstant).transpose(), &staticStress,
+                      force[static_cast<size_t>(full.peakInstant)], kPoints};
+    auto strongest = [&](int e) {  // the definition: the largest σ₁ over the element's points
+      double best = -std::numeric_limits<double>::infinity();
+      for (int c = 0; c < kPoints; ++c) best = std::max(best, maxPrincipalStress(field.atPoint(kPoints * e + c)));
+      return best;
+    };
+    const double peak = full.peakPrincipalPa;
+    EXPECT_NEAR(strongest(full.peakElement), peak, 1e-12 * peak);
+    EXPECT_NEAR(maxPrincipalStress(field.at(full.peakElement)), peak, 1e-12 * peak);
+    std::vector<int32_t> expected;
+    for (int e = 0; e < elements; ++e)
+      if (strongest(e) >= threshold) expected.push_back(e);
+    std::vector<int32_t> seeds = full.seeds;
+    ASSERT_FALSE(seeds.empty());
+    for (size_t i = 1; i < seeds.size(); ++i) EXPECT_LE(strongest(seeds[i]), strongest(seeds[i - 1]) * (1 + 1e-12));
+    std::sort(seeds.begin(), seeds.end());
+    EXPECT_EQ(std::adjacent_find(seeds.begin(), seeds.end()), seeds.end()) << "an element seeded twice";
+    EXPECT_EQ(seeds, expected);
+  }
+}
+
 // A uniform tension σ_xx along a box of 8 × 2 × 2 cells (0.05 m each): every element is a seed
 // and the principal direction is x everywhere, so one crack (maxCracks = 1, no noise) grows along
 // the plane x = 0.0375 through the centroid of element 0 and costs G_c × 0.1 × 0.1 m² to cross the

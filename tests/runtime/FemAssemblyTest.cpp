@@ -255,6 +255,33 @@ TEST(FemAssemblyP2, QuadraticFieldIsRepresentedExactly) {
   }
 }
 
+TEST(FemAssemblyP2, ElementStressesRecoverTheStressModesOfAnyDisplacementAtEitherOrder) {
+  // The static correction's and the full-FEM reference's stress recovery equals the bake's stress
+  // modes for the same displacement, point by point, and the order dispatch builds the same
+  // FEM nodes the pack reader counts.
+  const TetMesh mesh = testing::makeBoxTetMesh(0.3, 0.2, 0.1, 3, 2, 1);
+  const Material m = presetGlass();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(-1e-6, 1e-6);
+  for (const ElementOrder order : {ElementOrder::P1, ElementOrder::P2}) {
+    const Points nodes = femNodes(mesh, order).value();
+    EXPECT_EQ(nodes.rows(), femNodeCount(mesh, order));
+    EXPECT_EQ(assembleFem(mesh, order, m, {}).value().stiffness.rows(), 3 * nodes.rows());
+    MatrixXdRow u(3 * nodes.rows(), 1);
+    for (Eigen::Index i = 0; i < u.rows(); ++i) u(i, 0) = unit(rng);
+    const MatrixXdRow modes = computeStressModes(mesh, order, m, u).value();
+    const auto recovery = ElementStresses::make(mesh, order, m);
+    ASSERT_TRUE(recovery.ok()) << recovery.error().message;
+    EXPECT_EQ(recovery.value().pointsPerElement(), stressPointsPerElement(order));
+    EXPECT_EQ(recovery.value().femNodeCount(), nodes.rows());
+    Eigen::VectorXd stress;
+    recovery.value().all(u.col(0), stress);
+    ASSERT_EQ(stress.size(), modes.rows());
+    EXPECT_LE((stress - modes.col(0)).cwiseAbs().maxCoeff(), 1e-9 * modes.cwiseAbs().maxCoeff()) << elementOrderName(order);
+  }
+  EXPECT_EQ(femNodeCount(mesh, ElementOrder::P2), quadraticBox(0.3, 0.2, 0.1, 3, 2, 1).nodes.rows());
+}
+
 TEST(FemAssemblyP2, CornerStressesBoundTheStressEverywhereInTheElement) {
   // The stress of a straight-sided P2 tet is linear, so any convex function of it (the largest
   // principal stress, the norm) peaks at a corner: what the stress scan's bounds rely on.

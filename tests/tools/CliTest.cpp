@@ -78,9 +78,11 @@ TEST_F(CliTest, BakeThenInspectJson) {
   ASSERT_EQ(inspect.exitCode, 0) << inspect.out;
   const auto doc = nlohmann::json::parse(inspect.out);
   EXPECT_EQ(doc["format"], "brittle-pack");
-  EXPECT_EQ(doc["version"], 2);
+  EXPECT_EQ(doc["version"], 3);
   const auto& o = doc["objects"][0];
   EXPECT_EQ(o["name"], "box");
+  EXPECT_EQ(o["mesh"]["element"], "p1");
+  EXPECT_EQ(o["mesh"]["fem_nodes"], o["mesh"]["nodes"]);
   EXPECT_EQ(o["material"]["name"], "glass");
   EXPECT_EQ(o["modes"]["count"], 8);
   EXPECT_LE(o["modes"]["max_residual"].get<double>(), 1e-8);
@@ -91,6 +93,15 @@ TEST_F(CliTest, BakeThenInspectJson) {
   }
   // A box's edges are real features: nothing to adjust, nothing printed.
   EXPECT_EQ(bake.out.find("adjusted "), std::string::npos) << bake.out;
+  // Quadratic tets: one more FEM node per edge; an unknown element is a usage error.
+  const CliRun p2 = run("bake --mesh " + path("box.off") + " --material glass --tets 300 --modes 6 --element p2 --quiet --out " +
+                        path("p2.h5"));
+  ASSERT_EQ(p2.exitCode, 0) << p2.out;
+  const auto p2doc = nlohmann::json::parse(run("inspect " + path("p2.h5") + " --json").out);
+  const auto& p2mesh = p2doc["objects"][0]["mesh"];
+  EXPECT_EQ(p2mesh["element"], "p2");
+  EXPECT_GT(p2mesh["fem_nodes"].get<int64_t>(), p2mesh["nodes"].get<int64_t>() + p2mesh["tets"].get<int64_t>());
+  EXPECT_EQ(run("bake --mesh " + path("box.off") + " --material glass --element p3 --out " + path("x.h5")).exitCode, 2);
   // The meshing-run budget is at least one run.
   const CliRun noRuns = run("bake --mesh " + path("box.off") + " --material glass --meshing-runs 0 --out " + path("x.h5"));
   EXPECT_EQ(noRuns.exitCode, 2) << noRuns.out;

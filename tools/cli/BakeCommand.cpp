@@ -25,6 +25,7 @@ struct BakeOptions {
   bool repair = false;
   double repairVoxel = 0.0;
   bool lumped = false;
+  std::string element = "p1";
   bool noFeatures = false;
   double sliverBound = 5.0;
   int meshingRuns = TetMeshSettings{}.meshingRuns;
@@ -62,6 +63,9 @@ Runner addBakeCommand(CLI::App& app) {
                   "Mesh_3 runs allowed for the final mesh: when one splits a thin part or makes a degenerate tet, "
                   "the next adjusts (sharp features off, local size, more tets); 1 = no retry")
       ->capture_default_str()->check(CLI::Range(1, 8));
+  cmd->add_option("--element", o->element,
+                  "Finite element: p1 (4-node tets) or p2 (10-node tets; thin parts, which lock in bending with p1)")
+      ->check(CLI::IsMember({"p1", "p2"}))->capture_default_str();
   cmd->add_flag("--lumped-mass", o->lumped, "Use a lumped (diagonal) mass matrix instead of the consistent one");
   cmd->add_option("--factorization", o->factorization, "Sparse factorisation of K - sigma M")
       ->check(CLI::IsMember({"cholmod", "eigen"}))->capture_default_str();
@@ -72,7 +76,7 @@ Runner addBakeCommand(CLI::App& app) {
   cmd->get_option("--cell-size")->excludes(cmd->get_option("--tets"));
   // A manifest carries its own per-object settings: refuse options it would silently override.
   for (const char* perObject : {"--material", "--name", "--tets", "--cell-size", "--modes", "--repair", "--repair-voxel",
-                                "--lumped-mass", "--no-sharp-features", "--sliver-bound", "--meshing-runs", "--seed"}) {
+                                "--element", "--lumped-mass", "--no-sharp-features", "--sliver-bound", "--meshing-runs", "--seed"}) {
     cmd->get_option(perObject)->excludes(manifest);
   }
 
@@ -110,6 +114,7 @@ Runner addBakeCommand(CLI::App& app) {
       s.repair = o->repair;
       s.repairSettings.voxelSizeM = o->repairVoxel;
       s.fem.lumpedMass = o->lumped;
+      s.elementOrder = *parseElementOrder(o->element);
       objects.push_back(std::move(s));
     }
     for (auto& s : objects) s.modal.factorization = o->factorization == "eigen" ? Factorization::EigenLdlt : Factorization::Cholmod;

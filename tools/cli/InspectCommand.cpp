@@ -85,6 +85,8 @@ nlohmann::json inspectJson(const Pack& pack) {
     j["material"] = material ? materialJson(*material) : nlohmann::json{{"name", o.materialName}};
     j["mesh"] = {{"nodes", q.nodeCount},
                  {"tets", q.tetCount},
+                 {"element", elementOrderName(o.elementOrder)},
+                 {"fem_nodes", o.modal.modes.rows() / 3},
                  {"surface_faces", q.surfaceFaceCount},
                  {"min_dihedral_deg", q.minDihedralDeg},
                  {"max_dihedral_deg", q.maxDihedralDeg},
@@ -141,8 +143,8 @@ void printInspection(const Pack& pack, std::ostream& out) {
           << mat->tensileStrengthPa / 1e6 << " MPa, G_c " << mat->fractureEnergyJPerM2 << " J/m2, Rayleigh ("
           << mat->rayleighAlphaPerS << " 1/s, " << mat->rayleighBetaS << " s)\n";
     }
-    out << "  tet mesh      " << q.nodeCount << " nodes, " << q.tetCount << " tets, " << q.surfaceFaceCount
-        << " surface faces; dihedral " << q.minDihedralDeg << "-" << q.maxDihedralDeg << " deg, radius-edge max "
+    out << "  tet mesh      " << q.nodeCount << " nodes, " << q.tetCount << " " << elementOrderName(o.elementOrder)
+        << " tets (" << o.modal.modes.rows() / 3 << " FEM nodes), " << q.surfaceFaceCount << " surface faces; dihedral " << q.minDihedralDeg << "-" << q.maxDihedralDeg << " deg, radius-edge max "
         << q.maxRadiusEdgeRatio << " (mean " << q.meanRadiusEdgeRatio << ")\n";
     out << "  mass          " << mp.massKg << " kg, volume " << mp.volumeM3 << " m3, centre of mass ("
         << mp.centerOfMassM.x() << ", " << mp.centerOfMassM.y() << ", " << mp.centerOfMassM.z() << ") m\n";

@@ -20,9 +20,10 @@
 namespace brittle {
 
 inline constexpr const char* kPackFormatName = "brittle-pack";
-/// Version 2 added the fragment database (/database). The reader also reads version 1 packs,
-/// which have none.
-inline constexpr int kPackVersion = 2;
+/// Version 2 added the fragment database (/database). Version 3 added each object's element order
+/// (element_order: 1 = P1, 2 = P2; ObjectAsset.h). The reader also reads versions 1 and 2: their
+/// objects are P1, and version 1 packs have no database.
+inline constexpr int kPackVersion = 3;
 inline constexpr int kOldestReadablePackVersion = 1;
 
 struct Pack {

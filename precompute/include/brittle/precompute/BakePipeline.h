@@ -25,6 +25,8 @@ struct ObjectBakeSettings {
   bool repair = false;               ///< rebuild the surface through an OpenVDB level set first
   RepairSettings repairSettings;
   TetMeshSettings tetMesh;
+  /// The finite element (ObjectAsset.h): P2 for thin parts, which lock in bending with P1.
+  ElementOrder elementOrder = ElementOrder::P1;
   FemSettings fem;
   ModalSettings modal;               ///< shiftRad2PerS2 == 0 means defaultShift()
 };

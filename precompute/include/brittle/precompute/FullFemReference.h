@@ -12,6 +12,7 @@
 
 #include "brittle/database/Material.h"
 #include "brittle/core/MeshTypes.h"
+#include "brittle/database/ObjectAsset.h"
 #include "brittle/core/Result.h"
 #include "brittle/runtime/HertzContact.h"
 
@@ -21,10 +22,11 @@ struct FullFemSettings {
   int stepsPerContact = 100;   ///< time step = t_c / stepsPerContact
   double durationS = 0.0;      ///< simulated time; ≤ 0: t_c plus as long again as `extraS`
   double extraS = 0.0;         ///< with durationS ≤ 0: time simulated after the contact
+  ElementOrder elementOrder = ElementOrder::P1;  ///< the object's (ObjectAsset::elementOrder)
 };
 
 struct FullFemResult {
-  double peakPrincipalPa = 0.0;  ///< largest principal stress over elements and steps
+  double peakPrincipalPa = 0.0;  ///< largest principal stress over elements' stress points and steps
   int32_t peakElement = -1;
   double peakTimeS = 0.0;
   int64_t steps = 0;

@@ -37,7 +37,7 @@ using Voigt = Eigen::Matrix<double, 6, 1>;
 /// Largest principal stress (Pa) of a Voigt stress (xx, yy, zz, yz, xz, xy), and its unit direction.
 double maxPrincipalStress(const Voigt& stress, Eigen::Vector3d* direction = nullptr);
 
-/// ‖D S_e,j‖ per element and mode (#T by modes): the stress bound per unit |q_j|.
+/// ‖D S_e,j‖ per stress point and mode (PT by modes): the stress bound per unit |q_j|.
 Eigen::MatrixXd stressModeBounds(const MatrixXdRow& stressModes, int modes);
 
 struct StressScan {
@@ -48,12 +48,15 @@ struct StressScan {
   int64_t evaluations = 0;        ///< element stresses evaluated
 };
 
-/// Scans σ₁ over every element and instant. q: K by r (r ≤ columns of stressModes); bounds from
-/// stressModeBounds (T by r); staticStress (6T, per newton, may be empty) and forceN (K) add the static
-/// correction. Pruned and unpruned scans return the same peak, element, instant and seeds.
+/// Scans σ₁ over every stress point and instant. stressModes: 6PT by ≥ r, P = pointsPerElement
+/// (ObjectAsset::stressModes: 1 for P1, the 4 corners for P2); q: K by r; bounds from
+/// stressModeBounds (PT by r); staticStress (6PT, per newton, may be empty) and forceN (K) add the
+/// static correction. The peak and the seeds name elements: an element's σ₁ is the largest at its
+/// points (for P2 that is its maximum over the element, the stress being linear in it). Pruned and
+/// unpruned scans return the same peak, element, instant and seeds.
 StressScan scanStresses(const MatrixXdRow& stressModes, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
                         const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double thresholdPa,
-                        bool prune);
+                        bool prune, int pointsPerElement = 1);
 
 /// Buffers of scanStresses, kept between calls so that a scan allocates nothing once they have
 /// grown to the largest body scanned.
@@ -65,6 +68,7 @@ struct StressScanWorkspace {
   std::vector<std::pair<double, int32_t>> heap, seeds;
   std::vector<std::vector<std::pair<double, int32_t>>> rangeSeeds;  ///< per fixed range of elements
   std::vector<int64_t> rangeEvaluations;
+  std::vector<char> seedTaken;                 ///< T, when an element has several stress points
 };
 
 /// The same scan into `out` (its seeds keep their capacity), with the buffers of `workspace`. The
@@ -73,7 +77,7 @@ struct StressScanWorkspace {
 /// threads.
 void scanStresses(const MatrixXdRow& stressModes, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
                   const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double thresholdPa, bool prune,
-                  StressScanWorkspace& workspace, StressScan& out);
+                  StressScanWorkspace& workspace, StressScan& out, int pointsPerElement = 1);
 
 struct CrackSettings {
   int maxCracks = 6;                     ///< seeds that start a crack, strongest first
@@ -123,11 +127,15 @@ struct FractureState {
 
 /// The stress field at one instant: σ_e = S_e q (+ σ̂_e F).
 struct StressField {
-  const MatrixXdRow* stressModes = nullptr;  ///< 6T by ≥ r
+  const MatrixXdRow* stressModes = nullptr;  ///< 6PT by ≥ r
   Eigen::VectorXd q;                         ///< r modal coordinates
-  const Eigen::VectorXd* staticStress = nullptr;  ///< 6T per newton, or null
+  const Eigen::VectorXd* staticStress = nullptr;  ///< 6PT per newton, or null
   double forceN = 0.0;
+  int pointsPerElement = 1;                  ///< P: 1 (P1) or 4 (P2, the corners)
+  /// The element's stress: at its point of largest σ₁ (the one point of a P1 element).
   Voigt at(int32_t element) const;
+  /// The stress at one stress point (row block `point` of stressModes).
+  Voigt atPoint(Eigen::Index point) const;
 };
 
 /// Buffers of crack growth, labelling and crumb merging, kept between calls: once they have grown

@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <vector>
 
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
@@ -88,6 +89,46 @@ inline constexpr int kQuadraticTetStressPoints = 4;
 /// the stress (Pa, Voigt) at corner c (local node c, c = 0..3) of element e per unit modal
 /// coordinate. modes is 3N by r. The mesh must pass assembleFem.
 MatrixXdRow computeStressModes(const QuadraticTetMesh& mesh, const Material& material, const MatrixXdRow& modes);
+
+/// The FEM nodes of a linear tet mesh at an element order: its own nodes (P1), or those followed by
+/// the mid-edge nodes of makeQuadraticTetMesh (P2). Errors: those of makeQuadraticTetMesh.
+Result<Points> femNodes(const TetMesh& mesh, ElementOrder order);
+
+/// K and M of a linear tet mesh at an element order (3 × femNodes rows). Errors: those of the
+/// assembleFem above for that order, and of makeQuadraticTetMesh.
+Result<FemSystem> assembleFem(const TetMesh& mesh, ElementOrder order, const Material& material,
+                              const FemSettings& settings);
+
+/// Stress modes of a linear tet mesh at an element order (ObjectAsset::stressModes: 6T by r for
+/// P1, 24T by r for P2); modes is 3 × femNodes by r. Errors: those of makeQuadraticTetMesh.
+Result<MatrixXdRow> computeStressModes(const TetMesh& mesh, ElementOrder order, const Material& material,
+                                       const MatrixXdRow& modes);
+
+/// Stresses at every element's stress points (stressPointsPerElement) from nodal displacements:
+/// the recovery of the static correction and of the full-FEM reference. P1 keeps C B_e (6 by 12)
+/// per element; P2 keeps each element's barycentric gradients and forms B at its corners when
+/// asked, a tenth of the memory of 4 × (6 by 30) matrices.
+class ElementStresses {
+ public:
+  /// Errors: InvalidMaterial, those of makeQuadraticTetMesh (P2).
+  static Result<ElementStresses> make(const TetMesh& mesh, ElementOrder order, const Material& material);
+  int pointsPerElement() const { return stressPointsPerElement(mOrder); }
+  Eigen::Index elementCount() const { return mElements.rows(); }
+  /// 3 × this is the length of a displacement vector.
+  Eigen::Index femNodeCount() const { return mFemNodes; }
+  /// The 6P stresses (Pa, Voigt, point by point) of element e for displacements u (3 × femNodeCount, m).
+  void element(Eigen::Index e, const Eigen::VectorXd& u, double* out) const;
+  /// Every element's: stress is resized to 6PT.
+  void all(const Eigen::VectorXd& u, Eigen::VectorXd& stress) const;
+
+ private:
+  ElementOrder mOrder = ElementOrder::P1;
+  Eigen::Index mFemNodes = 0;
+  Eigen::Matrix<double, 6, 6> mElasticity;
+  Eigen::Matrix<int32_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> mElements;  // #T by 4 or 10 FEM nodes
+  std::vector<Eigen::Matrix<double, 6, 12>> mLinear;       // P1: C B_e
+  std::vector<Eigen::Matrix<double, 4, 3>> mGradients;    // P2: ∇λ per element (rows)
+};
 
 /// The six rigid-body modes of the mesh (3 translations, 3 infinitesimal rotations about the
 /// centroid of the nodes), as a 3N by 6 matrix with M-orthonormal columns. Nodal values of the

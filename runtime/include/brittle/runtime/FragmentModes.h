@@ -53,10 +53,11 @@ struct ExactModesSettings {
   int modeCount = 40;        ///< elastic modes kept (fewer if the mesh has fewer degrees of freedom)
   int denseMaxDof = 240;     ///< at or below this 3N, Eigen's dense solver; above, Spectra
   double tolerance = 1e-10;  ///< Spectra's relative tolerance on the Ritz values
+  ElementOrder elementOrder = ElementOrder::P1;  ///< the runtime passes the parent's
 };
 
-/// The fragment as an object the runtime can break: the sub-mesh, its modes and stress modes,
-/// with `material`. massProperties are those of the sub-mesh's boundary. The asset's name is
+/// The fragment as an object the runtime can break: the sub-mesh, its modes and stress modes at
+/// settings.elementOrder, with `material`. massProperties are those of the sub-mesh's boundary. The asset's name is
 /// `name`. Errors: InvalidArgument (settings, a sub-mesh with fewer than 4 nodes),
 /// DegenerateElement, FactorizationFailed, EigenNotConverged, RigidModeMismatch (not exactly six
 /// near-zero modes: the sub-mesh hangs together by an edge or a node).

@@ -10,8 +10,9 @@
 // modal stress as σ_e(t) = S_e q(t) + σ̂_e F(t).
 //
 // K and M are assembled and K + μM is factorised (sparse LDLᵀ) once per object when it is loaded;
-// L⁻¹PMΨ (the inertia relief's share of every forward solve) and each element's C B_e (6 × 12) are
-// kept. An impact then solves with its own sparse load: a forward solve over the load's reach in
+// L⁻¹PMΨ (the inertia relief's share of every forward solve) and each element's stress recovery
+// (ElementStresses: C B_e for P1, the corners' B for P2) are kept. The load acts on corner nodes, so
+// for P2 the mid-edge nodes carry none: the same resultant, lumped to the corners. An impact then solves with its own sparse load: a forward solve over the load's reach in
 // the elimination tree, one full backward solve, and one pass over the elements. With a Workspace
 // reused across impacts, that costs no heap allocation.
 #pragma once
@@ -38,7 +39,7 @@ class StaticCorrection {
     Eigen::VectorXd load, displacement, scratch, modal;
   };
 
-  /// Stress per newton (6T, Voigt, Pa/N) of the truncated modes for a unit force along `direction`
+  /// Stress per newton (6PT as ObjectAsset::stressModes, Voigt, Pa/N) of the truncated modes for a unit force along `direction`
   /// spread over nodes with weights summing to 1, and the work f·u_t (m/N) of that load on them.
   /// `stress` and the workspace keep their storage between calls of the same object.
   /// Errors: InvalidArgument (a node out of range, weights that do not sum to 1).
