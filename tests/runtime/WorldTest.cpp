@@ -131,6 +131,52 @@ TEST_F(WorldTest, BreaksAboveAThresholdWithClosedFragmentsThatConserveVolumeAndM
   EXPECT_GT(r.contact.durationS, 0.0);
 }
 
+TEST(WorldP2Test, AQuadraticPlateBreaksIntoClosedFragmentsThatKeepTheirElement) {
+  // The default pack's plate is P2: its impact scans the elements' corners, its static correction
+  // solves with the P2 K, and the exact path gives each fragment its own P2 model.
+  auto pack = testing::makeGlassPlatePack(300, 12, 0.15, ElementOrder::P2);
+  ASSERT_TRUE(pack) << pack.error().message;
+  const ObjectAsset plate = pack.value().objects[0];
+  ASSERT_EQ(plate.elementOrder, ElementOrder::P2);
+  WorldSettings settings;
+  settings.fracture.exactModesMaxTets = 1000000;  // every fragment that is not debris
+  settings.fracture.exactModeCount = 4;           // a few modes: the element is the point here
+  auto world = World::create(std::move(pack).value(), settings);
+  ASSERT_TRUE(world) << world.error().message;
+  ImpactDesc d;
+  d.object = world.value().addObject({.asset = "plate"}).value();
+  d.pointWorld = Eigen::Vector3d(0.07, 0.08, 0.01);
+  d.normalWorld = Eigen::Vector3d::UnitZ();
+  d.speedMps = 60.0;
+  d.impactorMassKg = 0.1;
+  d.impactorRadiusM = 0.02;
+  auto hit = world.value().impact(d);
+  ASSERT_TRUE(hit) << hit.error().message;
+  const ImpactResult& r = hit.value();
+  ASSERT_TRUE(r.broken);
+  EXPECT_TRUE(r.staticCorrectionUsed);
+  ASSERT_GE(r.peakElement, 0);
+  EXPECT_LT(r.peakElement, plate.tetMesh.tets.rows());
+  const double volume = computeTetMassProperties(plate.tetMesh, 1.0).volumeM3;
+  double sum = 0.0;
+  int exact = 0;
+  for (const FragmentResult& f : r.fragments) {
+    const Status valid = validateSurfaceMesh(f.surface);
+    EXPECT_TRUE(valid) << valid.error().message;
+    sum += f.massProperties.volumeM3;
+    if (!f.exactModes) continue;
+    ++exact;
+    const ObjectAsset& a = *world.value().objectAsset(f.object).value();
+    EXPECT_EQ(a.elementOrder, ElementOrder::P2);
+    EXPECT_EQ(a.modal.modes.rows(), 3 * femNodeCount(a.tetMesh, ElementOrder::P2));
+    EXPECT_EQ(a.stressModes.rows(), 24 * a.tetMesh.tets.rows());
+    EXPECT_GT(a.modal.frequenciesHz[0], 0.0);
+    EXPECT_LT(a.modal.residuals.maxCoeff(), 1e-6);
+  }
+  EXPECT_GE(exact, 2);
+  EXPECT_NEAR(sum, volume, 1e-9 * volume);
+}
+
 TEST_F(WorldTest, SameSeedSameFragmentsOtherSeedOtherCracks) {
   auto run = [&](uint64_t seed) {
     WorldSettings s;

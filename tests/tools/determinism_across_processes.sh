@@ -5,7 +5,8 @@
 # loader allocates first). Checked:
 #   1. a fragment-database bake (bake-db) with 1, 2 and 1 worker threads gives the same pack data;
 #   2. a bake of the four default objects (the default manifest's meshes and materials, at fewer
-#      elements and modes) with a small database gives the same pack data;
+#      elements and modes, the plate in P2 as in the default pack) with a small database gives the same
+#      pack data;
 # (pack data: every dataset and attribute bit for bit, the wall-clock bake timings aside;
 # compare_packs.py);
 #   3. one breaking impact on each object (the main job's four impacts) gives the same fracture
@@ -51,7 +52,7 @@ same_packs "bake-db (threads 1, 2, 1)" "$work/db1.h5" "$work/db2.h5" "$work/db3.
 cat > "$work/manifest.json" <<JSON
 {
   "objects": [
-    { "name": "glass-plate", "mesh": "$src/assets/meshes/plate.off", "material": "glass", "tets": 2000, "modes": 12 },
+    { "name": "glass-plate", "mesh": "$src/assets/meshes/plate.off", "material": "glass", "tets": 1000, "modes": 12, "element": "p2" },
     { "name": "porcelain-vase", "mesh": "$src/assets/meshes/vase.off", "material": "porcelain", "tets": 1500, "modes": 12 },
     { "name": "brick", "mesh": "$src/assets/meshes/brick.off", "material": "concrete", "tets": 1000, "modes": 12 },
     { "name": "stone-ball", "mesh": "$src/assets/meshes/ball.off", "material": "stone", "tets": 1000, "modes": 12 }

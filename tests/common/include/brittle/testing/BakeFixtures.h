@@ -19,10 +19,13 @@ inline const Material& presetGlass() {
 }
 
 /// A pack of one object named "plate": a preset-glass plate sideM × sideM × 0.01 m (the box
-/// [0, sideM]² × [0, 0.01]) of about `targetTets` tets with `modes` modes, and its material.
-inline Result<Pack> makeGlassPlatePack(int64_t targetTets, int modes, double sideM = 0.3) {
+/// [0, sideM]² × [0, 0.01]) of about `targetTets` tets of the given element with `modes` modes,
+/// and its material.
+inline Result<Pack> makeGlassPlatePack(int64_t targetTets, int modes, double sideM = 0.3,
+                                       ElementOrder order = ElementOrder::P1) {
   ObjectBakeSettings b;
   b.name = "plate";
+  b.elementOrder = order;
   b.material = presetGlass();
   b.tetMesh.targetTets = targetTets;
   b.modal.modeCount = modes;
