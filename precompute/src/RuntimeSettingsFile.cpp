@@ -52,6 +52,8 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
       s.debrisVolumeFraction = f;
     } else if (key == "exact_modes_max_tets") {
       if (Status st = integer(key, s.exactModesMaxTets); !st) return st.error();
+    } else if (key == "exact_modes_max_dof") {
+      if (Status st = integer(key, s.exactModesMaxDof); !st) return st.error();
     } else if (key == "exact_mode_count") {
       if (Status st = integer(key, s.exactModeCount); !st) return st.error();
       if (s.exactModeCount < 1) return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"exact_mode_count\" must be ≥ 1");
@@ -76,6 +78,7 @@ std::string runtimeSettingsJson(const FractureSettings& s) {
   const nlohmann::json doc = {{"descriptor", descriptorKindName(s.descriptor)},
                               {"debris_volume_fraction", s.debrisVolumeFraction},
                               {"exact_modes_max_tets", s.exactModesMaxTets},
+                              {"exact_modes_max_dof", s.exactModesMaxDof},
                               {"exact_mode_count", s.exactModeCount},
                               {"modes", s.modeCount}};
   return doc.dump(2) + "\n";

@@ -20,6 +20,14 @@ const Result<StaticCorrection>& Body::staticCorrection() const {
   return *mCorrection;
 }
 
+void Body::adoptStaticCorrection(Result<StaticCorrection> correction) {
+  scheduleStaticCorrection();
+  std::call_once(mCorrectionOnce, [&] {
+    mCorrection.emplace(std::move(correction));
+    mCorrectionReady.store(true, std::memory_order_release);
+  });
+}
+
 const TetMoments& Body::tetMoments() const {
   std::call_once(mMomentsOnce, [this] { mTetMoments = tetVolumeMoments(asset.tetMesh, centreM); });
   return mTetMoments;
@@ -51,7 +59,8 @@ const Result<std::shared_ptr<const Body>>& BodySource::get() const {
   return *mBody;
 }
 
-Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount) {
+Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount,
+                                             const ExactModesFactor* factor) {
   const int points = stressPointsPerElement(asset.elementOrder);
   if (asset.modal.modes.cols() == 0 || asset.stressModes.rows() != 6 * points * asset.tetMesh.tets.rows()) {
     return makeError(ErrorCode::InvalidArgument,
@@ -107,6 +116,12 @@ Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& 
   body->sizeM = (hi - lo).norm();
   body->centreM = 0.5 * (lo + hi);
   body->asset = std::move(asset);
+  if (factor && factor->factor) {
+    auto built = StaticCorrection::build(body->asset, material, body->modes, factor->fem, factor->factor,
+                                         -factor->shiftRad2PerS2);
+    if (!built) built = Error{built.error().code, "object '" + body->asset.name + "': " + built.error().message};
+    body->adoptStaticCorrection(std::move(built));
+  }
   return std::shared_ptr<const Body>(std::move(body));
 }
 

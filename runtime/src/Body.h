@@ -19,6 +19,7 @@
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
 #include "brittle/core/Result.h"
+#include "brittle/runtime/FragmentModes.h"
 #include "brittle/runtime/FragmentSurfaces.h"
 #include "brittle/runtime/StaticCorrection.h"
 #include "brittle/runtime/TetTopology.h"
@@ -52,6 +53,9 @@ struct Body {
   /// how far a background build has got.
   bool staticCorrectionScheduled() const { return mCorrectionScheduled.load(std::memory_order_acquire); }
   void scheduleStaticCorrection() const { mCorrectionScheduled.store(true, std::memory_order_release); }
+  /// Installs a static correction built elsewhere (makeBody, from the exact path's factor) while
+  /// the body is still being made: it then counts as built and scheduled.
+  void adoptStaticCorrection(Result<StaticCorrection> correction);
 
  private:
   mutable std::once_flag mCorrectionOnce;
@@ -82,9 +86,12 @@ class BodySource {
   mutable std::optional<Result<std::shared_ptr<const Body>>> mBody;
 };
 
-/// Builds a body with the first `modeCount` stored modes (0: all). Errors: InvalidArgument (no
+/// Builds a body with the first `modeCount` stored modes (0: all). With `factor` (the exact
+/// path's, holding a factorisation), its static correction is built at once from that factor
+/// (μ = −σ) instead of a second factorisation on its first impact. Errors: InvalidArgument (no
 /// modal data, stress modes of the wrong size, a zero-frequency elastic mode), those of
 /// buildTetTopology.
-Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount);
+Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount,
+                                             const ExactModesFactor* factor = nullptr);
 
 }  // namespace brittle::detail

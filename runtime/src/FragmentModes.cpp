@@ -36,9 +36,11 @@ class ShiftInvertOp {
   const Eigen::SimplicialLDLT<SparseMatrixd>& mFactor;
 };
 
-// Lowest `count` eigenpairs of K φ = λ M φ, ascending, M-normalised.
+// Lowest `count` eigenpairs of K φ = λ M φ, ascending, M-normalised; `factor` gets the sparse
+// path's factorisation of K − σM (null on the dense path).
 Status lowestEigenpairs(const FemSystem& fem, int count, double sigma, const ExactModesSettings& s,
-                        Eigen::VectorXd& values, Eigen::MatrixXd& vectors) {
+                        Eigen::VectorXd& values, Eigen::MatrixXd& vectors,
+                        std::shared_ptr<const Eigen::SimplicialLDLT<SparseMatrixd>>& factorOut) {
   const Eigen::Index n = fem.stiffness.rows();
   if (n <= s.denseMaxDof) {
     Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> dense(Eigen::MatrixXd(fem.stiffness),
@@ -48,7 +50,8 @@ Status lowestEigenpairs(const FemSystem& fem, int count, double sigma, const Exa
     vectors = dense.eigenvectors().leftCols(count);
     return Ok{};
   }
-  Eigen::SimplicialLDLT<SparseMatrixd> factor(fem.stiffness - sigma * fem.mass);
+  auto shifted = std::make_shared<Eigen::SimplicialLDLT<SparseMatrixd>>(fem.stiffness - sigma * fem.mass);
+  const Eigen::SimplicialLDLT<SparseMatrixd>& factor = *shifted;
   if (factor.info() != Eigen::Success) return makeError(ErrorCode::FactorizationFailed, "K − σM did not factorise");
   ShiftInvertOp op(factor);
   Spectra::SparseSymMatProd<double> massOp(fem.mass);
@@ -62,6 +65,7 @@ Status lowestEigenpairs(const FemSystem& fem, int count, double sigma, const Exa
   }
   values = solver.eigenvalues();
   vectors = solver.eigenvectors();
+  factorOut = std::move(shifted);
   return Ok{};
 }
 
@@ -251,7 +255,9 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
 }
 
 Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Material& material,
-                                       const ExactModesSettings& settings, const std::string& name) {
+                                       const ExactModesSettings& settings, const std::string& name,
+                                       ExactModesFactor* factorOut) {
+  if (factorOut) *factorOut = ExactModesFactor{};
   if (settings.modeCount < 1 || settings.denseMaxDof < 0 || !(settings.tolerance > 0.0 && settings.tolerance < 1.0)) {
     return invalidArgument("ExactModesSettings: modeCount ≥ 1, denseMaxDof ≥ 0, tolerance in (0, 1)");
   }
@@ -274,7 +280,8 @@ Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Materia
   const double sigma = -1e-3 * material.youngsModulusPa / material.densityKgPerM3 / (length * length);
   Eigen::VectorXd values;
   Eigen::MatrixXd vectors;
-  if (Status st = lowestEigenpairs(fem.value(), wanted, sigma, s, values, vectors); !st) {
+  std::shared_ptr<const Eigen::SimplicialLDLT<SparseMatrixd>> factor;
+  if (Status st = lowestEigenpairs(fem.value(), wanted, sigma, s, values, vectors, factor); !st) {
     return Error{st.error().code, "fragment '" + name + "': " + st.error().message};
   }
   // Exactly six near-zero modes for one connected solid.
@@ -316,6 +323,11 @@ Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Materia
   a.elementOrder = settings.elementOrder;
   a.bake.requestedModes = settings.modeCount;
   a.bake.factorization = dof <= s.denseMaxDof ? "dense" : "eigen-ldlt";
+  if (factorOut && factor) {
+    factorOut->fem = std::move(fem).value();
+    factorOut->factor = std::move(factor);
+    factorOut->shiftRad2PerS2 = sigma;
+  }
   return a;
 }
 

@@ -242,20 +242,28 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
     return nullptr;
   }
   const FractureSettings& fs = *job.settings;
+  const ElementOrder order = parent->body->asset.elementOrder;
+  if (const Eigen::Index dof = 3 * femNodeCount(sub.value().mesh, order); fs.exactModesMaxDof > 0 && dof > fs.exactModesMaxDof) {
+    reason = "exact path: its " + std::string(elementOrderName(order)) + " model has " + std::to_string(dof) +
+             " degrees of freedom, over exactModesMaxDof = " + std::to_string(fs.exactModesMaxDof);
+    return nullptr;
+  }
   ExactModesSettings es;
   es.modeCount = fs.modeCount > 0 ? std::min(fs.modeCount, fs.exactModeCount) : fs.exactModeCount;
-  es.elementOrder = parent->body->asset.elementOrder;  // a fragment keeps its parent's element
+  es.elementOrder = order;  // a fragment keeps its parent's element
   const int modeCount = fs.modeCount;
   const DescriptorKind kind = fs.descriptor;
   const FragmentMatcher* matcher = job.matcher;
   const FragmentDatabase* db = job.database;
   std::string name = parent->body->asset.name + ".f" + std::to_string(i);
   TriangleMesh surface = matcher ? fr.surface : TriangleMesh{};
-  return BodySource::deferred([parent, mesh = std::move(sub).value(), es, modeCount, kind, matcher, db,
+  const bool correct = fs.staticCorrection;
+  return BodySource::deferred([parent, mesh = std::move(sub).value(), es, modeCount, correct, kind, matcher, db,
                                name = std::move(name), surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
     const Material& material = parent->body->material;
-    auto own = exactFragmentAsset(mesh, material, es, name);
-    Result<std::shared_ptr<const Body>> made = own ? makeBody(std::move(own).value(), material, modeCount)
+    ExactModesFactor factor;  // its modal analysis's factorisation: the static correction's too
+    auto own = exactFragmentAsset(mesh, material, es, name, correct ? &factor : nullptr);
+    Result<std::shared_ptr<const Body>> made = own ? makeBody(std::move(own).value(), material, modeCount, &factor)
                                                    : Result<std::shared_ptr<const Body>>(own.error());
     if (made || !matcher) return made;
     auto match = matcher->match(surface, kind, 1);

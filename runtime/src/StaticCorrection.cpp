@@ -17,7 +17,7 @@ struct StaticCorrection::Data {
   Eigen::MatrixXd modes;        // Φ: 3N by r
   Eigen::MatrixXd modesMassRigid;  // Φᵀ M Ψ: r by 6 (zero up to rounding for elastic modes)
   Eigen::VectorXd lambdas;      // r, shifted by μ
-  Eigen::SimplicialLDLT<SparseMatrixd> solver;
+  std::shared_ptr<const ShiftedFactor> solver;  // of K + μM
   Eigen::VectorXd inverseD;     // of the LDLᵀ factor (vectorD() returns a copy)
   ElementStresses recovery;     // σ at each element's stress points from u
 };
@@ -25,6 +25,23 @@ struct StaticCorrection::Data {
 Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const Material& material, int modes) {
   auto fem = assembleFem(asset.tetMesh, asset.elementOrder, material, FemSettings{});
   if (!fem) return fem.error();
+  if (asset.modal.eigenvaluesRad2PerS2.size() == 0) {
+    return makeError(ErrorCode::InvalidArgument, "static correction: '" + asset.name + "' has no modes");
+  }
+  const double mu = 1e-6 * asset.modal.eigenvaluesRad2PerS2[0];
+  auto factor = std::make_shared<ShiftedFactor>(fem.value().stiffness + mu * fem.value().mass);
+  if (factor->info() != Eigen::Success) {
+    return makeError(ErrorCode::FactorizationFailed, "static correction: K + μM of '" + asset.name + "' did not factorise");
+  }
+  return build(asset, material, modes, fem.value(), std::move(factor), mu);
+}
+
+Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const Material& material, int modes,
+                                                 const FemSystem& fem, std::shared_ptr<const ShiftedFactor> factor,
+                                                 double mu) {
+  if (!factor || factor->info() != Eigen::Success || factor->rows() != fem.stiffness.rows() || !(mu > 0.0)) {
+    return makeError(ErrorCode::InvalidArgument, "static correction: a factor of K + μM with μ > 0 is needed");
+  }
   auto nodes = femNodes(asset.tetMesh, asset.elementOrder);
   if (!nodes) return nodes.error();
   auto recovery = ElementStresses::make(asset.tetMesh, asset.elementOrder, material);
@@ -37,29 +54,25 @@ Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const
   auto data = std::make_shared<Data>();
   data->femNodes = nodes.value().rows();
   data->recovery = std::move(recovery).value();
-  data->mass = fem.value().mass;
+  data->mass = fem.mass;
   data->rigid = rigidBodyModes(nodes.value(), data->mass);
   const int r = std::min<int>(modes, static_cast<int>(asset.modal.modes.cols()));
   data->modes = asset.modal.modes.leftCols(r);
-  const double mu = 1e-6 * asset.modal.eigenvaluesRad2PerS2[0];
   data->lambdas = asset.modal.eigenvaluesRad2PerS2.head(r).array() + mu;
-  const SparseMatrixd shifted = fem.value().stiffness + mu * data->mass;
-  data->solver.compute(shifted);
-  if (data->solver.info() != Eigen::Success) {
-    return makeError(ErrorCode::FactorizationFailed, "static correction: K + μM of '" + asset.name + "' did not factorise");
-  }
-  data->inverseD = data->solver.vectorD().cwiseInverse();
+  data->solver = std::move(factor);
+  const ShiftedFactor& solver = *data->solver;
+  data->inverseD = solver.vectorD().cwiseInverse();
   // The inertia relief's share of every forward solve, once: f_e = f − MΨΨᵀf, so
   // L⁻¹P f_e = L⁻¹P f − (L⁻¹P MΨ) Ψᵀf, and an impact's forward solve stays as sparse as its load.
   // (Not (K + μM)⁻¹MΨ after the whole solve: that is Ψ/μ, and taking it away from (K + μM)⁻¹f
   // would cancel six digits of the elastic part.)
   data->massRigid = data->mass * data->rigid;
-  if (data->solver.permutationP().size() > 0) {
-    data->reliefForward = data->solver.permutationP() * data->massRigid;
+  if (solver.permutationP().size() > 0) {
+    data->reliefForward = solver.permutationP() * data->massRigid;
   } else {
     data->reliefForward = data->massRigid;
   }
-  data->solver.matrixL().solveInPlace(data->reliefForward);
+  solver.matrixL().solveInPlace(data->reliefForward);
   data->modesMassRigid = data->modes.transpose() * data->massRigid;
   return StaticCorrection(std::move(data));
 }
@@ -97,17 +110,17 @@ Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, do
   // u = (K + μM)⁻¹ f_e from the factors P(K + μM)Pᵀ = L D Lᵀ, step by step: Eigen's solve() permutes
   // its result in place, and that allocates a mask on every call. The forward solve skips the
   // zeros of a sparse right-hand side, so it costs only the load's reach in the elimination tree.
-  if (d.solver.permutationP().size() > 0) {
-    w.scratch.noalias() = d.solver.permutationP() * w.load;
+  if (d.solver->permutationP().size() > 0) {
+    w.scratch.noalias() = d.solver->permutationP() * w.load;
   } else {
     w.scratch = w.load;
   }
-  d.solver.matrixL().solveInPlace(w.scratch);
+  d.solver->matrixL().solveInPlace(w.scratch);
   w.scratch.noalias() -= d.reliefForward * rigid;  // inertia relief: the solve of f_e from here on
   w.scratch.array() *= d.inverseD.array();
-  d.solver.matrixU().solveInPlace(w.scratch);
-  if (d.solver.permutationPinv().size() > 0) {
-    w.displacement.noalias() = d.solver.permutationPinv() * w.scratch;
+  d.solver->matrixU().solveInPlace(w.scratch);
+  if (d.solver->permutationPinv().size() > 0) {
+    w.displacement.noalias() = d.solver->permutationPinv() * w.scratch;
   } else {
     w.displacement = w.scratch;
   }

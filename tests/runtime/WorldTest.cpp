@@ -140,8 +140,10 @@ TEST(WorldP2Test, AQuadraticPlateBreaksIntoClosedFragmentsThatKeepTheirElement) 
   ASSERT_EQ(plate.elementOrder, ElementOrder::P2);
   WorldSettings settings;
   settings.fracture.exactModesMaxTets = 1000000;  // every fragment that is not debris
+  settings.fracture.exactModesMaxDof = 0;
   settings.fracture.exactModeCount = 4;           // a few modes: the element is the point here
-  auto world = World::create(std::move(pack).value(), settings);
+  const Pack source = pack.value();
+  auto world = World::create(Pack(source), settings);
   ASSERT_TRUE(world) << world.error().message;
   ImpactDesc d;
   d.object = world.value().addObject({.asset = "plate"}).value();
@@ -175,6 +177,23 @@ TEST(WorldP2Test, AQuadraticPlateBreaksIntoClosedFragmentsThatKeepTheirElement) 
   }
   EXPECT_GE(exact, 2);
   EXPECT_NEAR(sum, volume, 1e-9 * volume);
+
+  // The exact path's budget in degrees of freedom: over it, a fragment goes to the match (here,
+  // with no database, it stays a surface) and says why.
+  WorldSettings tight = settings;
+  tight.fracture.exactModesMaxDof = 30;
+  auto small = World::create(Pack(source), tight);
+  ASSERT_TRUE(small) << small.error().message;
+  d.object = small.value().addObject({.asset = "plate"}).value();
+  auto again = small.value().impact(d);
+  ASSERT_TRUE(again && again.value().broken);
+  for (const FragmentResult& f : again.value().fragments) {
+    if (f.debris) continue;
+    EXPECT_FALSE(f.exactModes);
+    EXPECT_NE(f.reason.find("over exactModesMaxDof = 30"), std::string::npos) << f.reason;
+  }
+  tight.fracture.exactModesMaxDof = -1;
+  EXPECT_EQ(World::create(Pack(source), tight).error().code, ErrorCode::InvalidArgument);
 }
 
 TEST_F(WorldTest, SameSeedSameFragmentsOtherSeedOtherCracks) {

@@ -81,6 +81,7 @@ Status applyRuntimeSettingsFile(const std::string& path, const CLI::App& cmd, Fr
   if (given("--debris")) merged.debrisVolumeFraction = fracture.debrisVolumeFraction;
   if (given("--descriptor")) merged.descriptor = fracture.descriptor;
   if (given("--exact-max-tets")) merged.exactModesMaxTets = fracture.exactModesMaxTets;
+  if (given("--exact-max-dof")) merged.exactModesMaxDof = fracture.exactModesMaxDof;
   fracture = merged;
   return Ok{};
 }

@@ -23,6 +23,7 @@ struct ImpactOptions {
   uint64_t seed = 1;
   int modes = 0;
   int exactMaxTets = FractureSettings{}.exactModesMaxTets;
+  int exactMaxDof = FractureSettings{}.exactModesMaxDof;
   std::string runtimeSettings;
   double crackBlend = CrackSettings{}.directionBlend, crackNoise = CrackSettings{}.noiseRad;
   double debris = 0.01, propagationRatio = CrackSettings{}.propagationStressRatio;
@@ -53,6 +54,9 @@ Runner addImpactCommand(CLI::App& app) {
   cmd->add_option("--settings", o->runtimeSettings, "Runtime settings (JSON, as brittle size writes them); flags given here win");
   cmd->add_option("--exact-max-tets", o->exactMaxTets,
                   "Fragments of at most this many tets get their own modal analysis instead of a database match (0: never)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--exact-max-dof", o->exactMaxDof,
+                  "... and whose own model has at most this many degrees of freedom (0: no limit)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--debris", o->debris, "Fragments below this volume fraction are rigid debris")->capture_default_str()->check(CLI::Range(0.0, 0.99));
   cmd->add_option("--descriptor", o->descriptor, "Descriptor used to match fragments")
@@ -87,6 +91,7 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.matchFragments = !o->noMatch;
     settings.fracture.debrisVolumeFraction = o->debris;
     settings.fracture.exactModesMaxTets = o->exactMaxTets;
+    settings.fracture.exactModesMaxDof = o->exactMaxDof;
     if (!o->runtimeSettings.empty()) {
       if (Status st = applyRuntimeSettingsFile(o->runtimeSettings, *cmd, settings.fracture); !st) return reportError(st.error());
     }

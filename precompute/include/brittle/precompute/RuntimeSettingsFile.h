@@ -4,6 +4,7 @@
 //   { "descriptor": "moment",            // the kind fragments are matched with
 //     "debris_volume_fraction": 0.004,   // fragments below this share of their body stay rigid
 //     "exact_modes_max_tets": 150,       // the exact path's size limit (0: never)
+//     "exact_modes_max_dof": 2000,       // and its model's limit in degrees of freedom (0: none)
 //     "exact_mode_count": 20,
 //     "modes": 0 }                       // modes per impact (0: all the pack stores)
 //

@@ -20,13 +20,16 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/SparseCholesky>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
 #include "brittle/core/MeshTypes.h"
 #include "brittle/core/Result.h"
+#include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/TetTopology.h"
 
 namespace brittle {
@@ -56,12 +59,22 @@ struct ExactModesSettings {
   ElementOrder elementOrder = ElementOrder::P1;  ///< the runtime passes the parent's
 };
 
+/// What the exact path's modal analysis factorised, handed to the new body's static correction
+/// (StaticCorrection::build with a factor) so that the fragment is factorised once: its K and M,
+/// and K − σM with the shift σ < 0 it solved with. Empty (no factor) when the dense solver ran.
+struct ExactModesFactor {
+  FemSystem fem;
+  std::shared_ptr<const Eigen::SimplicialLDLT<SparseMatrixd>> factor;
+  double shiftRad2PerS2 = 0.0;
+};
+
 /// The fragment as an object the runtime can break: the sub-mesh, its modes and stress modes at
 /// settings.elementOrder, with `material`. massProperties are those of the sub-mesh's boundary. The asset's name is
 /// `name`. Errors: InvalidArgument (settings, a sub-mesh with fewer than 4 nodes),
 /// DegenerateElement, FactorizationFailed, EigenNotConverged, RigidModeMismatch (not exactly six
 /// near-zero modes: the sub-mesh hangs together by an edge or a node).
 Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Material& material,
-                                       const ExactModesSettings& settings, const std::string& name);
+                                       const ExactModesSettings& settings, const std::string& name,
+                                       ExactModesFactor* factor = nullptr);
 
 }  // namespace brittle

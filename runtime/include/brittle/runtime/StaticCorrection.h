@@ -18,6 +18,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/SparseCholesky>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -25,14 +26,25 @@
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
 #include "brittle/core/Result.h"
+#include "brittle/runtime/FemAssembly.h"
 
 namespace brittle {
 
+/// A sparse LDLᵀ factorisation of K + μM (μ > 0).
+using ShiftedFactor = Eigen::SimplicialLDLT<SparseMatrixd>;
+
 class StaticCorrection {
  public:
-  /// Factorises the object's K + μM for the first `modes` stored modes.
-  /// Errors: those of assembleFem, FactorizationFailed.
+  /// Factorises the object's K + μM, μ = 10⁻⁶ λ₁, for the first `modes` stored modes.
+  /// Errors: those of assembleFem, FactorizationFailed, InvalidArgument (no modes).
   static Result<StaticCorrection> build(const ObjectAsset& asset, const Material& material, int modes);
+  /// The same on a factorisation the caller made already: `factor` of K + μM, where `fem` holds
+  /// the asset's K and M. The correction's relative error is at most μ/λ_{r+1}, the shift over
+  /// the first mode left out: the exact path hands over the factor of its own modal analysis
+  /// (μ = 10⁻³ (c/L)²), which saves the fragment's second factorisation.
+  /// Errors: InvalidArgument (no factor, one of another size, μ ≤ 0, modes of the wrong size).
+  static Result<StaticCorrection> build(const ObjectAsset& asset, const Material& material, int modes,
+                                        const FemSystem& fem, std::shared_ptr<const ShiftedFactor> factor, double mu);
 
   /// Buffers of stressPerNewton, sized on first use.
   struct Workspace {

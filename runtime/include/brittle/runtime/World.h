@@ -95,6 +95,12 @@ struct FractureSettings {
   /// 24 %) but a bounded worst case (p90 38 % against 79 %); beyond, its cost grows about linearly
   /// (25 ms at 150–400 tets, 140 ms at 1000–3000) while the match's tail reaches hundreds of percent.
   int exactModesMaxTets = 150;
+  /// ... and whose own model has at most this many degrees of freedom (3 × its FEM nodes, known
+  /// once its solid is cut out): what the exact path costs. P1 fragments of up to 150 tets stay
+  /// under it (at most ~1 000 sub-tets, ~1 500 DOF). A P2 fragment of the same 150 parent tets has
+  /// 6–7k DOF and took 220–480 ms on the pane, where the match and a database entry's
+  /// factorisation take ~10 ms; over the limit the fragment is matched. 0: no limit.
+  int exactModesMaxDof = 2000;
   /// Modes of an exact-path fragment (at most modeCount when that is set). Fragments are smaller
   /// than their parent, so fewer of their modes fall in an impact's band; the static correction
   /// covers the rest. 40 modes cost ~1.5× what 20 do (chart 5).
