@@ -277,6 +277,14 @@ void writeElement(hid_t file, const char* path, hid_t memType, std::vector<hsize
   H5Dclose(dset);
 }
 
+// Overwrites the root's version attribute.
+void writeVersion(hid_t file, int version) {
+  const hid_t attr = H5Aopen(file, "version", H5P_DEFAULT);
+  ASSERT_GE(attr, 0);
+  EXPECT_GE(H5Awrite(attr, H5T_NATIVE_INT, &version), 0);
+  H5Aclose(attr);
+}
+
 class PackTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -514,13 +522,7 @@ TEST_F(PackTest, WrongUnitAttribute) {
 
 TEST_F(PackTest, WrongVersion) {
   writeValidPack();
-  editPack(mPath, [](hid_t f) {
-    const hid_t attr = H5Aopen(f, "version", H5P_DEFAULT);
-    ASSERT_GE(attr, 0);
-    const int version = kPackVersion + 1;
-    EXPECT_GE(H5Awrite(attr, H5T_NATIVE_INT, &version), 0);
-    H5Aclose(attr);
-  });
+  editPack(mPath, [](hid_t f) { writeVersion(f, kPackVersion + 1); });
   expectReadError(ErrorCode::PackVersionMismatch, "pack version " + std::to_string(kPackVersion + 1));
 }
 
@@ -530,11 +532,7 @@ TEST_F(PackTest, VersionTwoPacksAreReadWithLinearElements) {
   pack.objects.pop_back();  // the P2 object
   ASSERT_TRUE(writePack(pack, mPath).ok());
   editPack(mPath, [](hid_t f) {
-    const hid_t attr = H5Aopen(f, "version", H5P_DEFAULT);
-    ASSERT_GE(attr, 0);
-    const int version = 2;
-    EXPECT_GE(H5Awrite(attr, H5T_NATIVE_INT, &version), 0);
-    H5Aclose(attr);
+    writeVersion(f, 2);
     ASSERT_GE(H5Ldelete(f, "/objects/element_order", H5P_DEFAULT), 0);
   });
   const Result<Pack> read = readPack(mPath);
