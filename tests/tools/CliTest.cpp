@@ -58,6 +58,17 @@ std::pair<long, long> bakedAndReused(const std::string& out) {
   return {std::stol(out.substr(start + 2)), std::stol(out.substr(at + 15))};
 }
 
+// The comma-separated cells of one CSV line (the benches write no quoted cells).
+std::vector<std::string> csvCells(const std::string& line) {
+  std::vector<std::string> cells;
+  for (size_t at = 0; at != std::string::npos;) {
+    const size_t comma = line.find(',', at);
+    cells.push_back(line.substr(at, comma == std::string::npos ? std::string::npos : comma - at));
+    at = comma == std::string::npos ? comma : comma + 1;
+  }
+  return cells;
+}
+
 class CliTest : public ::testing::Test {
  protected:
   std::filesystem::path dir = testing::makeTempDir("cli");
@@ -190,6 +201,27 @@ TEST_F(CliTest, CalibrateFitsTheMaterialAndWritesAFileThatBakes) {
 }
 
 // The speed/accuracy benches write what their chart scripts read, with values that make sense.
+TEST_F(CliTest, ImpactBenchTimesEitherElementAndNamesItInItsCsv) {
+  // A P2 slab: every stage's row says p2, and the slab breaks at the bench's speed.
+  const CliRun bench = run("bench impact --tets 400 --modes 6 --impacts 2 --element p2 --threads 1 --quiet --csv " + path("b.csv"));
+  ASSERT_EQ(bench.exitCode, 0) << bench.out;
+  std::ifstream in(dir / "b.csv");
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "target_tets,tets,modes,prune,stage,impacts,median_ms,p99_ms,broken_fraction,mean_fragments,median_evaluations,element");
+  int rows = 0;
+  while (std::getline(in, line)) {
+    ++rows;
+    const std::vector<std::string> cells = csvCells(line);
+    ASSERT_EQ(cells.size(), 12u) << line;
+    EXPECT_EQ(cells[5], "2") << line;            // impacts
+    EXPECT_EQ(std::stod(cells[8]), 1.0) << line;  // every one broke the slab
+    EXPECT_EQ(cells[11], "p2") << line;
+  }
+  EXPECT_EQ(rows, 2 * 10);  // pruned and unpruned, ten stages each
+  EXPECT_EQ(run("bench impact --element p3 --csv " + path("x.csv")).exitCode, 2);
+}
+
 TEST_F(CliTest, SpeedAccuracyBenchesWriteTheirCsv) {
   const CliRun integrators = run("bench integrators --points 5 --csv " + path("i.csv") + " --timing-csv " + path("t.csv"));
   ASSERT_EQ(integrators.exitCode, 0) << integrators.out;
@@ -200,12 +232,7 @@ TEST_F(CliTest, SpeedAccuracyBenchesWriteTheirCsv) {
   int rows = 0;
   while (std::getline(in, line)) {
     ++rows;
-    std::vector<std::string> cells;
-    for (size_t at = 0; at != std::string::npos;) {
-      const size_t comma = line.find(',', at);
-      cells.push_back(line.substr(at, comma == std::string::npos ? std::string::npos : comma - at));
-      at = comma == std::string::npos ? comma : comma + 1;
-    }
+    const std::vector<std::string> cells = csvCells(line);
     ASSERT_EQ(cells.size(), 6u) << line;
     const double omegaH = std::stod(cells[2]), error = std::stod(cells[4]), late = std::stod(cells[5]);
     if (cells[0] == "exact") {

@@ -19,7 +19,7 @@ namespace brittle::bench {
 Status runImpactBench(const ImpactBenchSettings& s) {
   std::ofstream csv(s.csv);
   if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.csv.string());
-  csv << "target_tets,tets,modes,prune,stage,impacts,median_ms,p99_ms,broken_fraction,mean_fragments,median_evaluations\n";
+  csv << "target_tets,tets,modes,prune,stage,impacts,median_ms,p99_ms,broken_fraction,mean_fragments,median_evaluations,element\n";
   const Material glass = materialPreset("glass").value();
   FragmentDatabase database;
   if (!s.databasePack.empty()) {
@@ -37,6 +37,7 @@ Status runImpactBench(const ImpactBenchSettings& s) {
     b.material = glass;
     b.tetMesh.targetTets = target;
     b.modal.modeCount = maxModes;
+    b.elementOrder = s.elementOrder;
     auto asset = bakeSurface(boxSurface(0.2, 0.2, 0.05), b);
     if (!asset) return asset.error();
     const int64_t tets = asset.value().tetMesh.tets.rows();
@@ -102,7 +103,7 @@ Status runImpactBench(const ImpactBenchSettings& s) {
           csv << target << "," << tets << "," << modes << "," << (prune ? 1 : 0) << "," << kStages[k] << "," << s.impacts
               << "," << percentile(stage[k], 0.5) << "," << percentile(stage[k], 0.99) << ","
               << static_cast<double>(broken) / s.impacts << "," << fragments / s.impacts << "," << percentile(evaluations, 0.5)
-              << "\n";
+              << "," << elementOrderName(s.elementOrder) << "\n";
         }
         if (!s.quiet) {
           std::printf("%6lld tets %3d modes %-9s total median %8.2f ms p99 %8.2f ms (stress %.2f, cracks %.2f, surfaces %.2f, "

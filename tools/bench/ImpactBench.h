@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "brittle/core/Result.h"
+#include "brittle/database/ObjectAsset.h"
 
 namespace brittle::bench {
 
@@ -31,6 +32,7 @@ struct ImpactBenchSettings {
   std::filesystem::path csv = "docs/results/data/impact_latency.csv";
   std::filesystem::path databasePack;  ///< empty: no database, fragments stay surfaces
   int exactModesMaxTets = 150;         ///< with a database: the World's default
+  ElementOrder elementOrder = ElementOrder::P1;  ///< the slab's element (P2: thin parts' accuracy)
   /// The World's worker threads (0: one per core). The impact's parallel stages (the seed scan,
   /// surfaces beside moments, new bodies) use them; with 1 an impact runs on this thread alone.
   int threads = 0;

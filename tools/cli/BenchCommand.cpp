@@ -73,6 +73,10 @@ Runner addBenchCommand(CLI::App& app) {
   auto is = std::make_shared<bench::ImpactBenchSettings>();
   impact->add_option("--tets", is->tets, "Target tet counts")->delimiter(',')->capture_default_str();
   impact->add_option("--modes", is->modes, "Mode counts")->delimiter(',')->capture_default_str();
+  impact->add_option_function<std::string>(
+            "--element", [is](const std::string& name) { is->elementOrder = *parseElementOrder(name); },
+            "The slab's element: p1 (default) or p2")
+      ->check(CLI::IsMember({"p1", "p2"}));
   impact->add_option("--impacts", is->impacts, "Impacts per setting")->capture_default_str()->check(CLI::Range(1, 100000));
   impact->add_option("--speed", is->speedMps, "Impact speed (m/s)")->capture_default_str();
   impact->add_option("--seed", is->seed, "Seed of the impact points and cracks")->capture_default_str();
