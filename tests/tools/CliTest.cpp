@@ -200,7 +200,6 @@ TEST_F(CliTest, CalibrateFitsTheMaterialAndWritesAFileThatBakes) {
   EXPECT_NE(badFile.out.find("unknown key \"colour\""), std::string::npos) << badFile.out;
 }
 
-// The speed/accuracy benches write what their chart scripts read, with values that make sense.
 TEST_F(CliTest, ImpactBenchTimesEitherElementAndNamesItInItsCsv) {
   // A P2 slab: every stage's row says p2, and the slab breaks at the bench's speed.
   const CliRun bench = run("bench impact --tets 400 --modes 6 --impacts 2 --element p2 --threads 1 --quiet --csv " + path("b.csv"));
@@ -222,6 +221,7 @@ TEST_F(CliTest, ImpactBenchTimesEitherElementAndNamesItInItsCsv) {
   EXPECT_EQ(run("bench impact --element p3 --csv " + path("x.csv")).exitCode, 2);
 }
 
+// The speed/accuracy benches write what their chart scripts read, with values that make sense.
 TEST_F(CliTest, SpeedAccuracyBenchesWriteTheirCsv) {
   const CliRun integrators = run("bench integrators --points 5 --csv " + path("i.csv") + " --timing-csv " + path("t.csv"));
   ASSERT_EQ(integrators.exitCode, 0) << integrators.out;
