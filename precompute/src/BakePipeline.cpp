@@ -98,17 +98,17 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
   t = SteadyClock::now();
   progress.report("assembling K and M", 0.0);
   asset.elementOrder = s.elementOrder;
-  auto system = assembleFem(asset.tetMesh, s.elementOrder, s.material, s.fem);
+  auto fem = makeFemMesh(asset.tetMesh, s.elementOrder);
+  if (!fem) return inObject(name, fem.error());
+  auto system = assembleFem(fem.value(), s.material, s.fem);
   if (!system) return inObject(name, system.error());
-  auto nodes = femNodes(asset.tetMesh, s.elementOrder);
-  if (!nodes) return inObject(name, nodes.error());
   rec.assemblyS = secondsSince(t);
 
   t = SteadyClock::now();
   ModalSettings modal = s.modal;
   if (modal.shiftRad2PerS2 == 0.0) modal.shiftRad2PerS2 = defaultShift(asset.tetMesh.nodes, s.material);
   rec.shift = modal.shiftRad2PerS2;
-  auto modes = computeModes(system.value(), nodes.value(), modal, &progress);
+  auto modes = computeModes(system.value(), fem.value().nodes(), modal, &progress);
   if (!modes) return inObject(name, modes.error());
   rec.modalS = secondsSince(t);
   rep.modalStats = modes.value().stats;
@@ -116,9 +116,7 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
 
   t = SteadyClock::now();
   progress.report("stress modes", 0.0);
-  auto stressModes = computeStressModes(asset.tetMesh, s.elementOrder, s.material, asset.modal.modes);
-  if (!stressModes) return inObject(name, stressModes.error());
-  asset.stressModes = std::move(stressModes).value();
+  asset.stressModes = computeStressModes(fem.value(), s.material, asset.modal.modes);
   rec.stressModesS = secondsSince(t);
 
   asset.massProperties = computeTetMassProperties(asset.tetMesh, s.material.densityKgPerM3);

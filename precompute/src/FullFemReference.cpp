@@ -15,9 +15,11 @@ Result<FullFemResult> solveFullFemImpact(const TetMesh& mesh, const Material& ma
   if (settings.stepsPerContact < 2 || !(contact.durationS > 0.0)) {
     return makeError(ErrorCode::InvalidArgument, "full FEM reference: stepsPerContact ≥ 2 and a positive contact duration");
   }
-  auto fem = assembleFem(mesh, settings.elementOrder, material, FemSettings{});
+  auto femMesh = makeFemMesh(mesh, settings.elementOrder);
+  if (!femMesh) return femMesh.error();
+  auto fem = assembleFem(femMesh.value(), material, FemSettings{});
   if (!fem) return fem.error();
-  auto recovery = ElementStresses::make(mesh, settings.elementOrder, material);
+  auto recovery = ElementStresses::make(femMesh.value(), material);
   if (!recovery) return recovery.error();
   const ElementStresses& stresses = recovery.value();
   const SparseMatrixd& k = fem.value().stiffness;

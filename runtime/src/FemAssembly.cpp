@@ -294,38 +294,38 @@ MatrixXdRow computeStressModes(const QuadraticTetMesh& mesh, const Material& mat
   return s;
 }
 
-Result<Points> femNodes(const TetMesh& mesh, ElementOrder order) {
-  if (order == ElementOrder::P1) return mesh.nodes;
-  auto quadratic = makeQuadraticTetMesh(mesh);
-  if (!quadratic) return quadratic.error();
-  return std::move(quadratic.value().nodes);
+Result<FemMesh> makeFemMesh(const TetMesh& mesh, ElementOrder order) {
+  FemMesh out;
+  out.linear = &mesh;
+  out.order = order;
+  if (order == ElementOrder::P2) {
+    auto quadratic = makeQuadraticTetMesh(mesh);
+    if (!quadratic) return quadratic.error();
+    out.quadratic = std::move(quadratic).value();
+  }
+  return out;
 }
 
-Result<FemSystem> assembleFem(const TetMesh& mesh, ElementOrder order, const Material& material,
-                              const FemSettings& settings) {
-  if (order == ElementOrder::P1) return assembleFem(mesh, material, settings);
-  auto quadratic = makeQuadraticTetMesh(mesh);
-  if (!quadratic) return quadratic.error();
-  return assembleFem(quadratic.value(), material, settings);
+Result<FemSystem> assembleFem(const FemMesh& mesh, const Material& material, const FemSettings& settings) {
+  if (mesh.order == ElementOrder::P1) return assembleFem(*mesh.linear, material, settings);
+  return assembleFem(mesh.quadratic, material, settings);
 }
 
-Result<MatrixXdRow> computeStressModes(const TetMesh& mesh, ElementOrder order, const Material& material,
-                                       const MatrixXdRow& modes) {
-  if (order == ElementOrder::P1) return computeStressModes(mesh, material, modes);
-  auto quadratic = makeQuadraticTetMesh(mesh);
-  if (!quadratic) return quadratic.error();
-  return computeStressModes(quadratic.value(), material, modes);
+MatrixXdRow computeStressModes(const FemMesh& mesh, const Material& material, const MatrixXdRow& modes) {
+  if (mesh.order == ElementOrder::P1) return computeStressModes(*mesh.linear, material, modes);
+  return computeStressModes(mesh.quadratic, material, modes);
 }
 
-Result<ElementStresses> ElementStresses::make(const TetMesh& mesh, ElementOrder order, const Material& material) {
+Result<ElementStresses> ElementStresses::make(const FemMesh& fem, const Material& material) {
   if (Status s = validateMaterial(material); !s) return s.error();
+  const TetMesh& mesh = *fem.linear;
   ElementStresses out;
-  out.mOrder = order;
+  out.mOrder = fem.order;
+  out.mFemNodes = fem.nodes().rows();
   out.mElasticity = isotropicElasticity(material.youngsModulusPa, material.poissonRatio);
   const auto t = static_cast<size_t>(mesh.tets.rows());
   auto corner = [&](Eigen::Index e, int a) -> Eigen::Vector3d { return mesh.nodes.row(mesh.tets(e, a)).transpose(); };
-  if (order == ElementOrder::P1) {
-    out.mFemNodes = mesh.nodes.rows();
+  if (fem.order == ElementOrder::P1) {
     out.mElements = mesh.tets;
     out.mLinear.resize(t);
     for (size_t e = 0; e < t; ++e) {
@@ -334,10 +334,7 @@ Result<ElementStresses> ElementStresses::make(const TetMesh& mesh, ElementOrder 
     }
     return out;
   }
-  auto quadratic = makeQuadraticTetMesh(mesh);
-  if (!quadratic) return quadratic.error();
-  out.mFemNodes = quadratic.value().nodes.rows();
-  out.mElements = quadratic.value().tets;
+  out.mElements = fem.quadratic.tets;
   out.mGradients.resize(t);
   for (size_t e = 0; e < t; ++e) {
     const auto i = static_cast<Eigen::Index>(e);

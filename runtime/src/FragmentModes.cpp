@@ -265,7 +265,9 @@ Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Materia
   if (nodes < 4 || sub.mesh.tets.rows() < 1) return invalidArgument("fragment '" + name + "': fewer than 4 nodes");
   auto topology = buildTetTopology(sub.mesh);
   if (!topology) return topology.error();
-  auto fem = assembleFem(sub.mesh, settings.elementOrder, material, FemSettings{});
+  auto femMesh = makeFemMesh(sub.mesh, settings.elementOrder);
+  if (!femMesh) return femMesh.error();
+  auto fem = assembleFem(femMesh.value(), material, FemSettings{});
   if (!fem) return fem.error();
 
   // Six rigid modes plus the elastic ones; a mesh too small for that keeps what it has.
@@ -317,9 +319,7 @@ Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Materia
   }
   const Eigen::MatrixXd gram = Eigen::MatrixXd(m.modes).transpose() * (fem.value().mass * Eigen::MatrixXd(m.modes));
   m.orthonormalityError = (gram - Eigen::MatrixXd::Identity(r, r)).cwiseAbs().maxCoeff();
-  auto stressModes = computeStressModes(sub.mesh, settings.elementOrder, material, m.modes);
-  if (!stressModes) return stressModes.error();
-  a.stressModes = std::move(stressModes).value();
+  a.stressModes = computeStressModes(femMesh.value(), material, m.modes);
   a.elementOrder = settings.elementOrder;
   a.bake.requestedModes = settings.modeCount;
   a.bake.factorization = dof <= s.denseMaxDof ? "dense" : "eigen-ldlt";

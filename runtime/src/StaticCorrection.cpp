@@ -23,7 +23,9 @@ struct StaticCorrection::Data {
 };
 
 Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const Material& material, int modes) {
-  auto fem = assembleFem(asset.tetMesh, asset.elementOrder, material, FemSettings{});
+  auto mesh = makeFemMesh(asset.tetMesh, asset.elementOrder);
+  if (!mesh) return mesh.error();
+  auto fem = assembleFem(mesh.value(), material, FemSettings{});
   if (!fem) return fem.error();
   if (asset.modal.eigenvaluesRad2PerS2.size() == 0) {
     return makeError(ErrorCode::InvalidArgument, "static correction: '" + asset.name + "' has no modes");
@@ -33,29 +35,36 @@ Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const
   if (factor->info() != Eigen::Success) {
     return makeError(ErrorCode::FactorizationFailed, "static correction: K + μM of '" + asset.name + "' did not factorise");
   }
-  return build(asset, material, modes, fem.value(), std::move(factor), mu);
+  return fromFactor(asset, material, modes, mesh.value(), fem.value(), std::move(factor), mu);
 }
 
 Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const Material& material, int modes,
                                                  const FemSystem& fem, std::shared_ptr<const ShiftedFactor> factor,
                                                  double mu) {
+  auto mesh = makeFemMesh(asset.tetMesh, asset.elementOrder);
+  if (!mesh) return mesh.error();
+  return fromFactor(asset, material, modes, mesh.value(), fem, std::move(factor), mu);
+}
+
+Result<StaticCorrection> StaticCorrection::fromFactor(const ObjectAsset& asset, const Material& material, int modes,
+                                                      const FemMesh& mesh, const FemSystem& fem,
+                                                      std::shared_ptr<const ShiftedFactor> factor, double mu) {
   if (!factor || factor->info() != Eigen::Success || factor->rows() != fem.stiffness.rows() || !(mu > 0.0)) {
     return makeError(ErrorCode::InvalidArgument, "static correction: a factor of K + μM with μ > 0 is needed");
   }
-  auto nodes = femNodes(asset.tetMesh, asset.elementOrder);
-  if (!nodes) return nodes.error();
-  auto recovery = ElementStresses::make(asset.tetMesh, asset.elementOrder, material);
+  const Points& nodes = mesh.nodes();
+  auto recovery = ElementStresses::make(mesh, material);
   if (!recovery) return recovery.error();
-  if (asset.modal.modes.rows() != 3 * nodes.value().rows()) {
+  if (asset.modal.modes.rows() != 3 * nodes.rows()) {
     return makeError(ErrorCode::InvalidArgument, "static correction: the modes of '" + asset.name + "' have " +
                                                      std::to_string(asset.modal.modes.rows()) + " rows, expected " +
-                                                     std::to_string(3 * nodes.value().rows()));
+                                                     std::to_string(3 * nodes.rows()));
   }
   auto data = std::make_shared<Data>();
-  data->femNodes = nodes.value().rows();
+  data->femNodes = nodes.rows();
   data->recovery = std::move(recovery).value();
   data->mass = fem.mass;
-  data->rigid = rigidBodyModes(nodes.value(), data->mass);
+  data->rigid = rigidBodyModes(nodes, data->mass);
   const int r = std::min<int>(modes, static_cast<int>(asset.modal.modes.cols()));
   data->modes = asset.modal.modes.leftCols(r);
   data->lambdas = asset.modal.eigenvaluesRad2PerS2.head(r).array() + mu;

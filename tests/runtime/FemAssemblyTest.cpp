@@ -264,13 +264,14 @@ TEST(FemAssemblyP2, ElementStressesRecoverTheStressModesOfAnyDisplacementAtEithe
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> unit(-1e-6, 1e-6);
   for (const ElementOrder order : {ElementOrder::P1, ElementOrder::P2}) {
-    const Points nodes = femNodes(mesh, order).value();
+    const FemMesh fem = makeFemMesh(mesh, order).value();
+    const Points& nodes = fem.nodes();
     EXPECT_EQ(nodes.rows(), femNodeCount(mesh, order));
-    EXPECT_EQ(assembleFem(mesh, order, m, {}).value().stiffness.rows(), 3 * nodes.rows());
+    EXPECT_EQ(assembleFem(fem, m, {}).value().stiffness.rows(), 3 * nodes.rows());
     MatrixXdRow u(3 * nodes.rows(), 1);
     for (Eigen::Index i = 0; i < u.rows(); ++i) u(i, 0) = unit(rng);
-    const MatrixXdRow modes = computeStressModes(mesh, order, m, u).value();
-    const auto recovery = ElementStresses::make(mesh, order, m);
+    const MatrixXdRow modes = computeStressModes(fem, m, u);
+    const auto recovery = ElementStresses::make(fem, m);
     ASSERT_TRUE(recovery.ok()) << recovery.error().message;
     EXPECT_EQ(recovery.value().pointsPerElement(), stressPointsPerElement(order));
     EXPECT_EQ(recovery.value().femNodeCount(), nodes.rows());

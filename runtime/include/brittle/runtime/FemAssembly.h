@@ -90,19 +90,26 @@ inline constexpr int kQuadraticTetStressPoints = 4;
 /// coordinate. modes is 3N by r. The mesh must pass assembleFem.
 MatrixXdRow computeStressModes(const QuadraticTetMesh& mesh, const Material& material, const MatrixXdRow& modes);
 
-/// The FEM nodes of a linear tet mesh at an element order: its own nodes (P1), or those followed by
-/// the mid-edge nodes of makeQuadraticTetMesh (P2). Errors: those of makeQuadraticTetMesh.
-Result<Points> femNodes(const TetMesh& mesh, ElementOrder order);
+/// A linear tet mesh's finite elements at an element order, made once and shared by the
+/// assembly, the stress modes and the stress recovery: P1 is the mesh itself, P2 adds the
+/// mid-edge nodes of makeQuadraticTetMesh. It refers to the linear mesh, which must outlive it.
+struct FemMesh {
+  const TetMesh* linear = nullptr;
+  ElementOrder order = ElementOrder::P1;
+  QuadraticTetMesh quadratic;  ///< P2 only
+  /// The FEM nodes: the linear mesh's (P1), or its corners followed by the mid-edge nodes (P2).
+  const Points& nodes() const { return order == ElementOrder::P2 ? quadratic.nodes : linear->nodes; }
+};
+/// Errors: those of makeQuadraticTetMesh (P2).
+Result<FemMesh> makeFemMesh(const TetMesh& mesh, ElementOrder order);
 
-/// K and M of a linear tet mesh at an element order (3 × femNodes rows). Errors: those of the
-/// assembleFem above for that order, and of makeQuadraticTetMesh.
-Result<FemSystem> assembleFem(const TetMesh& mesh, ElementOrder order, const Material& material,
-                              const FemSettings& settings);
+/// K and M at the mesh's order (3 × nodes() rows). Errors: those of the assembleFem above for
+/// that order.
+Result<FemSystem> assembleFem(const FemMesh& mesh, const Material& material, const FemSettings& settings);
 
-/// Stress modes of a linear tet mesh at an element order (ObjectAsset::stressModes: 6T by r for
-/// P1, 24T by r for P2); modes is 3 × femNodes by r. Errors: those of makeQuadraticTetMesh.
-Result<MatrixXdRow> computeStressModes(const TetMesh& mesh, ElementOrder order, const Material& material,
-                                       const MatrixXdRow& modes);
+/// Stress modes at the mesh's order (ObjectAsset::stressModes: 6T by r for P1, 24T by r for P2);
+/// modes is 3 × nodes() by r.
+MatrixXdRow computeStressModes(const FemMesh& mesh, const Material& material, const MatrixXdRow& modes);
 
 /// Stresses at every element's stress points (stressPointsPerElement) from nodal displacements:
 /// the recovery of the static correction and of the full-FEM reference. P1 keeps C B_e (6 by 12)
@@ -110,8 +117,8 @@ Result<MatrixXdRow> computeStressModes(const TetMesh& mesh, ElementOrder order, 
 /// asked, a tenth of the memory of 4 × (6 by 30) matrices.
 class ElementStresses {
  public:
-  /// Errors: InvalidMaterial, those of makeQuadraticTetMesh (P2).
-  static Result<ElementStresses> make(const TetMesh& mesh, ElementOrder order, const Material& material);
+  /// Errors: InvalidMaterial.
+  static Result<ElementStresses> make(const FemMesh& mesh, const Material& material);
   int pointsPerElement() const { return stressPointsPerElement(mOrder); }
   Eigen::Index elementCount() const { return mElements.rows(); }
   /// 3 × this is the length of a displacement vector.

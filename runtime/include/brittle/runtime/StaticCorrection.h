@@ -63,6 +63,9 @@ class StaticCorrection {
 
  private:
   struct Data;
+  static Result<StaticCorrection> fromFactor(const ObjectAsset& asset, const Material& material, int modes,
+                                             const FemMesh& mesh, const FemSystem& fem,
+                                             std::shared_ptr<const ShiftedFactor> factor, double mu);
   explicit StaticCorrection(std::shared_ptr<const Data> data) : mData(std::move(data)) {}
   std::shared_ptr<const Data> mData;
 };
