@@ -28,6 +28,11 @@ void Body::adoptStaticCorrection(Result<StaticCorrection> correction) {
   });
 }
 
+const StressBounds& Body::stressBounds() const {
+  std::call_once(mBoundsOnce, [this] { mStressBounds = stressModeBounds(asset.stressModes, modes, omega.cwiseInverse()); });
+  return mStressBounds;
+}
+
 const TetMoments& Body::tetMoments() const {
   std::call_once(mMomentsOnce, [this] { mTetMoments = tetVolumeMoments(asset.tetMesh, centreM); });
   return mTetMoments;
@@ -87,7 +92,6 @@ Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& 
   }
   body->zeta.resize(body->modes);
   for (int j = 0; j < body->modes; ++j) body->zeta[j] = rayleighDampingRatio(material, body->omega[j]);
-  body->stressBounds = stressModeBounds(asset.stressModes, body->modes);
   const auto n = asset.tetMesh.nodes.rows();
   body->nodeNormals.setZero(n, 3);
   body->ring.assign(static_cast<size_t>(n), {});

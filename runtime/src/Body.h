@@ -3,7 +3,7 @@
 // bounds, surface normals and neighbours, the static correction's factorised K, the tets' moments). Private to the
 // runtime: World.cpp places bodies in slots, ImpactStages.cpp reads them.
 //
-// A Body is immutable once made, except for its static correction and its tets' moments, each made
+// A Body is immutable once made, except for its static correction, stress bounds and tets' moments, each made
 // at most once (std::call_once) by whichever thread asks first: a background task the World starts when a
 // pack object is placed, or the body's first impact. Several threads may read a Body at once.
 #pragma once
@@ -18,6 +18,7 @@
 
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
+#include "brittle/runtime/CrackPropagation.h"
 #include "brittle/core/Result.h"
 #include "brittle/runtime/FragmentModes.h"
 #include "brittle/runtime/FragmentSurfaces.h"
@@ -32,12 +33,16 @@ struct Body {
   TetTopology topology;
   int modes = 0;
   Eigen::VectorXd omega, zeta;
-  Eigen::MatrixXd stressBounds;            // T by modes
   Points nodeNormals;                      // #N, area-weighted outward normals (boundary nodes)
   std::vector<std::vector<int32_t>> ring;  // boundary neighbours per node
   std::vector<int32_t> boundaryNodes;
   double sizeM = 0.0;                      // bounding-box diagonal
   Eigen::Vector3d centreM = Eigen::Vector3d::Zero();  // bounding-box centre: the origin of the tet moments
+
+  /// The stress scan's bounds per stress point over `modes` modes, weighted by 1/ω
+  /// (CrackPropagation.h: stressModeBounds); made on first use, as the static correction (the
+  /// plate's 30k points take ~50 ms, not to be paid on the caller's thread when it is placed).
+  const StressBounds& stressBounds() const;
 
   /// Each tet's volume moments about centreM (FragmentSurfaces.h: tetVolumeMoments), from which a
   /// breaking impact sums its fragments' moments; made on first use, as the static correction.
@@ -62,6 +67,8 @@ struct Body {
   mutable std::atomic<bool> mCorrectionReady{false};
   mutable std::atomic<bool> mCorrectionScheduled{false};
   mutable std::optional<Result<StaticCorrection>> mCorrection;
+  mutable std::once_flag mBoundsOnce;
+  mutable StressBounds mStressBounds;
   mutable std::once_flag mMomentsOnce;
   mutable TetMoments mTetMoments;
 };

@@ -100,11 +100,31 @@ double maxPrincipalStress(const Voigt& s, Eigen::Vector3d* direction) {
   return eig.eigenvalues()[2];
 }
 
-Eigen::MatrixXd stressModeBounds(const MatrixXdRow& s, int modes) {
+StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::VectorXd& modeScales) {
   const Eigen::Index t = s.rows() / 6;
-  Eigen::MatrixXd b(t, modes);
+  StressBounds b;
+  b.modeNorms.resize(t, modes);
+  b.modeScales = modeScales.size() > 0 ? Eigen::VectorXd(modeScales.head(modes)) : Eigen::VectorXd::Ones(modes);
+  b.spectralNorms.resize(t);
+  // ‖A‖₂ = √λ_max(G), G = A Aᵀ (6 by 6, symmetric positive semi-definite), bounded without an eigen
+  // solve: with H = G / tr G, λ_max(H)¹⁶ ≤ tr H¹⁶ = ‖H⁸‖_F², so √λ_max(G) ≤ √(tr G · ‖H⁸‖_F^(1/8)),
+  // at most 6^(1/32) = 1.06 times the norm, for three 6-by-6 products (a fifth of an eigen solve).
+  // The margin covers the products' rounding.
+  constexpr double kMargin = 1.0 + 1e-9;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> a(6, modes);
   for (Eigen::Index e = 0; e < t; ++e) {
-    b.row(e) = (kD.asDiagonal() * s.block(6 * e, 0, 6, modes)).colwise().norm();
+    a.noalias() = kD.asDiagonal() * s.block(6 * e, 0, 6, modes);
+    b.modeNorms.row(e) = a.colwise().norm();
+    a = a * b.modeScales.asDiagonal();
+    Eigen::Matrix<double, 6, 6> h = a * a.transpose();
+    const double trace = h.trace();
+    if (!(trace > 0.0)) {
+      b.spectralNorms[e] = 0.0;
+      continue;
+    }
+    h /= trace;
+    for (int i = 0; i < 3; ++i) h = (h * h).eval();
+    b.spectralNorms[e] = std::sqrt(trace * std::pow(h.norm(), 0.125)) * kMargin;
   }
   return b;
 }
@@ -129,7 +149,7 @@ Voigt StressField::at(int32_t e) const {
   return best;
 }
 
-StressScan scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
+StressScan scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen::MatrixXd& q,
                         const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double threshold,
                         bool prune, int pointsPerElement) {
   StressScanWorkspace workspace;
@@ -138,7 +158,7 @@ StressScan scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, con
   return scan;
 }
 
-void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
+void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen::MatrixXd& q,
                   const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double threshold, bool prune,
                   StressScanWorkspace& w, StressScan& scan, int pointsPerElement) {
   // Every stress point is scanned as one "element" e of S's rows; the peak and the seeds are then
@@ -173,15 +193,19 @@ void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eig
       }
     }
   } else {
-    // Two levels of bounds. Per element, over all instants: B_e = Σ_j ‖D S_e,j‖ max_k |q_kj|
-    // (+ ‖D σ̂_e‖ max_k |F_k|), one matrix-vector product. Elements are taken from a max-heap on
-    // B_e until B_e < best; only then are the per-instant bounds b_e,k = Σ_j ‖D S_e,j‖ |q_kj|
-    // (+ ‖D σ̂_e‖ |F_k|) formed, for that element alone. Anything skipped is below the final peak,
-    // so the answer is the full scan's.
+    // Two levels of bounds (see the header: the smaller of the triangle and the spectral bound).
+    // Per element, over all instants: B_e = min(Σ_j ‖D S_e,j‖ max_k |q_kj|, ‖D S_e‖₂ max_k ‖q_k‖)
+    // (+ ‖D σ̂_e‖ max_k |F_k|), two matrix-vector products. Elements are taken from a max-heap on
+    // B_e until B_e < best; only then are the per-instant bounds b_e,k formed, for that element
+    // alone, the spectral one first (one product). Anything skipped is below the final peak, so
+    // the answer is the full scan's.
     w.qAbsT = q.cwiseAbs().transpose();  // r by K
     w.qMax = w.qAbsT.rowwise().maxCoeff();
+    w.qNorm.resize(steps);  // ‖W⁻¹ q_k‖
+    for (Eigen::Index k = 0; k < steps; ++k) w.qNorm[k] = w.qT.col(k).cwiseQuotient(bounds.modeScales.head(r)).norm();
     w.elementBound.resize(t);
-    w.elementBound.noalias() = bounds.leftCols(r) * w.qMax;
+    w.elementBound.noalias() = bounds.modeNorms.leftCols(r) * w.qMax;
+    w.elementBound = w.elementBound.cwiseMin(bounds.spectralNorms * w.qNorm.maxCoeff());
     double forceMax = 0.0;
     if (correction) {
       w.staticNorm.resize(t);
@@ -194,15 +218,15 @@ void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eig
     w.heap.resize(static_cast<size_t>(t));
     for (Eigen::Index e = 0; e < t; ++e) w.heap[static_cast<size_t>(e)] = {w.elementBound[e], static_cast<int32_t>(e)};
     std::make_heap(w.heap.begin(), w.heap.end());
-    w.instantBound.resize(steps);
     while (!w.heap.empty() && w.heap.front().first >= best) {
       std::pop_heap(w.heap.begin(), w.heap.end());
       const int32_t e = w.heap.back().second;
       w.heap.pop_back();
-      w.instantBound.noalias() = w.qAbsT.transpose() * bounds.row(e).head(r).transpose();
-      if (correction) w.instantBound += w.staticNorm[e] * w.forceAbs;
+      w.modeNorms = bounds.modeNorms.row(e).head(r).transpose();
       for (Eigen::Index k = 0; k < steps; ++k) {
-        if (w.instantBound[k] < best) continue;
+        const double staticBound = correction ? w.staticNorm[e] * w.forceAbs[k] : 0.0;
+        if (bounds.spectralNorms[e] * w.qNorm[k] + staticBound < best) continue;
+        if (w.modeNorms.dot(w.qAbsT.col(k)) + staticBound < best) continue;
         const Voigt s = voigt(e, k);
         if ((kD.asDiagonal() * s).norm() < best) continue;
         ++scan.evaluations;
@@ -218,7 +242,8 @@ void scanStresses(const MatrixXdRow& S, const Eigen::MatrixXd& bounds, const Eig
   w.seeds.clear();
   if (prune && k >= 0) {  // b_e,k at the peak instant, for every element
     w.seedBound.resize(t);
-    w.seedBound.noalias() = bounds.leftCols(r) * w.qAbsT.col(k);
+    w.seedBound.noalias() = bounds.modeNorms.leftCols(r) * w.qAbsT.col(k);
+    w.seedBound = w.seedBound.cwiseMin(bounds.spectralNorms * w.qNorm[k]);
     if (correction) w.seedBound += w.forceAbs[k] * w.staticNorm;
   }
   // Every element over σ_t at that instant: in fixed ranges, each into its own list, gathered in

@@ -125,11 +125,11 @@ Status stressStage(const ImpactJob& job, Flow& flow, ImpactWorkspace& ws, Impact
   const int points = stressPointsPerElement(body.asset.elementOrder);
   if (flow.correction && fs.reportUncorrectedPeak) {
     // The truncated modes alone, for the report (peak only: no seeds needed).
-    scanStresses(body.asset.stressModes, body.stressBounds, ws.q, kNoStatic, ws.force,
+    scanStresses(body.asset.stressModes, body.stressBounds(), ws.q, kNoStatic, ws.force,
                  std::numeric_limits<double>::infinity(), fs.pruneStresses, ws.scanBuffers, scan, points);
     result.peakWithoutCorrectionPa = scan.peakPrincipalPa;
   }
-  scanStresses(body.asset.stressModes, body.stressBounds, ws.q, flow.correction ? ws.staticStress : kNoStatic,
+  scanStresses(body.asset.stressModes, body.stressBounds(), ws.q, flow.correction ? ws.staticStress : kNoStatic,
                ws.force, body.material.tensileStrengthPa, fs.pruneStresses, ws.scanBuffers, scan, points);
   result.peakPrincipalStressPa = scan.peakPrincipalPa;
   if (!flow.correction) result.peakWithoutCorrectionPa = scan.peakPrincipalPa;

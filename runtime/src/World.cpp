@@ -181,11 +181,14 @@ struct World::Impl {
       if (!id) return id.error();  // unreachable: capacity checked above
       result.fragments[i].object = id.value();
     }
-    // The fragments' modal data are made on the workers from now on (an impact or objectAsset
-    // that needs one first makes or waits for it).
+    // The fragments' modal data and stress bounds are made on the workers from now on (an impact
+    // or objectAsset that needs one first makes or waits for it).
     workers().execute([&] {
       for (auto& source : newBodies) {
-        if (source) background.run([source] { (void)source->get(); });
+        if (!source) continue;
+        background.run([source] {
+          if (const auto& body = source->get()) (void)body.value()->stressBounds();
+        });
       }
     });
     newBodies.clear();
@@ -276,11 +279,13 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
         if (correct) made->scheduleStaticCorrection();
         w.workers().execute([&] {
           w.background.run([made, correct] {
+            (void)made->stressBounds();
             (void)made->tetMoments();
             if (correct) (void)made->staticCorrection();
           });
         });
       } else {
+        (void)made->stressBounds();
         (void)made->tetMoments();
         if (correct) {
           if (const auto& correction = made->staticCorrection(); !correction) return correction.error();

@@ -3,6 +3,7 @@
 // definition and on hand-made cuts), and typed errors.
 #include "brittle/runtime/CrackPropagation.h"
 
+#include <Eigen/SVD>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -112,7 +113,10 @@ TEST(CrackPropagation, PrunedScanEqualsTheFullScanOnRandomFields) {
       }
       std::vector<double> force(instants);
       for (double& f : force) f = 100.0 * std::abs(g(rng));
-      const Eigen::MatrixXd bounds = stressModeBounds(stressModes, modes);
+      // Unit weights, or 1/ω-like ones (the World's), under which the spectral bound is the tighter.
+      const Eigen::VectorXd scales =
+          trial % 3 == 0 ? Eigen::VectorXd() : Eigen::VectorXd(Eigen::VectorXd::LinSpaced(modes, 1, modes).cwiseInverse());
+      const StressBounds bounds = stressModeBounds(stressModes, modes, scales);
       const double threshold = trial == 5 ? 1e9 : 2.5e6 + 4e5 * trial;
       const StressScan full = scanStresses(stressModes, bounds, q, staticStress, force, threshold, false);
       const StressScan pruned = scanStresses(stressModes, bounds, q, staticStress, force, threshold, true);
@@ -143,6 +147,44 @@ TEST(CrackPropagation, PrunedScanEqualsTheFullScanOnRandomFields) {
   EXPECT_GT(withoutSeeds, 0);
 }
 
+TEST(CrackPropagation, SpectralBoundIsANormBoundWithinSixPercent) {
+  // ‖D S_e W‖₂ from the trace of the 16th power of the Gram matrix: never below the exact norm
+  // (an SVD), at most 6^(1/32) above it, for any number of the first modes, and so a bound on
+  // ‖D S_e q‖ / ‖W⁻¹ q‖. Blocks of rank 1 to 6, and an all-zero one.
+  std::mt19937_64 rng(31);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const int points = 60, modes = 40;
+  MatrixXdRow stressModes = MatrixXdRow::Zero(6 * points, modes);
+  for (int e = 1; e < points; ++e) {
+    const int rank = 1 + e % 6;
+    Eigen::MatrixXd left(6, rank), right(rank, modes);
+    for (Eigen::Index i = 0; i < left.size(); ++i) left.data()[i] = 1e6 * g(rng);
+    for (Eigen::Index i = 0; i < right.size(); ++i) right.data()[i] = g(rng);
+    stressModes.block(6 * e, 0, 6, modes) = left * right;
+  }
+  const Eigen::VectorXd scales = Eigen::VectorXd::LinSpaced(modes, 1, modes).cwiseInverse();
+  const StressBounds bounds = stressModeBounds(stressModes, modes, scales);
+  const Eigen::Matrix<double, 6, 1> d = (Eigen::Matrix<double, 6, 1>() << 1, 1, 1, std::sqrt(2.0), std::sqrt(2.0), std::sqrt(2.0)).finished();
+  EXPECT_EQ(bounds.spectralNorms[0], 0.0);
+  double worst = 1.0;
+  for (int e = 1; e < points; ++e) {
+    const Eigen::MatrixXd a = d.asDiagonal() * stressModes.block(6 * e, 0, 6, modes) * scales.asDiagonal();
+    const double exact = Eigen::JacobiSVD<Eigen::MatrixXd>(a).singularValues()[0];
+    EXPECT_GE(bounds.spectralNorms[e], exact) << "point " << e;
+    EXPECT_LE(bounds.spectralNorms[e], std::pow(6.0, 1.0 / 32.0) * exact * (1 + 1e-12)) << "point " << e;
+    worst = std::max(worst, bounds.spectralNorms[e] / exact);
+    for (int r : {1, 7, modes}) {  // any first r modes: ‖D S_e q‖ ≤ bound · ‖W⁻¹ q‖
+      Eigen::VectorXd q(r);
+      for (Eigen::Index i = 0; i < r; ++i) q[i] = g(rng);
+      const double stress = (d.asDiagonal() * stressModes.block(6 * e, 0, 6, r) * q).norm();
+      EXPECT_LE(stress, bounds.spectralNorms[e] * (scales.head(r).cwiseInverse().asDiagonal() * q).norm()) << e << ", " << r;
+    }
+  }
+  EXPECT_GT(worst, 1.0);  // the bound is not the exact norm by accident
+  EXPECT_EQ(bounds.modeNorms.rows(), points);
+  EXPECT_NEAR(bounds.modeNorms(5, 3), (d.asDiagonal() * stressModes.block(30, 3, 6, 1)).norm(), 1e-9);
+}
+
 TEST(CrackPropagation, ScanOfFourPointsPerElementNamesEachElementOnceByItsStrongestPoint) {
   // P2 stress modes (the 4 corners of each element): pruned equals full, the peak is the largest
   // σ₁ over every element's points, and the seeds are exactly the elements whose strongest point
@@ -161,8 +203,8 @@ TEST(CrackPropagation, ScanOfFourPointsPerElementNamesEachElementOnceByItsStrong
     for (Eigen::Index i = 0; i < staticStress.size(); ++i) staticStress[i] = 1e3 * g(rng);
     std::vector<double> force(instants);
     for (double& f : force) f = 100.0 * std::abs(g(rng));
-    const Eigen::MatrixXd bounds = stressModeBounds(stressModes, modes);
-    ASSERT_EQ(bounds.rows(), kPoints * elements);
+    const StressBounds bounds = stressModeBounds(stressModes, modes);
+    ASSERT_EQ(bounds.modeNorms.rows(), kPoints * elements);
     const double threshold = 3e6;
     const StressScan full = scanStresses(stressModes, bounds, q, staticStress, force, threshold, false, kPoints);
     const StressScan pruned = scanStresses(stressModes, bounds, q, staticStress, force, threshold, true, kPoints);

@@ -4,10 +4,13 @@
 //
 // Stress of element e at instant k: σ_e = S_e q_k (+ σ̂_e F_k, the static correction of the
 // truncated modes, when given). For the largest principal stress,
-//   σ₁ ≤ ‖σ‖_F = ‖D σ_voigt‖ ≤ Σ_j ‖D S_e,j‖ |q_j,k| + ‖D σ̂_e‖ |F_k|,   D = diag(1, 1, 1, √2, √2, √2)
-// (S_e,j the stress of mode j), so an element or instant whose bound is below what is sought is
-// skipped without changing the answer. Elements are visited by a bound over all instants (one
-// matrix-vector product), and per-instant bounds are formed only for the elements visited.
+//   σ₁ ≤ ‖σ‖_F = ‖D σ_voigt‖ ≤ min(Σ_j ‖D S_e,j‖ |q_j,k|, ‖D S_e‖₂ ‖q_k‖) + ‖D σ̂_e‖ |F_k|,
+// D = diag(1, 1, 1, √2, √2, √2), S_e,j the stress of mode j. The first term (the triangle
+// inequality) is tight when one mode dominates; the second (the spectral norm of the 6-by-r block,
+// which has rank ≤ 6) when many do, as in a hit that rings 40 modes at once, where it is several
+// times smaller. An element or instant whose bound is below what is sought is skipped without
+// changing the answer. Elements are visited by a bound over all instants (one matrix-vector
+// product), and per-instant bounds are formed only for the elements visited.
 // scanStresses with prune = false evaluates everything, for tests and benchmarks.
 //
 // Growth: seeds are the elements whose σ₁ reaches σ_t at the instant of the peak, strongest first,
@@ -37,8 +40,19 @@ using Voigt = Eigen::Matrix<double, 6, 1>;
 /// Largest principal stress (Pa) of a Voigt stress (xx, yy, zz, yz, xz, xy), and its unit direction.
 double maxPrincipalStress(const Voigt& stress, Eigen::Vector3d* direction = nullptr);
 
-/// ‖D S_e,j‖ per stress point and mode (PT by modes): the stress bound per unit |q_j|.
-Eigen::MatrixXd stressModeBounds(const MatrixXdRow& stressModes, int modes);
+/// What bounds a stress point's stress per unit of modal amplitude, for the pruned scan.
+struct StressBounds {
+  Eigen::MatrixXd modeNorms;     ///< PT by modes: ‖D S_e,j‖, per unit |q_j|
+  Eigen::VectorXd modeScales;    ///< modes: w_j > 0 (1/ω_j: see stressModeBounds)
+  Eigen::VectorXd spectralNorms; ///< PT: ‖D S_e W‖₂ over the first `modes` modes, per unit ‖W⁻¹ q‖
+};
+
+/// The bounds of every stress point over the first `modes` modes of stressModes (6PT by ≥ modes).
+/// modeScales (w_j > 0, ≥ modes entries; empty: all 1) weigh the spectral bound
+/// ‖D S_e q‖ ≤ ‖D S_e W‖₂ ‖W⁻¹ q‖. With w_j = 1/ω_j, ‖W⁻¹ q‖² = Σ ω_j² q_j² is twice the kept
+/// modes' strain energy, which a hit shares out over many modes while the stress per unit q_j
+/// grows with ω_j: the bound is then stress per unit √energy, and holds for any fewer modes.
+StressBounds stressModeBounds(const MatrixXdRow& stressModes, int modes, const Eigen::VectorXd& modeScales = {});
 
 struct StressScan {
   double peakPrincipalPa = 0.0;   ///< exact maximum of σ₁ over elements and instants
@@ -50,11 +64,11 @@ struct StressScan {
 
 /// Scans σ₁ over every stress point and instant. stressModes: 6PT by ≥ r, P = pointsPerElement
 /// (ObjectAsset::stressModes: 1 for P1, the 4 corners for P2); q: K by r; bounds from
-/// stressModeBounds (PT by r); staticStress (6PT, per newton, may be empty) and forceN (K) add the
+/// stressModeBounds over ≥ r modes; staticStress (6PT, per newton, may be empty) and forceN (K) add the
 /// static correction. The peak and the seeds name elements: an element's σ₁ is the largest at its
 /// points (for P2 that is its maximum over the element, the stress being linear in it). Pruned and
 /// unpruned scans return the same peak, element, instant and seeds.
-StressScan scanStresses(const MatrixXdRow& stressModes, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
+StressScan scanStresses(const MatrixXdRow& stressModes, const StressBounds& bounds, const Eigen::MatrixXd& q,
                         const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double thresholdPa,
                         bool prune, int pointsPerElement = 1);
 
@@ -64,7 +78,9 @@ struct StressScanWorkspace {
   Eigen::MatrixXd qAbsT;                       ///< r by K: |q|ᵀ
   Eigen::MatrixXd qT;                          ///< r by K: qᵀ
   Eigen::VectorXd qMax, staticNorm, forceAbs;  ///< r, T, K
-  Eigen::VectorXd elementBound, instantBound, seedBound;  ///< T, K, T
+  Eigen::VectorXd qNorm;                       ///< K: ‖W⁻¹ q_k‖ (StressBounds::modeScales)
+  Eigen::VectorXd modeNorms;                   ///< r: the visited point's ‖D S_e,j‖, contiguous
+  Eigen::VectorXd elementBound, seedBound;     ///< T, T
   std::vector<std::pair<double, int32_t>> heap, seeds;
   std::vector<std::vector<std::pair<double, int32_t>>> rangeSeeds;  ///< per fixed range of elements
   std::vector<int64_t> rangeEvaluations;
@@ -75,7 +91,7 @@ struct StressScanWorkspace {
 /// seeds are gathered over fixed ranges of elements, in parallel where the caller runs in a oneTBB
 /// arena with more than one thread, and in range order: the scan is the same on any number of
 /// threads.
-void scanStresses(const MatrixXdRow& stressModes, const Eigen::MatrixXd& bounds, const Eigen::MatrixXd& q,
+void scanStresses(const MatrixXdRow& stressModes, const StressBounds& bounds, const Eigen::MatrixXd& q,
                   const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double thresholdPa, bool prune,
                   StressScanWorkspace& workspace, StressScan& out, int pointsPerElement = 1);
 
