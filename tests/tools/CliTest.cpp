@@ -364,6 +364,15 @@ TEST_F(CliTest, SizeBakesTheSceneObjectsAtTheirModeCountsAndReports) {
   const std::string hit = "impact " + path("out/sized.h5") + " --object tile --point 0,0,0.006 --normal 0,0,1 --speed 3 --json";
   EXPECT_EQ(run(hit + " --settings " + path("out/sized.settings.json")).exitCode, 0);
   EXPECT_EQ(run(hit + " --settings " + path("out/sized.settings.json") + " --debris 0.2").exitCode, 0);
+  // The truncated modes' own peak is a second scan, run on request only; it changes nothing else.
+  const CliRun plain = run(hit), reported = run(hit + " --report-uncorrected");
+  ASSERT_EQ(plain.exitCode, 0) << plain.out;
+  ASSERT_EQ(reported.exitCode, 0) << reported.out;
+  const auto plainDoc = nlohmann::json::parse(plain.out), reportedDoc = nlohmann::json::parse(reported.out);
+  EXPECT_TRUE(plainDoc["peak_without_correction_pa"].is_null());
+  EXPECT_GT(reportedDoc["peak_without_correction_pa"].get<double>(), 0.0);
+  EXPECT_EQ(plainDoc["peak_principal_stress_pa"].get<double>(), reportedDoc["peak_principal_stress_pa"].get<double>());
+  EXPECT_EQ(plainDoc["cracks"], reportedDoc["cracks"]);
   std::ofstream(dir / "typo.settings.json") << R"({ "debris": 0.1 })";
   const CliRun typo = run(hit + " --settings " + path("typo.settings.json"));
   EXPECT_EQ(typo.exitCode, 3);
