@@ -1,9 +1,11 @@
 #include "brittle/runtime/StaticCorrection.h"
 
 #include <Eigen/SparseCholesky>
+#include <oneapi/tbb/task_arena.h>
 #include <cmath>
 #include <string>
 
+#include "BackwardSolve.h"
 #include "brittle/runtime/FemAssembly.h"
 
 namespace brittle {
@@ -19,6 +21,7 @@ struct StaticCorrection::Data {
   Eigen::VectorXd lambdas;      // r, shifted by μ
   std::shared_ptr<const ShiftedFactor> solver;  // of K + μM
   Eigen::VectorXd inverseD;     // of the LDLᵀ factor (vectorD() returns a copy)
+  detail::BackwardSolvePlan backward;  // Lᵀ's solve, shared by the arena's threads
   ElementStresses recovery;     // σ at each element's stress points from u
 };
 
@@ -71,6 +74,8 @@ Result<StaticCorrection> StaticCorrection::fromFactor(const ObjectAsset& asset, 
   data->solver = std::move(factor);
   const ShiftedFactor& solver = *data->solver;
   data->inverseD = solver.vectorD().cwiseInverse();
+  data->backward = detail::BackwardSolvePlan::make(solver.matrixL().nestedExpression(),
+                                                   tbb::this_task_arena::max_concurrency());
   // The inertia relief's share of every forward solve, once: f_e = f − MΨΨᵀf, so
   // L⁻¹P f_e = L⁻¹P f − (L⁻¹P MΨ) Ψᵀf, and an impact's forward solve stays as sparse as its load.
   // (Not (K + μM)⁻¹MΨ after the whole solve: that is Ψ/μ, and taking it away from (K + μM)⁻¹f
@@ -118,7 +123,8 @@ Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, do
   w.displacement.resize(dofs);
   // u = (K + μM)⁻¹ f_e from the factors P(K + μM)Pᵀ = L D Lᵀ, step by step: Eigen's solve() permutes
   // its result in place, and that allocates a mask on every call. The forward solve skips the
-  // zeros of a sparse right-hand side, so it costs only the load's reach in the elimination tree.
+  // zeros of a sparse right-hand side, so it costs only the load's reach in the elimination tree;
+  // the backward solve, over all of L, is shared by the threads (BackwardSolve.h).
   if (d.solver->permutationP().size() > 0) {
     w.scratch.noalias() = d.solver->permutationP() * w.load;
   } else {
@@ -127,7 +133,7 @@ Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, do
   d.solver->matrixL().solveInPlace(w.scratch);
   w.scratch.noalias() -= d.reliefForward * rigid;  // inertia relief: the solve of f_e from here on
   w.scratch.array() *= d.inverseD.array();
-  d.solver->matrixU().solveInPlace(w.scratch);
+  d.backward.solveInPlace(d.solver->matrixL().nestedExpression(), w.scratch);  // = matrixU().solveInPlace
   if (d.solver->permutationPinv().size() > 0) {
     w.displacement.noalias() = d.solver->permutationPinv() * w.scratch;
   } else {
