@@ -57,7 +57,6 @@ BackwardSolvePlan BackwardSolvePlan::make(const Eigen::SparseMatrix<double>& low
     }
   }
   parts = std::max(parts, 1);
-  plan.mTopNodes.clear();
   if (parts == 1 || n == 0) {
     plan.mTopNodes.resize(static_cast<size_t>(n));
     for (int32_t j = 0; j < n; ++j) plan.mTopNodes[static_cast<size_t>(n - 1 - j)] = j;
@@ -106,10 +105,9 @@ BackwardSolvePlan BackwardSolvePlan::make(const Eigen::SparseMatrix<double>& low
     sp.criticalWork = topWork + *std::max_element(load.begin(), load.end());
     return sp;
   };
-  Split best;
-  for (double fraction : {1.0, 0.75, 0.5, 0.33, 0.25, 0.125}) {
-    Split sp = split(fraction * total / parts);
-    if (best.top.empty() && best.finals.empty() ? true : sp.criticalWork < best.criticalWork) best = std::move(sp);
+  Split best = split(total / parts);
+  for (double fraction : {0.75, 0.5, 0.33, 0.25, 0.125}) {
+    if (Split sp = split(fraction * total / parts); sp.criticalWork < best.criticalWork) best = std::move(sp);
   }
   plan.mTopNodes = std::move(best.top);
   std::sort(plan.mTopNodes.begin(), plan.mTopNodes.end(), std::greater<>());

@@ -33,7 +33,7 @@ class BackwardSolvePlan {
   /// in parallel (oneTBB) where the caller's arena has threads, else one after the other.
   void solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x) const;
 
-  /// The share of L's non-zeros solved in parallel (0 for one part), for the benchmark and tests.
+  /// The share of L's non-zeros solved in parallel (0 for one part); what the plan is worth.
   double parallelShare() const { return mParallelShare; }
   /// The critical path's share of L's non-zeros: the top plus the heaviest part (1 for one part).
   double criticalShare() const { return mCriticalShare; }

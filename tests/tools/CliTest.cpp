@@ -9,7 +9,6 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
-#include <sstream>
 #include <string>
 #include <vector>
 #include <Eigen/Geometry>
@@ -67,6 +66,24 @@ std::vector<std::string> csvCells(const std::string& line) {
     at = comma == std::string::npos ? comma : comma + 1;
   }
   return cells;
+}
+
+// A CSV file: its header line, and each further line whole and split by csvCells.
+struct Csv {
+  std::string header;
+  std::vector<std::string> lines;
+  std::vector<std::vector<std::string>> rows;
+};
+
+Csv readCsv(const std::filesystem::path& file) {
+  Csv csv;
+  std::ifstream in(file);
+  std::getline(in, csv.header);
+  for (std::string line; std::getline(in, line);) {
+    csv.rows.push_back(csvCells(line));
+    csv.lines.push_back(std::move(line));
+  }
+  return csv;
 }
 
 class CliTest : public ::testing::Test {
@@ -204,20 +221,15 @@ TEST_F(CliTest, ImpactBenchTimesEitherElementAndNamesItInItsCsv) {
   // A P2 slab: every stage's row says p2, and the slab breaks at the bench's speed.
   const CliRun bench = run("bench impact --tets 400 --modes 6 --impacts 2 --element p2 --threads 1 --quiet --csv " + path("b.csv"));
   ASSERT_EQ(bench.exitCode, 0) << bench.out;
-  std::ifstream in(dir / "b.csv");
-  std::string line;
-  std::getline(in, line);
-  EXPECT_EQ(line, "target_tets,tets,modes,prune,stage,impacts,median_ms,p99_ms,broken_fraction,mean_fragments,median_evaluations,element");
-  int rows = 0;
-  while (std::getline(in, line)) {
-    ++rows;
-    const std::vector<std::string> cells = csvCells(line);
-    ASSERT_EQ(cells.size(), 12u) << line;
-    EXPECT_EQ(cells[5], "2") << line;            // impacts
-    EXPECT_EQ(std::stod(cells[8]), 1.0) << line;  // every one broke the slab
-    EXPECT_EQ(cells[11], "p2") << line;
+  const Csv csv = readCsv(dir / "b.csv");
+  EXPECT_EQ(csv.header, "target_tets,tets,modes,prune,stage,impacts,median_ms,p99_ms,broken_fraction,mean_fragments,median_evaluations,element");
+  for (const std::vector<std::string>& cells : csv.rows) {
+    ASSERT_EQ(cells.size(), 12u) << cells[0];
+    EXPECT_EQ(cells[5], "2") << cells[4];            // impacts
+    EXPECT_EQ(std::stod(cells[8]), 1.0) << cells[4];  // every one broke the slab
+    EXPECT_EQ(cells[11], "p2") << cells[4];
   }
-  EXPECT_EQ(rows, 2 * 10);  // pruned and unpruned, ten stages each
+  EXPECT_EQ(csv.rows.size(), 2u * 10);  // pruned and unpruned, ten stages each
   EXPECT_EQ(run("bench impact --element p3 --csv " + path("x.csv")).exitCode, 2);
 }
 
@@ -225,14 +237,11 @@ TEST_F(CliTest, ImpactBenchTimesEitherElementAndNamesItInItsCsv) {
 TEST_F(CliTest, SpeedAccuracyBenchesWriteTheirCsv) {
   const CliRun integrators = run("bench integrators --points 5 --csv " + path("i.csv") + " --timing-csv " + path("t.csv"));
   ASSERT_EQ(integrators.exitCode, 0) << integrators.out;
-  std::ifstream in(dir / "i.csv");
-  std::string line;
-  std::getline(in, line);
-  EXPECT_EQ(line, "integrator,zeta,omega_h,steps_per_period,peak_error,late_amplitude");
-  int rows = 0;
-  while (std::getline(in, line)) {
-    ++rows;
-    const std::vector<std::string> cells = csvCells(line);
+  const Csv csv = readCsv(dir / "i.csv");
+  EXPECT_EQ(csv.header, "integrator,zeta,omega_h,steps_per_period,peak_error,late_amplitude");
+  for (size_t i = 0; i < csv.rows.size(); ++i) {
+    const std::vector<std::string>& cells = csv.rows[i];
+    const std::string& line = csv.lines[i];
     ASSERT_EQ(cells.size(), 6u) << line;
     const double omegaH = std::stod(cells[2]), error = std::stod(cells[4]), late = std::stod(cells[5]);
     if (cells[0] == "exact") {
@@ -243,27 +252,23 @@ TEST_F(CliTest, SpeedAccuracyBenchesWriteTheirCsv) {
       EXPECT_FALSE(error < 1.0) << line;  // blown up
     }
   }
-  EXPECT_EQ(rows, 4 * 2 * 5);
+  EXPECT_EQ(csv.rows.size(), 4u * 2 * 5);
   const CliRun modes = run("bench modes --tets 3000 --modes 4,8 --points 1 --repeats 1 --quiet --csv " + path("m.csv"));
   ASSERT_EQ(modes.exitCode, 0) << modes.out;
-  std::ifstream m(dir / "m.csv");
-  std::getline(m, line);
-  EXPECT_EQ(line.substr(0, 40), "point,x,y,tets,modes,reference_pa,correc");
-  rows = 0;
-  while (std::getline(m, line)) ++rows;
-  EXPECT_EQ(rows, 2);
+  const Csv m = readCsv(dir / "m.csv");
+  EXPECT_EQ(m.header.substr(0, 40), "point,x,y,tets,modes,reference_pa,correc");
+  EXPECT_EQ(m.rows.size(), 2u);
   EXPECT_EQ(run("bench integrators --zeta 1.5 --csv " + path("z.csv")).exitCode, 2);
 
   // Resolution: the coarser mesh is further from the extrapolated frequencies than the finer.
   const CliRun resolution = run("bench resolution --tets 300,2000 --modes 3 --quiet --csv " + path("r.csv"));
   ASSERT_EQ(resolution.exitCode, 0) << resolution.out;
-  std::ifstream r(dir / "r.csv");
-  std::getline(r, line);
-  EXPECT_EQ(line, "target_tets,tets,mode,frequency_hz,reference_hz,error,difference_from_finest,meshing_s,modal_s,bake_s");
+  const Csv r = readCsv(dir / "r.csv");
+  EXPECT_EQ(r.header, "target_tets,tets,mode,frequency_hz,reference_hz,error,difference_from_finest,meshing_s,modal_s,bake_s");
   std::vector<double> errors;
-  while (std::getline(r, line)) {
-    const size_t a = line.find(',', line.find(',', line.find(',', line.find(',', line.find(',') + 1) + 1) + 1) + 1);
-    errors.push_back(std::abs(std::stod(line.substr(a + 1))));
+  for (const std::vector<std::string>& cells : r.rows) {
+    ASSERT_EQ(cells.size(), 10u);
+    errors.push_back(std::abs(std::stod(cells[5])));
   }
   ASSERT_EQ(errors.size(), 6u);
   for (int j = 0; j < 3; ++j) EXPECT_GT(errors[static_cast<size_t>(j)], errors[static_cast<size_t>(3 + j)]) << j;
@@ -286,18 +291,14 @@ TEST_F(CliTest, ExactModesBenchComparesTheMatchWithTheFragmentsOwnModes) {
   const CliRun bench = run("bench exact-modes " + path("p.h5") + " --speeds 40 --seeds 1 --max-fragments 3 --exact-modes 6 "
                            "--repeats 1 --quiet --csv " + path("x.csv"));
   ASSERT_EQ(bench.exitCode, 0) << bench.out;
-  std::ifstream in(dir / "x.csv");
-  std::string line;
-  std::getline(in, line);
-  EXPECT_EQ(line.substr(0, 62), "object,speed_mps,seed,fragment,volume_fraction,parent_tets,sub");
-  int rows = 0;
-  while (std::getline(in, line)) {
-    ++rows;
+  const Csv csv = readCsv(dir / "x.csv");
+  EXPECT_EQ(csv.header.substr(0, 62), "object,speed_mps,seed,fragment,volume_fraction,parent_tets,sub");
+  for (const std::string& line : csv.lines) {
     EXPECT_EQ(line.substr(0, 8), "tile,40,") << line;
     EXPECT_EQ(line.find("nan"), std::string::npos) << line;  // both paths and the reference ran
   }
-  EXPECT_GE(rows, 2);
-  EXPECT_LE(rows, 3);
+  EXPECT_GE(csv.lines.size(), 2u);
+  EXPECT_LE(csv.lines.size(), 3u);
 }
 
 TEST_F(CliTest, FractureStatisticsBenchWritesOneRowPerSeedAndSpeed) {
@@ -305,17 +306,12 @@ TEST_F(CliTest, FractureStatisticsBenchWritesOneRowPerSeedAndSpeed) {
                            "--modes 8 --quiet --brick-mesh \"" + (testing::sourceDir() / "assets" / "meshes" / "brick.off").string() +
                            "\" --csv " + path("f.csv"));
   ASSERT_EQ(bench.exitCode, 0) << bench.out;
-  std::ifstream csv(dir / "f.csv");
-  std::string line;
-  std::getline(csv, line);
-  EXPECT_EQ(line, "case,tets,modes,speed_mps,seed,broken,fragments,pieces,largest_mass_fraction,peak_pa,impact_ms");
-  int rows = 0;
+  const Csv csv = readCsv(dir / "f.csv");
+  EXPECT_EQ(csv.header, "case,tets,modes,speed_mps,seed,broken,fragments,pieces,largest_mass_fraction,peak_pa,impact_ms");
   double slow = 0.0, fast = 0.0;
-  while (std::getline(csv, line)) {
-    ++rows;
-    std::vector<std::string> c;
-    std::stringstream cells(line);
-    for (std::string cell; std::getline(cells, cell, ',');) c.push_back(cell);
+  for (size_t i = 0; i < csv.rows.size(); ++i) {
+    const std::vector<std::string>& c = csv.rows[i];
+    const std::string& line = csv.lines[i];
     ASSERT_EQ(c.size(), 11u) << line;
     const int fragments = std::stoi(c[6]), pieces = std::stoi(c[7]);
     const double largest = std::stod(c[8]);
@@ -325,7 +321,7 @@ TEST_F(CliTest, FractureStatisticsBenchWritesOneRowPerSeedAndSpeed) {
     EXPECT_EQ(c[5] == "1", fragments > 1) << line;
     if (c[0] == "plate") (std::stod(c[3]) < 10.0 ? slow : fast) += fragments;
   }
-  EXPECT_EQ(rows, 3 * 3);
+  EXPECT_EQ(csv.rows.size(), 3u * 3);
   EXPECT_GT(fast, slow);  // a 40 m/s ball breaks the plate into more pieces than a 2 m/s one
   EXPECT_EQ(run("bench fracture --plate-speeds -1 --csv " + path("bad.csv")).exitCode, 2);
 }
@@ -557,19 +553,16 @@ TEST_F(CliTest, SearchBenchWritesItsCsv) {
   const CliRun bench = run("bench search --shapes " + shapes + " --sizes 40,80 --queries 8 --physics-queries 0 --index kd-forest:2:16 --quiet --csv " +
                            path("search.csv") + " --cost-csv " + path("cost.csv"));
   ASSERT_EQ(bench.exitCode, 0) << bench.out;
-  std::ifstream csv(dir / "search.csv");
-  std::string header, line;
-  std::getline(csv, header);
-  EXPECT_EQ(header.rfind("entries,descriptor,index,", 0), 0u) << header;
-  int rows = 0, bruteForce = 0;
-  while (std::getline(csv, line)) {
-    ++rows;
+  const Csv csv = readCsv(dir / "search.csv");
+  EXPECT_EQ(csv.header.rfind("entries,descriptor,index,", 0), 0u) << csv.header;
+  int bruteForce = 0;
+  for (const std::string& line : csv.lines) {
     if (line.find(",brute-force,") != std::string::npos) {
       ++bruteForce;
       EXPECT_NE(line.find(",1,0,0,0,0"), std::string::npos) << "exact search has recall 1: " << line;
     }
   }
-  EXPECT_EQ(rows, 2 * 3 * 2);  // sizes × kinds × (brute force, kd-forest)
+  EXPECT_EQ(csv.lines.size(), 2u * 3 * 2);  // sizes × kinds × (brute force, kd-forest)
   EXPECT_EQ(bruteForce, 2 * 3);
   std::ifstream cost(dir / "cost.csv");
   const std::string costText((std::istreambuf_iterator<char>(cost)), std::istreambuf_iterator<char>());
@@ -586,16 +579,10 @@ TEST_F(CliTest, SearchBenchWithRuntimeFragmentsAsQueriesAndEntries) {
                            " --runtime-fraction 0.5 --runtime-queries --index kd-forest:1:8 --quiet --csv " +
                            path("search.csv") + " --cost-csv " + path("cost.csv"));
   ASSERT_EQ(bench.exitCode, 0) << bench.out;
-  std::ifstream csv(dir / "search.csv");
-  std::string header, line;
-  std::getline(csv, header);
-  EXPECT_NE(header.find(",database_runtime_fraction,query_source"), std::string::npos) << header;
-  int rows = 0;
-  while (std::getline(csv, line)) {
-    ++rows;
-    EXPECT_NE(line.find(",0.5,runtime"), std::string::npos) << line;
-  }
-  EXPECT_EQ(rows, 2);  // brute force and the kd-forest
+  const Csv csv = readCsv(dir / "search.csv");
+  EXPECT_NE(csv.header.find(",database_runtime_fraction,query_source"), std::string::npos) << csv.header;
+  for (const std::string& line : csv.lines) EXPECT_NE(line.find(",0.5,runtime"), std::string::npos) << line;
+  EXPECT_EQ(csv.lines.size(), 2u);  // brute force and the kd-forest
 }
 
 
