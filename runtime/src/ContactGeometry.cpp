@@ -86,25 +86,93 @@ double surfaceRadiusAt(const Body& body, const ContactSite& site) {
   return kappa > 1e-3 / body.sizeM ? 1.0 / kappa : std::numeric_limits<double>::infinity();
 }
 
-void contactLoadWeights(const Body& body, const ContactSite& site, const Eigen::Vector3d& p, double patchRadiusM,
+double contactLoadRadius(const Body& body, const ContactSite& site, double patchRadiusM) {
+  const Points& x = body.asset.tetMesh.nodes;
+  double h = 0.0;  // the longest surface edge at the contact face's corners: the ring's reach
+  for (int k = 0; k < 3; ++k) {
+    const int32_t i = body.topology.boundaryTriangles(site.face, k);
+    for (int32_t j : body.ring[static_cast<size_t>(i)]) h = std::max(h, (x.row(i) - x.row(j)).norm());
+  }
+  return std::max(patchRadiusM, kContactRingReach * h);
+}
+
+void contactLoadWeights(const Body& body, const ContactSite& site, double patchRadiusM,
                         std::vector<std::pair<int32_t, double>>& weights) {
   const Points& x = body.asset.tetMesh.nodes;
+  const TetTopology& topo = body.topology;
+  const Triangles& tri = topo.boundaryTriangles;
+  // The disc's centre: the surface point the contact was placed at.
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 3; ++k) p += site.bary[k] * x.row(tri(site.face, k)).transpose();
+  const bool quadratic = body.asset.elementOrder == ElementOrder::P2;
+  const auto corners = static_cast<int32_t>(x.rows());
+  const double rho = contactLoadRadius(body, site, patchRadiusM);
   weights.clear();
-  double total = 0.0;
-  for (int32_t i : body.boundaryNodes) {
-    const double r2 = (x.row(i).transpose() - p).squaredNorm() / (patchRadiusM * patchRadiusM);
-    if (r2 >= 1.0) continue;
-    const double w = std::sqrt(1.0 - r2) * body.topology.nodeAreasM2[i];
-    weights.emplace_back(i, w);
-    total += w;
-  }
-  if (!(total > 0.0)) {
-    weights.clear();
-    total = 0.0;
-    for (int k = 0; k < 3; ++k) {
-      weights.emplace_back(body.topology.boundaryTriangles(site.face, k), site.bary[k]);
-      total += site.bary[k];
+  // The mid-edge node (N + edge id) between corners a and b of boundary face f.
+  auto midEdge = [&](Eigen::Index f, int32_t a, int32_t b) -> int32_t {
+    const int32_t tet = topo.boundaryFaces[static_cast<size_t>(f)][0];
+    const int32_t lo = std::min(a, b), hi = std::max(a, b);
+    for (int k = 0; k < 6; ++k) {
+      const int32_t e = topo.tetEdges(tet, k);
+      if (topo.edges(e, 0) == lo && topo.edges(e, 1) == hi) return corners + e;
     }
+    return -1;  // unreachable: a boundary face's edges are its tet's
+  };
+  // ∫ N_i p dA over each face the disc reaches: the face split into kSplit² triangles, each with
+  // the three-point rule at (2/3, 1/6, 1/6) (exact to degree 2), which follows the pressure's
+  // square-root edge closely enough; the total is normalised below, so the resultant is exact.
+  constexpr int kSplit = 4;
+  for (Eigen::Index f = 0; f < tri.rows(); ++f) {
+    const Eigen::Vector3d a = x.row(tri(f, 0)), b = x.row(tri(f, 1)), c = x.row(tri(f, 2));
+    Eigen::Vector3d bary;
+    if ((closestOnTriangle(p, a, b, c, bary) - p).squaredNorm() >= rho * rho) continue;
+    const double subArea = 0.5 * (b - a).cross(c - a).norm() / (kSplit * kSplit);
+    double n[6] = {0, 0, 0, 0, 0, 0};  // corners a, b, c; mid-edges ab, bc, ca
+    for (int i = 0; i < kSplit; ++i) {
+      for (int j = 0; j < kSplit - i; ++j) {
+        // Sub-triangles in barycentric steps: (i, j), (i + 1, j), (i, j + 1), and the flipped one.
+        for (int flip = 0; flip < (i + j < kSplit - 1 ? 2 : 1); ++flip) {
+          const Eigen::Vector2d v0 = flip ? Eigen::Vector2d(i + 1, j + 1) : Eigen::Vector2d(i, j);
+          const Eigen::Vector2d v1(i + 1, j), v2(i, j + 1);
+          for (int q = 0; q < 3; ++q) {
+            const Eigen::Vector2d uv =
+                ((q == 0 ? 4.0 : 1.0) * v0 + (q == 1 ? 4.0 : 1.0) * v1 + (q == 2 ? 4.0 : 1.0) * v2) / (6.0 * kSplit);
+            const double l1 = uv[0], l2 = uv[1], l0 = 1.0 - l1 - l2;
+            const double r2 = (l0 * a + l1 * b + l2 * c - p).squaredNorm() / (rho * rho);
+            if (r2 >= 1.0) continue;
+            const double w = std::sqrt(1.0 - r2) * subArea / 3.0;
+            if (quadratic) {
+              n[0] += w * l0 * (2 * l0 - 1), n[1] += w * l1 * (2 * l1 - 1), n[2] += w * l2 * (2 * l2 - 1);
+              n[3] += w * 4 * l0 * l1, n[4] += w * 4 * l1 * l2, n[5] += w * 4 * l2 * l0;
+            } else {
+              n[0] += w * l0, n[1] += w * l1, n[2] += w * l2;
+            }
+          }
+        }
+      }
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (n[k] != 0.0) weights.emplace_back(tri(f, k), n[k]);
+      if (quadratic && n[3 + k] != 0.0) weights.emplace_back(midEdge(f, tri(f, k), tri(f, (k + 1) % 3)), n[3 + k]);
+    }
+  }
+  // One weight per node, in node order.
+  std::sort(weights.begin(), weights.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
+  size_t out = 0;
+  for (size_t i = 0; i < weights.size(); ++i) {
+    if (out > 0 && weights[out - 1].first == weights[i].first) {
+      weights[out - 1].second += weights[i].second;
+    } else {
+      weights[out++] = weights[i];
+    }
+  }
+  weights.resize(out);
+  double total = 0.0;
+  for (const auto& [i, w] : weights) total += w;
+  if (!(total > 0.0)) {  // unreachable while ρ covers the contact face; kept for a degenerate face
+    weights.clear();
+    total = 1.0;
+    for (int k = 0; k < 3; ++k) weights.emplace_back(tri(site.face, k), site.bary[k]);
   }
   for (auto& [i, w] : weights) w /= total;
 }

@@ -68,7 +68,7 @@ Status contactStage(const ImpactJob& job, Flow& flow, ImpactResult& result) {
   auto contact = computeHertzContact(hi);
   if (!contact) return contact.error();
   result.contact = contact.value();
-  contactLoadWeights(body, site.value(), flow.pointLocal, result.contact.patchRadiusM, result.loadWeights);
+  contactLoadWeights(body, site.value(), result.contact.patchRadiusM, result.loadWeights);
   return Ok{};
 }
 
