@@ -1,5 +1,6 @@
 #include "ContactGeometry.h"
 
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -86,17 +87,17 @@ double surfaceRadiusAt(const Body& body, const ContactSite& site) {
   return kappa > 1e-3 / body.sizeM ? 1.0 / kappa : std::numeric_limits<double>::infinity();
 }
 
-double contactLoadRadius(const Body& body, const ContactSite& site, double patchRadiusM) {
+double contactLoadRadius(const Body& body, const ContactSite& site, double patchRadiusM, double spreadFraction) {
   const Points& x = body.asset.tetMesh.nodes;
   double h = 0.0;  // the longest surface edge at the contact face's corners: the ring's reach
   for (int k = 0; k < 3; ++k) {
     const int32_t i = body.topology.boundaryTriangles(site.face, k);
     for (int32_t j : body.ring[static_cast<size_t>(i)]) h = std::max(h, (x.row(i) - x.row(j)).norm());
   }
-  return std::max(patchRadiusM, kContactRingReach * h);
+  return std::max({patchRadiusM, spreadFraction * body.sizeM, kContactRingReach * h});
 }
 
-void contactLoadWeights(const Body& body, const ContactSite& site, double patchRadiusM,
+void contactLoadWeights(const Body& body, const ContactSite& site, double rho,
                         std::vector<std::pair<int32_t, double>>& weights) {
   const Points& x = body.asset.tetMesh.nodes;
   const TetTopology& topo = body.topology;
@@ -106,7 +107,6 @@ void contactLoadWeights(const Body& body, const ContactSite& site, double patchR
   for (int k = 0; k < 3; ++k) p += site.bary[k] * x.row(tri(site.face, k)).transpose();
   const bool quadratic = body.asset.elementOrder == ElementOrder::P2;
   const auto corners = static_cast<int32_t>(x.rows());
-  const double rho = contactLoadRadius(body, site, patchRadiusM);
   weights.clear();
   // The mid-edge node (N + edge id) between corners a and b of boundary face f.
   auto midEdge = [&](Eigen::Index f, int32_t a, int32_t b) -> int32_t {

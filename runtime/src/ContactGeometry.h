@@ -7,19 +7,24 @@
 // κ = 2 n·(x_i − x_j)/|x_i − x_j|², averaged (flat or concave: ∞).
 // contactLoadWeights: the consistent nodal loads f_i = ∫ N_i p dA of the Hertz pressure
 // p ∝ √(1 − r²/ρ²) over the disc of radius ρ around the contact point (the closest surface point
-// to the reported one), on the boundary faces it
-// reaches, with the element's own surface shape functions (P1: the corners; P2: corners and
-// mid-edge nodes, where a uniform pressure puts all of its load). Weights sum to 1.
+// to the reported one), on the boundary faces it reaches, with the element's own surface shape
+// functions (P1: the corners; P2: corners and mid-edge nodes, where a uniform pressure puts all
+// of its load). Weights sum to 1.
 //
-// ρ = max(a, 1.5 h): Hertz's patch radius a, or, when the patch is smaller than the mesh around
-// it, 1.5 times the longest surface edge h at the contact face's corners, so that the load reaches
-// at least the nearest ring of nodes. Why: a mesh of edge h cannot represent stresses that vary
-// over less than about h. A load on fewer nodes does not make the answer more exact: it makes the
-// stresses next to it a property of the mesh (a nodal point load's field grows as 1/h² under
-// refinement, and more so on P2 corner nodes, which a uniform pressure does not load at all). The
-// spread keeps the resultant and its point of action, so by Saint-Venant the stress beyond a few ρ
-// is that of the true patch; nearer, it is that of a patch of radius ρ, which is what the mesh can
-// resolve. Where the mesh does resolve the patch (a ≥ 1.5 h) the load is Hertz's own.
+// ρ = max(a, s·D, h) (contactLoadRadius): Hertz's patch radius a; a length of the object,
+// s = FractureSettings::contactSpreadFraction (0.05) of its bounding-box diagonal D; and the
+// longest surface edge h at the contact face's corners, so that the load reaches at least the
+// nearest ring of nodes. Why: a mesh of edge h cannot represent stresses that vary over less than
+// about h. A load on fewer nodes does not make the answer more exact: it makes the stresses next
+// to it a property of the mesh (a nodal point load's field grows as 1/h² under refinement, and
+// more so on P2 corner nodes, which a uniform pressure does not load at all). A spread that
+// follows the mesh alone (s = 0) still moves with it: ρ shrinks as the mesh is refined, and the
+// stress under the load grows as 1/ρ². With s·D above the ring, ρ is a property of the object,
+// and refining the mesh converges to the stress of a patch of radius ρ. The spread keeps the
+// resultant and its point of action, so by Saint-Venant the stress beyond a few ρ is that of
+// the true patch; nearer, the runtime resolves the stress at the length ρ, and what is finer
+// (Hertz's edge tension of a small patch, cone cracks) is not modelled. Where the patch is larger
+// (a ≥ s·D, a ≥ h) the load is Hertz's own.
 #pragma once
 
 #include <Eigen/Core>
@@ -45,14 +50,16 @@ Result<ContactSite> locateContact(const Body& body, const Eigen::Vector3d& point
 /// The local radius of curvature (m) at the site's nearest node; +∞ where flat or concave.
 double surfaceRadiusAt(const Body& body, const ContactSite& site);
 
-/// The ring reach of the spread: ρ = max(a, kContactRingReach · h).
-inline constexpr double kContactRingReach = 1.5;
+/// The ring reach of the spread: ρ ≥ kContactRingReach · h.
+inline constexpr double kContactRingReach = 1.0;
 
-/// ρ, the radius the contact load is spread over (m).
-double contactLoadRadius(const Body& body, const ContactSite& site, double patchRadiusM);
+/// ρ = max(a, spreadFraction · D, kContactRingReach · h), the radius the contact load is spread
+/// over (m).
+double contactLoadRadius(const Body& body, const ContactSite& site, double patchRadiusM, double spreadFraction);
 
-/// Node weights of the contact load (summing to 1; FEM node ids, so mid-edge nodes N + edge for
-/// P2; P2 corner weights may be negative) into `weights`, in node order, which keeps its storage.
-void contactLoadWeights(const Body& body, const ContactSite& site, double patchRadiusM, std::vector<std::pair<int32_t, double>>& weights);
+/// Node weights of the contact load spread over radius `rho` (summing to 1; FEM node ids, so
+/// mid-edge nodes N + edge for P2; P2 corner weights may be negative) into `weights`, in node
+/// order, which keeps its storage.
+void contactLoadWeights(const Body& body, const ContactSite& site, double rho, std::vector<std::pair<int32_t, double>>& weights);
 
 }  // namespace brittle::detail

@@ -68,7 +68,8 @@ Status contactStage(const ImpactJob& job, Flow& flow, ImpactResult& result) {
   auto contact = computeHertzContact(hi);
   if (!contact) return contact.error();
   result.contact = contact.value();
-  contactLoadWeights(body, site.value(), result.contact.patchRadiusM, result.loadWeights);
+  result.loadRadiusM = contactLoadRadius(body, site.value(), result.contact.patchRadiusM, job.settings->contactSpreadFraction);
+  contactLoadWeights(body, site.value(), result.loadRadiusM, result.loadWeights);
   return Ok{};
 }
 

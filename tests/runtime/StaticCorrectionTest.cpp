@@ -23,7 +23,8 @@ struct Case {
 };
 
 Case runPlateCase(int modes, ElementOrder order = ElementOrder::P1, int64_t tets = 3000, double sideM = 0.3,
-                  const Eigen::Vector3d& pointWorld = Eigen::Vector3d(0.01, -0.02, 0.005)) {
+                  const Eigen::Vector3d& pointWorld = Eigen::Vector3d(0.01, -0.02, 0.005),
+                  double contactSpread = FractureSettings{}.contactSpreadFraction) {
   Case c;
   const Material& glass = testing::presetGlass();
   c.pack = testing::makeGlassPlatePack(tets, modes, sideM, order).value();
@@ -31,6 +32,7 @@ Case runPlateCase(int modes, ElementOrder order = ElementOrder::P1, int64_t tets
     WorldSettings s;
     s.fracture.staticCorrection = correction;
     s.fracture.reportUncorrectedPeak = true;
+    s.fracture.contactSpreadFraction = contactSpread;
     World world = World::create(Pack(c.pack), s).value();
     ImpactDesc d;
     d.object = world.addObject({.asset = "plate"}).value();
@@ -55,34 +57,41 @@ Case runPlateCase(int modes, ElementOrder order = ElementOrder::P1, int64_t tets
 }
 
 TEST(StaticCorrection, BringsThePeakStressWithin15PercentOfTheFullFemReference) {
-  // Measured (3k tets, Newmark at t_c/60): full FEM 231.3 MPa; 20 modes 190.7 corrected (−17.6 %)
-  // vs 150.8 alone (−34.8 %); 40 modes 200.2 (−13.4 %) vs 182.4 (−21.2 %); 60 modes 222.3 (−3.9 %)
-  // vs 182.3 (−21.2 %). The rest of the gap is the dynamic (not quasi-static) response of the
-  // modes between r and the contact's frequency.
-  for (int modes : {20, 40}) {
-  const Case c = runPlateCase(modes);
-  const double ref = c.reference.peakPrincipalPa;
-  const double with = c.corrected.peakPrincipalStressPa, without = c.corrected.peakWithoutCorrectionPa;
-  std::printf("plate, %d modes: full FEM (Newmark, %lld steps) %.2f MPa; modal + static correction %.2f MPa (%+.1f %%); "
-              "modal alone %.2f MPa (%+.1f %%)\n",
-              modes, static_cast<long long>(c.reference.steps), ref / 1e6, with / 1e6, 100 * (with / ref - 1), without / 1e6,
-              100 * (without / ref - 1));
-  if (modes >= 40) {
+  // Two loads of the same impact: the default spread (ρ = 0.05 × the plate's diagonal, 2.1 cm,
+  // ContactGeometry.h) and the mesh's nearest ring only (contactSpreadFraction 0), which is close
+  // to a point load. Measured (3k tets, Newmark at t_c/60), 40 modes: default spread, full FEM
+  // 162.3 MPa, modal + correction 159.9 (−1.5 %), modal alone 163.7 (+0.9 %); ring only, full FEM
+  // 225.7, corrected 195.4 (−13.4 %), alone 181.8 (−19.5 %). (20 modes: −18.1 % both with the
+  // spread; −17.6 % against −33.6 % on the ring.) The correction carries the part of the stress
+  // that varies over less than a mode's wavelength: most of it under a concentrated load, little
+  // under a load spread over twice the thickness. The rest of the gap is the dynamic (not
+  // quasi-static) response of the modes between r and the contact's frequency.
+  for (const double spread : {FractureSettings{}.contactSpreadFraction, 0.0}) {
+    const Case c = runPlateCase(40, ElementOrder::P1, 3000, 0.3, Eigen::Vector3d(0.01, -0.02, 0.005), spread);
+    const double ref = c.reference.peakPrincipalPa;
+    const double with = c.corrected.peakPrincipalStressPa, without = c.corrected.peakWithoutCorrectionPa;
+    std::printf("plate, spread %.2f, 40 modes: full FEM (Newmark, %lld steps) %.2f MPa; modal + static correction %.2f MPa "
+                "(%+.1f %%); modal alone %.2f MPa (%+.1f %%)\n",
+                spread, static_cast<long long>(c.reference.steps), ref / 1e6, with / 1e6, 100 * (with / ref - 1),
+                without / 1e6, 100 * (without / ref - 1));
     EXPECT_NEAR(with / ref, 1.0, 0.15);
-  }
-  EXPECT_NEAR(with / ref, 1.0, 0.20);
-  EXPECT_LT(std::abs(with / ref - 1.0), std::abs(without / ref - 1.0) - 0.05);  // the correction helps
-  EXPECT_EQ(c.truncated.peakPrincipalStressPa, without);  // "without" is the uncorrected model's own peak
+    if (spread == 0.0) {
+      EXPECT_LT(std::abs(with / ref - 1.0), std::abs(without / ref - 1.0) - 0.05);  // the correction helps
+    } else {
+      EXPECT_LT(std::abs(with / ref - 1.0), std::abs(without / ref - 1.0) + 0.03);  // and does no harm
+    }
+    EXPECT_EQ(c.truncated.peakPrincipalStressPa, without);  // "without" is the uncorrected model's own peak
   }
 }
 
 TEST(StaticCorrection, OnQuadraticTetsBringsThePeakStressWithin15PercentOfTheFullFemReference) {
   // The same case on a P2 plate (the default plate's element): the corner stresses of the modal
   // model with the correction against the Newmark reference's corner stresses on the same mesh.
-  // Measured (1 492 P2 tets, Newmark at t_c/60, 174 steps): full FEM 138.70 MPa; modal +
-  // correction 137.92 MPa (−0.6 %); modal alone 104.17 MPa (−24.9 %). On the 0.3 m plate (7 356
-  // tets): 1227.2 against 1224.4 MPa (−0.2 %; a corner under the load's node, so a mesh-dependent
-  // peak, the same in both models).
+  // Measured (1 492 P2 tets, Newmark at t_c/60, 174 steps), the load spread over the ring (the
+  // 0.1 m plate's mesh is coarser than 0.05 of its diagonal): full FEM 96.40 MPa; modal +
+  // correction 95.83 MPa (−0.6 %); modal alone the same (the peak is where the correction adds
+  // nothing). With the load on the contact face's corners only, as before the spread: 138.70,
+  // 137.92 (−0.6 %) and 104.17 MPa (−24.9 %).
   // A 0.1 m plate (a few seconds), hit on its top face near the centre.
   const Case c = runPlateCase(40, ElementOrder::P2, 1000, 0.1, Eigen::Vector3d(0.045, 0.06, 0.01));
   const double ref = c.reference.peakPrincipalPa;
@@ -92,7 +101,7 @@ TEST(StaticCorrection, OnQuadraticTetsBringsThePeakStressWithin15PercentOfTheFul
               static_cast<long long>(c.pack.objects[0].tetMesh.tets.rows()), static_cast<long long>(c.reference.steps),
               ref / 1e6, with / 1e6, 100 * (with / ref - 1), without / 1e6, 100 * (without / ref - 1));
   EXPECT_NEAR(with / ref, 1.0, 0.15);
-  EXPECT_LT(std::abs(with / ref - 1.0), std::abs(without / ref - 1.0));  // the correction helps
+  EXPECT_LE(std::abs(with / ref - 1.0), std::abs(without / ref - 1.0) + 1e-9);  // the correction does no harm
 }
 
 // A preset-glass box of about `tets` tets.

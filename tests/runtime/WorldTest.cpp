@@ -274,11 +274,13 @@ TEST_F(WorldTest, ThresholdMovesWithStrengthImpactorMassAndRadius) {
   EXPECT_GT(stronger, v0);
   // The plate fails in flexure (the back-face tension under the ball). A larger ball makes a stiffer
   // Hertz contact: a shorter, higher pulse for the same impulse, which loads the modes more, so it
-  // breaks the plate at a lower speed (measured: 2 mm 1.63 m/s, 20 mm 1.61, 80 mm 1.50). Local
-  // Hertzian cone cracks, which favour small balls, are finer than the mesh and not modelled.
+  // breaks the plate at a lower speed (measured: 2 mm 1.76 m/s, 20 mm 1.79, 80 mm 1.69). Both
+  // smaller balls' patches are below the load's spread (0.05 of the plate's diagonal,
+  // ContactGeometry.h), so only their pulses differ, and their thresholds agree within 5 %. Local
+  // Hertzian cone cracks, which favour small balls, are finer than the spread and not modelled.
   EXPECT_LT(larger, smaller * 0.97);
   EXPECT_LE(larger, v0);
-  EXPECT_LE(v0, smaller);
+  EXPECT_NEAR(v0 / smaller, 1.0, 0.05);
 }
 
 TEST_F(WorldTest, MatchedFragmentsBreakAgain) {

@@ -37,7 +37,7 @@ const Pack* smallPack() {
     // Fewer tets than the default pack, except the vase, whose thin wall needs its 8000.
     for (ObjectBakeSettings& o : objects) {
       if (o.name == "glass-plate") o.tetMesh.targetTets = 3000;
-      if (o.name == "brick" || o.name == "stone-ball") o.tetMesh.targetTets = 400;
+      if (o.name == "brick" || o.name == "stone-ball") o.tetMesh.targetTets = 800;
       o.modal.modeCount = 12;
     }
     auto baked = bakePack(objects);

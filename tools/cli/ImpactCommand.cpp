@@ -26,6 +26,7 @@ struct ImpactOptions {
   int exactMaxDof = FractureSettings{}.exactModesMaxDof;
   std::string runtimeSettings;
   double crackBlend = CrackSettings{}.directionBlend, crackNoise = CrackSettings{}.noiseRad;
+  double contactSpread = FractureSettings{}.contactSpreadFraction;
   double debris = 0.01, propagationRatio = CrackSettings{}.propagationStressRatio;
   int pulseSteps = FractureSettings{}.pulseSteps, ringDownSteps = FractureSettings{}.ringDownSteps;
   bool noCorrection = false;
@@ -58,6 +59,10 @@ Runner addImpactCommand(CLI::App& app) {
   cmd->add_option("--exact-max-dof", o->exactMaxDof,
                   "... and whose own model has at most this many degrees of freedom (0: no limit)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--contact-spread", o->contactSpread,
+                  "Spread the contact load over at least this fraction of the object's bounding-box diagonal "
+                  "(0: the mesh's nearest ring only; see docs/realtime.md, \"Contact loads\")")
+      ->capture_default_str()->check(CLI::Range(0.0, 0.99));
   cmd->add_option("--debris", o->debris, "Fragments below this volume fraction are rigid debris")->capture_default_str()->check(CLI::Range(0.0, 0.99));
   cmd->add_option("--descriptor", o->descriptor, "Descriptor used to match fragments")
       ->check(CLI::IsMember({"moment", "voxel", "voxel-improved"}))->capture_default_str();
@@ -93,6 +98,7 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.reportUncorrectedPeak = o->reportUncorrected;
     settings.fracture.matchFragments = !o->noMatch;
     settings.fracture.debrisVolumeFraction = o->debris;
+    settings.fracture.contactSpreadFraction = o->contactSpread;
     settings.fracture.exactModesMaxTets = o->exactMaxTets;
     settings.fracture.exactModesMaxDof = o->exactMaxDof;
     if (!o->runtimeSettings.empty()) {
@@ -104,6 +110,10 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.crack.noiseRad = o->crackNoise;
     settings.fracture.crack.minFragmentNodes = o->minFragmentNodes;
     settings.fracture.descriptor = parseDescriptorKind(o->descriptor).value();
+    TetMesh tets;  // the object's, for the peak's position
+    for (const ObjectAsset& a : pack.value().objects) {
+      if (a.name == o->object) tets = a.tetMesh;
+    }
     auto world = World::create(std::move(pack).value(), settings);
     if (!world) return reportError(world.error());
     auto id = world.value().addObject({.asset = o->object});
@@ -142,10 +152,19 @@ Runner addImpactCommand(CLI::App& app) {
                       {"effective_modulus_pa", r.contact.effectiveModulusPa}, {"duration_s", r.contact.durationS},
                       {"hertz_peak_force_n", r.contact.hertzPeakForceN}, {"pulse_peak_force_n", r.contact.pulseAmplitudeN},
                       {"impulse_ns", r.contact.impulseNs}, {"patch_radius_m", r.contact.patchRadiusM},
+                      {"load_radius_m", r.loadRadiusM},
                       {"body_radius_m", std::isfinite(r.bodyRadiusM) ? nlohmann::json(r.bodyRadiusM) : nlohmann::json("inf")}};
     doc["peak_principal_stress_pa"] = r.peakPrincipalStressPa;
     doc["peak_without_correction_pa"] = r.peakWithoutCorrectionPa;
     doc["peak_time_s"] = r.peakTimeS;
+    doc["peak_element"] = r.peakElement;
+    if (r.peakElement >= 0 && r.peakElement < tets.tets.rows()) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 4; ++k) c += 0.25 * tets.nodes.row(tets.tets(r.peakElement, k)).transpose();
+      doc["peak_element_centroid_m"] = {c.x(), c.y(), c.z()};
+    } else {
+      doc["peak_element_centroid_m"] = nullptr;
+    }
     doc["modes_used"] = r.modesUsed;
     doc["stress_evaluations"] = r.stressEvaluations;
     doc["cracks"] = {{"count", r.fracture.crackCount}, {"cut_elements", r.fracture.cutElements.size()},

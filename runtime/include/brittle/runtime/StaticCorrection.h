@@ -11,8 +11,8 @@
 //
 // K and M are assembled and K + μM is factorised (sparse LDLᵀ) once per object when it is loaded;
 // L⁻¹PMΨ (the inertia relief's share of every forward solve) and each element's stress recovery
-// (ElementStresses: C B_e for P1, the corners' B for P2) are kept. The load acts on corner nodes, so
-// for P2 the mid-edge nodes carry none: the same resultant, lumped to the corners. An impact then solves with its own sparse load: a forward solve over the load's reach in
+// (ElementStresses: C B_e for P1, the corners' B for P2) are kept. The load is any set of FEM nodes (for P2,
+// the contact's consistent load puts most of a pressure on mid-edge nodes). An impact then solves with its own sparse load: a forward solve over the load's reach in
 // the elimination tree, one full backward solve, and one pass over the elements. With a Workspace
 // reused across impacts, that costs no heap allocation.
 #pragma once

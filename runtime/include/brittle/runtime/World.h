@@ -82,6 +82,13 @@ struct FractureSettings {
   /// Also scan the stresses without the correction, for ImpactResult::peakWithoutCorrectionPa
   /// (a second stress scan: off in the hot path, on in `brittle impact`).
   bool reportUncorrectedPeak = false;
+  /// The contact load is Hertz's pressure spread over a disc of radius ρ = max(a, this × the
+  /// body's bounding-box diagonal, the longest surface edge at the contact), a the Hertz patch
+  /// radius, with the same resultant (ContactGeometry.h). The middle term is a length of the
+  /// object, not of its mesh, so the stresses near the contact converge as the mesh is refined;
+  /// finer detail under the contact (Hertzian cone cracks) is not modelled. 0: the mesh's ring
+  /// only, which makes the contact stress a property of the mesh (docs/realtime.md, "Contact loads").
+  double contactSpreadFraction = 0.05;
   CrackSettings crack;             ///< crack.seed is combined with the world seed and an impact counter
   double debrisVolumeFraction = 0.01;  ///< fragments below this fraction of the broken body are rigid debris
   /// Fragments that are not debris become new breakable objects: by the exact path below, or by
@@ -234,6 +241,7 @@ struct ImpactResult {
   /// object's frame). What the offline full-FEM reference (brittle/precompute/FullFemReference.h) needs
   /// to solve the same impact.
   std::vector<std::pair<int32_t, double>> loadWeights;
+  double loadRadiusM = 0.0;            ///< ρ, the radius the load was spread over (FractureSettings::contactSpreadFraction)
   Eigen::Vector3d forceDirectionLocal = Eigen::Vector3d::Zero();
   double ringDownS = 0.0;              ///< the window simulated after the contact
   int64_t stressEvaluations = 0;
