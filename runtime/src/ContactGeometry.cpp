@@ -97,7 +97,7 @@ double contactLoadRadius(const Body& body, const ContactSite& site, double patch
   return std::max({patchRadiusM, spreadFraction * body.sizeM, kContactRingReach * h});
 }
 
-void contactLoadWeights(const Body& body, const ContactSite& site, double rho,
+void contactLoadWeights(const Body& body, const ContactSite& site, const Eigen::Vector3d& normalLocal, double rho,
                         std::vector<std::pair<int32_t, double>>& weights) {
   const Points& x = body.asset.tetMesh.nodes;
   const TetTopology& topo = body.topology;
@@ -126,6 +126,9 @@ void contactLoadWeights(const Body& body, const ContactSite& site, double rho,
     const Eigen::Vector3d a = x.row(tri(f, 0)), b = x.row(tri(f, 1)), c = x.row(tri(f, 2));
     Eigen::Vector3d bary;
     if ((closestOnTriangle(p, a, b, c, bary) - p).squaredNorm() >= rho * rho) continue;
+    // Only faces that face the impactor: a disc wider than a plate's thickness must not press on
+    // its other side.
+    if ((b - a).cross(c - a).dot(normalLocal) <= 0.0) continue;
     const double subArea = 0.5 * (b - a).cross(c - a).norm() / (kSplit * kSplit);
     double n[6] = {0, 0, 0, 0, 0, 0};  // corners a, b, c; mid-edges ab, bc, ca
     for (int i = 0; i < kSplit; ++i) {

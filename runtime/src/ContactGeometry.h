@@ -7,7 +7,8 @@
 // κ = 2 n·(x_i − x_j)/|x_i − x_j|², averaged (flat or concave: ∞).
 // contactLoadWeights: the consistent nodal loads f_i = ∫ N_i p dA of the Hertz pressure
 // p ∝ √(1 − r²/ρ²) over the disc of radius ρ around the contact point (the closest surface point
-// to the reported one), on the boundary faces it reaches, with the element's own surface shape
+// to the reported one), on the boundary faces it reaches that face the impactor (not a thin
+// plate's other side), with the element's own surface shape
 // functions (P1: the corners; P2: corners and mid-edge nodes, where a uniform pressure puts all
 // of its load). Weights sum to 1.
 //
@@ -57,9 +58,11 @@ inline constexpr double kContactRingReach = 1.0;
 /// over (m).
 double contactLoadRadius(const Body& body, const ContactSite& site, double patchRadiusM, double spreadFraction);
 
-/// Node weights of the contact load spread over radius `rho` (summing to 1; FEM node ids, so
+/// Node weights of the contact load spread over radius `rho` on the boundary faces that face the
+/// impactor (outward normal · normalLocal > 0) (summing to 1; FEM node ids, so
 /// mid-edge nodes N + edge for P2; P2 corner weights may be negative) into `weights`, in node
 /// order, which keeps its storage.
-void contactLoadWeights(const Body& body, const ContactSite& site, double rho, std::vector<std::pair<int32_t, double>>& weights);
+void contactLoadWeights(const Body& body, const ContactSite& site, const Eigen::Vector3d& normalLocal, double rho,
+                        std::vector<std::pair<int32_t, double>>& weights);
 
 }  // namespace brittle::detail

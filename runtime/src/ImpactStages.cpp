@@ -69,7 +69,7 @@ Status contactStage(const ImpactJob& job, Flow& flow, ImpactResult& result) {
   if (!contact) return contact.error();
   result.contact = contact.value();
   result.loadRadiusM = contactLoadRadius(body, site.value(), result.contact.patchRadiusM, job.settings->contactSpreadFraction);
-  contactLoadWeights(body, site.value(), result.loadRadiusM, result.loadWeights);
+  contactLoadWeights(body, site.value(), flow.normalLocal, result.loadRadiusM, result.loadWeights);
   return Ok{};
 }
 
