@@ -166,14 +166,17 @@ TEST_F(HotPathAllocationTest, BreakingImpactsAllocateOnlyWhatTheyHandOver) {
   auto world = World::create(*sPack, settings);
   ASSERT_TRUE(world) << world.error().message;
   ImpactDesc hit;
-  hit.pointWorld = Eigen::Vector3d(0.01, -0.02, 0.005);
+  hit.pointWorld = Eigen::Vector3d(0.16, 0.13, 0.01);  // on the top face, near its centre
   hit.speedMps = 60.0;
   hit.impactorMassKg = 0.1;
   hit.impactorRadiusM = 0.02;
   ImpactResult result;
   long counted = 0;
   size_t fragments = 0, elements = 0;
-  for (int round = 0; round < 3; ++round) {  // round 0 warms up
+  // Round 0 warms up with a harder hit, which cuts more elements and makes more fragments than the
+  // counted rounds (each round's crack seed differs), so no workspace grows after it.
+  for (int round = 0; round < 3; ++round) {
+    hit.speedMps = round == 0 ? 120.0 : 60.0;
     auto id = world.value().addObject({.asset = "plate"});
     ASSERT_TRUE(id) << id.error().message;
     hit.object = id.value();
