@@ -215,23 +215,60 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
       forceMax = w.forceAbs.maxCoeff();
       w.elementBound += forceMax * w.staticNorm;
     }
+    // The search runs in 16 fixed ranges of points on the arena's threads, each over a max-heap of
+    // its own points. Every range starts from the same lower bound, the peak of the point with the
+    // largest B_e over all instants, so that ranges without the peak still prune; each finds its
+    // exact maximum above that, and the ranges' maxima are combined in range order with the same
+    // tie rule. The answer, and the evaluation count, are the same on any number of threads.
+    Eigen::Index first = 0;
+    if (t > 0) w.elementBound.maxCoeff(&first);  // the lowest index among equal bounds
+    for (Eigen::Index k = 0; t > 0 && k < steps; ++k) {
+      ++scan.evaluations;
+      consider(first, k, maxPrincipalStress(voigt(first, k)));
+    }
+    const double floorBest = best;
+    const int32_t floorPoint = scan.peakElement, floorInstant = scan.peakInstant;
+    constexpr int kPeakRanges = 16;
     w.heap.resize(static_cast<size_t>(t));
-    for (Eigen::Index e = 0; e < t; ++e) w.heap[static_cast<size_t>(e)] = {w.elementBound[e], static_cast<int32_t>(e)};
-    std::make_heap(w.heap.begin(), w.heap.end());
-    while (!w.heap.empty() && w.heap.front().first >= best) {
-      std::pop_heap(w.heap.begin(), w.heap.end());
-      const int32_t e = w.heap.back().second;
-      w.heap.pop_back();
-      w.modeNorms = bounds.modeNorms.row(e).head(r).transpose();
-      for (Eigen::Index k = 0; k < steps; ++k) {
-        const double staticBound = correction ? w.staticNorm[e] * w.forceAbs[k] : 0.0;
-        if (bounds.spectralNorms[e] * w.qNorm[k] + staticBound < best) continue;
-        if (w.modeNorms.dot(w.qAbsT.col(k)) + staticBound < best) continue;
-        const Voigt s = voigt(e, k);
-        if ((kD.asDiagonal() * s).norm() < best) continue;
-        ++scan.evaluations;
-        consider(e, k, maxPrincipalStress(s));
+    w.rangePeaks.resize(kPeakRanges);
+    auto searchRange = [&](int c) {
+      StressScanWorkspace::RangePeak& out = w.rangePeaks[static_cast<size_t>(c)];
+      out.best = floorBest;
+      out.point = floorPoint;
+      out.instant = floorInstant;
+      out.evaluations = 0;
+      out.modeNorms.resize(r);
+      const auto lo = static_cast<size_t>(t * c / kPeakRanges), hi = static_cast<size_t>(t * (c + 1) / kPeakRanges);
+      const auto heapBegin = w.heap.begin() + static_cast<std::ptrdiff_t>(lo);
+      auto heapEnd = w.heap.begin() + static_cast<std::ptrdiff_t>(hi);
+      for (size_t e = lo; e < hi; ++e) w.heap[e] = {w.elementBound[static_cast<Eigen::Index>(e)], static_cast<int32_t>(e)};
+      std::make_heap(heapBegin, heapEnd);
+      while (heapBegin != heapEnd && heapBegin->first >= out.best) {
+        std::pop_heap(heapBegin, heapEnd);
+        --heapEnd;
+        const int32_t e = heapEnd->second;
+        out.modeNorms = bounds.modeNorms.row(e).head(r).transpose();
+        for (Eigen::Index k = 0; k < steps; ++k) {
+          const double staticBound = correction ? w.staticNorm[e] * w.forceAbs[k] : 0.0;
+          if (bounds.spectralNorms[e] * w.qNorm[k] + staticBound < out.best) continue;
+          if (out.modeNorms.dot(w.qAbsT.col(k)) + staticBound < out.best) continue;
+          const Voigt s = voigt(e, k);
+          if ((kD.asDiagonal() * s).norm() < out.best) continue;
+          ++out.evaluations;
+          const double s1 = maxPrincipalStress(s);
+          if (s1 > out.best ||
+              (s1 == out.best && (k < out.instant || (k == out.instant && e < out.point)))) {
+            out.best = s1;
+            out.point = e;
+            out.instant = static_cast<int32_t>(k);
+          }
+        }
       }
+    };
+    tbb::parallel_for(0, kPeakRanges, searchRange);
+    for (const StressScanWorkspace::RangePeak& p : w.rangePeaks) {
+      scan.evaluations += p.evaluations;
+      consider(p.point, p.instant, p.best);
     }
   }
   scan.peakPrincipalPa = best;

@@ -84,6 +84,15 @@ struct StressScanWorkspace {
   std::vector<std::pair<double, int32_t>> heap, seeds;
   std::vector<std::vector<std::pair<double, int32_t>>> rangeSeeds;  ///< per fixed range of elements
   std::vector<int64_t> rangeEvaluations;
+  /// The pruned peak search per fixed range of stress points: its peak (value, point, instant)
+  /// and its evaluations, and each range's bound vector for the visited point.
+  struct RangePeak {
+    double best = 0.0;
+    int32_t point = -1, instant = -1;
+    int64_t evaluations = 0;
+    Eigen::VectorXd modeNorms;
+  };
+  std::vector<RangePeak> rangePeaks;
   std::vector<char> seedTaken;                 ///< T, when an element has several stress points
 };
 
