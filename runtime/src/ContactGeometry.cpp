@@ -1,6 +1,5 @@
 #include "ContactGeometry.h"
 
-
 #include <algorithm>
 #include <cmath>
 #include <limits>

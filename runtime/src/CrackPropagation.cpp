@@ -176,14 +176,18 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     if (correction) s += staticStress.segment<6>(6 * e) * forceN[static_cast<size_t>(k)];
     return s;
   };
+  // A peak (value, point, instant) takes s1 at (e, k) if it is larger; ties break towards the lower
+  // instant, then the lower point, in every scan and range.
+  auto take = [](double s1, Eigen::Index e, Eigen::Index k, double& value, int32_t& point, int32_t& instant) {
+    if (s1 > value || (s1 == value && (k < instant || (k == instant && e < point)))) {
+      value = s1;
+      point = static_cast<int32_t>(e);
+      instant = static_cast<int32_t>(k);
+    }
+  };
   double best = -std::numeric_limits<double>::infinity();
   auto consider = [&](Eigen::Index e, Eigen::Index k, double s1) {
-    // Ties break towards the lower instant, then the lower element, in both scans.
-    if (s1 > best || (s1 == best && (k < scan.peakInstant || (k == scan.peakInstant && e < scan.peakElement)))) {
-      best = s1;
-      scan.peakElement = static_cast<int32_t>(e);
-      scan.peakInstant = static_cast<int32_t>(k);
-    }
+    take(s1, e, k, best, scan.peakElement, scan.peakInstant);
   };
   if (!prune) {
     for (Eigen::Index e = 0; e < t; ++e) {
@@ -255,13 +259,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
           const Voigt s = voigt(e, k);
           if ((kD.asDiagonal() * s).norm() < out.best) continue;
           ++out.evaluations;
-          const double s1 = maxPrincipalStress(s);
-          if (s1 > out.best ||
-              (s1 == out.best && (k < out.instant || (k == out.instant && e < out.point)))) {
-            out.best = s1;
-            out.point = e;
-            out.instant = static_cast<int32_t>(k);
-          }
+          take(maxPrincipalStress(s), e, k, out.best, out.point, out.instant);
         }
       }
     };

@@ -110,14 +110,14 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.crack.noiseRad = o->crackNoise;
     settings.fracture.crack.minFragmentNodes = o->minFragmentNodes;
     settings.fracture.descriptor = parseDescriptorKind(o->descriptor).value();
-    TetMesh tets;  // the object's, for the peak's position
-    for (const ObjectAsset& a : pack.value().objects) {
-      if (a.name == o->object) tets = a.tetMesh;
-    }
     auto world = World::create(std::move(pack).value(), settings);
     if (!world) return reportError(world.error());
     auto id = world.value().addObject({.asset = o->object});
     if (!id) return reportError(id.error());
+    // The object's tet mesh, for where the peak is: copied now, as a broken object is removed.
+    auto asset = world.value().objectAsset(id.value());
+    if (!asset) return reportError(asset.error());
+    const TetMesh tets = asset.value()->tetMesh;
     ImpactDesc d;
     d.object = id.value();
     d.pointWorld = Eigen::Vector3d(o->point[0], o->point[1], o->point[2]);

@@ -79,13 +79,12 @@ struct StressScanWorkspace {
   Eigen::MatrixXd qT;                          ///< r by K: qᵀ
   Eigen::VectorXd qMax, staticNorm, forceAbs;  ///< r, T, K
   Eigen::VectorXd qNorm;                       ///< K: ‖W⁻¹ q_k‖ (StressBounds::modeScales)
-  Eigen::VectorXd modeNorms;                   ///< r: the visited point's ‖D S_e,j‖, contiguous
   Eigen::VectorXd elementBound, seedBound;     ///< T, T
   std::vector<std::pair<double, int32_t>> heap, seeds;
   std::vector<std::vector<std::pair<double, int32_t>>> rangeSeeds;  ///< per fixed range of elements
   std::vector<int64_t> rangeEvaluations;
-  /// The pruned peak search per fixed range of stress points: its peak (value, point, instant)
-  /// and its evaluations, and each range's bound vector for the visited point.
+  /// The pruned peak search per fixed range of stress points: its peak (value, point, instant),
+  /// its evaluations, and the visited point's ‖D S_e,j‖ (r, contiguous).
   struct RangePeak {
     double best = 0.0;
     int32_t point = -1, instant = -1;
