@@ -20,6 +20,46 @@ Eigen::Matrix3d tensor(const Voigt& s) {
   return t;
 }
 
+// ‖A‖₂ = √λ_max(G), G = A Aᵀ (6 by 6, symmetric positive semi-definite), bounded without an eigen
+// solve: with H = G / tr G, λ_max(H)¹⁶ ≤ tr H¹⁶ = ‖H⁸‖_F², so √λ_max(G) ≤ √(tr G · ‖H⁸‖_F^(1/8)),
+// at most 6^(1/32) = 1.06 times the norm, for three 6-by-6 products (a fifth of an eigen solve).
+// The margin covers the products' rounding.
+double spectralNormBound(const Eigen::Matrix<double, 6, Eigen::Dynamic>& a) {
+  constexpr double kMargin = 1.0 + 1e-9;
+  Eigen::Matrix<double, 6, 6> h = a * a.transpose();
+  const double trace = h.trace();
+  if (!(trace > 0.0)) return 0.0;
+  h /= trace;
+  for (int i = 0; i < 3; ++i) h = (h * h).eval();
+  return std::sqrt(trace * std::pow(h.norm(), 0.125)) * kMargin;
+}
+
+// Σ a_j b_j over n terms in a fixed order, whatever the buffers' alignment (the bounds below decide
+// what is evaluated, and so the evaluation count): eight running sums, j mod 8, added pairwise at
+// the end. Eight independent sums keep the adds from waiting on each other (one running sum made
+// each dot wait n add latencies).
+double dotInOrder(const double* a, const double* b, Eigen::Index n) {
+  double acc[8] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  Eigen::Index j = 0;
+  for (; j + 8 <= n; j += 8) {
+    for (int l = 0; l < 8; ++l) acc[l] += a[j + l] * b[j + l];
+  }
+  for (int l = 0; j + l < n; ++l) acc[l] += a[j + l] * b[j + l];
+  return ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
+}
+
+// σ₁ ≤ p + √(2/3) ‖s‖_F for σ = p I + s (p the mean normal stress, s the deviator, whose largest
+// eigenvalue is at most √(2/3) of its norm, reached by (2a, −a, −a)); never above ‖σ‖_F, and near
+// σ₁ where σ is compressive (p < 0), which ‖σ‖_F does not see.
+constexpr double kDeviatorShare = 0.816496580927726;  // √(2/3)
+
+double splitBound(const Voigt& s) {
+  const double p = (s[0] + s[1] + s[2]) / 3.0;
+  Voigt d = kD.cwiseProduct(s);
+  d.head<3>().array() -= p;
+  return p + kDeviatorShare * d.norm();
+}
+
 // σ_e = S_e q over the first r modes: S's rows 6e..6e+5 (row-major, contiguous) against q, in one
 // pass with six running sums in mode order. Eigen's general matrix-vector kernel costs several times
 // the 6r products for so small a block, and the scan and the cracks make tens of thousands of
@@ -103,28 +143,21 @@ double maxPrincipalStress(const Voigt& s, Eigen::Vector3d* direction) {
 StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::VectorXd& modeScales) {
   const Eigen::Index t = s.rows() / 6;
   StressBounds b;
-  b.modeNorms.resize(t, modes);
+  b.pressureModes.resize(t, modes);
+  b.deviatorNorms.resize(t, modes);
   b.modeScales = modeScales.size() > 0 ? Eigen::VectorXd(modeScales.head(modes)) : Eigen::VectorXd::Ones(modes);
   b.spectralNorms.resize(t);
-  // ‖A‖₂ = √λ_max(G), G = A Aᵀ (6 by 6, symmetric positive semi-definite), bounded without an eigen
-  // solve: with H = G / tr G, λ_max(H)¹⁶ ≤ tr H¹⁶ = ‖H⁸‖_F², so √λ_max(G) ≤ √(tr G · ‖H⁸‖_F^(1/8)),
-  // at most 6^(1/32) = 1.06 times the norm, for three 6-by-6 products (a fifth of an eigen solve).
-  // The margin covers the products' rounding.
-  constexpr double kMargin = 1.0 + 1e-9;
+  b.deviatorSpectralNorms.resize(t);
   Eigen::Matrix<double, 6, Eigen::Dynamic> a(6, modes);
   for (Eigen::Index e = 0; e < t; ++e) {
     a.noalias() = kD.asDiagonal() * s.block(6 * e, 0, 6, modes);
-    b.modeNorms.row(e) = a.colwise().norm();
+    const Eigen::RowVectorXd pressure = a.topRows<3>().colwise().sum() / 3.0;
+    b.pressureModes.row(e) = pressure;
     a = a * b.modeScales.asDiagonal();
-    Eigen::Matrix<double, 6, 6> h = a * a.transpose();
-    const double trace = h.trace();
-    if (!(trace > 0.0)) {
-      b.spectralNorms[e] = 0.0;
-      continue;
-    }
-    h /= trace;
-    for (int i = 0; i < 3; ++i) h = (h * h).eval();
-    b.spectralNorms[e] = std::sqrt(trace * std::pow(h.norm(), 0.125)) * kMargin;
+    b.spectralNorms[e] = spectralNormBound(a);
+    a.topRows<3>().rowwise() -= pressure.cwiseProduct(b.modeScales.transpose());  // the deviator, weighted
+    b.deviatorSpectralNorms[e] = spectralNormBound(a);
+    b.deviatorNorms.row(e) = a.colwise().norm().cwiseQuotient(b.modeScales.transpose());
   }
   return b;
 }
@@ -189,6 +222,29 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
   auto consider = [&](Eigen::Index e, Eigen::Index k, double s1) {
     take(s1, e, k, best, scan.peakElement, scan.peakInstant);
   };
+  // Whether (e, k) may reach `level`, cheapest test first: the spectral bound (one product); the
+  // exact mean stress p_e,k with the deviator's spectral bound, then with its triangle bound (r
+  // products each); the evaluated σ's own split bound (below). Their data are made by the pruned
+  // peak search. The margin covers the rounding of p_e,k's sum, whose terms may cancel.
+  auto mayReach = [&](Eigen::Index e, Eigen::Index k, double level) {
+    const double fAbs = w.forceAbs[k];
+    if (bounds.spectralNorms[e] * w.qNorm[k] + w.staticNorm[e] * fAbs < level) return false;
+    const double margin = 1e-9 * (w.pressureScale[e] + w.elementBound[e]);
+    const double p = dotInOrder(bounds.pressureModes.row(e).data(), w.qT.col(k).data(), r) +
+                     (correction ? w.staticPressure[e] * forceN[static_cast<size_t>(k)] : 0.0);
+    if (p + kDeviatorShare * (bounds.deviatorSpectralNorms[e] * w.qNorm[k] + w.staticDeviator[e] * fAbs) + margin < level) {
+      return false;
+    }
+    const double deviator = dotInOrder(bounds.deviatorNorms.row(e).data(), w.qAbsT.col(k).data(), r) * (1.0 + 1e-9);
+    return p + kDeviatorShare * (deviator + w.staticDeviator[e] * fAbs) + margin >= level;
+  };
+  // The evaluated σ: skipped below `level` by its split bound (with a margin for the eigen
+  // solve's rounding), else its σ₁.
+  auto principalAbove = [&](const Voigt& sigma, double level, double& s1) {
+    if (splitBound(sigma) + 1e-9 * kD.cwiseProduct(sigma).norm() < level) return false;
+    s1 = maxPrincipalStress(sigma);
+    return true;
+  };
   if (!prune) {
     for (Eigen::Index e = 0; e < t; ++e) {
       for (Eigen::Index k = 0; k < steps; ++k) {
@@ -197,28 +253,51 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
       }
     }
   } else {
-    // Two levels of bounds (see the header: the smaller of the triangle and the spectral bound).
-    // Per element, over all instants: B_e = min(Σ_j ‖D S_e,j‖ max_k |q_kj|, ‖D S_e‖₂ max_k ‖q_k‖)
-    // (+ ‖D σ̂_e‖ max_k |F_k|), two matrix-vector products. Elements are taken from a max-heap on
-    // B_e until B_e < best; only then are the per-instant bounds b_e,k formed, for that element
-    // alone, the spectral one first (one product). Anything skipped is below the final peak, so
-    // the answer is the full scan's.
+    // Bounds per point over all instants, then per (point, instant) for the points visited; see
+    // the header. The static correction adds σ̂_e F_k: its mean normal stress exactly, its norms to
+    // the norms.
     w.qAbsT = q.cwiseAbs().transpose();  // r by K
     w.qMax = w.qAbsT.rowwise().maxCoeff();
     w.qNorm.resize(steps);  // ‖W⁻¹ q_k‖
     for (Eigen::Index k = 0; k < steps; ++k) w.qNorm[k] = w.qT.col(k).cwiseQuotient(bounds.modeScales.head(r)).norm();
-    w.elementBound.resize(t);
-    w.elementBound.noalias() = bounds.modeNorms.leftCols(r) * w.qMax;
-    w.elementBound = w.elementBound.cwiseMin(bounds.spectralNorms * w.qNorm.maxCoeff());
-    double forceMax = 0.0;
+    w.forceAbs.setZero(steps);
+    w.staticNorm.setZero(t);
+    w.staticPressure.setZero(t);
+    w.staticDeviator.setZero(t);
     if (correction) {
-      w.staticNorm.resize(t);
-      w.forceAbs.resize(steps);
-      for (Eigen::Index e = 0; e < t; ++e) w.staticNorm[e] = (kD.asDiagonal() * staticStress.segment<6>(6 * e)).norm();
       for (Eigen::Index k = 0; k < steps; ++k) w.forceAbs[k] = std::abs(forceN[static_cast<size_t>(k)]);
-      forceMax = w.forceAbs.maxCoeff();
-      w.elementBound += forceMax * w.staticNorm;
+      for (Eigen::Index e = 0; e < t; ++e) {
+        const Voigt se = staticStress.segment<6>(6 * e);
+        Voigt d = kD.cwiseProduct(se);
+        w.staticNorm[e] = d.norm();
+        w.staticPressure[e] = (se[0] + se[1] + se[2]) / 3.0;
+        d.head<3>().array() -= w.staticPressure[e];
+        w.staticDeviator[e] = d.norm();
+      }
     }
+    const double forceMax = steps > 0 ? w.forceAbs.maxCoeff() : 0.0, qNormMax = steps > 0 ? w.qNorm.maxCoeff() : 0.0;
+    // B_e = min(‖D S_e W‖₂ max‖W⁻¹q_k‖ + ‖Dσ̂_e‖ max|F|,
+    //           Σ|P_e,j| max|q_j| + |p̂_e| max|F| + √(2/3) (min(Σ‖s_e,j‖ max|q_j|, ‖s_e W‖₂ max‖W⁻¹q_k‖) + ‖ŝ_e‖ max|F|)),
+    // and the scale of the rounding in a point's mean stress, Σ|P_e,j| max|q_j| + |p̂_e| max|F|.
+    w.elementBound.resize(t);
+    w.pressureScale.resize(t);
+    constexpr int kBoundRanges = 16;
+    tbb::parallel_for(0, kBoundRanges, [&](int c) {
+      for (Eigen::Index e = t * c / kBoundRanges; e < t * (c + 1) / kBoundRanges; ++e) {
+        const double* pe = bounds.pressureModes.row(e).data();
+        const double* de = bounds.deviatorNorms.row(e).data();
+        double pressure = 0.0, deviator = 0.0;
+        for (Eigen::Index j = 0; j < r; ++j) {
+          pressure += std::abs(pe[j]) * w.qMax[j];
+          deviator += de[j] * w.qMax[j];
+        }
+        pressure += std::abs(w.staticPressure[e]) * forceMax;
+        deviator = std::min(deviator, bounds.deviatorSpectralNorms[e] * qNormMax) + w.staticDeviator[e] * forceMax;
+        w.pressureScale[e] = pressure;
+        w.elementBound[e] = std::min(bounds.spectralNorms[e] * qNormMax + w.staticNorm[e] * forceMax,
+                                     pressure + kDeviatorShare * deviator);
+      }
+    });
     // The search runs in 16 fixed ranges of points on the arena's threads, each over a max-heap of
     // its own points. Every range starts from the same lower bound, the peak of the point with the
     // largest B_e over all instants, so that ranges without the peak still prune; each finds its
@@ -241,7 +320,6 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
       out.point = floorPoint;
       out.instant = floorInstant;
       out.evaluations = 0;
-      out.modeNorms.resize(r);
       const auto lo = static_cast<size_t>(t * c / kPeakRanges), hi = static_cast<size_t>(t * (c + 1) / kPeakRanges);
       const auto heapBegin = w.heap.begin() + static_cast<std::ptrdiff_t>(lo);
       auto heapEnd = w.heap.begin() + static_cast<std::ptrdiff_t>(hi);
@@ -251,15 +329,12 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
         std::pop_heap(heapBegin, heapEnd);
         --heapEnd;
         const int32_t e = heapEnd->second;
-        out.modeNorms = bounds.modeNorms.row(e).head(r).transpose();
         for (Eigen::Index k = 0; k < steps; ++k) {
-          const double staticBound = correction ? w.staticNorm[e] * w.forceAbs[k] : 0.0;
-          if (bounds.spectralNorms[e] * w.qNorm[k] + staticBound < out.best) continue;
-          if (out.modeNorms.dot(w.qAbsT.col(k)) + staticBound < out.best) continue;
-          const Voigt s = voigt(e, k);
-          if ((kD.asDiagonal() * s).norm() < out.best) continue;
+          if (!mayReach(e, k, out.best)) continue;
+          double s1 = 0.0;
+          if (!principalAbove(voigt(e, k), out.best, s1)) continue;
           ++out.evaluations;
-          take(maxPrincipalStress(s), e, k, out.best, out.point, out.instant);
+          take(s1, e, k, out.best, out.point, out.instant);
         }
       }
     };
@@ -272,17 +347,11 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
   scan.peakPrincipalPa = best;
   const int32_t peakPoint = scan.peakElement;
   if (peakPoint >= 0) scan.peakElement = peakPoint / pointsPerElement;
-  // Seeds at the peak instant.
+  // Seeds at the peak instant: every point over σ_t there (the same bounds per point, pruned), in
+  // fixed ranges, each into its own list, gathered in range order (a shattering impact evaluates
+  // most of the body here).
   const Eigen::Index k = scan.peakInstant;
   w.seeds.clear();
-  if (prune && k >= 0) {  // b_e,k at the peak instant, for every element
-    w.seedBound.resize(t);
-    w.seedBound.noalias() = bounds.modeNorms.leftCols(r) * w.qAbsT.col(k);
-    w.seedBound = w.seedBound.cwiseMin(bounds.spectralNorms * w.qNorm[k]);
-    if (correction) w.seedBound += w.forceAbs[k] * w.staticNorm;
-  }
-  // Every element over σ_t at that instant: in fixed ranges, each into its own list, gathered in
-  // range order (a shattering impact evaluates most of the body here).
   constexpr int kRanges = 16;
   w.rangeSeeds.resize(kRanges);
   w.rangeEvaluations.assign(kRanges, 0);
@@ -291,11 +360,14 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     out.clear();
     if (k < 0) return;
     for (Eigen::Index e = t * c / kRanges; e < t * (c + 1) / kRanges; ++e) {
-      if (prune && w.seedBound[e] < threshold) continue;
-      const Voigt s = voigt(e, k);
-      if (prune && (kD.asDiagonal() * s).norm() < threshold) continue;
+      if (prune && !mayReach(e, k, threshold)) continue;
+      double s1 = 0.0;
+      if (prune) {
+        if (!principalAbove(voigt(e, k), threshold, s1)) continue;
+      } else {
+        s1 = maxPrincipalStress(voigt(e, k));
+      }
       ++w.rangeEvaluations[static_cast<size_t>(c)];
-      const double s1 = maxPrincipalStress(s);
       if (s1 >= threshold) out.emplace_back(s1, static_cast<int32_t>(e));
     }
   };

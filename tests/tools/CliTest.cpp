@@ -371,6 +371,15 @@ TEST_F(CliTest, SizeBakesTheSceneObjectsAtTheirModeCountsAndReports) {
   EXPECT_GT(reportedDoc["peak_without_correction_pa"].get<double>(), 0.0);
   EXPECT_EQ(plainDoc["peak_principal_stress_pa"].get<double>(), reportedDoc["peak_principal_stress_pa"].get<double>());
   EXPECT_EQ(plainDoc["cracks"], reportedDoc["cracks"]);
+  // Repeats on fresh instances: warm stage times over the repeats, the first impact as reported.
+  const CliRun repeated = run(hit + " --repeat 3");
+  ASSERT_EQ(repeated.exitCode, 0) << repeated.out;
+  const auto repeatedDoc = nlohmann::json::parse(repeated.out);
+  EXPECT_EQ(repeatedDoc["warm_times_s"]["repeats"].get<int>(), 2);
+  EXPECT_GT(repeatedDoc["warm_times_s"]["stress"].get<double>(), 0.0);
+  EXPECT_EQ(repeatedDoc["fingerprint"], plainDoc["fingerprint"]);
+  EXPECT_FALSE(plainDoc.contains("warm_times_s"));
+  EXPECT_EQ(run(hit + " --repeat 0").exitCode, 2);
   std::ofstream(dir / "typo.settings.json") << R"({ "debris": 0.1 })";
   const CliRun typo = run(hit + " --settings " + path("typo.settings.json"));
   EXPECT_EQ(typo.exitCode, 3);
