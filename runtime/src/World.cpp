@@ -70,7 +70,12 @@ struct World::Impl {
   detail::ImpactWorkspace work;  // the synchronous impact()'s buffers
   std::vector<std::shared_ptr<const BodySource>> born;
   // Asynchronous work: submitted impacts by ticket, spare workspaces, background preparation.
-  std::unique_ptr<tbb::task_arena> arena;
+  // Impacts and background work (placement, the fragments' new bodies) run in two arenas over the
+  // same worker threads: a worker takes an impact's work before background work (arena
+  // priorities), and a host waiting for an impact helps with that impact only, never with a
+  // background task, which would hold it for as long as that task runs (a fragment's modal
+  // analysis, a placed object's factorisation).
+  std::unique_ptr<tbb::task_arena> arena, backgroundArena;
   tbb::task_group background;
   std::map<uint64_t, std::unique_ptr<PendingImpact>> pending;
   std::vector<std::unique_ptr<detail::ImpactWorkspace>> spareWorkspaces;
@@ -78,19 +83,33 @@ struct World::Impl {
 
   ~Impl() {
     // Work still running reads this World's pack and bodies: wait for it.
-    if (!arena) return;
-    arena->execute([&] {
-      for (auto& [ticket, p] : pending) p->group.wait();
-      background.wait();
-    });
+    if (arena) {
+      arena->execute([&] {
+        for (auto& [ticket, p] : pending) p->group.wait();
+      });
+    }
+    // Background work not started yet is not needed any more (its results die with the World).
+    if (backgroundArena) {
+      backgroundArena->execute([&] {
+        background.cancel();
+        background.wait();
+      });
+    }
   }
 
+  static std::unique_ptr<tbb::task_arena> makeArena(int32_t threads, tbb::task_arena::priority priority) {
+    const int concurrency = threads > 0 ? int{threads} : int{tbb::task_arena::automatic};
+    return std::make_unique<tbb::task_arena>(concurrency, 1, priority);
+  }
+  // Submitted impacts (and the parallel loops of any impact).
   tbb::task_arena& workers() {
-    if (!arena) {
-      arena = settings.workerThreads > 0 ? std::make_unique<tbb::task_arena>(settings.workerThreads)
-                                         : std::make_unique<tbb::task_arena>();
-    }
+    if (!arena) arena = makeArena(settings.workerThreads, tbb::task_arena::priority::high);
     return *arena;
+  }
+  // Placement and the fragments' new bodies.
+  tbb::task_arena& backgroundWorkers() {
+    if (!backgroundArena) backgroundArena = makeArena(settings.workerThreads, tbb::task_arena::priority::low);
+    return *backgroundArena;
   }
 
   Result<Slot*> slot(ObjectId id) {
@@ -183,7 +202,7 @@ struct World::Impl {
     }
     // The fragments' modal data and stress bounds are made on the workers from now on (an impact
     // or objectAsset that needs one first makes or waits for it).
-    workers().execute([&] {
+    backgroundWorkers().execute([&] {
       for (auto& source : newBodies) {
         if (!source) continue;
         background.run([source] {
@@ -278,7 +297,7 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
       const bool correct = w.settings.fracture.staticCorrection;
       if (w.settings.prepareInBackground) {
         if (correct) made->scheduleStaticCorrection();
-        w.workers().execute([&] {
+        w.backgroundWorkers().execute([&] {
           w.background.run([made, correct] {
             (void)made->stressBounds();
             (void)made->tetMoments();
@@ -420,7 +439,7 @@ int32_t World::pendingImpacts() const { return static_cast<int32_t>(mImpl->pendi
 Status World::waitUntilPrepared() {
   try {
     Impl& w = *mImpl;
-    if (w.arena) w.arena->execute([&] { w.background.wait(); });
+    if (w.backgroundArena) w.backgroundArena->execute([&] { w.background.wait(); });
     for (const auto& source : w.packBodies) {
       if (!source) continue;
       const std::shared_ptr<const Body>& body = source->get().value();  // pack bodies are made when placed

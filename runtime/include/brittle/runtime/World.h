@@ -21,8 +21,10 @@
 //
 // Threading contract. A World's methods are called from one thread at a time (the host's). The
 // work behind submitImpact, and the background preparation of placed objects
-// (WorldSettings::prepareInBackground), runs on the World's own worker threads (a oneTBB arena of
-// WorldSettings::workerThreads); it reads only what no World call changes while it runs (the
+// (WorldSettings::prepareInBackground), runs on the World's own worker threads (oneTBB arenas of
+// WorldSettings::workerThreads: one for impacts, one of lower priority for background work, so that
+// a free worker takes an impact first and a host waiting in collectImpact helps that impact and
+// never runs a background task); it reads only what no World call changes while it runs (the
 // struck object's immutable data, the pack's database) and writes only its own result. Between
 // submitImpact and collectImpact the struck object is pending: it stays in the world as it was,
 // and impact(), submitImpact() and removeObject() on it return InvalidArgument. collectImpact
