@@ -124,6 +124,12 @@ bool faceCut(const TetMesh& mesh, Eigen::Index e, int f, const Eigen::Vector4d& 
   return true;
 }
 
+// Seeds' order: a lower value, or the same value at a higher point, comes after (a max-heap's
+// top is the largest value at the lowest point).
+bool lowerSeed(const std::pair<double, int32_t>& a, const std::pair<double, int32_t>& b) {
+  return a.first != b.first ? a.first < b.first : a.second > b.second;
+}
+
 using Front = CrackWorkspace::Front;
 // Heap order: strongest normal stress on top; ties: lowest element id first.
 bool weaker(const Front& a, const Front& b) {
@@ -238,6 +244,19 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     const double deviator = dotInOrder(bounds.deviatorNorms.row(e).data(), w.qAbsT.col(k).data(), r) * (1.0 + 1e-9);
     return p + kDeviatorShare * (deviator + w.staticDeviator[e] * fAbs) + margin >= level;
   };
+  // The bound of (e, k) itself: the smaller of the spectral and the split bound (both dots).
+  auto seedBound = [&](Eigen::Index e, Eigen::Index k) {
+    const double fAbs = w.forceAbs[k];
+    const double spectral = bounds.spectralNorms[e] * w.qNorm[k] + w.staticNorm[e] * fAbs;
+    const double margin = 1e-9 * (w.pressureScale[e] + w.elementBound[e]);
+    const double p = dotInOrder(bounds.pressureModes.row(e).data(), w.qT.col(k).data(), r) +
+                     (correction ? w.staticPressure[e] * forceN[static_cast<size_t>(k)] : 0.0);
+    const double deviator =
+        std::min(bounds.deviatorSpectralNorms[e] * w.qNorm[k],
+                 dotInOrder(bounds.deviatorNorms.row(e).data(), w.qAbsT.col(k).data(), r) * (1.0 + 1e-9)) +
+        w.staticDeviator[e] * fAbs;
+    return std::min(spectral, p + kDeviatorShare * deviator + margin);
+  };
   // The evaluated σ: skipped below `level` by its split bound (with a margin for the eigen
   // solve's rounding), else its σ₁.
   auto principalAbove = [&](const Voigt& sigma, double level, double& s1) {
@@ -347,10 +366,14 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
   scan.peakPrincipalPa = best;
   const int32_t peakPoint = scan.peakElement;
   if (peakPoint >= 0) scan.peakElement = peakPoint / pointsPerElement;
-  // Seeds at the peak instant: every point over σ_t there (the same bounds per point, pruned), in
-  // fixed ranges, each into its own list, gathered in range order (a shattering impact evaluates
-  // most of the body here).
+  // Seeds at the peak instant, in fixed ranges, each into its own list, gathered in range order.
+  // Unpruned: every point over σ_t there, evaluated and sorted. Pruned: the candidates, each point
+  // whose bound there reaches σ_t, with that bound; SeedOrder evaluates them as crack growth takes
+  // seeds, strongest first (a shattering hit puts most of a body over σ_t and starts a few cracks).
   const Eigen::Index k = scan.peakInstant;
+  scan.seedThresholdPa = threshold;
+  scan.pointsPerElement = pointsPerElement;
+  scan.seedCandidates.clear();
   w.seeds.clear();
   constexpr int kRanges = 16;
   w.rangeSeeds.resize(kRanges);
@@ -360,25 +383,27 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     out.clear();
     if (k < 0) return;
     for (Eigen::Index e = t * c / kRanges; e < t * (c + 1) / kRanges; ++e) {
-      if (prune && !mayReach(e, k, threshold)) continue;
-      double s1 = 0.0;
       if (prune) {
-        if (!principalAbove(voigt(e, k), threshold, s1)) continue;
-      } else {
-        s1 = maxPrincipalStress(voigt(e, k));
+        if (!mayReach(e, k, threshold)) continue;
+        out.emplace_back(seedBound(e, k), static_cast<int32_t>(e));
+        continue;
       }
+      const double s1 = maxPrincipalStress(voigt(e, k));
       ++w.rangeEvaluations[static_cast<size_t>(c)];
       if (s1 >= threshold) out.emplace_back(s1, static_cast<int32_t>(e));
     }
   };
   tbb::parallel_for(0, kRanges, seedRange);
+  std::vector<std::pair<double, int32_t>>& gathered = prune ? scan.seedCandidates : w.seeds;
   for (int c = 0; c < kRanges; ++c) {
     scan.evaluations += w.rangeEvaluations[static_cast<size_t>(c)];
-    w.seeds.insert(w.seeds.end(), w.rangeSeeds[static_cast<size_t>(c)].begin(), w.rangeSeeds[static_cast<size_t>(c)].end());
+    gathered.insert(gathered.end(), w.rangeSeeds[static_cast<size_t>(c)].begin(), w.rangeSeeds[static_cast<size_t>(c)].end());
   }
-  std::sort(w.seeds.begin(), w.seeds.end(), [](const auto& a, const auto& b) {
-    return a.first != b.first ? a.first > b.first : a.second < b.second;
-  });
+  if (prune) {
+    std::make_heap(scan.seedCandidates.begin(), scan.seedCandidates.end(), lowerSeed);
+    return;
+  }
+  std::sort(w.seeds.begin(), w.seeds.end(), [](const auto& a, const auto& b) { return lowerSeed(b, a); });
   if (pointsPerElement == 1) {
     for (const auto& [s1, e] : w.seeds) scan.seeds.push_back(e);
     return;
@@ -393,9 +418,62 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
   }
 }
 
+SeedOrder::SeedOrder(const StressScan& scan, const StressField& field, SeedOrderWorkspace& workspace)
+    : mScan(scan), mField(field), mW(workspace) {
+  mW.candidates.assign(scan.seedCandidates.begin(), scan.seedCandidates.end());  // a heap already
+  mW.evaluated.clear();
+  if (scan.seeds.empty() && scan.pointsPerElement > 1 && field.stressModes) {
+    mW.taken.assign(static_cast<size_t>(field.stressModes->rows() / 6 / scan.pointsPerElement), 0);
+  }
+}
+
+bool SeedOrder::next(int32_t& element) {
+  if (!mScan.seeds.empty() || mScan.seedCandidates.empty()) {  // an unpruned scan's list
+    if (mNext >= mScan.seeds.size()) return false;
+    element = mScan.seeds[mNext++];
+    return true;
+  }
+  for (;;) {
+    // A candidate whose bound reaches the strongest stress evaluated may be stronger (or as strong
+    // with a lower index): evaluate it first.
+    while (!mW.candidates.empty() && (mW.evaluated.empty() || mW.candidates.front().first >= mW.evaluated.front().first)) {
+      std::pop_heap(mW.candidates.begin(), mW.candidates.end(), lowerSeed);
+      const int32_t point = mW.candidates.back().second;
+      mW.candidates.pop_back();
+      ++mEvaluations;
+      const double s1 = maxPrincipalStress(mField.atPoint(point));
+      if (s1 < mScan.seedThresholdPa) continue;
+      mW.evaluated.emplace_back(s1, point);
+      std::push_heap(mW.evaluated.begin(), mW.evaluated.end(), lowerSeed);
+    }
+    if (mW.evaluated.empty()) return false;
+    std::pop_heap(mW.evaluated.begin(), mW.evaluated.end(), lowerSeed);
+    const int32_t point = mW.evaluated.back().second;
+    mW.evaluated.pop_back();
+    element = point / mScan.pointsPerElement;
+    if (mScan.pointsPerElement > 1) {  // each element once, at its strongest point
+      char& taken = mW.taken[static_cast<size_t>(element)];
+      if (taken) continue;
+      taken = 1;
+    }
+    return true;
+  }
+}
+
+std::vector<int32_t> orderedSeeds(const StressScan& scan, const StressField& field) {
+  SeedOrderWorkspace workspace;
+  SeedOrder order(scan, field, workspace);
+  std::vector<int32_t> seeds;
+  for (int32_t e = 0; order.next(e);) seeds.push_back(e);
+  return seeds;
+}
+
 void CrackWorkspace::reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index edges, int cracks) {
   const auto n = static_cast<size_t>(nodes), t = static_cast<size_t>(tets), c = static_cast<size_t>(std::max(cracks, 1));
   front.reserve(4 * t);
+  seedOrder.candidates.reserve(4 * t);  // stress points: up to 4 per element (P2)
+  seedOrder.evaluated.reserve(4 * t);
+  seedOrder.taken.reserve(t);
   cut.reserve(t);
   stressKnown.reserve(t);
   stressCache.reserve(t);
@@ -438,6 +516,7 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
   state.edgeCuts.resize(topo.edges.rows());
   state.edgeCuts.setConstant(kNaN);
   w.cut.assign(tetCount, 0);
+  w.seedEvaluations = 0;
   w.front.clear();
   w.seedNormals.clear();  // per crack: the plane it started on
   w.phi.clear();
@@ -505,7 +584,8 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
   };
 
   // Seeds: strongest first; one crack per seed that is neither cut nor next to a cut element.
-  for (int32_t e : scan.seeds) {
+  SeedOrder seeds(scan, field, w.seedOrder);
+  for (int32_t e = 0; seeds.next(e);) {
     if (state.crackCount >= settings.maxCracks || state.arrestedByEnergy) break;
     bool nearCut = w.cut[static_cast<size_t>(e)] != 0;
     for (int f = 0; f < 4 && !nearCut; ++f) {
@@ -523,6 +603,7 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
     if (!apply(e, dir, dir.dot(centroid), state.crackCount)) break;
     ++state.crackCount;
   }
+  w.seedEvaluations = seeds.evaluations();
   // Fronts advance together, strongest normal stress first.
   while (!w.front.empty() && !state.arrestedByEnergy) {
     std::pop_heap(w.front.begin(), w.front.end(), weaker);

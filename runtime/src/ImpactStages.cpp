@@ -380,10 +380,11 @@ Status computeImpact(const ImpactJob& submitted, ImpactWorkspace& ws, ImpactResu
   inArena(job, [&] { stress = stressStage(job, flow, ws, result); });
   if (!stress) return inStage("stress scan", stress.error());
   t.stressS = secondsSince(t0);
-  if (ws.scan.seeds.empty()) return Ok{};
+  if (!ws.scan.hasSeeds()) return Ok{};
 
   t0 = SteadyClock::now();
   if (Status st = crackStage(job, flow, ws, result); !st) return inStage("crack growth", st.error());
+  result.stressEvaluations += ws.crack.seedEvaluations;  // the seeds crack growth took
   t.propagationS = secondsSince(t0);
   if (result.fracture.fragmentCount < 2) return Ok{};
 

@@ -66,8 +66,17 @@ struct StressScan {
   double peakPrincipalPa = 0.0;   ///< exact maximum of σ₁ over elements and instants
   int32_t peakElement = -1;
   int32_t peakInstant = -1;
-  std::vector<int32_t> seeds;     ///< elements with σ₁ ≥ threshold at the peak instant, strongest first
-  int64_t evaluations = 0;        ///< element stresses evaluated
+  /// An unpruned scan: the elements with σ₁ ≥ threshold at the peak instant, strongest first (ties:
+  /// the lower point first). A pruned scan leaves it empty and lists the candidates instead.
+  std::vector<int32_t> seeds;
+  /// A pruned scan: (bound, point) for each stress point whose bound at the peak instant reaches
+  /// the threshold, a max-heap; SeedOrder makes the same seeds from it, evaluated as they are taken.
+  std::vector<std::pair<double, int32_t>> seedCandidates;
+  double seedThresholdPa = 0.0;
+  int pointsPerElement = 1;
+  int64_t evaluations = 0;        ///< element stresses evaluated (SeedOrder counts its own)
+  /// Whether there is a seed: the peak point is one exactly when the peak reaches the threshold.
+  bool hasSeeds() const { return peakInstant >= 0 && peakPrincipalPa >= seedThresholdPa; }
 };
 
 /// Scans σ₁ over every stress point and instant. stressModes: 6PT by ≥ r, P = pointsPerElement
@@ -170,6 +179,36 @@ struct StressField {
   Voigt atPoint(Eigen::Index point) const;
 };
 
+/// Buffers of SeedOrder, kept between calls.
+struct SeedOrderWorkspace {
+  std::vector<std::pair<double, int32_t>> candidates, evaluated;  ///< max-heaps: (bound, point), (σ₁, point)
+  std::vector<char> taken;                                        ///< per element, with several points each
+};
+
+/// The seeds of a scan, strongest first, exactly the unpruned scan's list, made as they are taken:
+/// a pruned scan's candidates are evaluated at the peak instant (`field`) in the order of their
+/// bounds, and a seed is handed out once no candidate left could be stronger. Crack growth takes
+/// seeds until it has started its cracks; a shattering hit puts most of a body over σ_t and
+/// evaluates a fraction of it here.
+class SeedOrder {
+ public:
+  SeedOrder(const StressScan& scan, const StressField& field, SeedOrderWorkspace& workspace);
+  /// The next seed's element; false when there is none left.
+  bool next(int32_t& element);
+  /// Stresses evaluated so far.
+  int64_t evaluations() const { return mEvaluations; }
+
+ private:
+  const StressScan& mScan;
+  const StressField& mField;
+  SeedOrderWorkspace& mW;
+  size_t mNext = 0;
+  int64_t mEvaluations = 0;
+};
+
+/// Every seed of a scan in SeedOrder's order (tests, tools).
+std::vector<int32_t> orderedSeeds(const StressScan& scan, const StressField& field);
+
 /// Buffers of crack growth, labelling and crumb merging, kept between calls: once they have grown
 /// to the largest body cracked (or been reserved for it), growing cracks allocates nothing.
 struct CrackWorkspace {
@@ -185,6 +224,8 @@ struct CrackWorkspace {
   std::vector<double> phi;               ///< cracks × #N: each crack's nodal level set
   std::vector<char> cutBy;               ///< cracks × #T
   std::vector<Eigen::Vector3d> seedNormals;
+  SeedOrderWorkspace seedOrder;
+  int64_t seedEvaluations = 0;           ///< stresses SeedOrder evaluated for the last growth
   // labelFragments
   std::vector<int32_t> parent, labelOfRoot;
   // mergeCrumbs: per component, per node (member lists), per node (incident edges, CSR)
@@ -194,7 +235,7 @@ struct CrackWorkspace {
   void reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index edges, int cracks);
 };
 
-/// Grows cracks from scan.seeds in the field at the peak instant, within energyBudgetJ.
+/// Grows cracks from the scan's seeds (SeedOrder) in the field at the peak instant, within energyBudgetJ.
 /// Errors: InvalidArgument (bad settings, sizes or material values).
 Result<FractureState> propagateCracks(const TetMesh& mesh, const TetTopology& topology, const StressScan& scan,
                                       const StressField& field, double tensileStrengthPa, double fractureEnergyJPerM2,
