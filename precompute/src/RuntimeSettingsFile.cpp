@@ -50,6 +50,13 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
         return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"debris_volume_fraction\" must be in [0, 1)");
       }
       s.debrisVolumeFraction = f;
+    } else if (key == "contact_spread_fraction") {
+      if (!value.is_number()) return settingsFileError(sourceName, "\"contact_spread_fraction\" must be a number");
+      const double f = value.get<double>();
+      if (!(f >= 0.0 && f < 1.0)) {
+        return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"contact_spread_fraction\" must be in [0, 1)");
+      }
+      s.contactSpreadFraction = f;
     } else if (key == "exact_modes_max_tets") {
       if (Status st = integer(key, s.exactModesMaxTets); !st) return st.error();
     } else if (key == "exact_modes_max_dof") {
@@ -77,6 +84,7 @@ Result<FractureSettings> loadRuntimeSettings(const std::filesystem::path& path, 
 std::string runtimeSettingsJson(const FractureSettings& s) {
   const nlohmann::json doc = {{"descriptor", descriptorKindName(s.descriptor)},
                               {"debris_volume_fraction", s.debrisVolumeFraction},
+                              {"contact_spread_fraction", s.contactSpreadFraction},
                               {"exact_modes_max_tets", s.exactModesMaxTets},
                               {"exact_modes_max_dof", s.exactModesMaxDof},
                               {"exact_mode_count", s.exactModeCount},

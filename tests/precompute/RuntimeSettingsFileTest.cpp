@@ -14,6 +14,7 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   FractureSettings s;
   s.descriptor = DescriptorKind::VoxelImproved;
   s.debrisVolumeFraction = 0.004;
+  s.contactSpreadFraction = 0.12;
   s.exactModesMaxTets = 321;
   s.exactModeCount = 12;
   s.modeCount = 15;
@@ -23,6 +24,7 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   ASSERT_TRUE(back) << back.error().message;
   EXPECT_EQ(back.value().descriptor, DescriptorKind::VoxelImproved);
   EXPECT_EQ(back.value().debrisVolumeFraction, 0.004);
+  EXPECT_EQ(back.value().contactSpreadFraction, 0.12);
   EXPECT_EQ(back.value().exactModesMaxTets, 321);
   EXPECT_EQ(back.value().exactModeCount, 12);
   EXPECT_EQ(back.value().modeCount, 15);
@@ -56,6 +58,10 @@ TEST(RuntimeSettingsFile, BadFilesGiveTypedErrors) {
   EXPECT_EQ(code(R"({ "modes": 99999999999 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "debris_volume_fraction": 1.0 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "debris_volume_fraction": "a" })"), "parse_error");
+  EXPECT_EQ(code(R"({ "contact_spread_fraction": 1.0 })"), "invalid_argument");
+  EXPECT_EQ(code(R"({ "contact_spread_fraction": -0.1 })"), "invalid_argument");
+  EXPECT_EQ(code(R"({ "contact_spread_fraction": [0.1] })"), "parse_error");
+  EXPECT_EQ(code(R"({ "contact_spread_fraction": 0 })"), "ok");
   EXPECT_EQ(code(R"({ "exact_mode_count": 0 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "exact_modes_max_tets": 0 })"), "ok");
   auto missing = loadRuntimeSettings("no-such-settings.json");

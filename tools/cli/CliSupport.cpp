@@ -79,6 +79,7 @@ Status applyRuntimeSettingsFile(const std::string& path, const CLI::App& cmd, Fr
   auto given = [&](const char* flag) { return cmd.get_option_no_throw(flag) && cmd.count(flag) > 0; };
   if (given("--modes")) merged.modeCount = fracture.modeCount;
   if (given("--debris")) merged.debrisVolumeFraction = fracture.debrisVolumeFraction;
+  if (given("--contact-spread")) merged.contactSpreadFraction = fracture.contactSpreadFraction;
   if (given("--descriptor")) merged.descriptor = fracture.descriptor;
   if (given("--exact-max-tets")) merged.exactModesMaxTets = fracture.exactModesMaxTets;
   if (given("--exact-max-dof")) merged.exactModesMaxDof = fracture.exactModesMaxDof;

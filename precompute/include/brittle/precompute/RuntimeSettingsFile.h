@@ -3,6 +3,7 @@
 //
 //   { "descriptor": "moment",            // the kind fragments are matched with
 //     "debris_volume_fraction": 0.004,   // fragments below this share of their body stay rigid
+//     "contact_spread_fraction": 0.05,   // the contact load's least radius, per bounding-box diagonal
 //     "exact_modes_max_tets": 150,       // the exact path's size limit (0: never)
 //     "exact_modes_max_dof": 2000,       // and its model's limit in degrees of freedom (0: none)
 //     "exact_mode_count": 20,
@@ -23,15 +24,15 @@
 namespace brittle {
 
 /// The settings of `json` over `base`. Errors: ParseError (bad JSON, a mistyped or unknown key,
-/// naming it; an unknown descriptor), InvalidArgument (a value out of range: debris fraction
-/// outside [0, 1), negative counts, exact_mode_count < 1).
+/// naming it; an unknown descriptor), InvalidArgument (a value out of range: debris or contact
+/// spread fraction outside [0, 1), negative counts, exact_mode_count < 1).
 Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string_view sourceName,
                                               const FractureSettings& base = {});
 
 /// Reads a settings file. Errors: FileNotFound, then those of parseRuntimeSettings.
 Result<FractureSettings> loadRuntimeSettings(const std::filesystem::path& path, const FractureSettings& base = {});
 
-/// The document above for `settings` (all five keys).
+/// The document above for `settings` (every key).
 std::string runtimeSettingsJson(const FractureSettings& settings);
 
 }  // namespace brittle
