@@ -234,7 +234,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
   // peak search. The margin covers the rounding of p_e,k's sum, whose terms may cancel.
   auto mayReach = [&](Eigen::Index e, Eigen::Index k, double level) {
     const double fAbs = w.forceAbs[k];
-    if (bounds.spectralNorms[e] * w.qNorm[k] + w.staticNorm[e] * fAbs < level) return false;
+    if ((bounds.spectralNorms[e] * w.qNorm[k] + w.staticNorm[e] * fAbs) * (1.0 + 1e-9) < level) return false;
     const double margin = 1e-9 * (w.pressureScale[e] + w.elementBound[e]);
     const double p = dotInOrder(bounds.pressureModes.row(e).data(), w.qT.col(k).data(), r) +
                      (correction ? w.staticPressure[e] * forceN[static_cast<size_t>(k)] : 0.0);
@@ -247,7 +247,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
   // The bound of (e, k) itself: the smaller of the spectral and the split bound (both dots).
   auto seedBound = [&](Eigen::Index e, Eigen::Index k) {
     const double fAbs = w.forceAbs[k];
-    const double spectral = bounds.spectralNorms[e] * w.qNorm[k] + w.staticNorm[e] * fAbs;
+    const double spectral = (bounds.spectralNorms[e] * w.qNorm[k] + w.staticNorm[e] * fAbs) * (1.0 + 1e-9);
     const double margin = 1e-9 * (w.pressureScale[e] + w.elementBound[e]);
     const double p = dotInOrder(bounds.pressureModes.row(e).data(), w.qT.col(k).data(), r) +
                      (correction ? w.staticPressure[e] * forceN[static_cast<size_t>(k)] : 0.0);
@@ -313,8 +313,9 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
         pressure += std::abs(w.staticPressure[e]) * forceMax;
         deviator = std::min(deviator, bounds.deviatorSpectralNorms[e] * qNormMax) + w.staticDeviator[e] * forceMax;
         w.pressureScale[e] = pressure;
+        // The relative margin covers the sums' rounding (every term here is ≥ 0).
         w.elementBound[e] = std::min(bounds.spectralNorms[e] * qNormMax + w.staticNorm[e] * forceMax,
-                                     pressure + kDeviatorShare * deviator);
+                                     pressure + kDeviatorShare * deviator) * (1.0 + 1e-9);
       }
     });
     // The search runs in 16 fixed ranges of points on the arena's threads, each over a max-heap of

@@ -72,9 +72,9 @@ struct World::Impl {
   // Asynchronous work: submitted impacts by ticket, spare workspaces, background preparation.
   // Impacts and background work (placement, the fragments' new bodies) run in two arenas over the
   // same worker threads: a worker takes an impact's work before background work (arena
-  // priorities), and a host waiting for an impact helps with that impact only, never with a
+  // priorities), and a host waiting for an impact helps with impacts only, never with a
   // background task, which would hold it for as long as that task runs (a fragment's modal
-  // analysis, a placed object's factorisation).
+  // analysis, a placed object's factorisation). Each arena has workerThreads' concurrency.
   std::unique_ptr<tbb::task_arena> arena, backgroundArena;
   tbb::task_group background;
   std::map<uint64_t, std::unique_ptr<PendingImpact>> pending;

@@ -94,7 +94,7 @@ TEST(CrackPropagation, CrumbMergingEqualsRelabellingAfterEveryMerge) {
 TEST(CrackPropagation, PrunedScanEqualsTheFullScanOnRandomFields) {
   // Several generator seeds; fields with and without the static correction; thresholds from below
   // the typical peak (many seeds) to above every σ₁ (none).
-  int withSeeds = 0, withoutSeeds = 0;
+  int withSeeds = 0, withoutSeeds = 0, firstSeedCheaper = 0;
   for (uint64_t rngSeed : {11u, 12u, 13u, 14u}) {
     std::mt19937_64 rng(rngSeed);
     std::normal_distribution<double> g(0.0, 1.0);
@@ -132,13 +132,14 @@ TEST(CrackPropagation, PrunedScanEqualsTheFullScanOnRandomFields) {
       EXPECT_EQ(orderedSeeds(pruned, field), full.seeds);
       EXPECT_EQ(pruned.hasSeeds(), !full.seeds.empty());
       EXPECT_LE(pruned.evaluations, full.evaluations);
-      if (full.seeds.size() > 1) {  // the first seed alone costs fewer evaluations than all of them
+      if (!full.seeds.empty()) {  // the first seed evaluates at most every candidate, usually fewer
         SeedOrderWorkspace workspace;
         SeedOrder order(pruned, field, workspace);
         int32_t first = -1;
         ASSERT_TRUE(order.next(first));
         EXPECT_EQ(first, full.seeds.front());
-        EXPECT_LT(order.evaluations(), static_cast<int64_t>(pruned.seedCandidates.size()));
+        EXPECT_LE(order.evaluations(), static_cast<int64_t>(pruned.seedCandidates.size()));
+        if (order.evaluations() < static_cast<int64_t>(pruned.seedCandidates.size())) ++firstSeedCheaper;
       }
       // (Within rounding: the scan and StressField::at may sum the product in different orders.)
       const double peak = full.peakPrincipalPa;
@@ -156,6 +157,7 @@ TEST(CrackPropagation, PrunedScanEqualsTheFullScanOnRandomFields) {
   }
   EXPECT_GT(withSeeds, 0);
   EXPECT_GT(withoutSeeds, 0);
+  EXPECT_GT(firstSeedCheaper, 0);  // lazily made seeds save evaluations on these fields
 }
 
 TEST(CrackPropagation, SpectralBoundIsANormBoundWithinSixPercent) {

@@ -159,8 +159,14 @@ Runner addImpactCommand(CLI::App& app) {
         return kExitInternal;
       }
       warm.push_back(repeated.value().times);
-      if (repeated.value().broken) continue;
-      if (Status st = world.value().removeObject(d.object); !st) return reportError(st.error());
+      // Leave the world as it was: the repeat's object, or its fragments (maxObjects).
+      if (!repeated.value().broken) {
+        if (Status st = world.value().removeObject(d.object); !st) return reportError(st.error());
+      }
+      for (const FragmentResult& f : repeated.value().fragments) {
+        if (!f.object.valid()) continue;
+        if (Status st = world.value().removeObject(f.object); !st) return reportError(st.error());
+      }
     }
     auto warmMedian = [&](double StageTimes::*stage) {
       std::vector<double> v;

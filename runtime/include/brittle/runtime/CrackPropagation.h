@@ -84,7 +84,8 @@ struct StressScan {
 /// stressModeBounds over ≥ r modes; staticStress (6PT, per newton, may be empty) and forceN (K) add the
 /// static correction. The peak and the seeds name elements: an element's σ₁ is the largest at its
 /// points (for P2 that is its maximum over the element, the stress being linear in it). Pruned and
-/// unpruned scans return the same peak, element, instant and seeds.
+/// unpruned scans return the same peak, element and instant; the unpruned scan lists the seeds, the
+/// pruned one their candidates, from which SeedOrder makes the same seeds.
 StressScan scanStresses(const MatrixXdRow& stressModes, const StressBounds& bounds, const Eigen::MatrixXd& q,
                         const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double thresholdPa,
                         bool prune, int pointsPerElement = 1);

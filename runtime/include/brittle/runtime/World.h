@@ -22,9 +22,9 @@
 // Threading contract. A World's methods are called from one thread at a time (the host's). The
 // work behind submitImpact, and the background preparation of placed objects
 // (WorldSettings::prepareInBackground), runs on the World's own worker threads (oneTBB arenas of
-// WorldSettings::workerThreads: one for impacts, one of lower priority for background work, so that
-// a free worker takes an impact first and a host waiting in collectImpact helps that impact and
-// never runs a background task); it reads only what no World call changes while it runs (the
+// WorldSettings::workerThreads each: one for impacts, one of lower priority for background work, so
+// that a free worker takes an impact first and a host waiting in collectImpact helps with impacts
+// and never runs a background task); it reads only what no World call changes while it runs (the
 // struck object's immutable data, the pack's database) and writes only its own result. Between
 // submitImpact and collectImpact the struck object is pending: it stays in the world as it was,
 // and impact(), submitImpact() and removeObject() on it return InvalidArgument. collectImpact
@@ -136,8 +136,9 @@ struct WorldSettings {
   uint64_t seed = 1;
   /// Impacts submitted and not yet collected, at most.
   int32_t maxPendingImpacts = 64;
-  /// Worker threads for submitted impacts and background preparation; 0: one per core
-  /// (oneTBB's default). Results do not depend on it.
+  /// Worker threads for submitted impacts, and as many for background preparation (two oneTBB
+  /// arenas over the process's workers); 0: one per core (oneTBB's default). 1: the work runs
+  /// when the host waits for it or needs it. Results do not depend on it.
   int32_t workerThreads = 0;
   /// Placing the first instance of a pack object starts the factorisation of its K (the static
   /// correction) on a worker and returns at once; the object's first impact waits for it if it
