@@ -37,6 +37,16 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
     out = static_cast<int>(x);
     return Ok{};
   };
+  auto fraction = [&](const std::string& key, double& out) -> Status {  // a share in [0, 1)
+    const auto& v = doc[key];
+    if (!v.is_number()) return settingsFileError(sourceName, "\"" + key + "\" must be a number");
+    const double f = v.get<double>();
+    if (!(f >= 0.0 && f < 1.0)) {
+      return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"" + key + "\" must be in [0, 1)");
+    }
+    out = f;
+    return Ok{};
+  };
   for (const auto& [key, value] : doc.items()) {
     if (key == "descriptor") {
       if (!value.is_string()) return settingsFileError(sourceName, "\"descriptor\" must be a string");
@@ -44,19 +54,9 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
       if (!kind) return settingsFileError(sourceName, kind.error().message);
       s.descriptor = kind.value();
     } else if (key == "debris_volume_fraction") {
-      if (!value.is_number()) return settingsFileError(sourceName, "\"debris_volume_fraction\" must be a number");
-      const double f = value.get<double>();
-      if (!(f >= 0.0 && f < 1.0)) {
-        return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"debris_volume_fraction\" must be in [0, 1)");
-      }
-      s.debrisVolumeFraction = f;
+      if (Status st = fraction(key, s.debrisVolumeFraction); !st) return st.error();
     } else if (key == "contact_spread_fraction") {
-      if (!value.is_number()) return settingsFileError(sourceName, "\"contact_spread_fraction\" must be a number");
-      const double f = value.get<double>();
-      if (!(f >= 0.0 && f < 1.0)) {
-        return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"contact_spread_fraction\" must be in [0, 1)");
-      }
-      s.contactSpreadFraction = f;
+      if (Status st = fraction(key, s.contactSpreadFraction); !st) return st.error();
     } else if (key == "exact_modes_max_tets") {
       if (Status st = integer(key, s.exactModesMaxTets); !st) return st.error();
     } else if (key == "exact_modes_max_dof") {
