@@ -53,9 +53,8 @@ struct Body {
   const Result<StaticCorrection>& staticCorrection() const;
   /// Whether staticCorrection() would return at once (built, or failed).
   bool staticCorrectionReady() const { return mCorrectionReady.load(std::memory_order_acquire); }
-  /// Whether its build was started or asked for (World: a pack object placed in the background).
-  /// A fast impact takes the correction when this holds, so that its outcome does not depend on
-  /// how far a background build has got.
+  /// Whether its build was started or asked for: a pack object's when it is placed, a matched
+  /// fragment's when its body is made (ImpactStages.cpp); the World then builds it on the workers.
   bool staticCorrectionScheduled() const { return mCorrectionScheduled.load(std::memory_order_acquire); }
   void scheduleStaticCorrection() const { mCorrectionScheduled.store(true, std::memory_order_release); }
   /// Installs a static correction built elsewhere (makeBody, from the exact path's factor) while

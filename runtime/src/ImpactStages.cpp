@@ -73,10 +73,11 @@ Status contactStage(const ImpactJob& job, Flow& flow, ImpactResult& result) {
   return Ok{};
 }
 
-// The static correction's factorised K: built in the background after placement or here, on the
-// body's first impact. A fast impact (a host over its frame budget) takes it only when its build
-// was started already (a pack object's at placement, a fragment's by an earlier impact), waiting
-// for it if need be: whether it is used never depends on timing.
+// The static correction's factorised K: built on the workers once a pack object is placed or a
+// matched fragment's body is made (WorldSettings::prepareInBackground), or here if the impact
+// comes first (it then waits for, or makes, that build). A fast impact (a host over its frame
+// budget) takes it only when its build was scheduled already, so that it never factorises K
+// itself and whether the correction is used never depends on timing.
 Status prepareStage(const ImpactJob& job, Flow& flow, ImpactResult& result) {
   const Body& body = *job.body;
   const bool wanted = job.settings->staticCorrection && (!job.desc.fast || body.staticCorrectionScheduled());
@@ -206,6 +207,16 @@ struct BrokenParent {
   Eigen::VectorXd edgeCuts;
 };
 
+// A matched fragment's body counts its static correction as scheduled from the moment it is made
+// (the World builds it on the workers next, as it does a pack object's at placement). Its first
+// impact then finds K factorised instead of paying for it, and a fast impact's use of the
+// correction does not depend on how far that build has got. The exact path's body has it already
+// (makeBody adopts its modal analysis's factor).
+Result<std::shared_ptr<const Body>> withCorrectionScheduled(Result<std::shared_ptr<const Body>> made, bool correct) {
+  if (made && correct) made.value()->scheduleStaticCorrection();
+  return made;
+}
+
 // The database: the nearest entry and its placement (searched now, so that the result reports
 // it); the entry rescaled to the fragment is made later (BodySource).
 std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const double* moments, FragmentResult& fr) {
@@ -224,10 +235,11 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const doub
   fr.matchedEntry = m.entry;
   fr.matchDistance = m.distance;
   const FragmentDatabase* db = job.database;
-  return BodySource::deferred([db, m, material, modeCount]() -> Result<std::shared_ptr<const Body>> {
+  const bool correct = job.settings->staticCorrection && job.prepareFragments;
+  return BodySource::deferred([db, m, material, modeCount, correct]() -> Result<std::shared_ptr<const Body>> {
     auto placed = instantiateEntry(db->entries[static_cast<size_t>(m.entry)], db->referenceMaterial, material, m.queryFrame);
     if (!placed) return Error{placed.error().code, "entry " + std::to_string(m.entry) + ": " + placed.error().message};
-    return makeBody(std::move(placed).value(), material, modeCount);
+    return withCorrectionScheduled(makeBody(std::move(placed).value(), material, modeCount), correct);
   });
 }
 
@@ -258,8 +270,9 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   const FragmentDatabase* db = job.database;
   std::string name = parent->body->asset.name + ".f" + std::to_string(i);
   TriangleMesh surface = matcher ? fr.surface : TriangleMesh{};
-  const bool correct = fs.staticCorrection;
-  return BodySource::deferred([parent, mesh = std::move(sub).value(), es, modeCount, correct, kind, matcher, db,
+  const bool correct = fs.staticCorrection;  // the exact path's body adopts its analysis's factor
+  const bool scheduleMatch = correct && job.prepareFragments;
+  return BodySource::deferred([parent, mesh = std::move(sub).value(), es, modeCount, correct, scheduleMatch, kind, matcher, db,
                                name = std::move(name), surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
     const Material& material = parent->body->material;
     ExactModesFactor factor;  // its modal analysis's factorisation: the static correction's too
@@ -272,7 +285,7 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
     const FragmentMatch& m = match.value().front();
     auto placed = instantiateEntry(db->entries[static_cast<size_t>(m.entry)], db->referenceMaterial, material, m.queryFrame);
     if (!placed) return made.error();
-    return makeBody(std::move(placed).value(), material, modeCount);
+    return withCorrectionScheduled(makeBody(std::move(placed).value(), material, modeCount), scheduleMatch);
   });
 }
 

@@ -35,6 +35,9 @@ struct ImpactJob {
   const FragmentMatcher* matcher = nullptr;  ///< null: no database search
   const FragmentDatabase* database = nullptr;
   int32_t maxFragments = 256;          ///< WorldSettings::maxFragmentsPerImpact
+  /// WorldSettings::prepareInBackground: a matched fragment's static correction is scheduled when
+  /// its body is made (the World builds it on the workers), else on its first impact.
+  bool prepareFragments = true;
   tbb::task_arena* workers = nullptr;  ///< where the fragments' new bodies are made in parallel; null: the caller's
 };
 

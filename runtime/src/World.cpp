@@ -173,6 +173,7 @@ struct World::Impl {
     job.desc = desc;
     job.crackSeed = splitmix64(settings.seed ^ splitmix64(settings.fracture.crack.seed + impacts++));
     job.settings = &settings.fracture;
+    job.prepareFragments = settings.prepareInBackground;
     job.matcher = matcher ? &*matcher : nullptr;
     job.database = &pack.database;
     job.workers = &workers();
@@ -200,13 +201,16 @@ struct World::Impl {
       if (!id) return id.error();  // unreachable: capacity checked above
       result.fragments[i].object = id.value();
     }
-    // The fragments' modal data and stress bounds are made on the workers from now on (an impact
-    // or objectAsset that needs one first makes or waits for it).
+    // The fragments' modal data, stress bounds and (where scheduled) static corrections are made on
+    // the workers from now on (an impact or objectAsset that needs one first makes or waits for it).
     backgroundWorkers().execute([&] {
       for (auto& source : newBodies) {
         if (!source) continue;
         background.run([source] {
-          if (const auto& body = source->get()) (void)body.value()->stressBounds();
+          const auto& body = source->get();
+          if (!body) return;
+          (void)body.value()->stressBounds();
+          if (body.value()->staticCorrectionScheduled()) (void)body.value()->staticCorrection();
         });
       }
     });

@@ -142,7 +142,9 @@ struct WorldSettings {
   int32_t workerThreads = 0;
   /// Placing the first instance of a pack object starts the factorisation of its K (the static
   /// correction) on a worker and returns at once; the object's first impact waits for it if it
-  /// is not done. false: addObject factorises on the caller's thread and returns its errors.
+  /// is not done. false: addObject factorises on the caller's thread and returns its errors. The
+  /// same holds for a matched fragment's body: true, its K is factorised on a worker right after
+  /// the body is made; false, on its first impact.
   bool prepareInBackground = true;
   /// Called on a worker when the work of a submitted impact is done, before impactReady turns
   /// true, with the result collectImpact will hand over (the fragments' surfaces and mass
@@ -185,10 +187,11 @@ struct ImpactDesc {
   /// How far the point may lie from the body's surface (m); 0: 5 % of the body's size.
   double pointToleranceM = 0.0;
   /// A host over its frame budget: skip the static correction unless the body's K factorisation
-  /// was already started (a pack object's when it was placed, a fragment's by an earlier impact),
-  /// so that a fragment's first hit does not factorise its K (StageTimes::prepareS, the largest
-  /// cost of that hit). Less accurate (the truncated modes alone; see chart 1);
-  /// ImpactResult::staticCorrectionUsed says which it was. Never depends on timing.
+  /// was scheduled already (a pack object's when it was placed, a matched fragment's when its body
+  /// was made, both with WorldSettings::prepareInBackground; a fragment's by an earlier impact),
+  /// so that the impact never factorises K itself (StageTimes::prepareS). Less accurate when it
+  /// skips (the truncated modes alone; see chart 1); ImpactResult::staticCorrectionUsed says which
+  /// it was. Never depends on timing.
   bool fast = false;
 };
 
