@@ -16,15 +16,118 @@ std::pair<Eigen::Index, Eigen::Index> columnRange(const Eigen::SparseMatrix<doub
   return {begin, end};
 }
 
-void solveColumns(const Eigen::SparseMatrix<double>& lower, const std::vector<int32_t>& columns, double* x) {
-  const double* values = lower.valuePtr();
-  const int* rows = lower.innerIndexPtr();
-  for (int32_t j : columns) {
-    const auto [begin, end] = columnRange(lower, j);
-    double t = x[j];
-    for (Eigen::Index p = begin; p < end; ++p) t -= values[p] * x[rows[p]];
-    x[j] = t;
+// Σ_t a_t b_t and Σ_t c_t b_t over t < m, each in four running sums (t mod 4) added pairwise: the
+// sums over a supernode's rows of two of its columns, sharing the loads of b.
+void dotTwo(const double* a, const double* c, const double* b, Eigen::Index m, double& sumA, double& sumC) {
+  double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0, c0 = 0.0, c1 = 0.0, c2 = 0.0, c3 = 0.0;
+  Eigen::Index t = 0;
+  for (; t + 4 <= m; t += 4) {
+    a0 += a[t] * b[t];
+    a1 += a[t + 1] * b[t + 1];
+    a2 += a[t + 2] * b[t + 2];
+    a3 += a[t + 3] * b[t + 3];
+    c0 += c[t] * b[t];
+    c1 += c[t + 1] * b[t + 1];
+    c2 += c[t + 2] * b[t + 2];
+    c3 += c[t + 3] * b[t + 3];
   }
+  if (t < m) {
+    a0 += a[t] * b[t];
+    c0 += c[t] * b[t];
+  }
+  if (t + 1 < m) {
+    a1 += a[t + 1] * b[t + 1];
+    c1 += c[t + 1] * b[t + 1];
+  }
+  if (t + 2 < m) {
+    a2 += a[t + 2] * b[t + 2];
+    c2 += c[t + 2] * b[t + 2];
+  }
+  sumA = (a0 + a1) + (a2 + a3);
+  sumC = (c0 + c1) + (c2 + c3);
+}
+
+// The same for one column (the same arithmetic as dotTwo's first sum).
+double dotOne(const double* a, const double* b, Eigen::Index m) {
+  double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
+  Eigen::Index t = 0;
+  for (; t + 4 <= m; t += 4) {
+    a0 += a[t] * b[t];
+    a1 += a[t + 1] * b[t + 1];
+    a2 += a[t + 2] * b[t + 2];
+    a3 += a[t + 3] * b[t + 3];
+  }
+  if (t < m) a0 += a[t] * b[t];
+  if (t + 1 < m) a1 += a[t + 1] * b[t + 1];
+  if (t + 2 < m) a2 += a[t + 2] * b[t + 2];
+  return (a0 + a1) + (a2 + a3);
+}
+
+// Columns [run.first, run.end), descending, of the supernode that ends at run.last. Column j holds
+// rows j+1..last (in the supernode) then R, the rows of column `last`, whose x are gathered.
+void solveRuns(const Eigen::SparseMatrix<double>& lower, const std::vector<BackwardSolvePlan::Run>& runs, double* x,
+               std::vector<double>& gathered) {
+  const double* values = lower.valuePtr();
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const BackwardSolvePlan::Run& run = runs[i];
+    if (i + 1 < runs.size()) {  // the next run's values lie before this one's
+      const auto [begin, unused] = columnRange(lower, runs[i + 1].first);
+      const auto [unused2, end] = columnRange(lower, runs[i + 1].end - 1);
+      for (const double* p = values + begin; p < values + end; p += 8) __builtin_prefetch(p);
+    }
+    const auto [lastBegin, lastEnd] = columnRange(lower, run.last);
+    const Eigen::Index m = lastEnd - lastBegin;
+    const int* rows = lower.innerIndexPtr() + lastBegin;
+    double* b = gathered.data();
+    for (Eigen::Index t = 0; t < m; ++t) b[t] = x[rows[t]];
+    // Column j: its sum over R (its last m values), then over rows j+1..last, in row order.
+    auto finish = [&](int32_t j, double overR) {
+      const auto [begin, end] = columnRange(lower, j);
+      double t = overR;
+      for (Eigen::Index p = begin, k = j + 1; p < end - m; ++p, ++k) t += values[p] * x[k];
+      x[j] -= t;
+    };
+    int32_t j = run.end - 1;
+    for (; j - 1 >= run.first; j -= 2) {
+      double upper = 0.0, below = 0.0;
+      dotTwo(values + columnRange(lower, j).second - m, values + columnRange(lower, j - 1).second - m, b, m, upper,
+             below);
+      finish(j, upper);
+      finish(j - 1, below);
+    }
+    if (j == run.first) finish(j, dotOne(values + columnRange(lower, j).second - m, b, m));
+  }
+}
+
+// A supernode's last column per column: j and j + 1 share one when j's first row is j + 1 and j
+// has one row more than j + 1 (its pattern is then j + 1's and j + 1).
+std::vector<int32_t> supernodeLast(const Eigen::SparseMatrix<double>& lower) {
+  const auto n = static_cast<int32_t>(lower.cols());
+  std::vector<int32_t> last(static_cast<size_t>(n));
+  for (int32_t j = n - 1; j >= 0; --j) {
+    last[static_cast<size_t>(j)] = j;
+    if (j + 1 >= n) continue;
+    const auto [begin, end] = columnRange(lower, j);
+    const auto [nextBegin, nextEnd] = columnRange(lower, j + 1);
+    if (end > begin && lower.innerIndexPtr()[begin] == j + 1 && end - begin == nextEnd - nextBegin + 1) {
+      last[static_cast<size_t>(j)] = last[static_cast<size_t>(j) + 1];
+    }
+  }
+  return last;
+}
+
+// Descending columns as runs: neighbours in the list that are neighbours in one supernode.
+std::vector<BackwardSolvePlan::Run> toRuns(const std::vector<int32_t>& descending, const std::vector<int32_t>& last) {
+  std::vector<BackwardSolvePlan::Run> runs;
+  for (int32_t j : descending) {
+    const int32_t l = last[static_cast<size_t>(j)];
+    if (!runs.empty() && runs.back().first == j + 1 && runs.back().last == l) {
+      runs.back().first = j;
+    } else {
+      runs.push_back({j, j + 1, l});
+    }
+  }
+  return runs;
 }
 
 }  // namespace
@@ -57,9 +160,15 @@ BackwardSolvePlan BackwardSolvePlan::make(const Eigen::SparseMatrix<double>& low
     }
   }
   parts = std::max(parts, 1);
+  const std::vector<int32_t> superLast = supernodeLast(lower);
+  for (int32_t j = 0; j < n; ++j) {
+    const auto [begin, end] = columnRange(lower, j);
+    plan.mMaxGather = std::max(plan.mMaxGather, static_cast<size_t>(end - begin));
+  }
   if (parts == 1 || n == 0) {
-    plan.mTopNodes.resize(static_cast<size_t>(n));
-    for (int32_t j = 0; j < n; ++j) plan.mTopNodes[static_cast<size_t>(n - 1 - j)] = j;
+    std::vector<int32_t> all(static_cast<size_t>(n));
+    for (int32_t j = 0; j < n; ++j) all[static_cast<size_t>(n - 1 - j)] = j;
+    plan.mTopRuns = toRuns(all, superLast);
     return plan;
   }
   // Take the heaviest subtree apart (its root to the top, its children back as candidates) while
@@ -109,12 +218,12 @@ BackwardSolvePlan BackwardSolvePlan::make(const Eigen::SparseMatrix<double>& low
   for (double fraction : {0.75, 0.5, 0.33, 0.25, 0.125}) {
     if (Split sp = split(fraction * total / parts); sp.criticalWork < best.criticalWork) best = std::move(sp);
   }
-  plan.mTopNodes = std::move(best.top);
-  std::sort(plan.mTopNodes.begin(), plan.mTopNodes.end(), std::greater<>());
-  plan.mPartNodes.assign(static_cast<size_t>(parts), {});
+  std::sort(best.top.begin(), best.top.end(), std::greater<>());
+  plan.mTopRuns = toRuns(best.top, superLast);
+  std::vector<std::vector<int32_t>> partNodes(static_cast<size_t>(parts));
   std::vector<int32_t> stack;
   for (size_t f = 0; f < best.finals.size(); ++f) {
-    std::vector<int32_t>& nodes = plan.mPartNodes[static_cast<size_t>(best.partOf[f])];
+    std::vector<int32_t>& nodes = partNodes[static_cast<size_t>(best.partOf[f])];
     stack.assign(1, best.finals[f]);
     while (!stack.empty()) {
       const int32_t j = stack.back();
@@ -125,16 +234,31 @@ BackwardSolvePlan BackwardSolvePlan::make(const Eigen::SparseMatrix<double>& low
       }
     }
   }
-  for (auto& nodes : plan.mPartNodes) std::sort(nodes.begin(), nodes.end(), std::greater<>());
+  for (auto& nodes : partNodes) {
+    std::sort(nodes.begin(), nodes.end(), std::greater<>());
+    plan.mPartRuns.push_back(toRuns(nodes, superLast));
+  }
   plan.mParallelShare = best.parallelWork / total;
   plan.mCriticalShare = best.criticalWork / total;
   return plan;
 }
 
+void BackwardSolvePlan::solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x,
+                                     Scratch& scratch) const {
+  const size_t buffers = std::max<size_t>(mPartRuns.size(), 1);
+  if (scratch.size() < buffers) scratch.resize(buffers);
+  for (auto& buffer : scratch) {
+    if (buffer.size() < mMaxGather) buffer.resize(mMaxGather);
+  }
+  solveRuns(lower, mTopRuns, x.data(), scratch[0]);
+  tbb::parallel_for(0, static_cast<int>(mPartRuns.size()), [&](int part) {
+    solveRuns(lower, mPartRuns[static_cast<size_t>(part)], x.data(), scratch[static_cast<size_t>(part)]);
+  });
+}
+
 void BackwardSolvePlan::solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x) const {
-  solveColumns(lower, mTopNodes, x.data());
-  tbb::parallel_for(0, static_cast<int>(mPartNodes.size()),
-                    [&](int part) { solveColumns(lower, mPartNodes[static_cast<size_t>(part)], x.data()); });
+  Scratch scratch;
+  solveInPlace(lower, x, scratch);
 }
 
 }  // namespace brittle::detail

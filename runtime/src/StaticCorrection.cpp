@@ -133,7 +133,7 @@ Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, do
   d.solver->matrixL().solveInPlace(w.scratch);
   w.scratch.noalias() -= d.reliefForward * rigid;  // inertia relief: the solve of f_e from here on
   w.scratch.array() *= d.inverseD.array();
-  d.backward.solveInPlace(d.solver->matrixL().nestedExpression(), w.scratch);  // = matrixU().solveInPlace
+  d.backward.solveInPlace(d.solver->matrixL().nestedExpression(), w.scratch, w.gathered);  // = matrixU().solveInPlace
   if (d.solver->permutationPinv().size() > 0) {
     w.displacement.noalias() = d.solver->permutationPinv() * w.scratch;
   } else {

@@ -1,6 +1,7 @@
-// BackwardSolve.h (private to the runtime): the backward solve split over subtrees of the
-// elimination tree equals Eigen's serial solve bit for bit, for any number of parts, on the
-// factors the static correction makes (a P1 and a P2 glass box), and most of it runs in parallel.
+// BackwardSolve.h (private to the runtime): the backward solve by supernodes, split over subtrees
+// of the elimination tree, gives the same bits for any number of parts and equals Eigen's serial
+// solve within rounding, on the factors the static correction makes (a P1 and a P2 glass box), and
+// most of it runs in parallel.
 #include "BackwardSolve.h"
 
 #include <gtest/gtest.h>
@@ -17,7 +18,7 @@
 namespace brittle {
 namespace {
 
-TEST(BackwardSolve, EqualsEigensSerialSolveBitForBitOnAnyNumberOfParts) {
+TEST(BackwardSolve, SameBitsOnAnyNumberOfPartsAndEigensSerialSolveWithinRounding) {
   for (ElementOrder order : {ElementOrder::P1, ElementOrder::P2}) {
     SCOPED_TRACE(elementOrderName(order));
     const ObjectAsset plate = testing::makeGlassPlatePack(1200, 6, 0.1, order).value().objects[0];
@@ -32,14 +33,20 @@ TEST(BackwardSolve, EqualsEigensSerialSolveBitForBitOnAnyNumberOfParts) {
     std::normal_distribution<double> g(0.0, 1.0);
     Eigen::VectorXd y(lower.rows());
     for (Eigen::Index i = 0; i < y.size(); ++i) y[i] = g(rng);
-    Eigen::VectorXd expected = y;
-    factor.matrixU().solveInPlace(expected);
+    Eigen::VectorXd eigen = y;
+    factor.matrixU().solveInPlace(eigen);
+    Eigen::VectorXd serial = y;
+    detail::BackwardSolvePlan::make(lower, 1).solveInPlace(lower, serial);
+    // The sums run in another order than Eigen's: equal within a few ulps of the largest |x|.
+    EXPECT_LT((serial - eigen).cwiseAbs().maxCoeff(), 1e-13 * eigen.cwiseAbs().maxCoeff());
+    EXPECT_GT((serial - eigen).cwiseAbs().maxCoeff(), 0.0);  // (it is not Eigen's order)
+    detail::BackwardSolvePlan::Scratch scratch;  // reused by every plan below
     for (int parts : {1, 2, 3, 7}) {
       const detail::BackwardSolvePlan plan = detail::BackwardSolvePlan::make(lower, parts);
       Eigen::VectorXd x = y;
-      plan.solveInPlace(lower, x);
-      EXPECT_EQ(std::memcmp(x.data(), expected.data(), sizeof(double) * static_cast<size_t>(x.size())), 0)
-          << parts << " parts: max difference " << (x - expected).cwiseAbs().maxCoeff();
+      plan.solveInPlace(lower, x, scratch);
+      EXPECT_EQ(std::memcmp(x.data(), serial.data(), sizeof(double) * static_cast<size_t>(x.size())), 0)
+          << parts << " parts: max difference " << (x - serial).cwiseAbs().maxCoeff();
       if (parts == 1) {
         EXPECT_EQ(plan.parallelShare(), 0.0);
         EXPECT_EQ(plan.criticalShare(), 1.0);
@@ -60,7 +67,8 @@ TEST(BackwardSolve, EqualsEigensSerialSolveBitForBitOnAnyNumberOfParts) {
 
 TEST(BackwardSolve, AChainIsSolvedAloneAndAnEmptyFactorIsFine) {
   // A tridiagonal matrix's tree is one chain: whatever goes to a part waits for the rest, so the
-  // critical path is the whole solve, and the answer still equals the serial solve.
+  // critical path is the whole solve, and the answer still equals the serial solve (one
+  // supernode, each column one product: Eigen's arithmetic exactly).
   const int n = 50;
   Eigen::SparseMatrix<double> a(n, n);
   for (int i = 0; i < n; ++i) {

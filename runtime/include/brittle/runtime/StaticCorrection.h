@@ -49,6 +49,7 @@ class StaticCorrection {
   /// Buffers of stressPerNewton, sized on first use.
   struct Workspace {
     Eigen::VectorXd load, displacement, scratch, modal;
+    std::vector<std::vector<double>> gathered;  ///< the backward solve's, one per thread
   };
 
   /// Stress per newton (6PT as ObjectAsset::stressModes, Voigt, Pa/N) of the truncated modes for a unit force along `direction`
