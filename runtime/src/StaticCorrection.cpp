@@ -1,6 +1,7 @@
 #include "brittle/runtime/StaticCorrection.h"
 
 #include <Eigen/SparseCholesky>
+#include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 #include <cmath>
 #include <string>
@@ -146,7 +147,14 @@ Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, do
   // Minus the kept modes: u −= Φ (Φᵀ f_e / λ), Φᵀf_e = Φᵀf − ΦᵀMΨ Ψᵀf.
   w.modal.noalias() -= d.modesMassRigid * rigid;
   w.modal.array() /= d.lambdas.array();
-  w.displacement.noalias() -= d.modes * w.modal;
+  // Φ (15 MB on the P2 plate) is read once per impact: its rows in 16 fixed ranges on the arena's
+  // threads. Each row's sum is the same arithmetic in any range, so the bits do not depend on the
+  // split or the thread count.
+  constexpr int kRanges = 16;
+  tbb::parallel_for(0, kRanges, [&](int c) {
+    const Eigen::Index begin = dofs * c / kRanges, end = dofs * (c + 1) / kRanges;
+    w.displacement.segment(begin, end - begin).noalias() -= d.modes.middleRows(begin, end - begin) * w.modal;
+  });
   compliance = w.load.dot(w.displacement);
   d.recovery.all(w.displacement, stress);
   return Ok{};
