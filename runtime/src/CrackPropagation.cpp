@@ -38,7 +38,7 @@ double spectralNormBound(const Eigen::Matrix<double, 6, Eigen::Dynamic>& a) {
 // what is evaluated, and so the evaluation count): eight running sums, j mod 8, added pairwise at
 // the end. Eight independent sums keep the adds from waiting on each other (one running sum made
 // each dot wait n add latencies).
-double dotInOrder(const double* a, const double* b, Eigen::Index n) {
+inline __attribute__((always_inline)) double dotInOrder(const double* a, const double* b, Eigen::Index n) {
   double acc[8] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
   Eigen::Index j = 0;
   for (; j + 8 <= n; j += 8) {
@@ -334,6 +334,11 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     constexpr int kPeakRanges = 16;
     w.heap.resize(static_cast<size_t>(t));
     w.rangePeaks.resize(kPeakRanges);
+    const double* forceAbsK = w.forceAbs.data();
+    const double* qNorm = w.qNorm.data();
+    const double* forceK = forceN.data();
+    const double* qT = w.qT.data();        // r by K, column-major: instant k at qT + k r
+    const double* qAbsT = w.qAbsT.data();
     auto searchRange = [&](int c) {
       StressScanWorkspace::RangePeak& out = w.rangePeaks[static_cast<size_t>(c)];
       out.best = floorBest;
@@ -349,8 +354,22 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
         std::pop_heap(heapBegin, heapEnd);
         --heapEnd;
         const int32_t e = heapEnd->second;
+        // mayReach(e, k, out.best) over the instants, with the point's data and the instants'
+        // arrays in locals (the dots are calls, after which the compiler would reload every
+        // pointer): the same expressions in the same order, so the same decisions.
+        const double spectral = bounds.spectralNorms[e], staticNorm = w.staticNorm[e];
+        const double staticPressure = w.staticPressure[e], staticDeviator = w.staticDeviator[e];
+        const double deviatorSpectral = bounds.deviatorSpectralNorms[e];
+        const double margin = 1e-9 * (w.pressureScale[e] + w.elementBound[e]);
+        const double* pressureRow = bounds.pressureModes.row(e).data();
+        const double* deviatorRow = bounds.deviatorNorms.row(e).data();
         for (Eigen::Index k = 0; k < steps; ++k) {
-          if (!mayReach(e, k, out.best)) continue;
+          const double level = out.best, fAbs = forceAbsK[k], qNormK = qNorm[k];
+          if ((spectral * qNormK + staticNorm * fAbs) * (1.0 + 1e-9) < level) continue;
+          const double p = dotInOrder(pressureRow, qT + k * r, r) + (correction ? staticPressure * forceK[k] : 0.0);
+          if (p + kDeviatorShare * (deviatorSpectral * qNormK + staticDeviator * fAbs) + margin < level) continue;
+          const double deviator = dotInOrder(deviatorRow, qAbsT + k * r, r) * (1.0 + 1e-9);
+          if (!(p + kDeviatorShare * (deviator + staticDeviator * fAbs) + margin >= level)) continue;
           double s1 = 0.0;
           if (!principalAbove(voigt(e, k), out.best, s1)) continue;
           ++out.evaluations;
