@@ -1,12 +1,18 @@
 // The contact load (runtime/src/ContactGeometry.h): Hertz's pressure spread over a disc of radius
 // ρ = max(a, 0.05 × the body's diagonal, the nearest ring), as consistent nodal loads. Its
-// resultant and point of action, its convergence under mesh refinement, and its typed error.
+// resultant and point of action, its convergence under mesh refinement, Hertz's edge tension
+// where the mesh resolves the patch, and its typed error.
 #include <gtest/gtest.h>
 
+#include <Eigen/CholmodSupport>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 
+#include "Body.h"
+#include "ContactGeometry.h"
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/World.h"
 #include "brittle/testing/BakeFixtures.h"
@@ -79,6 +85,159 @@ TEST(ContactLoad, SpreadPressureKeepsItsResultantAndItsPointOfAction) {
     }
     EXPECT_LT(ringOnly, 0.05 * diagonal(mesh));  // the mesh's ring alone is finer than the object's length
   }
+}
+
+// A block [−L, L]² × [−H, 0] of hexes graded from h₀ at the top centre (each cell `growth` times
+// the last), six tets per hex along its main diagonal (conforming between neighbours).
+TetMesh gradedBlock(double h0, double growth, double halfWidth, double depth) {
+  auto graded = [&](double extent) {
+    std::vector<double> t = {0.0};
+    for (double h = h0; t.back() < extent; h *= growth) t.push_back(std::min(extent, t.back() + h));
+    return t;
+  };
+  std::vector<double> xs, zs;
+  const std::vector<double> half = graded(halfWidth);
+  for (size_t i = half.size(); i-- > 1;) xs.push_back(-half[i]);
+  xs.insert(xs.end(), half.begin(), half.end());
+  for (double z : graded(depth)) zs.insert(zs.begin(), -z);
+  const auto nx = static_cast<int32_t>(xs.size()), nz = static_cast<int32_t>(zs.size());
+  TetMesh mesh;
+  mesh.nodes.resize(static_cast<Eigen::Index>(nx) * nx * nz, 3);
+  auto id = [&](int32_t i, int32_t j, int32_t k) { return (k * nx + j) * nx + i; };
+  for (int32_t k = 0; k < nz; ++k)
+    for (int32_t j = 0; j < nx; ++j)
+      for (int32_t i = 0; i < nx; ++i) mesh.nodes.row(id(i, j, k)) << xs[static_cast<size_t>(i)], xs[static_cast<size_t>(j)], zs[static_cast<size_t>(k)];
+  std::vector<std::array<int32_t, 4>> tets;
+  const std::array<std::array<int, 3>, 6> orders = {{{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
+  for (int32_t k = 0; k + 1 < nz; ++k)
+    for (int32_t j = 0; j + 1 < nx; ++j)
+      for (int32_t i = 0; i + 1 < nx; ++i)
+        for (const auto& order : orders) {
+          std::array<int32_t, 3> step = {0, 0, 0};
+          std::array<int32_t, 4> tet{};
+          tet[0] = id(i, j, k);
+          for (int s = 0; s < 3; ++s) {
+            step[static_cast<size_t>(order[static_cast<size_t>(s)])] = 1;
+            tet[static_cast<size_t>(s) + 1] = id(i + step[0], j + step[1], k + step[2]);
+          }
+          const Eigen::Vector3d a = mesh.nodes.row(tet[0]), b = mesh.nodes.row(tet[1]), c = mesh.nodes.row(tet[2]),
+                                d = mesh.nodes.row(tet[3]);
+          if ((b - a).cross(c - a).dot(d - a) < 0.0) std::swap(tet[1], tet[2]);
+          tets.push_back(tet);
+        }
+  mesh.tets.resize(static_cast<Eigen::Index>(tets.size()), 4);
+  for (size_t t = 0; t < tets.size(); ++t)
+    for (int c = 0; c < 4; ++c) mesh.tets(static_cast<Eigen::Index>(t), c) = tets[t][static_cast<size_t>(c)];
+  return mesh;
+}
+
+// Where the mesh resolves the Hertz patch (its edges near the contact a/4, so ρ = a with no
+// spread), the load is Hertz's own pressure p = p₀√(1 − r²/a²), p₀ = 3F/(2πa²), and the static
+// surface stress of a body much larger than a follows the half-space solution (Johnson, Contact
+// Mechanics, 1985, §3.4): σ_rr = −(1 + 2ν)p₀/2 at the centre, and outside the patch
+// σ_rr = (1 − 2ν)p₀a²/(3r²), the tension that peaks at the edge, (1 − 2ν)p₀/3. The block's P2
+// static solution (bottom fixed, sides free, 6a wide and deep) is compared with it on the top
+// surface's element corners.
+TEST(ContactLoad, AResolvedPatchGivesHertzsEdgeTension) {
+  const double a = 1e-3;  // m: the scale does not matter in linear elasticity
+  const Material& glass = testing::presetGlass();
+  ObjectAsset asset;
+  asset.name = "block";
+  asset.elementOrder = ElementOrder::P2;
+  asset.tetMesh = gradedBlock(a / 4.0, 1.5, 5.0 * a, 5.0 * a);
+  const FemMesh fem = makeFemMesh(asset.tetMesh, ElementOrder::P2).value();
+  const Eigen::Index n = fem.nodes().rows();
+  // The load needs no modes; makeBody wants one.
+  asset.modal.modes = Eigen::MatrixXd::Zero(3 * n, 1);
+  asset.modal.eigenvaluesRad2PerS2 = Eigen::VectorXd::Ones(1);
+  asset.stressModes = MatrixXdRow::Zero(6 * stressPointsPerElement(ElementOrder::P2) * asset.tetMesh.tets.rows(), 1);
+  auto body = detail::makeBody(asset, glass, 0);
+  ASSERT_TRUE(body) << body.error().message;
+  auto site = detail::locateContact(*body.value(), Eigen::Vector3d(0.0, 0.0, 0.0), 1e-9);
+  ASSERT_TRUE(site) << site.error().message;
+  const double rho = detail::contactLoadRadius(*body.value(), site.value(), a, 0.0);
+  EXPECT_EQ(rho, a);  // resolved: the ring is inside the patch, and nothing is spread further
+  std::vector<std::pair<int32_t, double>> weights;
+  detail::contactLoadWeights(*body.value(), site.value(), Eigen::Vector3d::UnitZ(), rho, weights);
+
+  // K u = f for a unit force along −z, the bottom (z = −6a) fixed.
+  const FemSystem system = assembleFem(fem, glass, FemSettings{}).value();
+  std::vector<Eigen::Index> freeOf(static_cast<size_t>(3 * n), -1);
+  Eigen::Index free = 0;
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c)
+      if (fem.nodes()(i, 2) > -5.0 * a + 1e-12) freeOf[static_cast<size_t>(3 * i + c)] = free++;
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Eigen::Index col = 0; col < system.stiffness.outerSize(); ++col)
+    for (SparseMatrixd::InnerIterator it(system.stiffness, col); it; ++it) {
+      const Eigen::Index r = freeOf[static_cast<size_t>(it.row())], c = freeOf[static_cast<size_t>(it.col())];
+      if (r >= 0 && c >= 0) entries.emplace_back(r, c, it.value());
+    }
+  SparseMatrixd k(free, free);
+  k.setFromTriplets(entries.begin(), entries.end());
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(free);
+  for (const auto& [node, w] : weights) f[freeOf[static_cast<size_t>(3 * node + 2)]] -= w;
+  // CHOLMOD's supernodal factor (a 3D P2 block fills in: Eigen's simplicial one took ~15 s).
+  Eigen::CholmodSupernodalLLT<SparseMatrixd> solver(k);
+  ASSERT_EQ(solver.info(), Eigen::Success);
+  const Eigen::VectorXd uFree = solver.solve(f);
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(3 * n);
+  for (Eigen::Index d = 0; d < 3 * n; ++d)
+    if (freeOf[static_cast<size_t>(d)] >= 0) u[d] = uFree[freeOf[static_cast<size_t>(d)]];
+  Eigen::VectorXd stress;
+  ElementStresses::make(fem, glass).value().all(u, stress);
+
+  // σ_rr at the top surface's element corners, against Hertz: at the axis, and averaged (with
+  // Hertz's value at each corner) over rings of corners around the patch's edge and outside it.
+  const double p0 = 3.0 / (2.0 * std::numbers::pi * a * a), nu = glass.poissonRatio;
+  const std::array<double, 5> ringEdges = {0.8, 1.25, 1.5, 2.0, 3.0};  // in a
+  std::array<double, 4> fe{}, hertz{};
+  std::array<int, 4> count{};
+  double centre = 0.0;
+  int centreCount = 0;
+  const Points& x = asset.tetMesh.nodes;
+  for (Eigen::Index e = 0; e < asset.tetMesh.tets.rows(); ++e) {
+    for (int c = 0; c < 4; ++c) {
+      const Eigen::Vector3d p = x.row(asset.tetMesh.tets(e, c));
+      if (p.z() < -1e-12) continue;
+      const double r = std::hypot(p.x(), p.y());
+      const double* s = stress.data() + 6 * (4 * e + c);
+      Eigen::Matrix3d sigma;
+      sigma << s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2];
+      if (r < 1e-12) {
+        centre += sigma(0, 0);  // any horizontal direction at the axis
+        ++centreCount;
+        continue;
+      }
+      const Eigen::Vector3d er(p.x() / r, p.y() / r, 0.0);
+      for (size_t b = 0; b < fe.size(); ++b) {
+        if (r < ringEdges[b] * a || r >= ringEdges[b + 1] * a) continue;
+        fe[b] += er.dot(sigma * er);
+        // Johnson (3.45): inside the patch (1 − 2ν)p₀a²/(3r²)(1 − (1 − r²/a²)^{3/2}) − p₀√(1 − r²/a²).
+        const double inside = r < a ? 1.0 - r * r / (a * a) : 0.0;
+        hertz[b] += (1.0 - 2.0 * nu) * p0 * a * a / (3.0 * r * r) * (1.0 - std::pow(inside, 1.5)) - p0 * std::sqrt(inside);
+        ++count[b];
+      }
+    }
+  }
+  ASSERT_GT(centreCount, 0);
+  centre /= centreCount;
+  const double centreHertz = -(1.0 + 2.0 * nu) * p0 / 2.0;
+  std::printf("centre σ_rr/p0 %.4f (Hertz %.4f)\n", centre / p0, centreHertz / p0);
+  for (size_t b = 0; b < fe.size(); ++b) {
+    ASSERT_GT(count[b], 8) << b;
+    std::printf("r in [%.2f, %.2f) a: σ_rr/p0 %.4f (Hertz %.4f) over %d corners\n", ringEdges[b], ringEdges[b + 1],
+                fe[b] / count[b] / p0, hertz[b] / count[b] / p0, count[b]);
+  }
+  // Measured: the axis −0.679 p₀ (Hertz −0.700), the rings across the edge 0.0457 and 0.1172 p₀
+  // (Hertz 0.0439, 0.1111); farther out 0.084 and 0.052 (0.071, 0.041), the finite block adding
+  // some tension as it bends.
+  EXPECT_NEAR(centre, centreHertz, 0.05 * std::abs(centreHertz));
+  for (size_t b : {0, 1}) EXPECT_NEAR(fe[b] / count[b], hertz[b] / count[b], 0.1 * hertz[b] / count[b]) << b;
+  for (size_t b : {2, 3}) EXPECT_NEAR(fe[b] / count[b], hertz[b] / count[b], 0.3 * hertz[b] / count[b]) << b;
+  EXPECT_GT(fe[1] / count[1], fe[2] / count[2]);  // the tension peaks at the edge and falls off as 1/r²
+  EXPECT_GT(fe[2] / count[2], fe[3] / count[3]);
+  EXPECT_GT(fe[3], 0.0);
 }
 
 TEST(ContactLoad, SpreadOutsideZeroToOneIsATypedError) {
