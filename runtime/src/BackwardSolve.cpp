@@ -3,6 +3,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <queue>
 #include <utility>
 
@@ -16,51 +17,22 @@ std::pair<Eigen::Index, Eigen::Index> columnRange(const Eigen::SparseMatrix<doub
   return {begin, end};
 }
 
-// Σ_t a_t b_t and Σ_t c_t b_t over t < m, each in four running sums (t mod 4) added pairwise: the
-// sums over a supernode's rows of two of its columns, sharing the loads of b.
-void dotTwo(const double* a, const double* c, const double* b, Eigen::Index m, double& sumA, double& sumC) {
-  double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0, c0 = 0.0, c1 = 0.0, c2 = 0.0, c3 = 0.0;
+// Σ_t col_c,t b_t over t < m for C columns at once (C = 1, 2), each in four running sums
+// (t mod 4) added pairwise: the sums over a supernode's rows of its columns, sharing the loads of b.
+// A column's sum is the same arithmetic whichever C it is computed with.
+template <int C>
+void dotColumns(const std::array<const double*, C>& cols, const double* b, Eigen::Index m, std::array<double, C>& sums) {
+  double acc[C][4] = {};
   Eigen::Index t = 0;
   for (; t + 4 <= m; t += 4) {
-    a0 += a[t] * b[t];
-    a1 += a[t + 1] * b[t + 1];
-    a2 += a[t + 2] * b[t + 2];
-    a3 += a[t + 3] * b[t + 3];
-    c0 += c[t] * b[t];
-    c1 += c[t + 1] * b[t + 1];
-    c2 += c[t + 2] * b[t + 2];
-    c3 += c[t + 3] * b[t + 3];
+    for (int c = 0; c < C; ++c) {
+      for (int l = 0; l < 4; ++l) acc[c][l] += cols[c][t + l] * b[t + l];
+    }
   }
-  if (t < m) {
-    a0 += a[t] * b[t];
-    c0 += c[t] * b[t];
+  for (int l = 0; t + l < m; ++l) {
+    for (int c = 0; c < C; ++c) acc[c][l] += cols[c][t + l] * b[t + l];
   }
-  if (t + 1 < m) {
-    a1 += a[t + 1] * b[t + 1];
-    c1 += c[t + 1] * b[t + 1];
-  }
-  if (t + 2 < m) {
-    a2 += a[t + 2] * b[t + 2];
-    c2 += c[t + 2] * b[t + 2];
-  }
-  sumA = (a0 + a1) + (a2 + a3);
-  sumC = (c0 + c1) + (c2 + c3);
-}
-
-// The same for one column (the same arithmetic as dotTwo's first sum).
-double dotOne(const double* a, const double* b, Eigen::Index m) {
-  double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
-  Eigen::Index t = 0;
-  for (; t + 4 <= m; t += 4) {
-    a0 += a[t] * b[t];
-    a1 += a[t + 1] * b[t + 1];
-    a2 += a[t + 2] * b[t + 2];
-    a3 += a[t + 3] * b[t + 3];
-  }
-  if (t < m) a0 += a[t] * b[t];
-  if (t + 1 < m) a1 += a[t + 1] * b[t + 1];
-  if (t + 2 < m) a2 += a[t + 2] * b[t + 2];
-  return (a0 + a1) + (a2 + a3);
+  for (int c = 0; c < C; ++c) sums[c] = (acc[c][0] + acc[c][1]) + (acc[c][2] + acc[c][3]);
 }
 
 // Columns [run.first, run.end), descending, of the supernode that ends at run.last. Column j holds
@@ -89,13 +61,16 @@ void solveRuns(const Eigen::SparseMatrix<double>& lower, const std::vector<Backw
     };
     int32_t j = run.end - 1;
     for (; j - 1 >= run.first; j -= 2) {
-      double upper = 0.0, below = 0.0;
-      dotTwo(values + columnRange(lower, j).second - m, values + columnRange(lower, j - 1).second - m, b, m, upper,
-             below);
-      finish(j, upper);
-      finish(j - 1, below);
+      std::array<double, 2> sums{};
+      dotColumns<2>({values + columnRange(lower, j).second - m, values + columnRange(lower, j - 1).second - m}, b, m, sums);
+      finish(j, sums[0]);
+      finish(j - 1, sums[1]);
     }
-    if (j == run.first) finish(j, dotOne(values + columnRange(lower, j).second - m, b, m));
+    if (j == run.first) {
+      std::array<double, 1> sum{};
+      dotColumns<1>({values + columnRange(lower, j).second - m}, b, m, sum);
+      finish(j, sum[0]);
+    }
   }
 }
 
