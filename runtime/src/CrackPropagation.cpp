@@ -228,22 +228,34 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
   auto consider = [&](Eigen::Index e, Eigen::Index k, double s1) {
     take(s1, e, k, best, scan.peakElement, scan.peakInstant);
   };
+  // What the tests of one point read, in locals: its bounds, and the instants' arrays (the
+  // search takes a point's instants in a row, and would otherwise reload every pointer).
+  struct PointView {
+    double spectral, staticNorm, staticPressure, staticDeviator, deviatorSpectral, margin;
+    const double *pressureRow, *deviatorRow, *forceAbs, *qNorm, *force, *qT, *qAbsT;
+  };
+  auto pointView = [&](Eigen::Index e) {
+    return PointView{bounds.spectralNorms[e],        w.staticNorm[e],
+                     w.staticPressure[e],            w.staticDeviator[e],
+                     bounds.deviatorSpectralNorms[e], 1e-9 * (w.pressureScale[e] + w.elementBound[e]),
+                     bounds.pressureModes.row(e).data(), bounds.deviatorNorms.row(e).data(),
+                     w.forceAbs.data(),              w.qNorm.data(),
+                     forceN.data(),                  w.qT.data(),
+                     w.qAbsT.data()};
+  };
   // Whether (e, k) may reach `level`, cheapest test first: the spectral bound (one product); the
   // exact mean stress p_e,k with the deviator's spectral bound, then with its triangle bound (r
   // products each); the evaluated σ's own split bound (below). Their data are made by the pruned
   // peak search. The margin covers the rounding of p_e,k's sum, whose terms may cancel.
-  auto mayReach = [&](Eigen::Index e, Eigen::Index k, double level) {
-    const double fAbs = w.forceAbs[k];
-    if ((bounds.spectralNorms[e] * w.qNorm[k] + w.staticNorm[e] * fAbs) * (1.0 + 1e-9) < level) return false;
-    const double margin = 1e-9 * (w.pressureScale[e] + w.elementBound[e]);
-    const double p = dotInOrder(bounds.pressureModes.row(e).data(), w.qT.col(k).data(), r) +
-                     (correction ? w.staticPressure[e] * forceN[static_cast<size_t>(k)] : 0.0);
-    if (p + kDeviatorShare * (bounds.deviatorSpectralNorms[e] * w.qNorm[k] + w.staticDeviator[e] * fAbs) + margin < level) {
-      return false;
-    }
-    const double deviator = dotInOrder(bounds.deviatorNorms.row(e).data(), w.qAbsT.col(k).data(), r) * (1.0 + 1e-9);
-    return p + kDeviatorShare * (deviator + w.staticDeviator[e] * fAbs) + margin >= level;
+  auto mayReachAt = [&](const PointView& v, Eigen::Index k, double level) {
+    const double fAbs = v.forceAbs[k], qNormK = v.qNorm[k];
+    if ((v.spectral * qNormK + v.staticNorm * fAbs) * (1.0 + 1e-9) < level) return false;
+    const double p = dotInOrder(v.pressureRow, v.qT + k * r, r) + (correction ? v.staticPressure * v.force[k] : 0.0);
+    if (p + kDeviatorShare * (v.deviatorSpectral * qNormK + v.staticDeviator * fAbs) + v.margin < level) return false;
+    const double deviator = dotInOrder(v.deviatorRow, v.qAbsT + k * r, r) * (1.0 + 1e-9);
+    return p + kDeviatorShare * (deviator + v.staticDeviator * fAbs) + v.margin >= level;
   };
+  auto mayReach = [&](Eigen::Index e, Eigen::Index k, double level) { return mayReachAt(pointView(e), k, level); };
   // The bound of (e, k) itself: the smaller of the spectral and the split bound (both dots).
   auto seedBound = [&](Eigen::Index e, Eigen::Index k) {
     const double fAbs = w.forceAbs[k];
@@ -334,11 +346,6 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     constexpr int kPeakRanges = 16;
     w.heap.resize(static_cast<size_t>(t));
     w.rangePeaks.resize(kPeakRanges);
-    const double* forceAbsK = w.forceAbs.data();
-    const double* qNorm = w.qNorm.data();
-    const double* forceK = forceN.data();
-    const double* qT = w.qT.data();        // r by K, column-major: instant k at qT + k r
-    const double* qAbsT = w.qAbsT.data();
     auto searchRange = [&](int c) {
       StressScanWorkspace::RangePeak& out = w.rangePeaks[static_cast<size_t>(c)];
       out.best = floorBest;
@@ -354,22 +361,9 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
         std::pop_heap(heapBegin, heapEnd);
         --heapEnd;
         const int32_t e = heapEnd->second;
-        // mayReach(e, k, out.best) over the instants, with the point's data and the instants'
-        // arrays in locals (the dots are calls, after which the compiler would reload every
-        // pointer): the same expressions in the same order, so the same decisions.
-        const double spectral = bounds.spectralNorms[e], staticNorm = w.staticNorm[e];
-        const double staticPressure = w.staticPressure[e], staticDeviator = w.staticDeviator[e];
-        const double deviatorSpectral = bounds.deviatorSpectralNorms[e];
-        const double margin = 1e-9 * (w.pressureScale[e] + w.elementBound[e]);
-        const double* pressureRow = bounds.pressureModes.row(e).data();
-        const double* deviatorRow = bounds.deviatorNorms.row(e).data();
+        const PointView view = pointView(e);
         for (Eigen::Index k = 0; k < steps; ++k) {
-          const double level = out.best, fAbs = forceAbsK[k], qNormK = qNorm[k];
-          if ((spectral * qNormK + staticNorm * fAbs) * (1.0 + 1e-9) < level) continue;
-          const double p = dotInOrder(pressureRow, qT + k * r, r) + (correction ? staticPressure * forceK[k] : 0.0);
-          if (p + kDeviatorShare * (deviatorSpectral * qNormK + staticDeviator * fAbs) + margin < level) continue;
-          const double deviator = dotInOrder(deviatorRow, qAbsT + k * r, r) * (1.0 + 1e-9);
-          if (!(p + kDeviatorShare * (deviator + staticDeviator * fAbs) + margin >= level)) continue;
+          if (!mayReachAt(view, k, out.best)) continue;
           double s1 = 0.0;
           if (!principalAbove(voigt(e, k), out.best, s1)) continue;
           ++out.evaluations;

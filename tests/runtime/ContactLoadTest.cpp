@@ -16,6 +16,7 @@
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/World.h"
 #include "brittle/testing/BakeFixtures.h"
+#include "brittle/testing/Fixtures.h"
 
 namespace brittle {
 namespace {
@@ -88,7 +89,8 @@ TEST(ContactLoad, SpreadPressureKeepsItsResultantAndItsPointOfAction) {
 }
 
 // A block [−L, L]² × [−H, 0] of hexes graded from h₀ at the top centre (each cell `growth` times
-// the last), six tets per hex along its main diagonal (conforming between neighbours).
+// the last): testing::makeBoxTetMesh's structured cells (six tets each), their grid lines moved.
+// The map is monotone along each axis, so every cell stays a box and every tet positive.
 TetMesh gradedBlock(double h0, double growth, double halfWidth, double depth) {
   auto graded = [&](double extent) {
     std::vector<double> t = {0.0};
@@ -100,34 +102,12 @@ TetMesh gradedBlock(double h0, double growth, double halfWidth, double depth) {
   for (size_t i = half.size(); i-- > 1;) xs.push_back(-half[i]);
   xs.insert(xs.end(), half.begin(), half.end());
   for (double z : graded(depth)) zs.insert(zs.begin(), -z);
-  const auto nx = static_cast<int32_t>(xs.size()), nz = static_cast<int32_t>(zs.size());
-  TetMesh mesh;
-  mesh.nodes.resize(static_cast<Eigen::Index>(nx) * nx * nz, 3);
-  auto id = [&](int32_t i, int32_t j, int32_t k) { return (k * nx + j) * nx + i; };
-  for (int32_t k = 0; k < nz; ++k)
-    for (int32_t j = 0; j < nx; ++j)
-      for (int32_t i = 0; i < nx; ++i) mesh.nodes.row(id(i, j, k)) << xs[static_cast<size_t>(i)], xs[static_cast<size_t>(j)], zs[static_cast<size_t>(k)];
-  std::vector<std::array<int32_t, 4>> tets;
-  const std::array<std::array<int, 3>, 6> orders = {{{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
-  for (int32_t k = 0; k + 1 < nz; ++k)
-    for (int32_t j = 0; j + 1 < nx; ++j)
-      for (int32_t i = 0; i + 1 < nx; ++i)
-        for (const auto& order : orders) {
-          std::array<int32_t, 3> step = {0, 0, 0};
-          std::array<int32_t, 4> tet{};
-          tet[0] = id(i, j, k);
-          for (int s = 0; s < 3; ++s) {
-            step[static_cast<size_t>(order[static_cast<size_t>(s)])] = 1;
-            tet[static_cast<size_t>(s) + 1] = id(i + step[0], j + step[1], k + step[2]);
-          }
-          const Eigen::Vector3d a = mesh.nodes.row(tet[0]), b = mesh.nodes.row(tet[1]), c = mesh.nodes.row(tet[2]),
-                                d = mesh.nodes.row(tet[3]);
-          if ((b - a).cross(c - a).dot(d - a) < 0.0) std::swap(tet[1], tet[2]);
-          tets.push_back(tet);
-        }
-  mesh.tets.resize(static_cast<Eigen::Index>(tets.size()), 4);
-  for (size_t t = 0; t < tets.size(); ++t)
-    for (int c = 0; c < 4; ++c) mesh.tets(static_cast<Eigen::Index>(t), c) = tets[t][static_cast<size_t>(c)];
+  const auto nx = static_cast<int>(xs.size()) - 1, nz = static_cast<int>(zs.size()) - 1;
+  TetMesh mesh = testing::makeBoxTetMesh(nx, nx, nz, nx, nx, nz);  // grid index i at coordinate i
+  for (Eigen::Index v = 0; v < mesh.nodes.rows(); ++v) {
+    mesh.nodes.row(v) << xs[static_cast<size_t>(std::lround(mesh.nodes(v, 0)))],
+        xs[static_cast<size_t>(std::lround(mesh.nodes(v, 1)))], zs[static_cast<size_t>(std::lround(mesh.nodes(v, 2)))];
+  }
   return mesh;
 }
 
