@@ -1,6 +1,6 @@
-// Hdf5Util.h — private helpers shared by PackWriter.cpp and PackReader.cpp: RAII ownership of
-// HDF5 identifiers, a scope that silences HDF5's error printing, the innermost message of the
-// HDF5 error stack for our own typed errors, and the schema constants both sides share.
+// Hdf5Util.h — private helpers of the HDF5 layer (Hdf5Reader.h, Hdf5Writer.h) and the pack reader
+// and writer: RAII ownership of HDF5 identifiers, a scope that silences HDF5's error printing, and
+// the innermost message of the HDF5 error stack for our own typed errors.
 #pragma once
 
 #include <hdf5.h>
@@ -101,27 +101,3 @@ inline std::string withDetail() {
 }
 
 }  // namespace brittle::hdf5
-
-// Names both the writer and the reader must agree on (the rest is spelled out in PACK_SCHEMA.md
-// and checked by the round-trip tests).
-namespace brittle::packschema {
-
-struct UnitAttribute {
-  const char* name;
-  const char* value;
-};
-
-/// Root attributes that state the units of schema v1. The reader requires these exact values:
-/// a pack in other units would be silently misread.
-inline constexpr UnitAttribute kUnitAttributes[] = {
-    {"length_unit", "m"},
-    {"mass_unit", "kg"},
-    {"time_unit", "s"},
-    {"stress_unit", "Pa"},
-    {"energy_per_area_unit", "J/m^2"},
-    {"frequency_unit", "Hz"},
-};
-
-inline constexpr const char* kVoigtOrder = "xx,yy,zz,yz,xz,xy";
-
-}  // namespace brittle::packschema

@@ -1,4 +1,5 @@
-// PackReader.cpp — reads and validates a pack in schema v1 (database/PACK_SCHEMA.md).
+// PackReader.cpp — reads and validates a pack (database/PACK_SCHEMA.md): the schema, on top of the
+// checked HDF5 reads of Hdf5Reader.h.
 //
 // Nothing read here is trusted: the format and version are checked first, then every dataset's
 // type and shape (before anything is allocated for it), every offset table, every checksum (by
@@ -8,316 +9,28 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <limits>
 #include <optional>
 #include <set>
 #include <string>
 #include <system_error>
 #include <vector>
 
-#include "Hdf5Util.h"
+#include "Hdf5Reader.h"
+#include "PackSchema.h"
 #include "brittle/database/Pack.h"
 
 namespace brittle {
 namespace {
 
 namespace fs = std::filesystem;
+using hdf5::Array;
+using hdf5::fail;
+using hdf5::FileReader;
 using hdf5::Handle;
-
-// zlib cannot inflate more than about 1032 bytes per stored byte, so a dataset that claims more
-// than this many bytes per stored byte is lying about its shape. Checking this before allocating
-// bounds every allocation by the size of the file, whatever its dataspaces claim.
-constexpr hsize_t kMaxInflateRatio = 1100;
-
-// A dimension the caller checks itself (against a count read elsewhere).
-constexpr hsize_t kAny = std::numeric_limits<hsize_t>::max();
-
-// Thrown inside the reader and caught in readPack: validation is a long sequence of checks that
-// each may end the read, and an exception keeps each one to a single line.
-struct ReadFailure {
-  Error error;
-};
-
-[[noreturn]] void fail(ErrorCode code, std::string message) { throw ReadFailure{makeError(code, std::move(message))}; }
-
-template <typename T>
-struct Array {
-  std::vector<T> values;
-  std::vector<hsize_t> dims;
-};
-
-std::string shapeString(const std::vector<hsize_t>& dims) {
-  std::string s = "[";
-  for (size_t d = 0; d < dims.size(); ++d) {
-    if (d > 0) s += ", ";
-    s += dims[d] == kAny ? std::string("*") : std::to_string(dims[d]);
-  }
-  return s + "]";
-}
-
-// "[i, j]" of a flat row-major index.
-std::string indexString(size_t flat, const std::vector<hsize_t>& dims) {
-  std::vector<hsize_t> index(dims.size());
-  for (size_t d = dims.size(); d-- > 0;) {
-    index[d] = dims[d] == 0 ? 0 : flat % dims[d];
-    flat = dims[d] == 0 ? 0 : flat / dims[d];
-  }
-  return shapeString(index);
-}
-
-class FileReader {
- public:
-  FileReader(hid_t file, uintmax_t fileBytes) : mFile(file), mFileBytes(fileBytes) {}
-
-  /// True when a link named path exists (whatever it points to).
-  bool exists(const std::string& path) {
-    const htri_t found = H5Lexists(mFile, path.c_str(), H5P_DEFAULT);
-    if (found < 0) fail(ErrorCode::PackCorrupt, "cannot look up '" + path + "'" + hdf5::withDetail());
-    return found > 0;
-  }
-
-  void requireGroup(const std::string& path) {
-    Handle group = openObject(path, "group");
-    if (H5Iget_type(group.get()) != H5I_GROUP) fail(ErrorCode::PackShapeMismatch, "'" + path + "' is not a group");
-  }
-
-  /// nullopt when the attribute is missing or is not one string.
-  std::optional<std::string> stringAttribute(const std::string& where, const char* name) {
-    Handle attr = openAttribute(where, name);
-    if (!attr.valid()) return std::nullopt;
-    const std::string what = "attribute '" + std::string(name) + "' of '" + where + "'";
-    Handle type = hdf5::datatypeHandle(H5Aget_type(attr.get()));
-    if (!type.valid()) fail(ErrorCode::PackCorrupt, "cannot read the type of " + what + hdf5::withDetail());
-    if (H5Tget_class(type.get()) != H5T_STRING || pointCount(attr) != 1) return std::nullopt;
-    const H5T_cset_t cset = H5Tget_cset(type.get());
-    if (H5Tis_variable_str(type.get()) > 0) {
-      // Other tools (h5py, h5py-based editors) write attributes as variable-length strings.
-      Handle mem = stringMemType(H5T_VARIABLE, cset);
-      char* value = nullptr;
-      if (H5Aread(attr.get(), mem.get(), &value) < 0)
-        fail(ErrorCode::PackCorrupt, "cannot read " + what + hdf5::withDetail());
-      std::string out = value ? value : "";
-      H5free_memory(value);
-      return out;
-    }
-    const size_t width = H5Tget_size(type.get());
-    if (width == 0 || width > mFileBytes) fail(ErrorCode::PackCorrupt, what + " has an impossible width");
-    Handle mem = stringMemType(width, cset);
-    std::vector<char> buffer(width, '\0');
-    if (H5Aread(attr.get(), mem.get(), buffer.data()) < 0) {
-      fail(ErrorCode::PackCorrupt, "cannot read " + what + hdf5::withDetail());
-    }
-    return std::string(buffer.data(), strnlen(buffer.data(), width));
-  }
-
-  /// nullopt when the attribute is missing or is not one integer.
-  std::optional<int64_t> intAttribute(const std::string& where, const char* name) {
-    Handle attr = openAttribute(where, name);
-    if (!attr.valid()) return std::nullopt;
-    Handle type = hdf5::datatypeHandle(H5Aget_type(attr.get()));
-    if (!type.valid() || H5Tget_class(type.get()) != H5T_INTEGER || pointCount(attr) != 1) return std::nullopt;
-    int64_t value = 0;
-    if (H5Aread(attr.get(), H5T_NATIVE_INT64, &value) < 0) {
-      fail(ErrorCode::PackCorrupt,
-           "cannot read attribute '" + std::string(name) + "' of '" + where + "'" + hdf5::withDetail());
-    }
-    return value;
-  }
-
-  Array<double> f64(const std::string& path, const std::vector<hsize_t>& shape) {
-    Array<double> a = numeric<double>(path, shape, H5T_FLOAT, H5T_NATIVE_DOUBLE, "float64");
-    for (size_t i = 0; i < a.values.size(); ++i) {
-      if (!std::isfinite(a.values[i])) {
-        fail(ErrorCode::PackCorrupt, "dataset '" + path + "' holds a non-finite value (" + std::to_string(a.values[i]) +
-                                         ") at " + indexString(i, a.dims));
-      }
-    }
-    return a;
-  }
-  Array<float> f32(const std::string& path, const std::vector<hsize_t>& shape) {
-    Array<float> a = numeric<float>(path, shape, H5T_FLOAT, H5T_NATIVE_FLOAT, "float32");
-    for (size_t i = 0; i < a.values.size(); ++i) {
-      if (!std::isfinite(a.values[i])) {
-        fail(ErrorCode::PackCorrupt, "dataset '" + path + "' holds a non-finite value at " + indexString(i, a.dims));
-      }
-    }
-    return a;
-  }
-  Array<int64_t> i64(const std::string& path, const std::vector<hsize_t>& shape) {
-    return numeric<int64_t>(path, shape, H5T_INTEGER, H5T_NATIVE_INT64, "int64");
-  }
-  Array<int32_t> i32(const std::string& path, const std::vector<hsize_t>& shape) {
-    return numeric<int32_t>(path, shape, H5T_INTEGER, H5T_NATIVE_INT32, "int32");
-  }
-  Array<uint8_t> u8(const std::string& path, const std::vector<hsize_t>& shape) {
-    return numeric<uint8_t>(path, shape, H5T_INTEGER, H5T_NATIVE_UINT8, "uint8");
-  }
-
-  /// A 1-D dataset of fixed-length strings of `count` entries (kAny: any).
-  std::vector<std::string> strings(const std::string& path, hsize_t count) {
-    Handle dset = openDataset(path);
-    Handle type = hdf5::datatypeHandle(H5Dget_type(dset.get()));
-    if (!type.valid())
-      fail(ErrorCode::PackCorrupt, "cannot read the type of dataset '" + path + "'" + hdf5::withDetail());
-    // Variable-length strings live in the global heap, outside the checksummed chunks, so schema
-    // v1 only admits fixed-length ones.
-    if (H5Tget_class(type.get()) != H5T_STRING || H5Tis_variable_str(type.get()) != 0) {
-      fail(ErrorCode::PackShapeMismatch, "dataset '" + path + "' must hold fixed-length strings");
-    }
-    const size_t width = H5Tget_size(type.get());
-    if (width == 0) fail(ErrorCode::PackCorrupt, "dataset '" + path + "' has strings of width 0");
-    const std::vector<hsize_t> dims = checkedDims(dset, path, {count}, width);
-    Handle mem = stringMemType(width, H5Tget_cset(type.get()));
-    std::vector<char> buffer(dims[0] * width, '\0');
-    read(dset, path, mem.get(), buffer.data(), dims[0]);
-    std::vector<std::string> out(dims[0]);
-    for (size_t i = 0; i < out.size(); ++i) out[i].assign(&buffer[i * width], strnlen(&buffer[i * width], width));
-    return out;
-  }
-
- private:
-  Handle openObject(const std::string& path, const char* kind) {
-    const htri_t exists = H5Lexists(mFile, path.c_str(), H5P_DEFAULT);
-    if (exists < 0)
-      fail(ErrorCode::PackCorrupt, "cannot look up " + std::string(kind) + " '" + path + "'" + hdf5::withDetail());
-    if (exists == 0) fail(ErrorCode::PackShapeMismatch, std::string(kind) + " '" + path + "' is missing");
-    // Soft and external links are refused: an external link would make HDF5 open another file
-    // that none of the checks here cover.
-    H5L_info_t link;
-    if (H5Lget_info(mFile, path.c_str(), &link, H5P_DEFAULT) < 0) {
-      fail(ErrorCode::PackCorrupt, "cannot look up " + std::string(kind) + " '" + path + "'" + hdf5::withDetail());
-    }
-    if (link.type != H5L_TYPE_HARD) {
-      fail(ErrorCode::PackShapeMismatch, std::string(kind) + " '" + path + "' is a link, not a stored object");
-    }
-    Handle object(H5Oopen(mFile, path.c_str(), H5P_DEFAULT), H5Oclose);
-    if (!object.valid())
-      fail(ErrorCode::PackCorrupt, "cannot open " + std::string(kind) + " '" + path + "'" + hdf5::withDetail());
-    return object;
-  }
-
-  Handle openDataset(const std::string& path) {
-    Handle dset = openObject(path, "dataset");
-    if (H5Iget_type(dset.get()) != H5I_DATASET) fail(ErrorCode::PackShapeMismatch, "'" + path + "' is not a dataset");
-    // A dataset's values must be stored in this file. HDF5 also lets them live in raw external
-    // files or in datasets of other files (a virtual dataset): HDF5 would then open whatever
-    // file the pack names (a FIFO blocks the read for ever), and no checksum covers those bytes.
-    Handle dcpl = hdf5::propertyHandle(H5Dget_create_plist(dset.get()));
-    const H5D_layout_t layout = dcpl.valid() ? H5Pget_layout(dcpl.get()) : H5D_LAYOUT_ERROR;
-    const int externalFiles = dcpl.valid() ? H5Pget_external_count(dcpl.get()) : -1;
-    if (layout == H5D_LAYOUT_ERROR || externalFiles < 0) {
-      fail(ErrorCode::PackCorrupt, "cannot read the storage properties of '" + path + "'" + hdf5::withDetail());
-    }
-    if (layout == H5D_VIRTUAL || externalFiles > 0) {
-      fail(ErrorCode::PackShapeMismatch, "dataset '" + path + "' keeps its values in another file");
-    }
-    return dset;
-  }
-
-  // An invalid handle when the attribute is missing.
-  Handle openAttribute(const std::string& where, const char* name) {
-    const htri_t exists = H5Aexists_by_name(mFile, where.c_str(), name, H5P_DEFAULT);
-    if (exists < 0) {
-      fail(ErrorCode::PackCorrupt,
-           "cannot look up attribute '" + std::string(name) + "' of '" + where + "'" + hdf5::withDetail());
-    }
-    if (exists == 0) return Handle();
-    Handle attr = hdf5::attributeHandle(H5Aopen_by_name(mFile, where.c_str(), name, H5P_DEFAULT, H5P_DEFAULT));
-    if (!attr.valid()) {
-      fail(ErrorCode::PackCorrupt,
-           "cannot open attribute '" + std::string(name) + "' of '" + where + "'" + hdf5::withDetail());
-    }
-    return attr;
-  }
-
-  static hssize_t pointCount(const Handle& attr) {
-    Handle space = hdf5::dataspaceHandle(H5Aget_space(attr.get()));
-    return space.valid() ? H5Sget_simple_extent_npoints(space.get()) : -1;
-  }
-
-  static Handle stringMemType(size_t width, H5T_cset_t cset) {
-    Handle type = hdf5::datatypeHandle(H5Tcopy(H5T_C_S1));
-    // The memory type takes the file's character set: HDF5 does not convert between sets.
-    if (!type.valid() || H5Tset_size(type.get(), width) < 0 || H5Tset_cset(type.get(), cset) < 0 ||
-        (width != H5T_VARIABLE && H5Tset_strpad(type.get(), H5T_STR_NULLPAD) < 0)) {
-      fail(ErrorCode::PackIoError, "cannot create a string type" + hdf5::withDetail());
-    }
-    return type;
-  }
-
-  template <typename T>
-  Array<T> numeric(const std::string& path, const std::vector<hsize_t>& shape, H5T_class_t typeClass, hid_t memType,
-                   const char* typeName) {
-    Handle dset = openDataset(path);
-    Handle type = hdf5::datatypeHandle(H5Dget_type(dset.get()));
-    if (!type.valid())
-      fail(ErrorCode::PackCorrupt, "cannot read the type of dataset '" + path + "'" + hdf5::withDetail());
-    // The exact type is required: HDF5 would otherwise convert silently, and a narrowing
-    // conversion (float64 → int32, int64 → int32) clips values instead of failing.
-    if (H5Tget_class(type.get()) != typeClass || H5Tget_size(type.get()) != sizeof(T) ||
-        (typeClass == H5T_INTEGER && H5Tget_sign(type.get()) != H5Tget_sign(memType))) {
-      fail(ErrorCode::PackShapeMismatch, "dataset '" + path + "' must hold " + typeName);
-    }
-    Array<T> a;
-    a.dims = checkedDims(dset, path, shape, sizeof(T));
-    size_t count = 1;
-    for (hsize_t d : a.dims) count *= d;
-    a.values.resize(count);
-    read(dset, path, memType, a.values.data(), count);
-    return a;
-  }
-
-  // The dataset's dimensions, once its rank and fixed dimensions match `shape` and its claimed
-  // size is plausible for what the file stores.
-  std::vector<hsize_t> checkedDims(const Handle& dset, const std::string& path, const std::vector<hsize_t>& shape,
-                                   size_t elementBytes) {
-    Handle space = hdf5::dataspaceHandle(H5Dget_space(dset.get()));
-    if (!space.valid())
-      fail(ErrorCode::PackCorrupt, "cannot read the dataspace of '" + path + "'" + hdf5::withDetail());
-    const int rank = H5Sget_simple_extent_ndims(space.get());
-    if (rank < 0) fail(ErrorCode::PackCorrupt, "cannot read the rank of '" + path + "'" + hdf5::withDetail());
-    std::vector<hsize_t> dims(static_cast<size_t>(rank));
-    if (rank > 0 && H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr) < 0) {
-      fail(ErrorCode::PackCorrupt, "cannot read the shape of '" + path + "'" + hdf5::withDetail());
-    }
-    bool matches = H5Sget_simple_extent_type(space.get()) == H5S_SIMPLE && dims.size() == shape.size();
-    for (size_t d = 0; matches && d < dims.size(); ++d) matches = shape[d] == kAny || dims[d] == shape[d];
-    if (!matches) {
-      fail(ErrorCode::PackShapeMismatch,
-           "dataset '" + path + "' has shape " + shapeString(dims) + ", expected " + shapeString(shape));
-    }
-    hsize_t bytes = elementBytes;
-    for (hsize_t d : dims) {
-      if (__builtin_mul_overflow(bytes, d, &bytes)) {
-        fail(ErrorCode::PackCorrupt, "dataset '" + path + "' claims an impossible shape " + shapeString(dims));
-      }
-    }
-    if (bytes > 0) {
-      const hsize_t stored = H5Dget_storage_size(dset.get());
-      if (stored == 0 || stored > mFileBytes || bytes / kMaxInflateRatio > stored) {
-        fail(ErrorCode::PackCorrupt, "dataset '" + path + "' claims shape " + shapeString(dims) + " (" +
-                                         std::to_string(bytes) + " bytes) but the file stores " +
-                                         std::to_string(stored) + " bytes of it");
-      }
-    }
-    return dims;
-  }
-
-  // A failed read of a dataset whose shape and type checked out means its stored bytes are bad:
-  // the Fletcher-32 filter found a mismatch, or deflate could not decode the chunk.
-  static void read(const Handle& dset, const std::string& path, hid_t memType, void* buffer, size_t count) {
-    if (count > 0 && H5Dread(dset.get(), memType, H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer) < 0) {
-      fail(ErrorCode::PackCorrupt,
-           "cannot read dataset '" + path + "': checksum mismatch or damaged data" + hdf5::withDetail());
-    }
-  }
-
-  hid_t mFile;
-  uintmax_t mFileBytes;
-};
+using hdf5::kAny;
+using hdf5::shapeString;
 
 // Validates an offset table of a ragged array: O + 1 entries, starting at 0, non-decreasing,
 // ending at the number of rows of the values dataset.
@@ -721,7 +434,7 @@ Result<Pack> readPack(const fs::path& path) {
     // The database is optional from version 2 on; version 1 packs have none.
     if (version >= 2 && reader.exists("/database")) pack.database = readDatabase(reader, version);
     return pack;
-  } catch (const ReadFailure& failure) {
+  } catch (const hdf5::ReadFailure& failure) {
     return makeError(failure.error.code, label + ": " + failure.error.message);
   } catch (const std::exception& e) {
     // Only allocation can throw here, and the sizes were bounded first; still never throw out.

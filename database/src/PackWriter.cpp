@@ -1,4 +1,5 @@
-// PackWriter.cpp — writes a Pack as an HDF5 file in schema v2 (database/PACK_SCHEMA.md).
+// PackWriter.cpp — writes a Pack as an HDF5 file (database/PACK_SCHEMA.md): the schema and its
+// validation, on top of the checked HDF5 writes of Hdf5Writer.h.
 //
 // The whole pack is validated before a byte is written, then written to a temporary file in the
 // target's directory, flushed to disk and renamed over the target (core/AtomicFile.h). A reader
@@ -13,36 +14,23 @@
 #include <string>
 #include <vector>
 
-#include "Hdf5Util.h"
+#include "Hdf5Writer.h"
+#include "PackSchema.h"
 #include "brittle/core/AtomicFile.h"
 #include "brittle/database/Pack.h"
-
 
 namespace brittle {
 namespace {
 
 namespace fs = std::filesystem;
+using hdf5::failHdf5;
+using hdf5::failIo;
+using hdf5::FileWriter;
 using hdf5::Handle;
-
-// About 256 KiB per chunk: few enough chunks that the chunk index stays small for big meshes,
-// small enough that the chunk cache and a partial read stay cheap.
-constexpr hsize_t kTargetChunkBytes = 256 * 1024;
-constexpr unsigned kDeflateLevel = 4;
-
-// Thrown inside the writer and caught in writePack: the write is a long straight sequence of
-// HDF5 calls, and an exception keeps each one to a single checked line.
-struct WriteFailure {
-  Error error;
-};
-
-[[noreturn]] void failIo(const std::string& message) { throw WriteFailure{makeError(ErrorCode::PackIoError, message)}; }
-
-[[noreturn]] void failHdf5(const std::string& message) { failIo(message + hdf5::withDetail()); }
 
 // ---------------------------------------------------------------------------------------------
 // Validation: everything the reader would reject is rejected here, so a bake fails at write time
 // with InvalidArgument instead of producing a pack that cannot be loaded.
-
 
 Status checkFinite(const std::string& where, const double* values, Eigen::Index count) {
   for (Eigen::Index i = 0; i < count; ++i) {
@@ -190,120 +178,7 @@ Status validatePack(const Pack& pack) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// HDF5 output.
-
-Handle fixedStringType(size_t width) {
-  Handle type = hdf5::datatypeHandle(H5Tcopy(H5T_C_S1));
-  // HDF5 has no zero-width strings; width 1 of NUL padding reads back as "".
-  if (!type.valid() || H5Tset_size(type.get(), std::max<size_t>(width, 1)) < 0 ||
-      H5Tset_strpad(type.get(), H5T_STR_NULLPAD) < 0 || H5Tset_cset(type.get(), H5T_CSET_UTF8) < 0) {
-    failHdf5("cannot create a string type of width " + std::to_string(width));
-  }
-  return type;
-}
-
-class FileWriter {
- public:
-  explicit FileWriter(hid_t file) : mFile(file) {}
-
-  Handle createGroup(const std::string& path) {
-    Handle gcpl = hdf5::propertyHandle(H5Pcreate(H5P_GROUP_CREATE));
-    if (!gcpl.valid() || H5Pset_obj_track_times(gcpl.get(), false) < 0) {
-      failHdf5("cannot set up group '" + path + "'");
-    }
-    Handle group = hdf5::groupHandle(H5Gcreate2(mFile, path.c_str(), H5P_DEFAULT, gcpl.get(), H5P_DEFAULT));
-    if (!group.valid()) failHdf5("cannot create group '" + path + "'");
-    return group;
-  }
-
-  void stringAttribute(hid_t loc, const std::string& where, const char* name, const std::string& value) {
-    Handle type = fixedStringType(value.size());
-    std::vector<char> buffer(std::max<size_t>(value.size(), 1), '\0');
-    std::copy(value.begin(), value.end(), buffer.begin());
-    writeAttribute(loc, where, name, type.get(), type.get(), buffer.data());
-  }
-
-  void intAttribute(hid_t loc, const std::string& where, const char* name, int32_t value) {
-    writeAttribute(loc, where, name, H5T_STD_I32LE, H5T_NATIVE_INT32, &value);
-  }
-
-  void f64(const std::string& path, const std::vector<double>& values, const std::vector<hsize_t>& dims,
-           const char* unit) {
-    dataset(path, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), dims, unit);
-  }
-  void f32(const std::string& path, const float* values, const std::vector<hsize_t>& dims) {
-    dataset(path, H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, values, dims, "1");
-  }
-  void i64(const std::string& path, const std::vector<int64_t>& values, const std::vector<hsize_t>& dims) {
-    dataset(path, H5T_STD_I64LE, H5T_NATIVE_INT64, values.data(), dims, nullptr);
-  }
-  void i32(const std::string& path, const std::vector<int32_t>& values, const std::vector<hsize_t>& dims) {
-    dataset(path, H5T_STD_I32LE, H5T_NATIVE_INT32, values.data(), dims, nullptr);
-  }
-  void u8(const std::string& path, const std::vector<uint8_t>& values) {
-    dataset(path, H5T_STD_U8LE, H5T_NATIVE_UINT8, values.data(), {values.size()}, nullptr);
-  }
-  void strings(const std::string& path, const std::vector<std::string>& values) {
-    size_t width = 1;
-    for (const auto& s : values) width = std::max(width, s.size());
-    std::vector<char> buffer(values.size() * width, '\0');
-    for (size_t i = 0; i < values.size(); ++i) std::copy(values[i].begin(), values[i].end(), &buffer[i * width]);
-    Handle type = fixedStringType(width);
-    dataset(path, type.get(), type.get(), buffer.data(), {values.size()}, nullptr);
-  }
-
- private:
-  void writeAttribute(hid_t loc, const std::string& where, const char* name, hid_t fileType, hid_t memType,
-                      const void* data) {
-    const std::string what = "attribute '" + std::string(name) + "' of '" + where + "'";
-    Handle space = hdf5::dataspaceHandle(H5Screate(H5S_SCALAR));
-    if (!space.valid()) failHdf5("cannot create the dataspace of " + what);
-    Handle attr = hdf5::attributeHandle(H5Acreate2(loc, name, fileType, space.get(), H5P_DEFAULT, H5P_DEFAULT));
-    if (!attr.valid()) failHdf5("cannot create " + what);
-    if (H5Awrite(attr.get(), memType, data) < 0) failHdf5("cannot write " + what);
-  }
-
-  // Every dataset is chunked with shuffle + deflate + Fletcher-32, in that order, so the checksum
-  // covers the bytes exactly as stored and is verified before anything is decompressed. No
-  // modification times are stored, for the same reason as in writeFile.
-  void dataset(const std::string& path, hid_t fileType, hid_t memType, const void* data,
-               const std::vector<hsize_t>& dims, const char* unit) {
-    const int rank = static_cast<int>(dims.size());
-    std::vector<hsize_t> maxDims = dims;
-    std::vector<hsize_t> chunk(dims.size());
-    hsize_t rowBytes = H5Tget_size(memType);
-    hsize_t count = 1;
-    for (int d = 0; d < rank; ++d) {
-      count *= dims[d];
-      // Chunk dimensions must be positive and, for a fixed-size dimension, no larger than it: an
-      // empty dimension is therefore declared extensible so that a chunk of 1 is legal.
-      if (dims[d] == 0) maxDims[d] = H5S_UNLIMITED;
-      if (d > 0) {
-        chunk[d] = std::max<hsize_t>(dims[d], 1);
-        rowBytes *= chunk[d];
-      }
-    }
-    chunk[0] = std::clamp<hsize_t>(kTargetChunkBytes / rowBytes, 1, std::max<hsize_t>(dims[0], 1));
-
-    Handle space = hdf5::dataspaceHandle(H5Screate_simple(rank, dims.data(), maxDims.data()));
-    if (!space.valid()) failHdf5("cannot create the dataspace of dataset '" + path + "'");
-    Handle dcpl = hdf5::propertyHandle(H5Pcreate(H5P_DATASET_CREATE));
-    if (!dcpl.valid() || H5Pset_chunk(dcpl.get(), rank, chunk.data()) < 0 || H5Pset_shuffle(dcpl.get()) < 0 ||
-        H5Pset_deflate(dcpl.get(), kDeflateLevel) < 0 || H5Pset_fletcher32(dcpl.get()) < 0 ||
-        H5Pset_obj_track_times(dcpl.get(), false) < 0) {
-      failHdf5("cannot set up chunking and filters of dataset '" + path + "'");
-    }
-    Handle dset = hdf5::datasetHandle(
-        H5Dcreate2(mFile, path.c_str(), fileType, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT));
-    if (!dset.valid()) failHdf5("cannot create dataset '" + path + "'");
-    if (count > 0 && H5Dwrite(dset.get(), memType, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
-      failHdf5("cannot write dataset '" + path + "'");
-    }
-    if (unit) stringAttribute(dset.get(), path, "unit", unit);
-  }
-
-  hid_t mFile;
-};
+// The schema: groups and datasets.
 
 // The objects to write, in order. Pointers, so that database entries (which hold an ObjectAsset
 // each) are written in place without copying their meshes and modes.
@@ -624,7 +499,7 @@ Status writePack(const Pack& pack, const fs::path& path) {
   Status written = writeAtomically(path, [&](const fs::path& temporary) -> Status {
     try {
       writeFile(pack, temporary);
-    } catch (const WriteFailure& failure) {
+    } catch (const hdf5::WriteFailure& failure) {
       return failure.error;
     } catch (const std::exception& e) {
       return makeError(ErrorCode::PackIoError, e.what());
