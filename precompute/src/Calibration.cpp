@@ -35,8 +35,9 @@ class PoissonSweep {
     std::vector<double> derivatives;   // ∂λᵢ/∂ν
   };
 
-  PoissonSweep(const TetMesh& mesh, Material reference, int count, int modeCount, uint64_t seed, ProgressSink* progress)
-      : mMesh(mesh), mReference(std::move(reference)), mCount(count), mModeCount(modeCount), mSeed(seed),
+  PoissonSweep(const FemMesh& mesh, FemSettings fem, Material reference, int count, int modeCount, uint64_t seed,
+               ProgressSink* progress)
+      : mMesh(mesh), mFem(fem), mReference(std::move(reference)), mCount(count), mModeCount(modeCount), mSeed(seed),
         mProgress(progress) {}
 
   /// The sample at ν, or nullptr after an error (kept in error()).
@@ -46,13 +47,13 @@ class PoissonSweep {
     if (isInterrupted(mProgress)) return fail(makeError(ErrorCode::Cancelled, "calibration cancelled"));
     Material material = mReference;
     material.poissonRatio = nu;
-    auto system = assembleFem(mMesh, material, FemSettings{});
+    auto system = assembleFem(mMesh, material, mFem);
     if (!system) return fail(system.error());
     ModalSettings modal;
     modal.modeCount = mModeCount;
-    modal.shiftRad2PerS2 = defaultShift(mMesh.nodes, material);
+    modal.shiftRad2PerS2 = defaultShift(mMesh.nodes(), material);
     modal.seed = mSeed;
-    auto modes = computeModes(system.value(), mMesh.nodes, modal);
+    auto modes = computeModes(system.value(), mMesh.nodes(), modal);
     if (!modes) return fail(modes.error());
     ++mSolves;
     reportProgress(mProgress, "calibrate", std::min(1.0, mSolves / 20.0));
@@ -61,8 +62,8 @@ class PoissonSweep {
     Material plus = material, minus = material;
     plus.poissonRatio += kPoissonStep;
     minus.poissonRatio -= kPoissonStep;
-    auto kPlus = assembleFem(mMesh, plus, FemSettings{});
-    auto kMinus = assembleFem(mMesh, minus, FemSettings{});
+    auto kPlus = assembleFem(mMesh, plus, mFem);
+    auto kMinus = assembleFem(mMesh, minus, mFem);
     if (!kPlus) return fail(kPlus.error());
     if (!kMinus) return fail(kMinus.error());
     const SparseMatrixd dK = (kPlus.value().stiffness - kMinus.value().stiffness) / (2.0 * kPoissonStep);
@@ -87,7 +88,8 @@ class PoissonSweep {
     return nullptr;
   }
 
-  const TetMesh& mMesh;
+  const FemMesh& mMesh;
+  FemSettings mFem;
   Material mReference;
   int mCount, mModeCount;
   uint64_t mSeed;
@@ -233,14 +235,17 @@ Status checkInputs(const TetMesh& mesh, const Material& base, const CalibrationM
 
 }  // namespace
 
-Result<std::vector<double>> naturalFrequenciesHz(const TetMesh& mesh, const Material& material, int count, uint64_t seed) {
-  auto system = assembleFem(mesh, material, FemSettings{});
+Result<std::vector<double>> naturalFrequenciesHz(const TetMesh& mesh, const Material& material, int count, uint64_t seed,
+                                                 ElementOrder order, bool lumpedMass) {
+  auto femMesh = makeFemMesh(mesh, order);
+  if (!femMesh) return femMesh.error();
+  auto system = assembleFem(femMesh.value(), material, FemSettings{.lumpedMass = lumpedMass});
   if (!system) return system.error();
   ModalSettings modal;
   modal.modeCount = count;
-  modal.shiftRad2PerS2 = defaultShift(mesh.nodes, material);
+  modal.shiftRad2PerS2 = defaultShift(femMesh.value().nodes(), material);
   modal.seed = seed;
-  auto modes = computeModes(system.value(), mesh.nodes, modal);
+  auto modes = computeModes(system.value(), femMesh.value().nodes(), modal);
   if (!modes) return modes.error();
   const Eigen::VectorXd& f = modes.value().basis.frequenciesHz;
   return std::vector<double>(f.data(), f.data() + f.size());
@@ -257,8 +262,10 @@ Result<CalibrationResult> calibrateMaterial(const TetMesh& mesh, const Material&
   CalibrationResult result;
   Material reference = base;
   if (measurements.massKg > 0.0) reference.densityKgPerM3 = measurements.massKg / computeTetMassProperties(mesh, 1.0).volumeM3;
-  PoissonSweep sweep(mesh, reference, count, settings.modeCount > 0 ? settings.modeCount : count + 4, settings.seed,
-                     progress);
+  auto femMesh = makeFemMesh(mesh, settings.elementOrder);
+  if (!femMesh) return femMesh.error();
+  PoissonSweep sweep(femMesh.value(), FemSettings{.lumpedMass = settings.lumpedMass}, reference, count,
+                     settings.modeCount > 0 ? settings.modeCount : count + 4, settings.seed, progress);
   StopWhenInterrupted stop(progress);
 
   // 1. E (and ν). Start from the base ν and the E that fits best at it (closed form in √(E/E₀)).

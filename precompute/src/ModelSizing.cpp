@@ -103,6 +103,7 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
   pack.objects.back().materialName = material.name;
   ObjectSizing out;
   out.object = asset.name;
+  out.elementOrder = asset.elementOrder;
   out.impacts = static_cast<int>(impacts.size());
   std::vector<double> reference(impacts.size(), 0.0);
   const std::string stage = "sizing " + asset.name;
@@ -167,6 +168,51 @@ namespace {
 
 std::string objectName(const ObjectBakeSettings& s) { return s.name.empty() ? s.meshPath.stem().string() : s.name; }
 
+// The values an impact on `asset` reads with r modes: its stress modes (6 per stress point) and
+// its modes (3 per FEM node), r each.
+double impactValues(const ObjectAsset& asset, int modes) {
+  const double points = static_cast<double>(asset.tetMesh.tets.rows()) * stressPointsPerElement(asset.elementOrder);
+  const double dofs = 3.0 * static_cast<double>(femNodeCount(asset.tetMesh, asset.elementOrder));
+  return (6.0 * points + dofs) * modes;
+}
+
+double medianImpactMsAt(const ObjectSizing& s) {
+  for (const auto& t : s.trials)
+    if (t.modes == s.chosenModes) return t.medianImpactMs;
+  return 0.0;
+}
+
+// The element orders tried: each scene object sized in each order, the cheapest that meets both
+// targets kept (ModelSizingSettings::elementOrders). `assets[o]` is the object in order o. When
+// none meets both, the one with the smallest frequency error (P2) is kept, and the result says
+// the target was not met.
+ObjectSizing chooseElementOrder(std::vector<ObjectSizing> sizings, const std::vector<const ObjectAsset*>& assets,
+                                double frequencyTarget) {
+  double quadraticHz = 0.0;
+  for (size_t o = 0; o < assets.size(); ++o)
+    if (assets[o]->elementOrder == ElementOrder::P2) quadraticHz = assets[o]->modal.frequenciesHz(0);
+  std::vector<ElementTrial> trials;
+  size_t best = assets.size(), fallback = 0;
+  for (size_t o = 0; o < assets.size(); ++o) {
+    ElementTrial t;
+    t.elementOrder = assets[o]->elementOrder;
+    t.firstFrequencyHz = assets[o]->modal.frequenciesHz(0);
+    t.frequencyError = std::abs(t.firstFrequencyHz - quadraticHz) / quadraticHz;
+    t.chosenModes = sizings[o].chosenModes;
+    t.targetMet = sizings[o].targetMet && t.frequencyError <= frequencyTarget;
+    t.impactValues = impactValues(*assets[o], t.chosenModes);
+    t.medianImpactMs = medianImpactMsAt(sizings[o]);
+    if (t.targetMet && (best == assets.size() || t.impactValues < trials[best].impactValues)) best = o;
+    if (trials.empty() || t.frequencyError < trials[fallback].frequencyError) fallback = o;
+    trials.push_back(t);
+  }
+  const size_t chosen = best < assets.size() ? best : fallback;
+  ObjectSizing out = std::move(sizings[chosen]);
+  out.targetMet = trials[chosen].targetMet;
+  out.elementTrials = std::move(trials);
+  return out;
+}
+
 /// Bakes the objects (and the database, when given) into a pack, written to `path`.
 Result<Pack> bakeAndWrite(const std::vector<ObjectBakeSettings>& objects, const FragmentDatabase* database,
                           const std::filesystem::path& path, ProgressSink* progress, double* seconds, int64_t* bytes) {
@@ -184,15 +230,34 @@ Result<Pack> bakeAndWrite(const std::vector<ObjectBakeSettings>& objects, const 
 
 }  // namespace
 
-Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manifest,
+Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manifestIn,
                                     const std::optional<DatabaseBakeSettings>& database,
                                     const SceneRequirements& requirements, const SceneSizingPaths& paths,
                                     const ModelSizingSettings& settings, ProgressSink* progress) {
   if (settings.modeLadder.empty()) return makeError(ErrorCode::InvalidArgument, "model sizing: empty mode ladder");
+  const std::vector<ElementOrder>& orders = settings.elementOrders;
+  for (size_t o = 0; o < orders.size(); ++o) {
+    if (std::find(orders.begin() + static_cast<std::ptrdiff_t>(o) + 1, orders.end(), orders[o]) != orders.end()) {
+      return makeError(ErrorCode::InvalidArgument, "model sizing: element order " + std::string(elementOrderName(orders[o])) +
+                                                       " listed twice");
+    }
+  }
+  if (orders.size() > 1 && std::find(orders.begin(), orders.end(), ElementOrder::P2) == orders.end()) {
+    return makeError(ErrorCode::InvalidArgument, "model sizing: choosing an element order needs p2 among the orders "
+                                                 "(each order's frequency error is estimated against it)");
+  }
+  if (orders.size() > 1 && !(settings.frequencyErrorTarget > 0.0 && settings.frequencyErrorTarget < 1.0)) {
+    return makeError(ErrorCode::InvalidArgument, "model sizing: the frequency error target must lie in (0, 1)");
+  }
+  // One order given: every object in it, as if the manifest said so.
+  std::vector<ObjectBakeSettings> manifest = manifestIn;
+  if (orders.size() == 1)
+    for (auto& m : manifest) m.elementOrder = orders[0];
   const int largest = *std::max_element(settings.modeLadder.begin(), settings.modeLadder.end());
   SceneSizingReport report;
   report.targetError = requirements.peakStressError;
   report.matchTargetError = requirements.matchFrequencyError;
+  if (orders.size() > 1) report.frequencyTargetError = settings.frequencyErrorTarget;
   report.refracture = requirements.refracture;
   std::vector<size_t> used;  // manifest index of each scene object
   for (const auto& range : requirements.objects) {
@@ -232,19 +297,58 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
   if (!maxPack) return maxPack.error();
   report.maximumBakeS += report.databaseBakeS;
 
+  // Several element orders: the scene's objects baked again in each, at the largest count.
+  std::vector<Pack> orderPacks;
+  if (orders.size() > 1) {
+    for (ElementOrder order : orders) {
+      std::vector<ObjectBakeSettings> inOrder;
+      for (size_t i : used) {
+        inOrder.push_back(maximum[i]);
+        inOrder.back().elementOrder = order;
+      }
+      auto baked = bakePack(inOrder, progress);
+      if (!baked) return baked.error();
+      orderPacks.push_back(std::move(baked).value());
+    }
+  }
+  // The asset each scene object is sized and studied on: its chosen order's.
+  std::vector<const ObjectAsset*> chosenAssets;
   std::vector<ObjectBakeSettings> sized;
   for (size_t k = 0; k < used.size(); ++k) {
-    const ObjectAsset& asset = maxPack.value().objects[used[k]];
-    auto sizing = sizeObjectModes(asset, manifest[used[k]].material, requirements.objects[k], requirements.peakStressError,
-                                  settings, progress);
-    if (!sizing) return sizing.error();
-    report.maximumImpactMs += sizing.value().trials.back().medianImpactMs;
-    for (const auto& t : sizing.value().trials) {
-      if (t.modes == sizing.value().chosenModes) report.sizedImpactMs += t.medianImpactMs;
+    const ObjectAsset* asset = &maxPack.value().objects[used[k]];
+    ObjectSizing sizing;
+    if (orders.size() > 1) {
+      std::vector<ObjectSizing> perOrder;
+      std::vector<const ObjectAsset*> assets;
+      for (const Pack& pack : orderPacks) {
+        assets.push_back(&pack.objects[k]);
+        auto s = sizeObjectModes(pack.objects[k], manifest[used[k]].material, requirements.objects[k],
+                                 requirements.peakStressError, settings, progress);
+        if (!s) return s.error();
+        // The all-maximum side is the manifest's own order (the first tried when it is not among them).
+        const bool manifestOrder = pack.objects[k].elementOrder == asset->elementOrder;
+        const bool manifestOrderTried = std::find(orders.begin(), orders.end(), asset->elementOrder) != orders.end();
+        if (manifestOrder || (perOrder.empty() && !manifestOrderTried)) {
+          report.maximumImpactMs += s.value().trials.back().medianImpactMs;
+        }
+        perOrder.push_back(std::move(s).value());
+      }
+      sizing = chooseElementOrder(std::move(perOrder), assets, settings.frequencyErrorTarget);
+      for (const Pack& pack : orderPacks)
+        if (pack.objects[k].elementOrder == sizing.elementOrder) asset = &pack.objects[k];
+    } else {
+      auto s = sizeObjectModes(*asset, manifest[used[k]].material, requirements.objects[k],
+                               requirements.peakStressError, settings, progress);
+      if (!s) return s.error();
+      sizing = std::move(s).value();
+      report.maximumImpactMs += sizing.trials.back().medianImpactMs;
     }
+    report.sizedImpactMs += medianImpactMsAt(sizing);
+    chosenAssets.push_back(asset);
     sized.push_back(manifest[used[k]]);
-    sized.back().modal.modeCount = sizing.value().chosenModes;
-    report.objects.push_back(std::move(sizing).value());
+    sized.back().modal.modeCount = sizing.chosenModes;
+    sized.back().elementOrder = sizing.elementOrder;
+    report.objects.push_back(std::move(sizing));
   }
   // What the fragments need: the debris threshold, and the descriptor and search precision the
   // sized pack's database stores.
@@ -252,7 +356,7 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
   std::vector<FragmentRecord> fragments;
   std::vector<Material> materials;
   for (size_t k = 0; k < used.size(); ++k) {
-    const ObjectAsset& asset = maxPack.value().objects[used[k]];
+    const ObjectAsset& asset = *chosenAssets[k];
     const Material& material = manifest[used[k]].material;
     auto records = sceneFragments(asset, material, requirements.objects[k], report.objects[k].chosenModes, settings, progress);
     if (!records) return records.error();
@@ -306,6 +410,7 @@ Status writeSizedManifest(const std::filesystem::path& manifest, const SceneSizi
         const std::string name = o.value("name", std::filesystem::path(mesh).stem().string());
         if (name != sizing.object) continue;
         o["modes"] = sizing.chosenModes;
+        o["element"] = elementOrderName(sizing.elementOrder);
         o["mesh"] = rebase(mesh);
         if (const std::string m = o.at("material").get<std::string>(); m.ends_with(".json")) o["material"] = rebase(m);
         objects.push_back(o);

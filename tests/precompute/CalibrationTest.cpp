@@ -92,6 +92,33 @@ TEST(Calibration, ExactMeasurementsGiveTheTrueMaterialBack) {
   EXPECT_EQ(validateMaterial(r.material).ok(), true);
 }
 
+// A P2 object is fitted with P2 tets. A thin plate's P1 tets lock in bending: their frequencies
+// are far above the P2 ones on the same mesh, so a P1 fit of a P2 plate's measurements returns an
+// E that is far too low, the locking absorbed into the material.
+TEST(Calibration, AQuadraticObjectIsFittedWithItsOwnElements) {
+  const TetMesh plate = testing::makeBoxTetMesh(0.20, 0.20, 0.01, 6, 6, 1);
+  CalibrationMeasurements measured;
+  measured.frequenciesHz = naturalFrequenciesHz(plate, truth(), 4, 1, ElementOrder::P2).value();
+  const std::vector<double> linearHz = naturalFrequenciesHz(plate, truth(), 4, 1, ElementOrder::P1).value();
+  EXPECT_GT(linearHz[0], 1.3 * measured.frequenciesHz[0]);  // the locking this test is about
+  CalibrationSettings settings;
+  settings.fitPoissonRatio = false;
+  Material base = materialPreset("glass").value();
+  base.poissonRatio = 0.27;
+  base.densityKgPerM3 = 2300.0;
+
+  settings.elementOrder = ElementOrder::P2;
+  const auto quadratic = calibrateMaterial(plate, base, measured, settings);
+  ASSERT_TRUE(quadratic.ok()) << quadratic.error().message;
+  EXPECT_NEAR(quadratic.value().material.youngsModulusPa / 52e9, 1.0, 1e-7);
+  EXPECT_LT(quadratic.value().rmsFrequencyError, 1e-9);
+
+  settings.elementOrder = ElementOrder::P1;
+  const auto linear = calibrateMaterial(plate, base, measured, settings);
+  ASSERT_TRUE(linear.ok()) << linear.error().message;
+  EXPECT_LT(linear.value().material.youngsModulusPa, 0.6 * 52e9);
+}
+
 TEST(Calibration, NoisyMeasurementsLandWithinTheirReportedUncertainty) {
   // 0.5 % frequency noise and 5 % decay-rate noise, as a careful tap test gives. Over several
   // noise draws the truth must lie within 4 reported σ, and σ must be honest (not huge).

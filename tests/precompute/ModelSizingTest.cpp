@@ -299,5 +299,72 @@ TEST(SceneSizingTest, BakesOnlyWhatTheSceneUsesAndReportsTheSavings) {
   EXPECT_NE(missing.error().message.find("tile, block"), std::string::npos);
 }
 
+// The element order is one more knob (ModelSizingSettings::elementOrders): each object is sized in
+// P1 and in P2 on the same tets, and the cheaper order that meets both targets is kept. The thin
+// tile's P1 tets lock in bending, far outside a 40 % frequency target, so it is P2; the chunky
+// block's P1 first mode is within it, and P1 reads fewer values per impact, so it stays P1.
+TEST(SceneSizingTest, KeepsTheCheaperElementOrderThatMeetsBothTargets) {
+  const auto dir = testing::makeTempDir("scene-sizing-elements");
+  testing::writeOff(testing::makeBoxSurface(0.1, 0.1, 0.012), dir / "tile.off");
+  testing::writeOff(testing::makeBoxSurface(0.2, 0.1, 0.06), dir / "block.off");
+  const auto manifestPath = writeText(dir, "manifest.json", R"({ "objects": [
+      { "name": "tile", "mesh": "tile.off", "material": "glass", "tets": 500, "modes": 10 },
+      { "name": "block", "mesh": "block.off", "material": "concrete", "tets": 400, "modes": 10 } ] })");
+  auto manifest = loadBakeManifest(manifestPath);
+  ASSERT_TRUE(manifest) << manifest.error().message;
+  auto requirements = parse(R"({ "peak_stress_error": 0.5, "refracture": false, "objects": [
+      { "name": "tile", "speeds_mps": [3, 3], "impactors": [ { "mass_kg": 0.05, "radius_m": 0.01 } ] },
+      { "name": "block", "speeds_mps": [3, 3], "impactors": [ { "mass_kg": 0.05, "radius_m": 0.01 } ] } ] })");
+  ASSERT_TRUE(requirements);
+  ModelSizingSettings s;
+  s.modeLadder = {5, 10};
+  s.points = 1;
+  s.timingRepeats = 1;
+  s.referenceStepsPerContact = 20;
+  s.fragmentsPerImpact = 2;
+  s.elementOrders = {ElementOrder::P1, ElementOrder::P2};
+  s.frequencyErrorTarget = 0.4;
+  auto report = sizeScene(manifest.value(), std::nullopt, requirements.value(), {dir / "sized.h5", {}}, s);
+  ASSERT_TRUE(report) << report.error().message;
+  const auto& r = report.value();
+  ASSERT_EQ(r.objects.size(), 2u);
+  EXPECT_EQ(r.frequencyTargetError, 0.4);
+  for (const ObjectSizing& o : r.objects) {
+    ASSERT_EQ(o.elementTrials.size(), 2u) << o.object;
+    const ElementTrial &p1 = o.elementTrials[0], &p2 = o.elementTrials[1];
+    EXPECT_EQ(p1.elementOrder, ElementOrder::P1);
+    EXPECT_EQ(p2.frequencyError, 0.0);
+    EXPECT_GT(p1.firstFrequencyHz, p2.firstFrequencyHz) << o.object;  // P1 is stiffer on the same tets
+    EXPECT_LT(p1.impactValues, p2.impactValues) << o.object;         // and cheaper
+    EXPECT_EQ(p1.targetMet, p1.frequencyError <= 0.4 && p1.chosenModes > 0) << o.object;
+  }
+  EXPECT_GT(r.objects[0].elementTrials[0].frequencyError, 0.4);  // the tile locks (measured 1.03)
+  EXPECT_EQ(r.objects[0].elementOrder, ElementOrder::P2);
+  EXPECT_LT(r.objects[1].elementTrials[0].frequencyError, 0.4);  // the block does not (measured 0.25)
+  EXPECT_EQ(r.objects[1].elementOrder, ElementOrder::P1);
+  auto sized = readPack(dir / "sized.h5");
+  ASSERT_TRUE(sized) << sized.error().message;
+  EXPECT_EQ(sized.value().objects[0].elementOrder, ElementOrder::P2);
+  EXPECT_EQ(sized.value().objects[1].elementOrder, ElementOrder::P1);
+  ASSERT_TRUE(writeSizedManifest(manifestPath, r, dir / "sized.json"));
+  auto again = loadBakeManifest(dir / "sized.json");
+  ASSERT_TRUE(again) << again.error().message;
+  EXPECT_EQ(again.value()[0].elementOrder, ElementOrder::P2);
+  EXPECT_EQ(again.value()[1].elementOrder, ElementOrder::P1);
+
+  // Bad order lists are refused before anything is baked.
+  s.elementOrders = {ElementOrder::P1, ElementOrder::P1};
+  auto twice = sizeScene(manifest.value(), std::nullopt, requirements.value(), {dir / "never.h5", {}}, s);
+  ASSERT_FALSE(twice);
+  EXPECT_EQ(twice.error().code, ErrorCode::InvalidArgument);
+  EXPECT_NE(twice.error().message.find("twice"), std::string::npos);
+  s.elementOrders = {ElementOrder::P1, ElementOrder::P2};
+  s.frequencyErrorTarget = 0.0;
+  auto badTarget = sizeScene(manifest.value(), std::nullopt, requirements.value(), {dir / "never.h5", {}}, s);
+  ASSERT_FALSE(badTarget);
+  EXPECT_EQ(badTarget.error().code, ErrorCode::InvalidArgument);
+  EXPECT_FALSE(std::filesystem::exists(dir / "never.h5"));
+}
+
 }  // namespace
 }  // namespace brittle

@@ -217,6 +217,24 @@ TEST_F(CliTest, CalibrateFitsTheMaterialAndWritesAFileThatBakes) {
   EXPECT_NE(badFile.out.find("unknown key \"colour\""), std::string::npos) << badFile.out;
 }
 
+// calibrate on a P2 object fits with P2 tets: the baked plate's own frequencies, scaled as for an
+// E of 80 % of glass's, give that E back (a P1 fit would absorb P1's locking into E).
+TEST_F(CliTest, CalibrateFitsAQuadraticObjectWithItsOwnElements) {
+  testing::writeOff(testing::makeBoxSurface(0.2, 0.2, 0.01), dir / "plate.off");
+  ASSERT_EQ(run("bake --mesh " + path("plate.off") + " --material glass --element p2 --tets 600 --modes 6 --quiet --out " +
+                path("plate.h5")).exitCode, 0);
+  const auto doc = nlohmann::json::parse(run("inspect " + path("plate.h5") + " --json").out);
+  std::string frequencies;
+  for (int i = 0; i < 3; ++i) {
+    frequencies += (i ? "," : "") + std::to_string(std::sqrt(0.8) * doc["objects"][0]["modes"]["frequencies_hz"][i].get<double>());
+  }
+  const CliRun fit = run("calibrate " + path("plate.h5") + " --object plate --fixed-poisson --frequencies " + frequencies + " --json");
+  ASSERT_EQ(fit.exitCode, 0) << fit.out;
+  const auto r = nlohmann::json::parse(fit.out);
+  EXPECT_EQ(r["element"], "p2");
+  EXPECT_NEAR(r["youngs_modulus_pa"].get<double>() / 56e9, 1.0, 1e-5);
+}
+
 TEST_F(CliTest, ImpactBenchTimesEitherElementAndNamesItInItsCsv) {
   // A P2 slab: every stage's row says p2, and the slab breaks at 80 m/s (this coarse slab's ring
   // spreads the load over ~3 cm, and 50 m/s, the bench's default, broke it in 3 of 4 impacts).
@@ -348,10 +366,24 @@ TEST_F(CliTest, SizeBakesTheSceneObjectsAtTheirModeCountsAndReports) {
   EXPECT_TRUE(chosen == 4 || chosen == 8) << report.dump();
   EXPECT_EQ(report["objects"][0]["trials"].size(), 2u);
   EXPECT_EQ(report["skipped_objects"], nlohmann::json::array({"block"}));
-  EXPECT_LT(report["sized"]["pack_bytes"].get<int64_t>(), report["maximum"]["pack_bytes"].get<int64_t>());
+  // The sized tile is P2 (below), which stores more than the all-maximum P1 side: the savings at
+  // one order are SceneSizingTest's.
+  EXPECT_GT(report["sized"]["pack_bytes"].get<int64_t>(), 0);
+  EXPECT_GT(report["maximum"]["pack_bytes"].get<int64_t>(), 0);
   const auto inspect = nlohmann::json::parse(run("inspect " + path("out/sized.h5") + " --json").out);
   ASSERT_EQ(inspect["objects"].size(), 1u);
   EXPECT_EQ(inspect["objects"][0]["modes"]["count"].get<int>(), chosen);
+  // Both element orders were tried (the default): the thin tile's P1 tets lock in bending, its first
+  // frequency far from P2's on the same tets, so P2 is kept, in the pack and in the manifest.
+  const auto& elements = report["objects"][0]["element_trials"];
+  ASSERT_EQ(elements.size(), 2u) << report.dump();
+  EXPECT_EQ(elements[0]["element"], "p1");
+  EXPECT_GT(elements[0]["frequency_error"].get<double>(), 0.02) << report.dump();
+  EXPECT_FALSE(elements[0]["target_met"].get<bool>());
+  EXPECT_EQ(elements[1]["frequency_error"].get<double>(), 0.0);
+  EXPECT_EQ(report["objects"][0]["element"], "p2");
+  EXPECT_EQ(inspect["objects"][0]["mesh"]["element"], "p2");
+  EXPECT_EQ(nlohmann::json::parse(fileBytes(dir / "out" / "sized.json"))["objects"][0]["element"], "p2");
   // The sized manifest bakes the same object from its own directory.
   ASSERT_EQ(run("bake --manifest " + path("out/sized.json") + " --quiet --out " + path("again.h5")).exitCode, 0);
   // The runtime settings beside the sized pack carry the scene's debris threshold; impacts read

@@ -122,6 +122,8 @@ Runner addCalibrateCommand(CLI::App& app) {
     settings.poissonMin = o->poissonMin;
     settings.poissonMax = o->poissonMax;
     settings.seed = o->seed;
+    settings.elementOrder = object->elementOrder;  // the model the pack runs, not a default
+    settings.lumpedMass = object->bake.lumpedMass;
     TerminalProgress progress(o->quiet || o->json);
     auto fit = calibrateMaterial(object->tetMesh, base, measured, settings, &progress);
     progress.finish();
@@ -136,6 +138,7 @@ Runner addCalibrateCommand(CLI::App& app) {
     nlohmann::json doc;
     doc["object"] = o->object;
     doc["base_material"] = base.name;
+    doc["element"] = elementOrderName(object->elementOrder);
     doc["youngs_modulus_pa"] = r.material.youngsModulusPa;
     doc["youngs_modulus_std_pa"] = numberOrNull(r.youngsModulusStdPa);
     doc["poisson_ratio"] = r.material.poissonRatio;
@@ -167,7 +170,8 @@ Runner addCalibrateCommand(CLI::App& app) {
       return kExitOk;
     }
     std::cout << std::setprecision(4) << o->object << " calibrated from " << measured.frequenciesHz.size()
-              << " frequencies (base " << base.name << "): E = " << r.material.youngsModulusPa / 1e9 << " GPa ± "
+              << " frequencies (base " << base.name << ", " << elementOrderName(object->elementOrder)
+              << " tets): E = " << r.material.youngsModulusPa / 1e9 << " GPa ± "
               << r.youngsModulusStdPa / 1e9 << ", nu = " << r.material.poissonRatio << " ± " << r.poissonRatioStd
               << (r.poissonAtBound ? " (at its bound)" : "") << ", density = " << r.material.densityKgPerM3 << " kg/m3\n";
     if (!r.modelDecayRatesPerS.empty()) {

@@ -19,6 +19,7 @@ namespace {
 
 struct SizeOptions {
   std::string manifest, scene, out, sizedManifest, report, keepMaximum, settingsOut;
+  std::vector<std::string> elements = {"p1", "p2"};
   double target = 0.0;
   ModelSizingSettings settings;
   bool quiet = false, json = false;
@@ -31,9 +32,16 @@ nlohmann::json reportJson(const SceneSizingReport& r) {
     for (const auto& t : o.trials) {
       trials.push_back({{"modes", t.modes}, {"worst_error", t.worstError}, {"median_impact_ms", t.medianImpactMs}});
     }
-    objects.push_back({{"name", o.object}, {"chosen_modes", o.chosenModes}, {"target_met", o.targetMet},
-                       {"worst_error", o.chosenError}, {"impacts", o.impacts}, {"reference_s", o.referenceS},
-                       {"trials", trials}});
+    nlohmann::json elements = nlohmann::json::array();
+    for (const auto& e : o.elementTrials) {
+      elements.push_back({{"element", elementOrderName(e.elementOrder)}, {"first_frequency_hz", e.firstFrequencyHz},
+                          {"frequency_error", e.frequencyError}, {"chosen_modes", e.chosenModes},
+                          {"target_met", e.targetMet}, {"impact_values", e.impactValues},
+                          {"median_impact_ms", e.medianImpactMs}});
+    }
+    objects.push_back({{"name", o.object}, {"element", elementOrderName(o.elementOrder)}, {"chosen_modes", o.chosenModes},
+                       {"target_met", o.targetMet}, {"worst_error", o.chosenError}, {"impacts", o.impacts},
+                       {"reference_s", o.referenceS}, {"trials", trials}, {"element_trials", elements}});
   }
   nlohmann::json debris = nlohmann::json::array();
   for (const auto& d : r.debris) {
@@ -54,6 +62,7 @@ nlohmann::json reportJson(const SceneSizingReport& r) {
               {"median_match_ms", r.search->medianMatchMs}, {"fragments", r.search->fragments}, {"trials", trials}};
   }
   return {{"target_peak_stress_error", r.targetError},
+          {"target_frequency_error", r.frequencyTargetError},
           {"target_match_frequency_error", r.matchTargetError},
           {"debris", debris},
           {"debris_volume_fraction", r.debrisVolumeFraction},
@@ -71,8 +80,14 @@ nlohmann::json reportJson(const SceneSizingReport& r) {
 void printReport(const SceneSizingReport& r) {
   std::printf("target: worst peak-stress error <= %.1f %% against the full-FEM reference\n", 100.0 * r.targetError);
   for (const auto& o : r.objects) {
-    std::printf("  %-18s %3d modes, worst error %5.1f %% over %d impacts%s\n", o.object.c_str(), o.chosenModes,
-                100.0 * o.chosenError, o.impacts, o.targetMet ? "" : "  (target NOT met: largest count kept)");
+    std::printf("  %-18s %s, %3d modes, worst error %5.1f %% over %d impacts%s\n", o.object.c_str(),
+                elementOrderName(o.elementOrder), o.chosenModes, 100.0 * o.chosenError, o.impacts,
+                o.targetMet ? "" : "  (target NOT met: largest count kept)");
+    for (const auto& e : o.elementTrials) {
+      std::printf("      %s: first mode %.1f Hz (%.2f %% from p2), %d modes, %.3g values read, %.2f ms%s\n",
+                  elementOrderName(e.elementOrder), e.firstFrequencyHz, 100.0 * e.frequencyError, e.chosenModes,
+                  e.impactValues, e.medianImpactMs, e.targetMet ? "" : "  (a target not met)");
+    }
     for (const auto& t : o.trials) {
       std::printf("      %3d modes: %6.1f %%  %7.2f ms\n", t.modes, 100.0 * t.worstError, t.medianImpactMs);
     }
@@ -127,6 +142,13 @@ Runner addSizeCommand(CLI::App& app) {
   cmd->add_option("--repeats", o->settings.timingRepeats, "Impacts timed per count and impact")->capture_default_str()
       ->check(CLI::Range(1, 1000));
   cmd->add_option("--seed", o->settings.seed, "Seed of the impact points")->capture_default_str();
+  cmd->add_option("--elements", o->elements,
+                  "Element orders tried per object, the cheapest that meets both targets kept (p2 must be among "
+                  "several: frequency errors are estimated against it); 'manifest' keeps each object's own")
+      ->delimiter(',')->capture_default_str()->check(CLI::IsMember({"p1", "p2", "manifest"}));
+  cmd->add_option("--frequency-target", o->settings.frequencyErrorTarget,
+                  "First-frequency error allowed when choosing the element order (relative, against p2 on the same tets)")
+      ->capture_default_str()->check(CLI::Range(1e-6, 0.999));
   cmd->add_option("--sized-manifest", o->sizedManifest, "Also write the sized pack's bake manifest here");
   cmd->add_option("--report", o->report, "Also write the report as JSON here");
   cmd->add_option("--settings-out", o->settingsOut,
@@ -143,6 +165,12 @@ Runner addSizeCommand(CLI::App& app) {
     auto requirements = loadSceneRequirements(o->scene);
     if (!requirements) return reportError(requirements.error());
     if (o->target > 0.0) requirements.value().peakStressError = o->target;
+    for (const std::string& name : o->elements) {
+      if (name == "manifest" && o->elements.size() > 1) {
+        return reportError(makeError(ErrorCode::InvalidArgument, "--elements: 'manifest' stands alone"));
+      }
+      if (name != "manifest") o->settings.elementOrders.push_back(*parseElementOrder(name));
+    }
     Result<SceneSizingReport> report = [&] {
       TerminalProgress progress(o->quiet);
       return sizeScene(objects.value(), database.value(), requirements.value(), {o->out, o->keepMaximum}, o->settings,

@@ -1,7 +1,9 @@
 // Calibration.h — fitting a material to measurements of a real object (Ceres).
 //
 // The object is free (hung on soft strings or laid on foam, as for a tap test) and meshed as
-// brittle meshes it (a pack object). Two fits, each a bounded nonlinear least-squares problem:
+// brittle meshes it (a pack object), with the pack object's element order and mass model: a fit
+// must use the model the runtime will run, or it absorbs that model's discretisation error into
+// the material (a P2 plate fitted with P1 tets, which lock in bending, gets half its E). Two fits, each a bounded nonlinear least-squares problem:
 //
 // 1. Elastic constants from natural frequencies. For a fixed mesh and density, K(E, ν) = E·K₁(ν)
 //    and M does not depend on E or ν, so every eigenvalue is λᵢ = (E/E₀)·λᵢ(E₀, ν): one modal
@@ -55,6 +57,9 @@ struct CalibrationSettings {
   int modeCount = 0;
   int maxIterations = 50;       ///< Levenberg-Marquardt iterations per fit
   uint64_t seed = 1;            ///< ARPACK's starting vector
+  /// The object's FEM model (ObjectAsset::elementOrder and ::lumpedMass): the one the pack runs.
+  ElementOrder elementOrder = ElementOrder::P1;
+  bool lumpedMass = false;
 };
 
 struct CalibrationResult {
@@ -85,9 +90,11 @@ Result<CalibrationResult> calibrateMaterial(const TetMesh& mesh, const Material&
                                             const CalibrationMeasurements& measurements,
                                             const CalibrationSettings& settings, ProgressSink* progress = nullptr);
 
-/// The lowest `count` elastic natural frequencies (Hz) of `mesh` made of `material` (ARPACK):
-/// what a tap test would measure. Errors as computeModes.
+/// The lowest `count` elastic natural frequencies (Hz) of `mesh` made of `material` (ARPACK), with
+/// `order` elements and the consistent (or lumped) mass: what a tap test on the model would
+/// measure. Errors as makeFemMesh and computeModes.
 Result<std::vector<double>> naturalFrequenciesHz(const TetMesh& mesh, const Material& material, int count,
-                                                 uint64_t seed = 1);
+                                                 uint64_t seed = 1, ElementOrder order = ElementOrder::P1,
+                                                 bool lumpedMass = false);
 
 }  // namespace brittle

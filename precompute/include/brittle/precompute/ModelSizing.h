@@ -39,14 +39,27 @@ struct ModeTrial {
   double medianImpactMs = 0.0;  ///< the runtime's impact time (warm world, fracture included)
 };
 
+/// One element order tried for an object (ModelSizingSettings::elementOrders).
+struct ElementTrial {
+  ElementOrder elementOrder = ElementOrder::P1;
+  double firstFrequencyHz = 0.0;  ///< the lowest elastic mode
+  double frequencyError = 0.0;    ///< relative, against P2 on the same tets (0 for P2 itself)
+  int chosenModes = 0;            ///< the peak-stress sizing's, in this order
+  bool targetMet = false;         ///< both targets
+  double impactValues = 0.0;      ///< values an impact reads at chosenModes (the cost compared)
+  double medianImpactMs = 0.0;    ///< the runtime's impact time at chosenModes (reported only)
+};
+
 struct ObjectSizing {
   std::string object;
+  ElementOrder elementOrder = ElementOrder::P1;  ///< the order sized (the chosen one, when several were tried)
   int chosenModes = 0;
   bool targetMet = false;
   double chosenError = 0.0;       ///< worst error at the chosen count
   int impacts = 0;                ///< impacts each count was measured on
   double referenceS = 0.0;        ///< time spent in the full-FEM reference
   std::vector<ModeTrial> trials;  ///< the ladder, ascending (counts above the stored modes dropped)
+  std::vector<ElementTrial> elementTrials;  ///< the orders tried, in settings order (empty: one order)
 };
 
 /// Sizes one object whose asset holds at least the ladder's first count of modes (baked with its
@@ -67,6 +80,7 @@ std::vector<ImpactDesc> drawSceneImpacts(const ObjectAsset& asset, const SceneOb
 struct SceneSizingReport {
   double targetError = 0.0;
   double matchTargetError = 0.0;           ///< SceneRequirements::matchFrequencyError
+  double frequencyTargetError = 0.0;       ///< ModelSizingSettings::frequencyErrorTarget (0: one order)
   bool refracture = true;
   std::vector<ObjectSizing> objects;       ///< the scene's, in its order
   std::vector<std::string> skippedObjects; ///< manifest objects the scene does not use
@@ -93,16 +107,19 @@ struct SceneSizingPaths {
 
 /// Bakes the all-maximum pack, sizes every scene object on it, then bakes the sized pack: the
 /// scene's objects at their chosen counts, plus the database when the scene refractures. Both
-/// packs are written (writePack, atomic) to measure their size. Errors: InvalidArgument (a scene
-/// object the manifest lacks, listing those it has), those of bakePack, bakeFragmentDatabase,
-/// sizeObjectModes and writePack.
+/// packs are written (writePack, atomic) to measure their size. With several element orders
+/// (ModelSizingSettings::elementOrders), each scene object is also baked and sized in each, and
+/// its cheapest order that meets both targets is the one sized and kept. Errors: InvalidArgument
+/// (a scene object the manifest lacks, listing those it has; an order listed twice; several
+/// orders without p2; a frequency target outside (0, 1)), those of bakePack,
+/// bakeFragmentDatabase, sizeObjectModes and writePack.
 Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manifest,
                                     const std::optional<DatabaseBakeSettings>& database,
                                     const SceneRequirements& requirements, const SceneSizingPaths& paths,
                                     const ModelSizingSettings& settings = {}, ProgressSink* progress = nullptr);
 
 /// Writes the bake manifest of the sized pack: `manifest`'s JSON with only the scene's objects,
-/// each with its chosen "modes", and without the "database" section unless the scene
+/// each with its chosen "modes" and "element", and without the "database" section unless the scene
 /// refractures; relative file names are rewritten for `out`'s directory, so that
 /// `brittle bake --manifest out` bakes the sized pack. Errors: FileNotFound, ParseError,
 /// PackIoError (writing).

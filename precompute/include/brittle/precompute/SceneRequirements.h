@@ -24,6 +24,7 @@
 
 #include "brittle/core/Result.h"
 #include "brittle/database/Material.h"
+#include "brittle/database/ObjectAsset.h"
 
 namespace brittle {
 
@@ -63,6 +64,18 @@ struct ModelSizingSettings {
   int referenceStepsPerContact = 60; ///< Newmark steps per contact time
   int timingRepeats = 3;             ///< impacts timed per mode count and impact (median)
   uint64_t seed = 1;
+  /// Element orders tried for each scene object; empty keeps each manifest object's own. With
+  /// more than one, every scene object is baked and sized in each order (the same tets: the
+  /// mesher does not depend on the order) and the cheapest that meets both targets is kept:
+  /// the peak-stress target at its chosen mode count, and frequencyErrorTarget on its first
+  /// frequency. That error is estimated against P2 on the same tets, so P2 must be among them:
+  /// P2's eigenvalue error falls as h⁴ where P1's falls as h² (and P1 locks in bending), so the
+  /// difference is P1's error to within P2's own. Cheapest means the fewest values an impact
+  /// reads, stress modes and modes at the chosen count (6 per stress point and 3 per FEM node,
+  /// per mode): the impact times, which follow them, are measured and reported, but a choice made
+  /// on a timing would make the pack depend on the machine's load.
+  std::vector<ElementOrder> elementOrders;
+  double frequencyErrorTarget = 0.02;  ///< the first frequency's allowed error (relative)
 };
 
 }  // namespace brittle
