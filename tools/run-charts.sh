@@ -26,6 +26,8 @@ $cli bench modes --csv $data/modes.csv
 plot plot_modes.py $data/modes.csv
 $cli bench resolution --csv $data/resolution.csv
 plot plot_resolution.py $data/resolution.csv
+$cli bench elements --csv $data/elements.csv
+plot plot_elements.py $data/elements.csv
 $cli bench fracture --csv $data/fracture.csv
 plot plot_fracture.py $data/fracture.csv
 

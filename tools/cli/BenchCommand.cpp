@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "../bench/ElementBench.h"
 #include "../bench/ExactModesBench.h"
 #include "../bench/FractureStatsBench.h"
 #include "../bench/ImpactBench.h"
@@ -123,6 +124,20 @@ Runner addBenchCommand(CLI::App& app) {
   resolution->add_option("--modes", rb->modes, "Elastic modes compared")->capture_default_str()->check(CLI::Range(1, 500));
   resolution->add_option("--csv", rb->csv, "Output CSV")->capture_default_str();
   resolution->add_flag("--quiet", rb->quiet, "No progress lines");
+  auto* elements = cmd->add_subcommand(
+      "elements", "P1 against P2 tets: first-frequency error against DOF, and impact time against that error");
+  auto eb = std::make_shared<bench::ElementBenchSettings>();
+  elements->add_option("--cases", eb->cases, "Cases: plate, beam, brick")->delimiter(',')->capture_default_str()
+      ->check(CLI::IsMember({"plate", "beam", "brick"}));
+  elements->add_option("--p1-tets", eb->p1Tets, "P1 tet targets (default: each case's ladder)")->delimiter(',');
+  elements->add_option("--p2-tets", eb->p2Tets, "P2 tet targets (default: each case's ladder)")->delimiter(',');
+  elements->add_option("--modes", eb->modes, "Modes baked and used by the impacts")->capture_default_str()->check(CLI::Range(1, 500));
+  elements->add_option("--impacts", eb->impacts, "Impacts timed per mesh")->capture_default_str()->check(CLI::Range(1, 1000));
+  elements->add_option("--speed", eb->speedMps, "Steel ball speed (m/s)")->capture_default_str();
+  elements->add_option("--seed", eb->seed, "Seed of the impact points")->capture_default_str();
+  elements->add_option("--brick-mesh", eb->brickMesh, "Surface mesh of the brick case")->capture_default_str();
+  elements->add_option("--csv", eb->csv, "Output CSV")->capture_default_str();
+  elements->add_flag("--quiet", eb->quiet, "No progress lines");
   auto* fracture = cmd->add_subcommand(
       "fracture", "Fragment count and largest fragment's mass share against impact speed, over many seeds");
   auto fb = std::make_shared<bench::FractureStatsBenchSettings>();
@@ -153,7 +168,9 @@ Runner addBenchCommand(CLI::App& app) {
   exact->add_option("--repeats", xb->repeats, "Timing repeats (median)")->capture_default_str()->check(CLI::Range(1, 100));
   exact->add_option("--csv", xb->csv, "Output CSV")->capture_default_str();
   exact->add_flag("--quiet", xb->quiet, "No progress lines");
-  return [s, shapes, kinds, indices, impact, is, place, pb, integrators, ib, modes, mb, resolution, rb, fracture, fb, exact, xb]() -> int {
+  return [s, shapes, kinds, indices, impact, is, place, pb, integrators, ib, modes, mb, resolution, rb, elements, eb, fracture,
+          fb, exact, xb]() -> int {
+    if (elements->parsed()) return writeCsv(eb->csv, [&] { return bench::runElementBench(*eb); });
     if (exact->parsed()) return writeCsv(xb->csv, [&] { return bench::runExactModesBench(*xb); });
     if (fracture->parsed()) return writeCsv(fb->csv, [&] { return bench::runFractureStatsBench(*fb); });
     if (resolution->parsed()) return writeCsv(rb->csv, [&] { return bench::runResolutionBench(*rb); });
