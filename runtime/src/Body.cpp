@@ -20,7 +20,7 @@ const Result<StaticCorrection>& Body::staticCorrection() const {
   return *mCorrection;
 }
 
-void Body::adoptStaticCorrection(Result<StaticCorrection> correction) {
+void Body::adoptStaticCorrection(Result<StaticCorrection> correction) const {
   scheduleStaticCorrection();
   std::call_once(mCorrectionOnce, [&] {
     mCorrection.emplace(std::move(correction));

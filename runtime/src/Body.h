@@ -57,9 +57,11 @@ struct Body {
   /// fragment's when its body is made (ImpactStages.cpp); the World then builds it on the workers.
   bool staticCorrectionScheduled() const { return mCorrectionScheduled.load(std::memory_order_acquire); }
   void scheduleStaticCorrection() const { mCorrectionScheduled.store(true, std::memory_order_release); }
-  /// Installs a static correction built elsewhere (makeBody, from the exact path's factor) while
-  /// the body is still being made: it then counts as built and scheduled.
-  void adoptStaticCorrection(Result<StaticCorrection> correction);
+  /// Installs a static correction built elsewhere (makeBody, from the exact path's factor; a
+  /// matched fragment's maker, its entry's placed) before the body is handed out: it then counts
+  /// as built and scheduled. Const as the lazily built members are: the first install or build
+  /// wins (std::call_once).
+  void adoptStaticCorrection(Result<StaticCorrection> correction) const;
 
  private:
   mutable std::once_flag mCorrectionOnce;

@@ -235,11 +235,21 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const doub
   fr.matchedEntry = m.entry;
   fr.matchDistance = m.distance;
   const FragmentDatabase* db = job.database;
+  const EntryCorrections* shared = job.entryCorrections;
   const bool correct = job.settings->staticCorrection && job.prepareFragments;
-  return BodySource::deferred([db, m, material, modeCount, correct]() -> Result<std::shared_ptr<const Body>> {
+  return BodySource::deferred([db, shared, m, material, modeCount, correct]() -> Result<std::shared_ptr<const Body>> {
     auto placed = instantiateEntry(db->entries[static_cast<size_t>(m.entry)], db->referenceMaterial, material, m.queryFrame);
     if (!placed) return Error{placed.error().code, "entry " + std::to_string(m.entry) + ": " + placed.error().message};
-    return withCorrectionScheduled(makeBody(std::move(placed).value(), material, modeCount), correct);
+    auto made = makeBody(std::move(placed).value(), material, modeCount);
+    if (made && correct && shared) {
+      // The entry's correction placed as instantiateEntry placed the entry: x = L Rᵀ_frame x̂ + t.
+      const Result<StaticCorrection>& entry = shared->get(m.entry, material);
+      if (entry) {
+        made.value()->adoptStaticCorrection(entry.value().placed(m.queryFrame.rotation.transpose(), 1.0 / m.queryFrame.scalePerM));
+        return made;
+      }
+    }
+    return withCorrectionScheduled(std::move(made), correct);
   });
 }
 

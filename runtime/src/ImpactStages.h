@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "Body.h"
+#include "EntryCorrections.h"
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/runtime/CrackPropagation.h"
 #include "brittle/runtime/FragmentSurfaces.h"
@@ -34,6 +35,9 @@ struct ImpactJob {
   const FractureSettings* settings = nullptr;
   const FragmentMatcher* matcher = nullptr;  ///< null: no database search
   const FragmentDatabase* database = nullptr;
+  /// The database entries' shared static corrections (WorldSettings::shareEntryCorrections); null:
+  /// each matched fragment factorises its own.
+  const EntryCorrections* entryCorrections = nullptr;
   int32_t maxFragments = 256;          ///< WorldSettings::maxFragmentsPerImpact
   /// WorldSettings::prepareInBackground: a matched fragment's static correction is scheduled when
   /// its body is made (the World builds it on the workers), else on its first impact.

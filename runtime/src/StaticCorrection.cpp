@@ -99,9 +99,39 @@ Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, do
   return stressPerNewton(weights, direction, stress, compliance, workspace);
 }
 
+StaticCorrection StaticCorrection::placed(const Eigen::Matrix3d& rotation, double lengthM) const {
+  StaticCorrection out = *this;
+  out.mRotation = rotation * mRotation;
+  out.mLengthM = lengthM * mLengthM;
+  out.mPlaced = true;
+  return out;
+}
+
 Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, double>>& weights,
                                          const Eigen::Vector3d& direction, Eigen::VectorXd& stress,
                                          double& compliance, Workspace& w) const {
+  if (mPlaced) {
+    // The body the data were built on, loaded along Rᵀ direction; its answer placed (see placed()).
+    const Eigen::Vector3d local = mRotation.transpose() * direction;
+    if (Status st = solvePerNewton(weights, local, stress, compliance, w); !st) return st;
+    const double stressScale = 1.0 / (mLengthM * mLengthM);
+    const Eigen::Matrix3d& r = mRotation;
+    for (Eigen::Index p = 0; p + 6 <= stress.size(); p += 6) {
+      double* v = stress.data() + p;
+      Eigen::Matrix3d t;
+      t << v[0], v[5], v[4], v[5], v[1], v[3], v[4], v[3], v[2];
+      const Eigen::Matrix3d q = stressScale * (r * t * r.transpose());
+      v[0] = q(0, 0), v[1] = q(1, 1), v[2] = q(2, 2), v[3] = q(1, 2), v[4] = q(0, 2), v[5] = q(0, 1);
+    }
+    compliance /= mLengthM;
+    return Ok{};
+  }
+  return solvePerNewton(weights, direction, stress, compliance, w);
+}
+
+Status StaticCorrection::solvePerNewton(const std::vector<std::pair<int32_t, double>>& weights,
+                                        const Eigen::Vector3d& direction, Eigen::VectorXd& stress,
+                                        double& compliance, Workspace& w) const {
   const Data& d = *mData;
   const Eigen::Index dofs = 3 * d.femNodes;
   const Eigen::Index r = d.modes.cols();

@@ -62,6 +62,7 @@ struct World::Impl {
   Pack pack;
   WorldSettings settings;
   std::optional<FragmentMatcher> matcher;
+  std::unique_ptr<detail::EntryCorrections> entryCorrections;  // with a matcher and shareEntryCorrections
   std::vector<std::shared_ptr<const BodySource>> packBodies;  // per pack object, built on first use
   std::vector<Slot> slots;
   std::vector<uint32_t> freeSlots;
@@ -176,6 +177,7 @@ struct World::Impl {
     job.prepareFragments = settings.prepareInBackground;
     job.matcher = matcher ? &*matcher : nullptr;
     job.database = &pack.database;
+    job.entryCorrections = entryCorrections.get();
     job.workers = &workers();
     job.maxFragments = settings.maxFragmentsPerImpact;
     return job;
@@ -269,6 +271,9 @@ Result<World> World::create(Pack pack, const WorldSettings& settings) {
       auto matcher = FragmentMatcher::build(db, ms);
       if (!matcher) return matcher.error();
       impl->matcher.emplace(std::move(matcher).value());
+      if (settings.shareEntryCorrections) {
+        impl->entryCorrections = std::make_unique<detail::EntryCorrections>(db, settings.fracture.modeCount);
+      }
     }
     return World(std::move(impl));
   } catch (const std::exception& e) {

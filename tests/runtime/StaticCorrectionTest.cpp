@@ -10,6 +10,7 @@
 
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/FullFemReference.h"
+#include "brittle/database/ScalingLaws.h"
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/World.h"
 #include "brittle/testing/BakeFixtures.h"
@@ -166,6 +167,39 @@ TEST(StaticCorrection, TypedErrors) {
 // The stress per newton is Σ over the elastic modes left out of φ_j φ_jᵀ f / (λ_j + μ), taken
 // from a dense generalised eigen-decomposition of the same K and M: the sparse solve (its forward
 // half over the load's reach, the inertia relief added after it) agrees to rounding.
+// A correction built on a body serves the body scaled by L, rotated and translated (a database
+// entry placed onto a fragment, ScalingLaws.h) with no factorisation of its own: it equals the
+// placed body's own correction within rounding, stresses and work.
+TEST(StaticCorrection, PlacedOnAScaledRotatedCopyEqualsThatCopysOwn) {
+  const Material& glass = testing::presetGlass();
+  FragmentEntry entry;
+  entry.asset = bakeGlassBox(0.1, 0.06, 0.04, 8, ElementOrder::P1, 300);
+  CanonicalFrame frame;
+  frame.rotation = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1.0, -2.0, 0.5).normalized()).toRotationMatrix();
+  frame.translationM = Eigen::Vector3d(0.3, -0.1, 0.2);
+  frame.scalePerM = 1.0 / 0.37;
+  Material stone = glass;  // another E and ρ (ν equal: the modes are the stored ones, scaled)
+  stone.name = "other";
+  stone.youngsModulusPa = 50e9;
+  stone.densityKgPerM3 = 2700.0;
+  const ObjectAsset unit = instantiateEntry(entry, glass, stone, CanonicalFrame{}).value();
+  const ObjectAsset copy = instantiateEntry(entry, glass, stone, frame).value();
+  const int kept = 6;
+  const StaticCorrection own = StaticCorrection::build(copy, stone, kept).value();
+  const StaticCorrection placed =
+      StaticCorrection::build(unit, stone, kept).value().placed(frame.rotation.transpose(), 1.0 / frame.scalePerM);
+  const std::vector<std::pair<int32_t, double>> weights = {{3, 0.5}, {7, 0.3}, {11, 0.2}};
+  const Eigen::Vector3d direction = Eigen::Vector3d(0.2, -0.4, 1.0).normalized();
+  Eigen::VectorXd a, b;
+  double ca = 0.0, cb = 0.0;
+  ASSERT_TRUE(own.stressPerNewton(weights, direction, a, ca));
+  ASSERT_TRUE(placed.stressPerNewton(weights, direction, b, cb));
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_LT((a - b).norm(), 1e-9 * a.norm());
+  EXPECT_NEAR(ca / cb, 1.0, 1e-9);
+  EXPECT_GT(a.norm(), 0.0);
+}
+
 TEST(StaticCorrection, EqualsTheSumOverTheModesLeftOutFromADenseDecomposition) {
   // For both elements; the stresses of the expected displacement come from the bake's stress-mode
   // code (computeStressModes), not from the correction's own recovery. P1: the sum over every

@@ -393,6 +393,43 @@ TEST_F(WorldTest, FastImpactsSkipTheFactorisationButUseACorrectionThatIsSchedule
   }
 }
 
+// A matched fragment's static correction is its entry's placed (WorldSettings::shareEntryCorrections)
+// or its own factorisation: the same soft hit on the same fragment reads the same corrected peak
+// within rounding either way, and every matched fragment's correction is there once its body is.
+TEST_F(WorldTest, AMatchedFragmentsSharedEntryCorrectionEqualsItsOwnFactorisation) {
+  std::vector<double> peaks, compliances;
+  for (const bool share : {true, false}) {
+    SCOPED_TRACE(share ? "the entry's correction placed" : "the fragment's own factorisation");
+    WorldSettings settings;
+    settings.shareEntryCorrections = share;
+    World world = makeWorld(settings);
+    auto broken = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
+    ASSERT_TRUE(broken && broken.value().broken);
+    int matched = 0;
+    const FragmentResult* target = nullptr;
+    for (const FragmentResult& f : broken.value().fragments) {
+      if (f.path != FragmentPath::Matched) continue;
+      ++matched;
+      if (!target || f.massProperties.volumeM3 > target->massProperties.volumeM3) target = &f;
+    }
+    ASSERT_NE(target, nullptr);
+    EXPECT_GE(matched, 2);
+    const Points& nodes = world.objectAsset(target->object).value()->tetMesh.nodes;
+    Eigen::Index top;
+    nodes.col(2).maxCoeff(&top);
+    ImpactDesc soft = ball(target->object, 0.05);  // far below its threshold: it stays whole
+    soft.pointWorld = nodes.row(top).transpose();
+    soft.pointToleranceM = 1.0;
+    soft.fast = true;  // uses the correction only if it was scheduled: it must be, both ways
+    auto hit = world.impact(soft);
+    ASSERT_TRUE(hit) << hit.error().message;
+    ASSERT_FALSE(hit.value().broken);
+    EXPECT_TRUE(hit.value().staticCorrectionUsed);
+    peaks.push_back(hit.value().peakPrincipalStressPa);
+  }
+  EXPECT_NEAR(peaks[0] / peaks[1], 1.0, 1e-9);
+}
+
 TEST_F(WorldTest, BadInputsGiveTypedErrorsNeverCrashes) {
   World world = makeWorld({}, false);
   auto id = world.addObject({.asset = "plate"});

@@ -62,13 +62,30 @@ class StaticCorrection {
   Status stressPerNewton(const std::vector<std::pair<int32_t, double>>& weights, const Eigen::Vector3d& direction,
                          Eigen::VectorXd& stress, double& complianceMPerN) const;
 
+  /// This correction, built on a body x̂, serving the same body placed as x = L R x̂ + t (same
+  /// material, same node numbering, its modes the placed ones: ScalingLaws.h's instantiateEntry
+  /// with E and ρ unchanged), without a factorisation of its own. Everything transforms exactly:
+  /// K + μM = L Q (K̂ + μ̂M̂) Qᵀ with Q the per-node rotation (μ and M follow λ ∝ 1/L² and
+  /// M ∝ L³), so u = Q û / L for the load rotated back, f̂ = Qᵀ f; the stress is R σ̂ Rᵀ / L² and
+  /// the work f·u = f̂·û / L. The data are shared (a database entry's correction serves every
+  /// fragment matched to it). `rotation` orthonormal, `lengthM` > 0; composes with an earlier
+  /// placement.
+  StaticCorrection placed(const Eigen::Matrix3d& rotation, double lengthM) const;
+
  private:
   struct Data;
   static Result<StaticCorrection> fromFactor(const ObjectAsset& asset, const Material& material, int modes,
                                              const FemMesh& mesh, const FemSystem& fem,
                                              std::shared_ptr<const ShiftedFactor> factor, double mu);
   explicit StaticCorrection(std::shared_ptr<const Data> data) : mData(std::move(data)) {}
+  // stressPerNewton on the body the data were built on.
+  Status solvePerNewton(const std::vector<std::pair<int32_t, double>>& weights, const Eigen::Vector3d& direction,
+                        Eigen::VectorXd& stress, double& complianceMPerN, Workspace& workspace) const;
   std::shared_ptr<const Data> mData;
+  // placed(): x = mLengthM mRotation x̂ + t; identity and 1 for the body the data were built on.
+  Eigen::Matrix3d mRotation = Eigen::Matrix3d::Identity();
+  double mLengthM = 1.0;
+  bool mPlaced = false;
 };
 
 }  // namespace brittle

@@ -146,6 +146,11 @@ struct WorldSettings {
   /// same holds for a matched fragment's body: true, its K is factorised on a worker right after
   /// the body is made; false, on its first impact.
   bool prepareInBackground = true;
+  /// A matched fragment's static correction is its database entry's, factorised once per entry
+  /// and material on first use and placed onto the fragment (StaticCorrection::placed: exact, the
+  /// fragment's own factorisation within rounding), instead of a factorisation per fragment: an
+  /// entry matched again costs none. false: every matched fragment factorises its own K.
+  bool shareEntryCorrections = true;
   /// Called on a worker when the work of a submitted impact is done, before impactReady turns
   /// true, with the result collectImpact will hand over (the fragments' surfaces and mass
   /// properties are final; object ids are not assigned yet). A host builds what it needs per

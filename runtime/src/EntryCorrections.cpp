@@ -1,0 +1,37 @@
+#include "EntryCorrections.h"
+
+#include <algorithm>
+
+#include "brittle/database/ScalingLaws.h"
+
+namespace brittle::detail {
+
+const Result<StaticCorrection>& EntryCorrections::get(int32_t entry, const Material& material) const {
+  Slot* slot = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(mMutex);
+    auto& held = mSlots[{entry, material.name}];
+    if (!held) held = std::make_unique<Slot>();
+    slot = held.get();  // map nodes do not move: the pointer stays valid
+  }
+  std::call_once(slot->once, [&] {
+    if (entry < 0 || static_cast<size_t>(entry) >= mDatabase.entries.size()) {
+      slot->correction.emplace(makeError(ErrorCode::InvalidArgument, "entry " + std::to_string(entry) + " out of range"));
+      return;
+    }
+    // The entry at unit size and in its canonical axes, with the target material (and, where ν
+    // differs, the same Rayleigh–Ritz modes the placed fragment gets).
+    CanonicalFrame unit;
+    auto asset = instantiateEntry(mDatabase.entries[static_cast<size_t>(entry)], mDatabase.referenceMaterial, material, unit);
+    if (!asset) {
+      slot->correction.emplace(asset.error());
+      return;
+    }
+    const auto stored = static_cast<int>(asset.value().modal.modes.cols());
+    const int modes = mModeCount > 0 ? std::min(mModeCount, stored) : stored;  // as makeBody counts them
+    slot->correction.emplace(StaticCorrection::build(asset.value(), material, modes));
+  });
+  return *slot->correction;
+}
+
+}  // namespace brittle::detail

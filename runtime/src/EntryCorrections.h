@@ -1,0 +1,46 @@
+// EntryCorrections.h — the static corrections of a pack's database entries, one per entry and
+// material, each shared by every fragment matched to that entry (StaticCorrection::placed).
+// Private to the runtime: ImpactStages.cpp's matched fragments adopt them, the World owns them.
+//
+// A matched fragment is its entry placed (ScalingLaws.h: x = L R x̂ + t, the target material):
+// its K + μM is the entry's at unit size with that material, scaled by L and rotated. So the
+// entry's correction is factorised once, on first use, by whichever thread needs it (others
+// wait), and a fragment's correction costs no factorisation. Built once per (entry, material):
+// what the fragment's own factorisation would give, within rounding.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "brittle/core/Result.h"
+#include "brittle/database/FragmentDatabase.h"
+#include "brittle/database/Material.h"
+#include "brittle/runtime/StaticCorrection.h"
+
+namespace brittle::detail {
+
+class EntryCorrections {
+ public:
+  /// `database` outlives this; modeCount as FractureSettings::modeCount (0: every stored mode).
+  EntryCorrections(const FragmentDatabase& database, int modeCount) : mDatabase(database), mModeCount(modeCount) {}
+
+  /// Entry `entry`'s correction at unit size in `material`, built on first use. Errors: those of
+  /// instantiateEntry and StaticCorrection::build, InvalidArgument (an entry out of range).
+  const Result<StaticCorrection>& get(int32_t entry, const Material& material) const;
+
+ private:
+  struct Slot {
+    std::once_flag once;
+    std::optional<Result<StaticCorrection>> correction;
+  };
+  const FragmentDatabase& mDatabase;
+  int mModeCount;
+  mutable std::mutex mMutex;  // guards mSlots' structure; each slot is built under its own once_flag
+  mutable std::map<std::pair<int32_t, std::string>, std::unique_ptr<Slot>> mSlots;
+};
+
+}  // namespace brittle::detail
