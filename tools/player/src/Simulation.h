@@ -20,6 +20,8 @@
 
 namespace brittle::play {
 
+// A breakable body's contact in a step, in the body's local frame: a candidate impact. Sorted
+// fastest first (ties: the lower body index), so the per-step cap keeps the hardest hits.
 struct Candidate {
   int32_t body = -1, other = -1;
   double speedMps = 0.0;
