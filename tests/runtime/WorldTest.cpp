@@ -71,6 +71,24 @@ class WorldTest : public ::testing::Test {
     return d;
   }
 
+  // A hit far below its threshold (the fragment stays whole) on the largest matched fragment of
+  // `broken`, at its highest node, from above.
+  static ImpactDesc softHitOnTheLargestMatched(World& world, const ImpactResult& broken) {
+    const FragmentResult* target = nullptr;
+    for (const FragmentResult& f : broken.fragments) {
+      if (f.path == FragmentPath::Matched && (!target || f.massProperties.volumeM3 > target->massProperties.volumeM3)) target = &f;
+    }
+    EXPECT_NE(target, nullptr);
+    if (!target) return {};
+    const Points& nodes = world.objectAsset(target->object).value()->tetMesh.nodes;
+    Eigen::Index top;
+    nodes.col(2).maxCoeff(&top);
+    ImpactDesc soft = ball(target->object, 0.05);
+    soft.pointWorld = nodes.row(top).transpose();
+    soft.pointToleranceM = 1.0;
+    return soft;
+  }
+
   // Lowest speed (to 1 %) that breaks the plate, by bisection on [lo, hi].
   static double breakingSpeed(World& world, const std::function<ImpactDesc(ObjectId, double)>& make) {
     double lo = 0.01, hi = 400.0;
@@ -362,17 +380,8 @@ TEST_F(WorldTest, FastImpactsSkipTheFactorisationButUseACorrectionThatIsSchedule
     World world = makeWorld(settings);
     auto broken = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
     ASSERT_TRUE(broken && broken.value().broken);
-    const FragmentResult* target = nullptr;
-    for (const FragmentResult& f : broken.value().fragments) {
-      if (f.path == FragmentPath::Matched && (!target || f.massProperties.volumeM3 > target->massProperties.volumeM3)) target = &f;
-    }
-    ASSERT_NE(target, nullptr);
-    const Points& nodes = world.objectAsset(target->object).value()->tetMesh.nodes;
-    Eigen::Index top;
-    nodes.col(2).maxCoeff(&top);
-    ImpactDesc soft = ball(target->object, 0.05);  // far below its threshold: it stays whole
-    soft.pointWorld = nodes.row(top).transpose();
-    soft.pointToleranceM = 1.0;
+    const ImpactDesc soft = softHitOnTheLargestMatched(world, broken.value());
+    ASSERT_TRUE(soft.object.valid());
     ImpactDesc fast = soft;
     fast.fast = true;
     auto first = world.impact(fast);
@@ -405,21 +414,10 @@ TEST_F(WorldTest, AMatchedFragmentsSharedEntryCorrectionEqualsItsOwnFactorisatio
     World world = makeWorld(settings);
     auto broken = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
     ASSERT_TRUE(broken && broken.value().broken);
-    int matched = 0;
-    const FragmentResult* target = nullptr;
-    for (const FragmentResult& f : broken.value().fragments) {
-      if (f.path != FragmentPath::Matched) continue;
-      ++matched;
-      if (!target || f.massProperties.volumeM3 > target->massProperties.volumeM3) target = &f;
-    }
-    ASSERT_NE(target, nullptr);
-    EXPECT_GE(matched, 2);
-    const Points& nodes = world.objectAsset(target->object).value()->tetMesh.nodes;
-    Eigen::Index top;
-    nodes.col(2).maxCoeff(&top);
-    ImpactDesc soft = ball(target->object, 0.05);  // far below its threshold: it stays whole
-    soft.pointWorld = nodes.row(top).transpose();
-    soft.pointToleranceM = 1.0;
+    const auto& fragments = broken.value().fragments;
+    EXPECT_GE(std::count_if(fragments.begin(), fragments.end(), [](const FragmentResult& f) { return f.path == FragmentPath::Matched; }), 2);
+    ImpactDesc soft = softHitOnTheLargestMatched(world, broken.value());
+    ASSERT_TRUE(soft.object.valid());
     soft.fast = true;  // uses the correction only if it was scheduled: it must be, both ways
     auto hit = world.impact(soft);
     ASSERT_TRUE(hit) << hit.error().message;
