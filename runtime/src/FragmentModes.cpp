@@ -103,12 +103,19 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
   // FragmentSurfaces.h's clamped parameter), face points (mean of the face's crack points, keyed
   // by the sorted node ids so that both tets of a face share it) and tet points.
   std::vector<Eigen::Vector3d> points;
-  std::map<std::pair<int, int64_t>, int32_t> ids;  // (kind, key) → point; kinds: 0 node, 1 edge, 2 tet
+  // Point of each parent node, edge and tet (−1: none yet), by index: the parent's size once per
+  // fragment, where a map's node per point cost more than the cutting.
+  std::array<std::vector<int32_t>, 3> ids = {std::vector<int32_t>(static_cast<size_t>(n), -1),
+                                             std::vector<int32_t>(static_cast<size_t>(topology.edges.rows()), -1),
+                                             std::vector<int32_t>(static_cast<size_t>(t), -1)};
   std::map<std::array<int32_t, 3>, int32_t> faceIds;
   auto point = [&](int kind, int64_t key, const Eigen::Vector3d& x) {
-    auto [it, inserted] = ids.try_emplace({kind, key}, static_cast<int32_t>(points.size()));
-    if (inserted) points.push_back(x);
-    return it->second;
+    int32_t& id = ids[static_cast<size_t>(kind)][static_cast<size_t>(key)];
+    if (id < 0) {
+      id = static_cast<int32_t>(points.size());
+      points.push_back(x);
+    }
+    return id;
   };
   auto node = [&](int32_t v) { return point(0, v, parent.nodes.row(v).transpose()); };
   auto edgePoint = [&](int32_t edge) {
