@@ -42,7 +42,7 @@ void correctPoisson(const TetMesh& mesh, const Material& reference, double poiss
 
 }  // namespace
 
-void rotateVoigtRows(const Eigen::Matrix3d& q, MatrixXdRow& s) {
+void rotateVoigtRows(const Eigen::Matrix3d& q, Eigen::Ref<MatrixXdRow> s) {
   const Eigen::Index elements = s.rows() / 6;
   Eigen::Matrix<double, 6, 1> v;
   for (Eigen::Index e = 0; e < elements; ++e) {

@@ -297,19 +297,29 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
   if (!maxPack) return maxPack.error();
   report.maximumBakeS += report.databaseBakeS;
 
-  // Several element orders: the scene's objects baked again in each, at the largest count.
-  std::vector<Pack> orderPacks;
-  if (orders.size() > 1) {
-    for (ElementOrder order : orders) {
-      std::vector<ObjectBakeSettings> inOrder;
-      for (size_t i : used) {
-        inOrder.push_back(maximum[i]);
-        inOrder.back().elementOrder = order;
+  // Several element orders (then exactly P1 and P2, no order twice): each scene object in each
+  // order at the largest count, `inOrder[o][k]`. Its manifest's order is the all-maximum pack's
+  // asset; the other is baked here, the objects that need it in one bake per order.
+  std::vector<std::vector<const ObjectAsset*>> inOrder(orders.size(), std::vector<const ObjectAsset*>(used.size()));
+  std::vector<Pack> otherOrders;
+  otherOrders.reserve(orders.size());  // inOrder points into them
+  for (size_t o = 0; orders.size() > 1 && o < orders.size(); ++o) {
+    std::vector<ObjectBakeSettings> toBake;
+    std::vector<size_t> baked;  // k of each object in toBake
+    for (size_t k = 0; k < used.size(); ++k) {
+      if (maximum[used[k]].elementOrder == orders[o]) {
+        inOrder[o][k] = &maxPack.value().objects[used[k]];
+        continue;
       }
-      auto baked = bakePack(inOrder, progress);
-      if (!baked) return baked.error();
-      orderPacks.push_back(std::move(baked).value());
+      toBake.push_back(maximum[used[k]]);
+      toBake.back().elementOrder = orders[o];
+      baked.push_back(k);
     }
+    if (toBake.empty()) continue;
+    auto pack = bakePack(toBake, progress);
+    if (!pack) return pack.error();
+    otherOrders.push_back(std::move(pack).value());
+    for (size_t j = 0; j < baked.size(); ++j) inOrder[o][baked[j]] = &otherOrders.back().objects[j];
   }
   // The asset each scene object is sized and studied on: its chosen order's.
   std::vector<const ObjectAsset*> chosenAssets;
@@ -320,22 +330,18 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
     if (orders.size() > 1) {
       std::vector<ObjectSizing> perOrder;
       std::vector<const ObjectAsset*> assets;
-      for (const Pack& pack : orderPacks) {
-        assets.push_back(&pack.objects[k]);
-        auto s = sizeObjectModes(pack.objects[k], manifest[used[k]].material, requirements.objects[k],
+      for (size_t o = 0; o < orders.size(); ++o) {
+        assets.push_back(inOrder[o][k]);
+        auto s = sizeObjectModes(*inOrder[o][k], manifest[used[k]].material, requirements.objects[k],
                                  requirements.peakStressError, settings, progress);
         if (!s) return s.error();
-        // The all-maximum side is the manifest's own order (the first tried when it is not among them).
-        const bool manifestOrder = pack.objects[k].elementOrder == asset->elementOrder;
-        const bool manifestOrderTried = std::find(orders.begin(), orders.end(), asset->elementOrder) != orders.end();
-        if (manifestOrder || (perOrder.empty() && !manifestOrderTried)) {
-          report.maximumImpactMs += s.value().trials.back().medianImpactMs;
-        }
+        // The all-maximum side is the manifest's own order, always one of the two.
+        if (inOrder[o][k] == asset) report.maximumImpactMs += s.value().trials.back().medianImpactMs;
         perOrder.push_back(std::move(s).value());
       }
       sizing = chooseElementOrder(std::move(perOrder), assets, settings.frequencyErrorTarget);
-      for (const Pack& pack : orderPacks)
-        if (pack.objects[k].elementOrder == sizing.elementOrder) asset = &pack.objects[k];
+      for (size_t o = 0; o < orders.size(); ++o)
+        if (orders[o] == sizing.elementOrder) asset = inOrder[o][k];
     } else {
       auto s = sizeObjectModes(*asset, manifest[used[k]].material, requirements.objects[k],
                                requirements.peakStressError, settings, progress);

@@ -1,12 +1,10 @@
 #include "EntryCorrections.h"
 
-#include <algorithm>
-
 #include "brittle/database/ScalingLaws.h"
 
 namespace brittle::detail {
 
-const Result<StaticCorrection>& EntryCorrections::get(int32_t entry, const Material& material) const {
+const Result<StaticCorrection>& EntryCorrections::get(int32_t entry, const Material& material, int modes) const {
   Slot* slot = nullptr;
   {
     std::lock_guard<std::mutex> lock(mMutex);
@@ -27,8 +25,6 @@ const Result<StaticCorrection>& EntryCorrections::get(int32_t entry, const Mater
       slot->correction.emplace(asset.error());
       return;
     }
-    const auto stored = static_cast<int>(asset.value().modal.modes.cols());
-    const int modes = mModeCount > 0 ? std::min(mModeCount, stored) : stored;  // as makeBody counts them
     slot->correction.emplace(StaticCorrection::build(asset.value(), material, modes));
   });
   return *slot->correction;

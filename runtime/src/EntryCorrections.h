@@ -25,12 +25,14 @@ namespace brittle::detail {
 
 class EntryCorrections {
  public:
-  /// `database` outlives this; modeCount as FractureSettings::modeCount (0: every stored mode).
-  EntryCorrections(const FragmentDatabase& database, int modeCount) : mDatabase(database), mModeCount(modeCount) {}
+  /// `database` outlives this.
+  explicit EntryCorrections(const FragmentDatabase& database) : mDatabase(database) {}
 
-  /// Entry `entry`'s correction at unit size in `material`, built on first use. Errors: those of
-  /// instantiateEntry and StaticCorrection::build, InvalidArgument (an entry out of range).
-  const Result<StaticCorrection>& get(int32_t entry, const Material& material) const;
+  /// Entry `entry`'s correction at unit size in `material` over its first `modes` modes (the
+  /// matched body's count, the same for every fragment of an entry in one World), built on first
+  /// use. Errors: those of instantiateEntry and StaticCorrection::build, InvalidArgument (an entry
+  /// out of range).
+  const Result<StaticCorrection>& get(int32_t entry, const Material& material, int modes) const;
 
  private:
   struct Slot {
@@ -38,7 +40,6 @@ class EntryCorrections {
     std::optional<Result<StaticCorrection>> correction;
   };
   const FragmentDatabase& mDatabase;
-  int mModeCount;
   mutable std::mutex mMutex;  // guards mSlots' structure; each slot is built under its own once_flag
   mutable std::map<std::pair<int32_t, std::string>, std::unique_ptr<Slot>> mSlots;
 };

@@ -243,7 +243,7 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const doub
     auto made = makeBody(std::move(placed).value(), material, modeCount);
     if (made && correct && shared) {
       // The entry's correction placed as instantiateEntry placed the entry: x = L Rᵀ_frame x̂ + t.
-      const Result<StaticCorrection>& entry = shared->get(m.entry, material);
+      const Result<StaticCorrection>& entry = shared->get(m.entry, material, made.value()->modes);
       if (entry) {
         made.value()->adoptStaticCorrection(entry.value().placed(m.queryFrame.rotation.transpose(), 1.0 / m.queryFrame.scalePerM));
         return made;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "BackwardSolve.h"
+#include "brittle/database/ScalingLaws.h"
 #include "brittle/runtime/FemAssembly.h"
 
 namespace brittle {
@@ -114,15 +115,8 @@ Status StaticCorrection::stressPerNewton(const std::vector<std::pair<int32_t, do
     // The body the data were built on, loaded along Rᵀ direction; its answer placed (see placed()).
     const Eigen::Vector3d local = mRotation.transpose() * direction;
     if (Status st = solvePerNewton(weights, local, stress, compliance, w); !st) return st;
-    const double stressScale = 1.0 / (mLengthM * mLengthM);
-    const Eigen::Matrix3d& r = mRotation;
-    for (Eigen::Index p = 0; p + 6 <= stress.size(); p += 6) {
-      double* v = stress.data() + p;
-      Eigen::Matrix3d t;
-      t << v[0], v[5], v[4], v[5], v[1], v[3], v[4], v[3], v[2];
-      const Eigen::Matrix3d q = stressScale * (r * t * r.transpose());
-      v[0] = q(0, 0), v[1] = q(1, 1), v[2] = q(2, 2), v[3] = q(1, 2), v[4] = q(0, 2), v[5] = q(0, 1);
-    }
+    rotateVoigtRows(mRotation, Eigen::Map<MatrixXdRow>(stress.data(), stress.size(), 1));  // as instantiateEntry's
+    stress *= 1.0 / (mLengthM * mLengthM);
     compliance /= mLengthM;
     return Ok{};
   }

@@ -272,7 +272,7 @@ Result<World> World::create(Pack pack, const WorldSettings& settings) {
       if (!matcher) return matcher.error();
       impl->matcher.emplace(std::move(matcher).value());
       if (settings.shareEntryCorrections) {
-        impl->entryCorrections = std::make_unique<detail::EntryCorrections>(db, settings.fracture.modeCount);
+        impl->entryCorrections = std::make_unique<detail::EntryCorrections>(db);
       }
     }
     return World(std::move(impl));

@@ -20,6 +20,13 @@ std::filesystem::path writeText(const std::filesystem::path& dir, const std::str
   return dir / name;
 }
 
+// The sizing scenes' two objects: a 12 mm glass tile (thin: P1 locks in bending) and a chunky block.
+void writeTileAndBlock(const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  testing::writeOff(testing::makeBoxSurface(0.1, 0.1, 0.012), dir / "tile.off");
+  testing::writeOff(testing::makeBoxSurface(0.2, 0.1, 0.06), dir / "block.off");
+}
+
 Result<SceneRequirements> parse(const std::string& text) {
   static const auto dir = testing::makeTempDir("requirements");
   return loadSceneRequirements(writeText(dir, "scene.json", text));
@@ -241,9 +248,7 @@ TEST_F(ModelSizingTest, FragmentsGiveTheDebrisThresholdAndTheSearch) {
 
 TEST(SceneSizingTest, BakesOnlyWhatTheSceneUsesAndReportsTheSavings) {
   const auto dir = testing::makeTempDir("scene-sizing");
-  std::filesystem::create_directories(dir / "meshes");
-  testing::writeOff(testing::makeBoxSurface(0.1, 0.1, 0.012), dir / "meshes" / "tile.off");
-  testing::writeOff(testing::makeBoxSurface(0.2, 0.1, 0.06), dir / "meshes" / "block.off");
+  writeTileAndBlock(dir / "meshes");
   const auto manifestPath = writeText(dir, "manifest.json", R"({ "objects": [
       { "name": "tile", "mesh": "meshes/tile.off", "material": "glass", "tets": 800, "modes": 10 },
       { "name": "block", "mesh": "meshes/block.off", "material": "concrete", "tets": 800, "modes": 10 } ] })");
@@ -305,8 +310,7 @@ TEST(SceneSizingTest, BakesOnlyWhatTheSceneUsesAndReportsTheSavings) {
 // block's P1 first mode is within it, and P1 reads fewer values per impact, so it stays P1.
 TEST(SceneSizingTest, KeepsTheCheaperElementOrderThatMeetsBothTargets) {
   const auto dir = testing::makeTempDir("scene-sizing-elements");
-  testing::writeOff(testing::makeBoxSurface(0.1, 0.1, 0.012), dir / "tile.off");
-  testing::writeOff(testing::makeBoxSurface(0.2, 0.1, 0.06), dir / "block.off");
+  writeTileAndBlock(dir);
   const auto manifestPath = writeText(dir, "manifest.json", R"({ "objects": [
       { "name": "tile", "mesh": "tile.off", "material": "glass", "tets": 500, "modes": 10 },
       { "name": "block", "mesh": "block.off", "material": "concrete", "tets": 400, "modes": 10 } ] })");
@@ -336,7 +340,9 @@ TEST(SceneSizingTest, KeepsTheCheaperElementOrderThatMeetsBothTargets) {
     EXPECT_EQ(p2.frequencyError, 0.0);
     EXPECT_GT(p1.firstFrequencyHz, p2.firstFrequencyHz) << o.object;  // P1 is stiffer on the same tets
     EXPECT_LT(p1.impactValues, p2.impactValues) << o.object;         // and cheaper
-    EXPECT_EQ(p1.targetMet, p1.frequencyError <= 0.4 && p1.chosenModes > 0) << o.object;
+    // The 50 % stress target is met in both orders here, so the frequency target decides.
+    EXPECT_EQ(p1.targetMet, p1.frequencyError <= 0.4) << o.object;
+    EXPECT_TRUE(p2.targetMet) << o.object;
   }
   EXPECT_GT(r.objects[0].elementTrials[0].frequencyError, 0.4);  // the tile locks (measured 1.03)
   EXPECT_EQ(r.objects[0].elementOrder, ElementOrder::P2);

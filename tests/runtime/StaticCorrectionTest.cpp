@@ -164,9 +164,6 @@ TEST(StaticCorrection, TypedErrors) {
   EXPECT_TRUE(stress.allFinite());
 }
 
-// The stress per newton is Σ over the elastic modes left out of φ_j φ_jᵀ f / (λ_j + μ), taken
-// from a dense generalised eigen-decomposition of the same K and M: the sparse solve (its forward
-// half over the load's reach, the inertia relief added after it) agrees to rounding.
 // A correction built on a body serves the body scaled by L, rotated and translated (a database
 // entry placed onto a fragment, ScalingLaws.h) with no factorisation of its own: it equals the
 // placed body's own correction within rounding, stresses and work.
@@ -200,6 +197,9 @@ TEST(StaticCorrection, PlacedOnAScaledRotatedCopyEqualsThatCopysOwn) {
   EXPECT_GT(a.norm(), 0.0);
 }
 
+// The stress per newton is Σ over the elastic modes left out of φ_j φ_jᵀ f / (λ_j + μ), taken
+// from a dense decomposition of the same K and M: the sparse solve (its forward
+// half over the load's reach, the inertia relief added after it) agrees to rounding.
 TEST(StaticCorrection, EqualsTheSumOverTheModesLeftOutFromADenseDecomposition) {
   // For both elements; the stresses of the expected displacement come from the bake's stress-mode
   // code (computeStressModes), not from the correction's own recovery. P1: the sum over every

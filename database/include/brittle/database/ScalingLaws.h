@@ -51,6 +51,7 @@ Result<ObjectAsset> instantiateEntry(const FragmentEntry& entry, const Material&
                                      const CanonicalFrame& frame, InstantiateReport* report = nullptr);
 
 /// Rotates every Voigt stress row block of a 6T by r matrix: σ' = Q σ Qᵀ per element and mode.
-void rotateVoigtRows(const Eigen::Matrix3d& q, MatrixXdRow& stressModes);
+/// Takes any row-major view: a stress vector mapped as 6P by 1 too (StaticCorrection::placed).
+void rotateVoigtRows(const Eigen::Matrix3d& q, Eigen::Ref<MatrixXdRow> stressModes);
 
 }  // namespace brittle
