@@ -1,71 +1,21 @@
-// DescriptorIndex.cpp — brute-force, FLANN and hnswlib backends of DescriptorIndex.
+// DescriptorIndex.cpp — validation, brute force, and the dispatch to the library backends
+// (IndexBackends.h).
 #include "brittle/database/DescriptorIndex.h"
 
-#include <climits>
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
-#include <exception>
 #include <limits>
 #include <memory>
 #include <string>
-#include <type_traits>
 
-#include <Eigen/Core>
-#include <flann/flann.hpp>
-// hnswlib 0.6.2's SSE path prefetches through the entry one past a full link list, a heap
-// over-read that AddressSanitizer reports. Without it (no manual vectorisation) the graph code is
-// clean, and the distance below is vectorised by Eigen instead.
-#define NO_MANUAL_VECTORIZATION
-#include <hnswlib/hnswlib.h>
+#include "IndexBackends.h"
 
 namespace brittle {
 
-// FLANN writes neighbour indices as size_t. Writing them through a size_t* straight into the
-// caller's int64_t array is allowed (unsigned type of the same rank) and saves a scratch copy.
-static_assert(std::is_same_v<std::make_unsigned_t<int64_t>, std::size_t>,
-              "FLANN's size_t indices are written in place into int64_t ids");
+namespace search {
 
-struct DescriptorIndex::Flann {
-  flann::Index<flann::L2<float>> index;
-  flann::SearchParams searchParams;
-};
-
-namespace {
-
-// Squared L2 over `dims` floats, as hnswlib's L2Space but through Eigen's SIMD.
-class EigenL2Space : public hnswlib::SpaceInterface<float> {
- public:
-  explicit EigenL2Space(size_t dims) : mDims(dims) {}
-  size_t get_data_size() override { return mDims * sizeof(float); }
-  hnswlib::DISTFUNC<float> get_dist_func() override { return &distance; }
-  void* get_dist_func_param() override { return &mDims; }
-
- private:
-  static float distance(const void* a, const void* b, const void* param) {
-    const auto n = static_cast<Eigen::Index>(*static_cast<const size_t*>(param));
-    if (n == 28) {  // the default moment descriptor (order 4): unrolled at compile time
-      using Fixed = Eigen::Matrix<float, 28, 1>;
-      return (Eigen::Map<const Fixed>(static_cast<const float*>(a)) - Eigen::Map<const Fixed>(static_cast<const float*>(b)))
-          .squaredNorm();
-    }
-    const Eigen::Map<const Eigen::VectorXf> x(static_cast<const float*>(a), n), y(static_cast<const float*>(b), n);
-    return (x - y).squaredNorm();
-  }
-  size_t mDims;
-};
-
-}  // namespace
-
-struct DescriptorIndex::Hnsw {
-  std::unique_ptr<EigenL2Space> space;  // squared L2, as the other backends
-  std::unique_ptr<hnswlib::HierarchicalNSW<float>> graph;
-};
-
-namespace {
-
-
-// Orders the k results by (distance, id) so ties break by lower id whatever order a backend found
-// them in. k is small, so insertion sort.
+// k is small, so insertion sort.
 void sortByDistanceThenId(int k, int64_t* ids, float* distances) {
   for (int i = 1; i < k; ++i) {
     const int64_t id = ids[i];
@@ -81,7 +31,34 @@ void sortByDistanceThenId(int k, int64_t* ids, float* distances) {
   }
 }
 
-}  // namespace
+Status checkZeroOne(const float* values, int64_t rows, int64_t dims, bool isQuery) {
+  for (int64_t r = 0; r < rows; ++r) {
+    for (int64_t c = 0; c < dims; ++c) {
+      const float v = values[r * dims + c];
+      if (v != 0.0f && v != 1.0f) {
+        return invalidArgument(std::string("DescriptorIndex") + (isQuery ? " query" : "") +
+                               ": binary indexes take 0/1 descriptors (the voxel kind); " +
+                               (isQuery ? std::string() : "row " + std::to_string(r) + ", ") + "column " +
+                               std::to_string(c) + " is " + std::to_string(v));
+      }
+    }
+  }
+  return Ok{};
+}
+
+int64_t codeBytes(int64_t dims, int64_t wordBytes) { return (dims + 8 * wordBytes - 1) / (8 * wordBytes) * wordBytes; }
+
+void packBits(const float* values, int64_t rows, int64_t dims, int64_t wordBytes, uint8_t* codes) {
+  const int64_t bytes = codeBytes(dims, wordBytes);
+  std::fill(codes, codes + rows * bytes, uint8_t{0});
+  for (int64_t r = 0; r < rows; ++r) {
+    for (int64_t c = 0; c < dims; ++c) {
+      if (values[r * dims + c] != 0.0f) codes[r * bytes + c / 8] |= static_cast<uint8_t>(1u << (c % 8));
+    }
+  }
+}
+
+}  // namespace search
 
 DescriptorIndex::DescriptorIndex(DescriptorIndex&&) noexcept = default;
 DescriptorIndex& DescriptorIndex::operator=(DescriptorIndex&&) noexcept = default;
@@ -93,17 +70,23 @@ const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind) {
     case DescriptorIndexSettings::Kind::KdForest: return "kd-forest";
     case DescriptorIndexSettings::Kind::Autotuned: return "autotuned";
     case DescriptorIndexSettings::Kind::Hnsw: return "hnsw";
+    case DescriptorIndexSettings::Kind::HnswBinary: return "hnsw-binary";
+    case DescriptorIndexSettings::Kind::FaissHnsw: return "faiss-hnsw";
+    case DescriptorIndexSettings::Kind::FaissIvf: return "faiss-ivf";
+    case DescriptorIndexSettings::Kind::FaissBinaryFlat: return "faiss-binary-flat";
+    case DescriptorIndexSettings::Kind::FaissBinaryHnsw: return "faiss-binary-hnsw";
   }
   return "unknown";
 }
 
 Result<DescriptorIndexSettings::Kind> parseDescriptorIndexKind(std::string_view name) {
   using Kind = DescriptorIndexSettings::Kind;
-  for (Kind kind : {Kind::BruteForce, Kind::KdForest, Kind::Autotuned, Kind::Hnsw}) {
+  std::string names;
+  for (Kind kind : kAllDescriptorIndexKinds) {
     if (name == descriptorIndexKindName(kind)) return kind;
+    names += std::string(names.empty() ? "" : ", ") + descriptorIndexKindName(kind);
   }
-  return makeError(ErrorCode::InvalidArgument, "unknown index backend '" + std::string(name) +
-                                                   "' (expected brute-force, kd-forest, autotuned or hnsw)");
+  return makeError(ErrorCode::InvalidArgument, "unknown index backend '" + std::string(name) + "' (expected one of " + names + ")");
 }
 
 Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, int64_t dims,
@@ -115,24 +98,6 @@ Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, 
   if (rows > std::numeric_limits<int64_t>::max() / dims ||
       static_cast<uint64_t>(rows * dims) > std::numeric_limits<std::size_t>::max() / sizeof(float))
     return invalidArgument("DescriptorIndex: rows * dims overflows");
-  const bool flannKind = settings.kind == Kind::KdForest || settings.kind == Kind::Autotuned;
-  // FLANN 1.9 stores point indices and dimensions as int internally.
-  if (flannKind && (rows > INT_MAX || dims > INT_MAX))
-    return invalidArgument("DescriptorIndex: FLANN backends need rows and dims <= INT32_MAX");
-  if (settings.kind == Kind::KdForest && settings.trees < 1)
-    return invalidArgument("DescriptorIndex: settings.trees must be >= 1, got " + std::to_string(settings.trees));
-  if (settings.kind == Kind::KdForest && settings.checks < 1)
-    return invalidArgument("DescriptorIndex: settings.checks must be >= 1, got " + std::to_string(settings.checks));
-  if (settings.kind == Kind::Hnsw && (settings.trees < 2 || settings.trees > 1024))
-    return invalidArgument("DescriptorIndex: settings.trees (HNSW M) must be in [2, 1024], got " + std::to_string(settings.trees));
-  if (settings.kind == Kind::Hnsw && settings.checks < 1)
-    return invalidArgument("DescriptorIndex: settings.checks (HNSW ef) must be >= 1, got " + std::to_string(settings.checks));
-  if (settings.kind == Kind::Hnsw && rows > static_cast<int64_t>(std::numeric_limits<uint32_t>::max()))
-    return invalidArgument("DescriptorIndex: HNSW needs rows <= UINT32_MAX");
-  if (settings.kind == Kind::Autotuned &&
-      !(settings.targetPrecision > 0.0f && settings.targetPrecision <= 1.0f))
-    return invalidArgument("DescriptorIndex: settings.targetPrecision must be in (0, 1], got " +
-                   std::to_string(settings.targetPrecision));
   for (int64_t r = 0; r < rows; ++r) {
     for (int64_t c = 0; c < dims; ++c) {
       if (!std::isfinite(data[r * dims + c]))
@@ -141,61 +106,36 @@ Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, 
     }
   }
 
+  DescriptorIndex result;
+  result.mSettings = settings;
+  result.mRows = rows;
+  result.mDims = dims;
   try {
-    DescriptorIndex result;
-    result.mSettings = settings;
-    result.mRows = rows;
-    result.mDims = dims;
     result.mData.assign(data, data + rows * dims);
-    if (settings.kind == Kind::Hnsw) {
-      auto hnsw = std::make_unique<Hnsw>();
-      hnsw->space = std::make_unique<EigenL2Space>(static_cast<size_t>(dims));
-      hnsw->graph = std::make_unique<hnswlib::HierarchicalNSW<float>>(
-          hnsw->space.get(), static_cast<size_t>(rows), static_cast<size_t>(settings.trees), size_t{200},
-          static_cast<size_t>(settings.seed));
-      for (int64_t r = 0; r < rows; ++r) {
-        hnsw->graph->addPoint(result.mData.data() + r * dims, static_cast<hnswlib::labeltype>(r));
-      }
-      hnsw->graph->setEf(static_cast<size_t>(settings.checks));
-      result.mHnsw = std::move(hnsw);
-      return result;
-    }
-    if (!flannKind) return result;
-
-    // The Matrix is a non-owning view of mData. mData's buffer never moves after this point
-    // (std::vector keeps its buffer when the DescriptorIndex is moved), so the view stays valid.
-    flann::Matrix<float> matrix(result.mData.data(), static_cast<std::size_t>(rows),
-                                static_cast<std::size_t>(dims));
-    flann::seed_random(static_cast<unsigned int>(settings.seed));
-    if (settings.kind == Kind::KdForest) {
-      result.mFlann.reset(new Flann{
-          flann::Index<flann::L2<float>>(matrix, flann::KDTreeIndexParams(settings.trees)),
-          flann::SearchParams(settings.checks)});
-    } else {
-      // build_weight 0.01 (build time matters little), memory_weight 0, sample_fraction 0.1.
-      result.mFlann.reset(new Flann{
-          flann::Index<flann::L2<float>>(
-              matrix, flann::AutotunedIndexParams(settings.targetPrecision, 0.01f, 0.0f, 0.1f)),
-          flann::SearchParams(flann::FLANN_CHECKS_AUTOTUNED)});
-    }
-    result.mFlann->index.buildIndex();
-    return result;
-  } catch (const std::exception& e) {
-    return invalidArgument(std::string("DescriptorIndex: ") + descriptorIndexKindName(settings.kind) + " build failed: " + e.what());
+  } catch (const std::bad_alloc&) {
+    return invalidArgument("DescriptorIndex: no memory for " + std::to_string(rows) + " x " + std::to_string(dims) + " floats");
   }
+  // mData's buffer never moves after this point (a moved std::vector keeps its buffer), so a
+  // backend may keep pointers into it.
+  Result<std::unique_ptr<search::Backend>> backend = std::unique_ptr<search::Backend>();
+  switch (settings.kind) {
+    case Kind::BruteForce: break;
+    case Kind::KdForest:
+    case Kind::Autotuned: backend = search::buildFlann(result.mData.data(), rows, dims, settings); break;
+    case Kind::Hnsw:
+    case Kind::HnswBinary: backend = search::buildHnsw(result.mData.data(), rows, dims, settings); break;
+    case Kind::FaissHnsw:
+    case Kind::FaissIvf:
+    case Kind::FaissBinaryFlat:
+    case Kind::FaissBinaryHnsw: backend = search::buildFaiss(result.mData.data(), rows, dims, settings); break;
+  }
+  if (!backend) return backend.error();
+  result.mBackend = std::move(backend).value();
+  return result;
 }
 
 int64_t DescriptorIndex::memoryBytes() const {
-  const auto data = static_cast<int64_t>(mData.size() * sizeof(float));
-  if (mHnsw) {  // level 0 (links, its own copy of the data, labels) plus the upper levels' links
-    const auto& g = *mHnsw->graph;
-    int64_t bytes = static_cast<int64_t>(g.max_elements_ * g.size_data_per_element_);
-    for (size_t i = 0; i < g.cur_element_count; ++i) {
-      bytes += static_cast<int64_t>(g.size_links_per_element_) * g.element_levels_[i];
-    }
-    return data + bytes;
-  }
-  return data + (mFlann ? static_cast<int64_t>(mFlann->index.usedMemory()) : 0);
+  return static_cast<int64_t>(mData.size() * sizeof(float)) + (mBackend ? mBackend->memoryBytes() : 0);
 }
 
 Status DescriptorIndex::validateQuery(const float* descriptor, int k, int64_t queryRow,
@@ -211,7 +151,7 @@ Status DescriptorIndex::validateQuery(const float* descriptor, int k, int64_t qu
                      (batch ? "at query row " + std::to_string(queryRow) + ", " : std::string("at ")) +
                      "column " + std::to_string(c));
   }
-  return Ok{};
+  return mBackend ? mBackend->validateQuery(descriptor, mDims) : Status(Ok{});
 }
 
 Status DescriptorIndex::query(const float* descriptor, int k, int64_t* ids,
@@ -224,8 +164,7 @@ Status DescriptorIndex::query(const float* descriptor, int k, int64_t* ids,
 }
 
 Status DescriptorIndex::queryBackend(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const {
-  if (mHnsw) return queryHnsw(descriptor, k, ids, squaredDistances);
-  if (mFlann) return queryFlann(descriptor, k, ids, squaredDistances);
+  if (mBackend) return mBackend->query(descriptor, k, ids, squaredDistances);
   queryBruteForce(descriptor, k, ids, squaredDistances);
   return Ok{};
 }
@@ -275,48 +214,6 @@ void DescriptorIndex::queryBruteForce(const float* descriptor, int k, int64_t* i
     squaredDistances[j] = d;
     ids[j] = r;
   }
-}
-
-Status DescriptorIndex::queryFlann(const float* descriptor, int k, int64_t* ids,
-                                   float* squaredDistances) const {
-  // Pre-fill so a short FLANN answer (not expected for k <= size()) is visible, not garbage.
-  for (int i = 0; i < k; ++i) {
-    ids[i] = -1;
-    squaredDistances[i] = std::numeric_limits<float>::infinity();
-  }
-  try {
-    // FLANN's Matrix wants non-const data; it does not write to the queries.
-    flann::Matrix<float> queryMatrix(const_cast<float*>(descriptor), 1, static_cast<std::size_t>(mDims));
-    flann::Matrix<std::size_t> indexMatrix(reinterpret_cast<std::size_t*>(ids), 1, static_cast<std::size_t>(k));
-    flann::Matrix<float> distanceMatrix(squaredDistances, 1, static_cast<std::size_t>(k));
-    const int found = mFlann->index.knnSearch(queryMatrix, indexMatrix, distanceMatrix,
-                                              static_cast<std::size_t>(k), mFlann->searchParams);
-    if (found < k)
-      return invalidArgument("DescriptorIndex query: FLANN returned " + std::to_string(found) + " of " +
-                     std::to_string(k) + " neighbours");
-  } catch (const std::exception& e) {
-    return invalidArgument(std::string("DescriptorIndex query: FLANN search failed: ") + e.what());
-  }
-  sortByDistanceThenId(k, ids, squaredDistances);
-  return Ok{};
-}
-
-Status DescriptorIndex::queryHnsw(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const {
-  try {
-    auto found = mHnsw->graph->searchKnn(descriptor, static_cast<size_t>(k));  // max-heap: farthest on top
-    if (static_cast<int>(found.size()) < k)
-      return invalidArgument("DescriptorIndex query: HNSW returned " + std::to_string(found.size()) + " of " +
-                     std::to_string(k) + " neighbours");
-    for (int i = k - 1; i >= 0; --i) {
-      squaredDistances[i] = found.top().first;
-      ids[i] = static_cast<int64_t>(found.top().second);
-      found.pop();
-    }
-  } catch (const std::exception& e) {
-    return invalidArgument(std::string("DescriptorIndex query: HNSW search failed: ") + e.what());
-  }
-  sortByDistanceThenId(k, ids, squaredDistances);
-  return Ok{};
 }
 
 }  // namespace brittle

@@ -49,6 +49,9 @@ Status validateFragmentDatabase(const FragmentDatabase& db) {
     if (index.trees < 1 || index.checks < 1 || !(index.targetPrecision > 0.0f && index.targetPrecision <= 1.0f)) {
       return invalid("index settings of the " + std::string(descriptorKindName(kind)) + " descriptor are out of range");
     }
+    if (Status st = validateMatchErrorModel(db.matchErrors[static_cast<size_t>(kind)]); !st) {
+      return invalid(std::string(descriptorKindName(kind)) + " " + st.error().message);
+    }
   }
   return Ok{};
 }

@@ -109,6 +109,8 @@ Result<std::vector<FragmentMatch>> FragmentMatcher::matchDescriptors(const Canon
     const bool seen = std::any_of(out.begin(), out.end(), [&](const FragmentMatch& o) { return o.entry == m.entry; });
     if (!seen) out.push_back(m);
   }
+  const MatchErrorModel& model = mDatabase->matchErrors[static_cast<size_t>(kind)];
+  for (FragmentMatch& m : out) m.predictedError = predictMatchError(model, m.distance);
   return out;
 }
 

@@ -449,6 +449,20 @@ void writeDatabase(FileWriter& w, const FragmentDatabase& db) {
     w.f64("/database/index/target_precision", precision, {k}, "1");
     w.i64("/database/index/seed", seeds, {k});
   }
+  {
+    Handle errors = w.createGroup("/database/match_errors");
+    for (DescriptorKind kind : kAllDescriptorKinds) {
+      const MatchErrorModel& m = db.matchErrors[static_cast<size_t>(kind)];
+      if (m.empty()) continue;
+      const std::string group = std::string("/database/match_errors/") + descriptorKindName(kind);
+      Handle g = w.createGroup(group);
+      const hsize_t bins = m.distance.size();
+      w.f64(group + "/distance", m.distance, {bins}, "1");
+      w.f64(group + "/median_error", m.medianError, {bins}, "1");
+      w.f64(group + "/p90_error", m.p90Error, {bins}, "1");
+      w.i64(group + "/samples", {m.samples}, {1});
+    }
+  }
 }
 
 void writeFile(const Pack& pack, const fs::path& file) {

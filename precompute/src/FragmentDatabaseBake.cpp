@@ -1,5 +1,7 @@
 #include "brittle/precompute/FragmentDatabaseBake.h"
 
+#include "brittle/database/MatchErrors.h"
+
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
@@ -276,7 +278,9 @@ Result<FragmentDatabase> bakeFragmentDatabase(const DatabaseBakeSettings& settin
   std::vector<FragmentEntry> entries;
   std::vector<std::array<Descriptor, kDescriptorKindCount>> rows;
   if (Status st = baker.value()->bake(0, settings.entryCount, entries, rows, shared); !st) return st.error();
-  return databaseOf(settings, std::move(entries), rows);
+  FragmentDatabase db = databaseOf(settings, std::move(entries), rows);
+  if (Status st = calibrateDatabaseMatchErrors(db); !st) return st.error();
+  return db;
 }
 
 // --- Checkpoints ---------------------------------------------------------------------------------
@@ -446,7 +450,7 @@ Result<DatabaseCheckpointReport> bakeFragmentDatabaseChunks(const DatabaseBakeSe
     std::vector<std::array<Descriptor, kDescriptorKindCount>> rows;
     if (Status st = baker.value()->bake(first, end, entries, rows, shared); !st) return st.error();
     Pack pack;
-    pack.database = databaseOf(settings, std::move(entries), rows);
+    pack.database = databaseOf(settings, std::move(entries), rows);  // not calibrated: see the assembly
     if (Status st = writePack(pack, fragmentDatabaseChunkPath(settings, c, chunk)); !st) return st.error();
     ++report.chunksBaked;
     report.entriesBaked += end - first;
@@ -475,6 +479,8 @@ Result<FragmentDatabase> assembleFragmentDatabase(const DatabaseBakeSettings& se
       m.bottomRows(p.descriptors[k].rows()) = p.descriptors[k];
     }
   }
+  // Over the whole database, once: a chunk's own calibration would see a fraction of it.
+  if (Status st = calibrateDatabaseMatchErrors(db); !st) return st.error();
   return db;
 }
 

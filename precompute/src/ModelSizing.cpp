@@ -1,6 +1,8 @@
 // ModelSizing.cpp — sizeObjectModes, sizeScene and writeSizedManifest (ModelSizing.h).
 #include "brittle/precompute/ModelSizing.h"
 
+#include "brittle/database/MatchErrors.h"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -382,6 +384,8 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
       if (!search) return search.error();
       sizedDb->indexSettings[static_cast<size_t>(search.value().kind)] = search.value().indexSettings();
       report.search = std::move(search).value();
+      // The calibration searched with the bake's index; the sized pack's matches use this one.
+      if (Status st = calibrateDatabaseMatchErrors(*sizedDb); !st) return st.error();
     }
   }
   report.fragmentSizingS = secondsSince(fragmentStart);

@@ -64,6 +64,12 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
     } else if (key == "exact_mode_count") {
       if (Status st = integer(key, s.exactModeCount); !st) return st.error();
       if (s.exactModeCount < 1) return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"exact_mode_count\" must be ≥ 1");
+    } else if (key == "match_error_target") {
+      if (!value.is_number()) return settingsFileError(sourceName, "\"match_error_target\" must be a number");
+      s.matchErrorTarget = value.get<double>();
+      if (!(s.matchErrorTarget >= 0.0)) {
+        return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"match_error_target\" must be ≥ 0");
+      }
     } else if (key == "modes") {
       if (Status st = integer(key, s.modeCount); !st) return st.error();
     } else {
@@ -88,6 +94,7 @@ std::string runtimeSettingsJson(const FractureSettings& s) {
                               {"exact_modes_max_tets", s.exactModesMaxTets},
                               {"exact_modes_max_dof", s.exactModesMaxDof},
                               {"exact_mode_count", s.exactModeCount},
+                              {"match_error_target", s.matchErrorTarget},
                               {"modes", s.modeCount}};
   return doc.dump(2) + "\n";
 }

@@ -234,6 +234,8 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const doub
   const FragmentMatch m = match.value().front();
   fr.matchedEntry = m.entry;
   fr.matchDistance = m.distance;
+  fr.predictedMatchError = m.predictedError.median;
+  fr.predictedMatchErrorP90 = m.predictedError.p90;
   const FragmentDatabase* db = job.database;
   const EntryCorrections* shared = job.entryCorrections;
   const bool correct = job.settings->staticCorrection && job.prepareFragments;
@@ -320,10 +322,28 @@ void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResul
     parent = std::make_shared<const BrokenParent>(
         BrokenParent{job.body, result.fracture.nodeLabels, result.fracture.edgeCuts});
   }
+  const double* moments = ws.fragmentMoments.data();
+  const double target = fs.matchErrorTarget;
+  auto percent = [](double x) { return std::to_string(static_cast<int>(std::lround(100.0 * x))) + " %"; };
   auto make = [&](size_t i) {
     FragmentResult& fr = result.fragments[i];
     if (fr.debris) return;
     if (parent && sizes[i] <= fs.exactModesMaxTets) {
+      // With a target, a match predicted within it is taken instead of the exact path.
+      if (target > 0.0 && job.matcher) {
+        born[i] = matchedSource(job, moments + i * kFragmentMomentCount, fr);
+        if (born[i] && fr.predictedMatchErrorP90 <= target) {
+          fr.path = FragmentPath::Matched;
+          return;
+        }
+        born[i] = nullptr;
+        fr.matchedEntry = -1;
+        fr.matchDistance = 0.0;
+        if (!std::isnan(fr.predictedMatchErrorP90)) {
+          fr.reason = "match predicted at " + percent(fr.predictedMatchErrorP90) + " (p90), over the target " +
+                      percent(target) + ": the exact path";
+        }
+      }
       born[i] = exactSource(job, parent, fr, i, fr.reason);
       if (born[i]) {
         fr.exactModes = true;
@@ -335,8 +355,12 @@ void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResul
       fr.reason += (fr.reason.empty() ? "" : "; ") + std::string("no database to match against");
       return;
     }
-    born[i] = matchedSource(job, ws.fragmentMoments.data() + i * kFragmentMomentCount, fr);
+    born[i] = matchedSource(job, moments + i * kFragmentMomentCount, fr);
     if (born[i]) fr.path = FragmentPath::Matched;
+    if (born[i] && target > 0.0 && fr.predictedMatchErrorP90 > target) {
+      fr.reason += (fr.reason.empty() ? "" : "; ") + std::string("match predicted at ") + percent(fr.predictedMatchErrorP90) +
+                   " (p90), over the target " + percent(target) + ", and the fragment over the exact path's budget";
+    }
   };
   auto all = [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, result.fragments.size(), 1), [&](const tbb::blocked_range<size_t>& r) {

@@ -327,6 +327,47 @@ TEST_F(WorldTest, MatchedFragmentsBreakAgain) {
   EXPECT_GE(second.value().fragments.size(), 2u);
 }
 
+// The scene's match-error target weighs each small fragment's match against the exact path: a
+// match predicted within the target is taken, one predicted over it gives way to the exact path
+// (and says so). The suite's database was calibrated when it was baked (MatchErrors.h).
+TEST_F(WorldTest, AMatchErrorTargetTakesTheMatchWhereItIsPredictedGoodEnough) {
+  ASSERT_FALSE(sPack->database.matchErrors[static_cast<size_t>(DescriptorKind::Moment)].empty());
+  auto run = [&](double target) {
+    WorldSettings settings;
+    settings.fracture.exactModesMaxTets = 1000000;  // every fragment that is not debris may take the exact path
+    settings.fracture.exactModesMaxDof = 0;
+    settings.fracture.exactModeCount = 4;
+    settings.fracture.matchErrorTarget = target;
+    World world = makeWorld(settings);
+    auto hit = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
+    EXPECT_TRUE(hit && hit.value().broken);
+    return std::move(hit).value();
+  };
+  const ImpactResult lenient = run(1e6), strict = run(1e-9), off = run(0.0);
+  ASSERT_EQ(lenient.fragments.size(), off.fragments.size());  // the same fracture: only the new objects differ
+  int fragments = 0;
+  for (size_t i = 0; i < off.fragments.size(); ++i) {
+    if (off.fragments[i].debris) continue;
+    ++fragments;
+    EXPECT_EQ(off.fragments[i].path, FragmentPath::ExactModes);
+    EXPECT_TRUE(off.fragments[i].reason.empty()) << off.fragments[i].reason;
+    const FragmentResult& taken = lenient.fragments[i];
+    EXPECT_EQ(taken.path, FragmentPath::Matched);
+    EXPECT_GE(taken.matchedEntry, 0);
+    EXPECT_GE(taken.predictedMatchErrorP90, taken.predictedMatchError);
+    EXPECT_GE(taken.predictedMatchError, 0.0);
+    const FragmentResult& refused = strict.fragments[i];
+    EXPECT_EQ(refused.path, FragmentPath::ExactModes);
+    EXPECT_EQ(refused.matchedEntry, -1);
+    EXPECT_EQ(refused.predictedMatchErrorP90, taken.predictedMatchErrorP90);
+    EXPECT_NE(refused.reason.find("over the target"), std::string::npos) << refused.reason;
+  }
+  EXPECT_GE(fragments, 2);
+  WorldSettings bad;
+  bad.fracture.matchErrorTarget = -0.1;
+  EXPECT_EQ(World::create(Pack(*sPack), bad).error().code, ErrorCode::InvalidArgument);
+}
+
 TEST_F(WorldTest, ExactPathFragmentsHaveTheirOwnModesAndBreakAgainWithoutADatabase) {
   WorldSettings settings;
   settings.fracture.exactModesMaxTets = 1000000;  // every fragment that is not debris

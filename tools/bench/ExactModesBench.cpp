@@ -107,7 +107,8 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
   std::ofstream csv(s.csv);
   if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.csv.string());
   csv << "object,speed_mps,seed,fragment,volume_fraction,parent_tets,sub_tets,dropped_volume_fraction,modes,match_s,exact_s,"
-         "reference_s,match_distance,match_freq_err,exact_freq_err,reference_f1_hz,exact_f1_hz,match_f1_hz\n";
+         "reference_s,match_distance,match_freq_err,exact_freq_err,reference_f1_hz,exact_f1_hz,match_f1_hz,"
+         "predicted_err_median,predicted_err_p90,predicted_beyond_range\n";
   csv.precision(9);
   for (const std::string& name : objects) {
     const ObjectAsset& asset = *std::find_if(p.objects.begin(), p.objects.end(), [&](const ObjectAsset& a) { return a.name == name; });
@@ -148,10 +149,12 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
           // Database path.
           Result<ObjectAsset> matched = makeError(ErrorCode::InvalidArgument, "no match");
           double distance = std::numeric_limits<double>::quiet_NaN();
+          MatchErrorPrediction predicted;
           const double matchS = medianSeconds(s.repeats, [&] {
             auto m = matcher.value().match(fr.surface, DescriptorKind::Moment, 1);
             if (!m) return;
             distance = m.value().front().distance;
+            predicted = m.value().front().predictedError;
             matched = instantiateEntry(p.database.entries[static_cast<size_t>(m.value().front().entry)],
                                        p.database.referenceMaterial, material, m.value().front().queryFrame);
           });
@@ -188,7 +191,8 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
               << (exact ? exact.value().modal.modes.cols() : 0) << "," << matchS << "," << (exact ? exactS : nan) << ","
               << referenceS << "," << distance << "," << (reference && matched ? maxRelative3(matchHz, refHz) : nan) << ","
               << (reference && exact ? maxRelative3(exactHz, refHz) : nan) << "," << (reference ? refHz[0] : nan) << ","
-              << (exact ? exactHz[0] : nan) << "," << (matched ? matchHz[0] : nan) << "\n";
+              << (exact ? exactHz[0] : nan) << "," << (matched ? matchHz[0] : nan) << "," << predicted.median << ","
+              << predicted.p90 << "," << (predicted.beyondRange ? 1 : 0) << "\n";
           if (!s.quiet) {
             std::fprintf(stderr, "%s v=%g seed=%d fragment %zu: %ld tets, match %.2f ms, exact %.2f ms%s%s\n", name.c_str(), speed,
                          seed, i, sub ? static_cast<long>(sub.value().mesh.tets.rows()) : 0L, 1e3 * matchS, 1e3 * exactS,

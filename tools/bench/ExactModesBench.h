@@ -13,7 +13,10 @@
 //     split into eight), and the error of each path's first three frequencies against it (the
 //     largest relative error of the three, as in the search benchmark). A bake of the fragment's
 //     surface through CGAL was tried first: Mesh_3 split most crack-faceted fragments into
-//     several pieces at a few thousand tets, so it could not serve as the reference.
+//     several pieces at a few thousand tets, so it could not serve as the reference;
+//   * the match's predicted error (median, 90th percentile, MatchErrors.h) from the pack's
+//     calibration, to chart against the measured one. The pack objects' fragments are held back
+//     from that calibration (it saw only the database's entries).
 // The runtime's default exactModesMaxTets comes from where the exact path's median time crosses
 // the budget the chart states.
 #pragma once

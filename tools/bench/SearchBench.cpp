@@ -55,37 +55,44 @@ void log(bool quiet, const char* format, auto... args) {
 }  // namespace
 
 Result<IndexChoice> parseIndexChoice(const std::string& text) {
+  using Kind = DescriptorIndexSettings::Kind;
   IndexChoice c;
   c.label = text;
+  // NAME:TREES:CHECKS for the kd-forest and the graphs and lists, NAME alone for the exact scans.
+  const std::string name = text.substr(0, text.find(':'));
+  auto kind = parseDescriptorIndexKind(name);
   const auto bad = [&] {
-    return makeError(ErrorCode::InvalidArgument, "index '" + text +
-                                                     "': expected kd-forest:TREES:CHECKS, hnsw:M:EF, autotuned:PRECISION "
-                                                     "or brute-force");
+    return makeError(ErrorCode::InvalidArgument,
+                     "index '" + text + "': expected kd-forest:TREES:CHECKS, hnsw:M:EF, hnsw-binary:M:EF, faiss-hnsw:M:EF, "
+                     "faiss-ivf:LISTS:PROBES, faiss-binary-hnsw:M:EF, autotuned:PRECISION, brute-force or "
+                     "faiss-binary-flat");
   };
-  if (text == "brute-force") {
-    c.settings.kind = DescriptorIndexSettings::Kind::BruteForce;
+  if (!kind) return bad();
+  c.settings.kind = kind.value();
+  if (kind.value() == Kind::BruteForce || kind.value() == Kind::FaissBinaryFlat) {
+    if (text != name) return bad();
     return c;
   }
-  int trees = 0, checks = 0;
-  float precision = 0.0f;
-  if (std::sscanf(text.c_str(), "kd-forest:%d:%d", &trees, &checks) == 2 && trees >= 1 && checks >= 1) {
-    c.settings.kind = DescriptorIndexSettings::Kind::KdForest;
-    c.settings.trees = trees;
-    c.settings.checks = checks;
-    return c;
-  }
-  if (std::sscanf(text.c_str(), "hnsw:%d:%d", &trees, &checks) == 2 && trees >= 2 && checks >= 1) {
-    c.settings.kind = DescriptorIndexSettings::Kind::Hnsw;
-    c.settings.trees = trees;
-    c.settings.checks = checks;
-    return c;
-  }
-  if (std::sscanf(text.c_str(), "autotuned:%f", &precision) == 1 && precision > 0.0f && precision <= 1.0f) {
-    c.settings.kind = DescriptorIndexSettings::Kind::Autotuned;
+  if (kind.value() == Kind::Autotuned) {
+    float precision = 0.0f;
+    char tail = 0;
+    if (std::sscanf(text.c_str() + name.size(), ":%f%c", &precision, &tail) != 1 || !(precision > 0.0f && precision <= 1.0f))
+      return bad();
     c.settings.targetPrecision = precision;
     return c;
   }
-  return bad();
+  int trees = 0, checks = 0;
+  char tail = 0;
+  if (std::sscanf(text.c_str() + name.size(), ":%d:%d%c", &trees, &checks, &tail) != 2 || trees < 1 || checks < 1)
+    return bad();
+  c.settings.trees = trees;
+  c.settings.checks = checks;
+  return c;
+}
+
+bool isBinaryIndex(DescriptorIndexSettings::Kind kind) {
+  return kind == DescriptorIndexSettings::Kind::HnswBinary || kind == DescriptorIndexSettings::Kind::FaissBinaryFlat ||
+         kind == DescriptorIndexSettings::Kind::FaissBinaryHnsw;
 }
 
 Status runSearchBench(const SearchBenchSettings& s) {
@@ -260,6 +267,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
       std::vector<float> exactDistance;
       double bruteMedian = 0.0;
       for (const IndexChoice& choice : choices) {
+        if (isBinaryIndex(choice.settings.kind) && kind != DescriptorKind::Voxel) continue;  // 0/1 codes only
         FragmentMatcherSettings ms;
         ms.enabled = {false, false, false};
         ms.enabled[static_cast<size_t>(kind)] = true;

@@ -83,6 +83,7 @@ Status applyRuntimeSettingsFile(const std::string& path, const CLI::App& cmd, Fr
   if (given("--descriptor")) merged.descriptor = fracture.descriptor;
   if (given("--exact-max-tets")) merged.exactModesMaxTets = fracture.exactModesMaxTets;
   if (given("--exact-max-dof")) merged.exactModesMaxDof = fracture.exactModesMaxDof;
+  if (given("--match-error-target")) merged.matchErrorTarget = fracture.matchErrorTarget;
   fracture = merged;
   return Ok{};
 }

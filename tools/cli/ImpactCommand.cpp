@@ -1,4 +1,5 @@
 // brittle impact — load a pack, place one object, report one impact, print and write the fragments.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -25,6 +26,7 @@ struct ImpactOptions {
   int modes = 0, repeat = 1;
   int exactMaxTets = FractureSettings{}.exactModesMaxTets;
   int exactMaxDof = FractureSettings{}.exactModesMaxDof;
+  double matchErrorTarget = FractureSettings{}.matchErrorTarget;
   std::string runtimeSettings;
   double crackBlend = CrackSettings{}.directionBlend, crackNoise = CrackSettings{}.noiseRad;
   double contactSpread = FractureSettings{}.contactSpreadFraction;
@@ -59,6 +61,10 @@ Runner addImpactCommand(CLI::App& app) {
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--exact-max-dof", o->exactMaxDof,
                   "... and whose own model has at most this many degrees of freedom (0: no limit)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--match-error-target", o->matchErrorTarget,
+                  "A fragment small enough for the exact path takes its database match instead when the match's "
+                  "predicted frequency error (90th percentile) is within this (0: size alone decides)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--contact-spread", o->contactSpread,
                   "Spread the contact load over at least this fraction of the object's bounding-box diagonal "
@@ -108,6 +114,7 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.contactSpreadFraction = o->contactSpread;
     settings.fracture.exactModesMaxTets = o->exactMaxTets;
     settings.fracture.exactModesMaxDof = o->exactMaxDof;
+    settings.fracture.matchErrorTarget = o->matchErrorTarget;
     if (!o->runtimeSettings.empty()) {
       if (Status st = applyRuntimeSettingsFile(o->runtimeSettings, *cmd, settings.fracture); !st) return reportError(st.error());
     }
@@ -216,14 +223,20 @@ Runner addImpactCommand(CLI::App& app) {
                      {"area_m2", r.fracture.crackAreaM2}, {"energy_budget_j", r.fracture.energyBudgetJ},
                      {"energy_spent_j", r.fracture.energySpentJ}, {"arrested_by_energy", r.fracture.arrestedByEnergy}};
     doc["fragments"] = nlohmann::json::array();
+    nlohmann::json paths = {{"debris", 0}, {"exact_modes", 0}, {"matched", 0}, {"surface_only", 0}};
     for (const FragmentResult& f : r.fragments) {
+      paths[std::string(fragmentPathName(f.path))] = paths[std::string(fragmentPathName(f.path))].get<int>() + 1;
+      auto orNull = [](double x) { return std::isnan(x) ? nlohmann::json() : nlohmann::json(x); };
       doc["fragments"].push_back({{"volume_m3", f.massProperties.volumeM3}, {"mass_kg", f.massProperties.massKg},
                                   {"center_of_mass_m", vec(f.massProperties.centerOfMassM)},
                                   {"triangles", f.surface.faces.rows()}, {"debris", f.debris},
                                   {"matched_entry", f.matchedEntry}, {"match_distance", f.matchDistance},
                                   {"exact_modes", f.exactModes}, {"path", fragmentPathName(f.path)},
+                                  {"predicted_match_error", orNull(f.predictedMatchError)},
+                                  {"predicted_match_error_p90", orNull(f.predictedMatchErrorP90)},
                                   {"reason", f.reason}});
     }
+    doc["fragment_paths"] = paths;
     doc["fingerprint"] = fingerprintHex(fingerprint(r));  // every computed value; times aside
     doc["times_s"] = {{"contact", r.times.contactS}, {"prepare", r.times.prepareS}, {"modal", r.times.modalS}, {"stress", r.times.stressS},
                       {"propagation", r.times.propagationS}, {"surfaces", r.times.surfacesS},
@@ -254,7 +267,13 @@ Runner addImpactCommand(CLI::App& app) {
                   << " cm3  " << std::setw(10) << f.massProperties.massKg * 1e3 << " g  ";
         if (f.debris) std::cout << "debris";
         else if (f.exactModes) std::cout << "own modes (exact path)";
-        else if (f.matchedEntry >= 0) std::cout << "entry " << f.matchedEntry << " (distance " << f.matchDistance << ")";
+        else if (f.matchedEntry >= 0) {
+          std::cout << "entry " << f.matchedEntry << " (distance " << f.matchDistance;
+          if (!std::isnan(f.predictedMatchErrorP90))
+            std::cout << ", predicted frequency error " << std::lround(100 * f.predictedMatchError) << " %, p90 "
+                      << std::lround(100 * f.predictedMatchErrorP90) << " %";
+          std::cout << ")";
+        }
         else std::cout << "unmatched: " << f.reason;
         std::cout << "\n";
       }

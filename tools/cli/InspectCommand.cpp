@@ -55,6 +55,10 @@ nlohmann::json databaseJson(const FragmentDatabase& db) {
                                    {"checks", index.checks},
                                    {"target_precision", index.targetPrecision},
                                    {"seed", index.seed}}}};
+    if (const MatchErrorModel& m = db.matchErrors[static_cast<size_t>(kind)]; !m.empty()) {
+      k["match_errors"] = {{"samples", m.samples}, {"distance", m.distance}, {"median_error", m.medianError},
+                           {"p90_error", m.p90Error}};
+    }
     if (kind == DescriptorKind::Moment) k["max_order"] = d.moment.maxOrder;
     if (kind == DescriptorKind::Voxel) k["resolution"] = d.voxel.resolution;
     if (kind == DescriptorKind::VoxelImproved) {

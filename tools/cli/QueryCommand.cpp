@@ -1,5 +1,6 @@
 // query: the database entries nearest to a closed mesh, with rescaled physical data.
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -44,8 +45,13 @@ Runner addQueryCommand(CLI::App& app) {
   cmd->add_option("--descriptor", o->descriptor, "Descriptor kind")
       ->check(CLI::IsMember({"moment", "voxel", "voxel-improved"}))->capture_default_str();
   cmd->add_option("--k", o->k, "Number of matches")->capture_default_str()->check(CLI::Range(1, 1000));
-  cmd->add_option("--index", o->index, "Override the stored index: brute-force (exact), kd-forest, autotuned or hnsw (M 16, ef 64)")
-      ->check(CLI::IsMember({"brute-force", "kd-forest", "autotuned", "hnsw"}));
+  std::vector<std::string> backends;
+  for (auto kind : kAllDescriptorIndexKinds) backends.push_back(descriptorIndexKindName(kind));
+  cmd->add_option("--index", o->index,
+                  "Override the stored index: brute-force (exact), kd-forest, autotuned, hnsw, hnsw-binary, faiss-hnsw, "
+                  "faiss-ivf, faiss-binary-flat or faiss-binary-hnsw (graphs: M 16, ef 64; faiss-ivf: √n lists, a "
+                  "quarter probed; the binary kinds: voxel only)")
+      ->check(CLI::IsMember(backends));
   cmd->add_option("--material", o->material,
                   "Material of the query (preset or JSON file) to rescale the physics to; default: the reference");
   cmd->add_flag("--json", o->json, "Print the matches as JSON");
@@ -69,10 +75,16 @@ Runner addQueryCommand(CLI::App& app) {
     if (!o->index.empty()) {
       DescriptorIndexSettings index = db.indexSettings[static_cast<size_t>(kind)];
       index.kind = parseDescriptorIndexKind(o->index).value();
-      if (index.kind == DescriptorIndexSettings::Kind::Hnsw &&
-          db.indexSettings[static_cast<size_t>(kind)].kind != DescriptorIndexSettings::Kind::Hnsw) {
-        index.trees = 16;  // M and ef: hnswlib's usual defaults, not the stored kd-forest's numbers
-        index.checks = 64;
+      using Kind = DescriptorIndexSettings::Kind;
+      if (index.kind != db.indexSettings[static_cast<size_t>(kind)].kind) {  // the stored numbers are another kind's
+        if (index.kind == Kind::FaissIvf) {
+          index.trees = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(db.entries.size()))));
+          index.checks = std::max(1, index.trees / 4);
+        } else if (index.kind == Kind::Hnsw || index.kind == Kind::HnswBinary || index.kind == Kind::FaissHnsw ||
+                   index.kind == Kind::FaissBinaryHnsw) {
+          index.trees = 16;  // M and ef: hnswlib's and FAISS's usual defaults
+          index.checks = 64;
+        }
       }
       settings.indexOverride[static_cast<size_t>(kind)] = index;
     }

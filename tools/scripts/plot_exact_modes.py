@@ -5,7 +5,13 @@ against the reference bake of the fragment's exact surface. Left: time per fragm
 size (tets of its own mesh). Right: the error of the first three frequencies against the same
 size. Medians per size bin as lines. Writes docs/results/data/exact_modes.png next to the CSV
 and prints the figures docs/results/ quotes, with the largest size bin whose median exact time
-stays within the budget (--budget-ms, default 20 ms)."""
+stays within the budget (--budget-ms, default 20 ms).
+
+When the CSV has the match's predicted error (packs from version 4: the database's leave-one-out
+calibration, MatchErrors.h), it also writes match_error_calibration.png: the predicted median and
+90th percentile against the measured error of each match, and prints how well they are calibrated
+(the share of measured errors within each: 0.5 and 0.9 if calibrated) and the rank correlation of
+predicted and measured errors."""
 import argparse
 import csv
 import math
@@ -94,6 +100,52 @@ def main():
     crossing = math.exp((math.log(args.budget_ms) - fit[1]) / fit[0])
     print(f"exact time ~ tets^{fit[0]:.2f}; the fit crosses {args.budget_ms:g} ms at {crossing:.0f} tets "
           f"(largest fragment within the budget: {max(within) if within else 0} tets)")
+    if "predicted_err_p90" in rows[0]:
+        calibration(rows, Path(args.csv).parent / "match_error_calibration.png")
+
+
+def ranks(values):
+    order = np.argsort(values, kind="stable")
+    r = np.empty(len(values))
+    r[order] = np.arange(len(values))
+    return r
+
+
+def calibration(rows, out):
+    """Predicted against measured match error, on the fragments with both."""
+    pts = [(number(r["predicted_err_median"]), number(r["predicted_err_p90"]), number(r["match_freq_err"]),
+            r["object"], r["predicted_beyond_range"] == "1") for r in rows]
+    pts = [p for p in pts if all(math.isfinite(x) for x in p[:3])]
+    if not pts:
+        print("match error calibration: no fragment has both a predicted and a measured error")
+        return
+    median, p90, measured = (np.array([p[i] for p in pts]) for i in range(3))
+    fig, ax = plt.subplots(figsize=(6, 5.5))
+    for obj in sorted({p[3] for p in pts}):
+        sel = [i for i, p in enumerate(pts) if p[3] == obj]
+        ax.scatter(100 * p90[sel], 100 * measured[sel], s=14, alpha=0.6, label=f"{obj}: predicted p90")
+    ax.scatter(100 * median, 100 * measured, s=8, marker="x", color="grey", alpha=0.5, label="predicted median")
+    top = 100 * max(measured.max(), p90.max()) * 1.1
+    ax.plot([0.1, top], [0.1, top], "k--", lw=1, label="measured = predicted")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("predicted error of the match (%)")
+    ax.set_ylabel("measured error of the match, f1..f3 vs reference (%)")
+    within50, within90 = float(np.mean(measured <= median)), float(np.mean(measured <= p90))
+    ax.set_title(f"Match error: predicted against measured ({len(pts)} fragments)\n"
+                 f"measured within the median {within50:.2f} (0.5 if calibrated), within p90 {within90:.2f} (0.9)",
+                 fontsize=9)
+    ax.legend(fontsize=7)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out, dpi=100)
+    rho = float(np.corrcoef(ranks(p90), ranks(measured))[0, 1]) if len(pts) > 2 else math.nan
+    beyond = sum(1 for p in pts if p[4])
+    print(f"match error calibration ({len(pts)} fragments, {beyond} beyond the calibrated distances): "
+          f"measured within the predicted median {within50:.2f}, within the predicted p90 {within90:.2f}; "
+          f"median predicted p90 {100 * float(np.median(p90)):.1f} %, median measured {100 * float(np.median(measured)):.1f} %; "
+          f"rank correlation {rho:.2f}")
+    print(f"chart: {out}")
 
 
 if __name__ == "__main__":

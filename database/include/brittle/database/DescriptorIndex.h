@@ -1,6 +1,6 @@
 // DescriptorIndex.h — k-nearest-neighbour search over a row-major float32 descriptor matrix.
 //
-// One API, four backends:
+// One API, nine backends:
 //   - BruteForce: exact search, the reference. Squared L2 accumulated in double, reported as
 //     float; ties (equal reported float distance) break by lower entry id.
 //   - KdForest:   FLANN randomized kd-tree forest (flann::KDTreeIndexParams(trees)), searched with
@@ -15,6 +15,16 @@
 //     peer of FLANN: `trees` is M (graph links per node), `checks` is ef (candidates kept per
 //     query); built with ef_construction 200 by inserting rows in order, with `seed` as hnswlib's
 //     level seed, so a build is deterministic. Approximate like KdForest.
+//   - HnswBinary: the same graph over the binary codes of 0/1 descriptors (the occupancy voxel
+//     kind), with the Hamming distance, which equals their squared L2 distance: a 16³ code is 512
+//     bytes instead of 16 KiB of floats. Values other than 0 or 1 are an InvalidArgument.
+//   - FAISS (Debian's libfaiss-dev), the standard baselines for descriptor research:
+//     FaissHnsw (IndexHNSWFlat: `trees` is M, `checks` efSearch, efConstruction 200), FaissIvf
+//     (IndexIVFFlat: `trees` inverted lists from k-means, `checks` lists probed), and on binary
+//     codes FaissBinaryFlat (exact Hamming scan) and FaissBinaryHnsw (M, efSearch as FaissHnsw).
+//     The binary kinds take 0/1 descriptors (the occupancy voxel kind), whose Hamming distance is
+//     their squared L2 distance; other values are an InvalidArgument. Built on one OpenMP thread
+//     with seeded randomness, so a build is deterministic; queries run on the caller's thread.
 //
 // Distances are squared Euclidean (no square root). Entry ids are 0-based row indices.
 //
@@ -23,15 +33,14 @@
 // lives (and stays at the same address, including across moves) as long as the DescriptorIndex.
 // The index is move-only.
 //
-// Determinism: the seed is passed to flann::seed_random (std::srand) before every FLANN build,
-// which fixes FLANN's choice of split dimensions. KNOWN LIMITATION: FLANN 1.9.2 (Debian 12) also
-// shuffles the points with a std::random_device-seeded generator when it builds each tree, so two
-// KdForest/Autotuned builds of the same data and seed can differ and approximate results can
-// differ between them. Results of one built index are deterministic. BruteForce is fully
-// deterministic. Because std::srand is process-global, do not build FLANN indices from several
-// threads at once.
+// Determinism: every build is a function of the data and the settings (seed included), in any
+// process. FLANN: the seed goes to flann::seed_random (std::srand), which fixes the split
+// dimensions, and to the generator that stands in for the std::random_device FLANN 1.9.2 seeds each
+// tree's shuffle from (FlannBackend.cpp). Because std::srand is process-global, do not build FLANN
+// indices from several threads at once. The Autotuned choice also depends on timings, so it is
+// not reproducible between runs; copy its parameters into a KdForest setting.
 //
-// Allocation (HNSW: its result heaps allocate per query, like FLANN's): query() never allocates
+// Allocation (HNSW and FAISS: their result heaps allocate per query, like FLANN's): query() never allocates
 // in the BruteForce backend (it writes straight into the
 // caller's arrays, so there is no capacity limit beyond k ≤ size()). In the FLANN backends, FLANN
 // 1.9 allocates on every query inside knnSearch: a k-entry result set, a branch heap that reserves
@@ -49,17 +58,32 @@
 #include "brittle/core/Result.h"
 
 namespace brittle {
+namespace search {
+class Backend;
+}
 
 struct DescriptorIndexSettings {
-  enum class Kind { BruteForce, KdForest, Autotuned, Hnsw };
+  enum class Kind { BruteForce, KdForest, Autotuned, Hnsw, HnswBinary, FaissHnsw, FaissIvf, FaissBinaryFlat, FaissBinaryHnsw };
   Kind kind = Kind::KdForest;
-  int trees = 4;                  ///< KdForest: number of randomized kd-trees, ≥ 1. Hnsw: M, in [2, 1024].
-  int checks = 64;                ///< KdForest: leaves visited per query, ≥ 1 (more: slower, better). Hnsw: ef, ≥ 1.
+  /// KdForest: number of randomized kd-trees, ≥ 1. Hnsw, HnswBinary and the FAISS graphs: M, in
+  /// [2, 1024]. FaissIvf: inverted lists, in [1, rows].
+  int trees = 4;
+  /// KdForest: leaves visited per query, ≥ 1 (more: slower, better). Hnsw and the FAISS graphs:
+  /// ef, ≥ 1. FaissIvf: lists probed, in [1, trees].
+  int checks = 64;
   float targetPrecision = 0.95f;  ///< Autotuned: wanted fraction of exact neighbours, in (0, 1].
-  uint64_t seed = 1;              ///< FLANN random seed (only its low 32 bits are used).
+  uint64_t seed = 1;              ///< seed of every randomised build (FLANN uses the low 32 bits).
 };
 
-/// "brute-force", "kd-forest", "autotuned" or "hnsw" (the CLI and pack spelling).
+inline constexpr DescriptorIndexSettings::Kind kAllDescriptorIndexKinds[] = {
+    DescriptorIndexSettings::Kind::BruteForce,      DescriptorIndexSettings::Kind::KdForest,
+    DescriptorIndexSettings::Kind::Autotuned,       DescriptorIndexSettings::Kind::Hnsw,
+    DescriptorIndexSettings::Kind::HnswBinary,
+    DescriptorIndexSettings::Kind::FaissHnsw,       DescriptorIndexSettings::Kind::FaissIvf,
+    DescriptorIndexSettings::Kind::FaissBinaryFlat, DescriptorIndexSettings::Kind::FaissBinaryHnsw};
+
+/// "brute-force", "kd-forest", "autotuned", "hnsw", "hnsw-binary", "faiss-hnsw", "faiss-ivf", "faiss-binary-flat"
+/// or "faiss-binary-hnsw" (the CLI and pack spelling).
 const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind);
 /// Inverse of descriptorIndexKindName. Error: InvalidArgument listing the valid names.
 Result<DescriptorIndexSettings::Kind> parseDescriptorIndexKind(std::string_view name);
@@ -68,14 +92,16 @@ class DescriptorIndex {
  public:
   /// Builds an index over `data`, a row-major rows × dims float32 matrix (entry i is row i).
   /// The data is copied. Errors (InvalidArgument): null data, rows < 1, dims < 1, rows·dims
-  /// overflow, rows > INT32_MAX for FLANN backends, a non-finite value (names row and column),
-  /// trees < 1, checks < 1, targetPrecision outside (0, 1], or a FLANN failure (message says so).
+  /// overflow, rows > INT32_MAX for FLANN and FAISS backends, a non-finite value (names row and
+  /// column), trees or checks outside the kind's range, targetPrecision outside (0, 1], a value
+  /// other than 0 or 1 for a binary kind, or a library failure (the message says which).
   static Result<DescriptorIndex> build(const float* data, int64_t rows, int64_t dims,
                                        const DescriptorIndexSettings& settings);
 
   /// The k nearest entries to `descriptor` (dims floats). Writes k ids and k squared L2
   /// distances, nearest first; equal distances are ordered by lower id. Errors (InvalidArgument):
-  /// null pointer, k < 1, k > size(), a non-finite query value (names the column).
+  /// null pointer, k < 1, k > size(), a non-finite query value (names the column), a value other
+  /// than 0 or 1 for a binary kind (HnswBinary and the FAISS binary kinds), fewer than k rows in the lists a FaissIvf query probes.
   [[nodiscard]] Status query(const float* descriptor, int k, int64_t* ids,
                              float* squaredDistances) const;
 
@@ -86,7 +112,8 @@ class DescriptorIndex {
   [[nodiscard]] Status queryBatch(const float* descriptors, int64_t count, int k, int64_t* ids,
                                   float* squaredDistances) const;
 
-  /// Bytes held: the descriptor copy plus FLANN's index structures (FLANN's own count).
+  /// Bytes held: the descriptor copy plus the backend's structures (FLANN's own count; the graph
+  /// links, lists and codes of hnswlib and FAISS).
   int64_t memoryBytes() const;
 
   int64_t size() const { return mRows; }
@@ -100,22 +127,16 @@ class DescriptorIndex {
   ~DescriptorIndex();
 
  private:
-  struct Flann;  // FLANN state, kept out of this header.
-  struct Hnsw;   // hnswlib state, likewise.
-
   DescriptorIndex() = default;
   Status validateQuery(const float* descriptor, int k, int64_t queryRow, bool batch) const;
   void queryBruteForce(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const;
-  Status queryFlann(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const;
-  Status queryHnsw(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const;
   Status queryBackend(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const;
 
   DescriptorIndexSettings mSettings;
   int64_t mRows = 0;
   int64_t mDims = 0;
   std::vector<float> mData;  ///< rows × dims row-major copy; FLANN points into it.
-  std::unique_ptr<Flann> mFlann;
-  std::unique_ptr<Hnsw> mHnsw;
+  std::unique_ptr<search::Backend> mBackend;  ///< null for BruteForce (IndexBackends.h)
 };
 
 }  // namespace brittle

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "brittle/database/DescriptorIndex.h"
+#include "brittle/database/MatchErrors.h"
 #include "brittle/database/Material.h"
 #include "brittle/database/ObjectAsset.h"
 #include "brittle/descriptors/DescriptorTypes.h"
@@ -47,6 +48,9 @@ struct FragmentDatabase {
   std::array<DescriptorMatrix, kDescriptorKindCount> descriptors;
   /// Per kind: how the runtime builds the search index at load.
   std::array<DescriptorIndexSettings, kDescriptorKindCount> indexSettings;
+  /// Per kind: the match error against the descriptor distance, calibrated when the database was
+  /// baked with physics (MatchErrors.h); empty without physics and in packs baked before it.
+  std::array<MatchErrorModel, kDescriptorKindCount> matchErrors;
 
   bool empty() const { return entries.empty(); }
   bool hasPhysics() const;  ///< every entry has a tet mesh and at least one mode

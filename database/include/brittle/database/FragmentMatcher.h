@@ -17,6 +17,7 @@
 
 #include "brittle/database/DescriptorIndex.h"
 #include "brittle/database/FragmentDatabase.h"
+#include "brittle/database/MatchErrors.h"
 #include "brittle/descriptors/CanonicalFrame.h"
 #include "brittle/core/Result.h"
 
@@ -27,6 +28,9 @@ struct FragmentMatch {
   float distance = 0.0f;       ///< Euclidean descriptor distance (not squared)
   int candidate = 0;           ///< which of the query's candidate frames matched
   CanonicalFrame queryFrame;   ///< query → canonical; its inverse places the entry on the query
+  /// The relative error of the entry's first three frequencies expected at this distance, from the
+  /// database's calibration (MatchErrors.h); NaN when the database has none.
+  MatchErrorPrediction predictedError;
 };
 
 struct FragmentMatcherSettings {

@@ -22,7 +22,10 @@ namespace brittle {
 inline constexpr const char* kPackFormatName = "brittle-pack";
 /// Version 2 added the fragment database (/database). Version 3 added each object's element order
 /// (element_order: 1 = P1, 2 = P2; ObjectAsset.h). The reader also reads versions 1 and 2: their
-/// objects are P1, and version 1 packs have no database.
+/// objects are P1, and version 1 packs have no database. The database's match-error models
+/// (/database/match_errors, MatchErrors.h) are an optional group (PACK_SCHEMA.md's policy: no new
+/// version): a pack without them reads with none, and its matches carry no predicted error until
+/// the database is baked again (brittle bake-db).
 inline constexpr int kPackVersion = 3;
 inline constexpr int kOldestReadablePackVersion = 1;
 

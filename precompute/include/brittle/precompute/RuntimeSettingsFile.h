@@ -7,6 +7,8 @@
 //     "exact_modes_max_tets": 150,       // the exact path's size limit (0: never)
 //     "exact_modes_max_dof": 2000,       // and its model's limit in degrees of freedom (0: none)
 //     "exact_mode_count": 20,
+//     "match_error_target": 0,           // a small fragment's match within this predicted error is
+//                                        // taken instead of the exact path (0: size alone decides)
 //     "modes": 0 }                       // modes per impact (0: all the pack stores)
 //
 // Every key is optional (a missing one keeps the value it replaces); unknown keys are refused, so

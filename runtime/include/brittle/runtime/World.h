@@ -114,6 +114,14 @@ struct FractureSettings {
   /// than their parent, so fewer of their modes fall in an impact's band; the static correction
   /// covers the rest. 40 modes cost ~1.5× what 20 do (chart 5).
   int exactModeCount = 20;
+  /// The scene's target for a match's error: the relative error of its first three frequencies,
+  /// as the database predicts it at the match's descriptor distance (its 90th percentile,
+  /// MatchErrors.h). 0: not used; fragments take the exact path by size alone. Above 0: a fragment
+  /// small enough for the exact path takes its database match instead when the match is predicted
+  /// within the target (a match costs ~1 ms, the exact path ~13 ms); a larger fragment still takes
+  /// its match, and its reason says when the prediction is over the target. A database without a
+  /// calibration (packs before version 4) predicts nothing, and fragments go by size.
+  double matchErrorTarget = 0.0;
   DescriptorKind descriptor = DescriptorKind::Moment;
 };
 
@@ -217,8 +225,9 @@ struct FragmentResult {
   /// (an exact-path fragment whose analysis fails takes its database match instead, if any).
   ObjectId object;
   FragmentPath path = FragmentPath::SurfaceOnly;
-  /// Why a fragment is SurfaceOnly (matching off, no database, the match or the entry failed), or
-  /// why the exact path fell back to the match; empty otherwise.
+  /// Why a fragment is SurfaceOnly (matching off, no database, the match or the entry failed), why
+  /// the exact path fell back to the match, or, with FractureSettings::matchErrorTarget, why a
+  /// fragment's match was predicted over the target; empty otherwise.
   std::string reason;
   bool debris = false;
   TriangleMesh surface;         ///< closed, outward; the broken object's local frame (m)
@@ -226,6 +235,10 @@ struct FragmentResult {
   int64_t matchedEntry = -1;    ///< database entry, −1 if none
   bool exactModes = false;      ///< object built by the exact path (its own modal analysis), not matched
   double matchDistance = 0.0;
+  /// The match's predicted frequency error (median and 90th percentile, MatchErrors.h) when the
+  /// fragment was matched or its match was weighed against the exact path; NaN otherwise.
+  double predictedMatchError = std::numeric_limits<double>::quiet_NaN();
+  double predictedMatchErrorP90 = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct StageTimes {

@@ -1,0 +1,49 @@
+// IndexBackends.h — the approximate and library backends behind DescriptorIndex (private).
+//
+// DescriptorIndex validates the data, the settings it shares between backends and every query,
+// keeps the row-major float copy of the data and runs brute force itself. Everything else is a
+// Backend: FLANN (FlannBackend.cpp), hnswlib (HnswBackend.cpp) and FAISS (FaissBackend.cpp). A
+// backend answers the k nearest rows of one query, nearest first, ties by lower id, with squared L2
+// distances, and never runs threads of its own (queries are called from the World's workers).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "brittle/core/Result.h"
+#include "brittle/database/DescriptorIndex.h"
+
+namespace brittle::search {
+
+class Backend {
+ public:
+  virtual ~Backend() = default;
+  /// Checks what the backend needs of one query beyond finite values (binary codes need 0 or 1).
+  virtual Status validateQuery(const float* /*descriptor*/, int64_t /*dims*/) const { return Ok{}; }
+  virtual Status query(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const = 0;
+  /// Bytes held beyond DescriptorIndex's own copy of the data.
+  virtual int64_t memoryBytes() const = 0;
+};
+
+/// `data` is DescriptorIndex's copy (rows × dims, finite, validated); it stays at this address for
+/// the backend's lifetime. Errors: InvalidArgument for settings the backend cannot take or a
+/// failure inside the library (the message says which).
+Result<std::unique_ptr<Backend>> buildFlann(const float* data, int64_t rows, int64_t dims,
+                                            const DescriptorIndexSettings& settings);
+Result<std::unique_ptr<Backend>> buildHnsw(const float* data, int64_t rows, int64_t dims,
+                                           const DescriptorIndexSettings& settings);
+Result<std::unique_ptr<Backend>> buildFaiss(const float* data, int64_t rows, int64_t dims,
+                                            const DescriptorIndexSettings& settings);
+
+/// Orders the k results by (distance, id), whatever order a backend found them in.
+void sortByDistanceThenId(int k, int64_t* ids, float* distances);
+
+// Binary codes of 0/1 descriptors (the occupancy voxel kind): one bit per value, least significant
+// first, each row padded with zero bits to a whole number of `wordBytes`. Their Hamming distance is
+// exactly the squared L2 distance of the 0/1 vectors.
+/// Every value 0 or 1, else InvalidArgument naming the first other one (its row, for data).
+Status checkZeroOne(const float* values, int64_t rows, int64_t dims, bool isQuery);
+int64_t codeBytes(int64_t dims, int64_t wordBytes);
+void packBits(const float* values, int64_t rows, int64_t dims, int64_t wordBytes, uint8_t* codes);
+
+}  // namespace brittle::search
