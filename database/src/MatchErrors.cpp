@@ -49,8 +49,17 @@ Result<MatchErrorModel> calibrateMatchErrors(const FragmentDatabase& database, D
     pairs.emplace_back(std::sqrt(static_cast<double>(std::max(squared[slot], 0.0f))), error);
   }
   if (pairs.size() < 2) return invalidArgument("match errors: fewer than two entries with three modes");
-  std::sort(pairs.begin(), pairs.end());
+  return fitMatchErrors(std::move(pairs), settings);
+}
 
+Result<MatchErrorModel> fitMatchErrors(std::vector<std::pair<double, double>> pairs, const MatchErrorSettings& settings) {
+  if (settings.bins < 1) return invalidArgument("match errors: bins must be >= 1");
+  if (pairs.empty()) return invalidArgument("match errors: no samples");
+  for (const auto& [distance, error] : pairs) {
+    if (!(std::isfinite(distance) && distance >= 0.0 && std::isfinite(error) && error >= 0.0))
+      return invalidArgument("match errors: a sample's distance or error is negative or not finite");
+  }
+  std::sort(pairs.begin(), pairs.end());
   MatchErrorModel model;
   model.samples = static_cast<int64_t>(pairs.size());
   const auto bins = static_cast<size_t>(std::clamp<int64_t>(model.samples / 4, 1, settings.bins));

@@ -168,6 +168,7 @@ Result<SearchSizing> chooseSearch(const FragmentDatabase& database, const std::v
         if (!placed || placed.value().modal.frequenciesHz.size() < 3) continue;
         const Eigen::Vector3d hz = placed.value().modal.frequenciesHz.head<3>();
         errors.push_back(((hz - fragments[i].frequenciesHz).array().abs() / fragments[i].frequenciesHz.array()).maxCoeff());
+        t.distanceErrors.emplace_back(m.value().front().distance, errors.back());
         ++t.matched;
       }
       t.medianFrequencyError = median(errors);
@@ -189,6 +190,7 @@ Result<SearchSizing> chooseSearch(const FragmentDatabase& database, const std::v
   out.checks = best->checks;
   out.medianFrequencyError = best->medianFrequencyError;
   out.medianMatchMs = best->medianMatchMs;
+  out.distanceErrors = best->distanceErrors;
   return out;
 }
 

@@ -25,7 +25,9 @@ using detail::kInf;
 using detail::unit;
 using detail::median;
 
-/// A uniform double in [0, 1) from 53 bits of the generator (the same on every platform).
+/// The fewest fragments a scene's own match-error model is fitted to (two per bin of four bins);
+/// with fewer, the sized pack keeps the database's leave-one-out model.
+constexpr size_t kSceneMatchErrorSamples = 8;
 
 }  // namespace
 
@@ -384,8 +386,15 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
       if (!search) return search.error();
       sizedDb->indexSettings[static_cast<size_t>(search.value().kind)] = search.value().indexSettings();
       report.search = std::move(search).value();
-      // The calibration searched with the bake's index; the sized pack's matches use this one.
+      // The calibration searched with the bake's index; the sized pack's matches use this one. The
+      // chosen kind's model is then fitted to the scene's own fragments where there are enough
+      // (queries of the runtime's kind; MatchErrors.h).
       if (Status st = calibrateDatabaseMatchErrors(*sizedDb); !st) return st.error();
+      if (report.search->distanceErrors.size() >= kSceneMatchErrorSamples) {
+        auto fitted = fitMatchErrors(report.search->distanceErrors);
+        if (!fitted) return fitted.error();
+        sizedDb->matchErrors[static_cast<size_t>(report.search->kind)] = std::move(fitted).value();
+      }
     }
   }
   report.fragmentSizingS = secondsSince(fragmentStart);

@@ -77,6 +77,22 @@ TEST(MatchErrors, LeaveOneOutOnPairsGivesTheDesignedErrorsPerBin) {
   EXPECT_TRUE(std::isnan(predictMatchError(MatchErrorModel{}, 0.1).median));
 }
 
+// A scene's own (distance, error) pairs: 12 samples make 3 bins of 4, in distance order.
+TEST(MatchErrors, FitsAScenesOwnSamples) {
+  std::vector<std::pair<double, double>> samples;
+  for (int i = 11; i >= 0; --i) samples.emplace_back(0.1 * i, 0.01 * (i % 4) + 0.1 * (i / 4));
+  auto model = fitMatchErrors(samples);
+  ASSERT_TRUE(model) << model.error().message;
+  ASSERT_EQ(model.value().distance.size(), 3u);
+  EXPECT_EQ(model.value().samples, 12);
+  EXPECT_DOUBLE_EQ(model.value().distance[1], 0.7);
+  EXPECT_DOUBLE_EQ(model.value().medianError[1], 0.115);  // bin 1's errors 0.10, 0.11, 0.12, 0.13
+  EXPECT_TRUE(validateMatchErrorModel(model.value()));
+  samples.emplace_back(-0.1, 0.2);
+  EXPECT_EQ(fitMatchErrors(samples).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(fitMatchErrors({}).error().code, ErrorCode::InvalidArgument);
+}
+
 TEST(MatchErrors, TheMatcherPredictsFromTheDatabasesModel) {
   FragmentDatabase db = pairedDatabase();
   ASSERT_TRUE(calibrateDatabaseMatchErrors(db));

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -235,7 +236,19 @@ TEST_F(ModelSizingTest, FragmentsGiveTheDebrisThresholdAndTheSearch) {
   for (const SearchTrial& t : loose.value().trials) {
     EXPECT_GT(t.matched, 0);
     EXPECT_GE(t.medianMatchMs, loose.value().medianMatchMs);
+    // One (distance, error) pair per matched fragment, the error that the trial's median is of.
+    ASSERT_EQ(t.distanceErrors.size(), static_cast<size_t>(t.matched));
+    std::vector<double> errors;
+    for (const auto& [distance, error] : t.distanceErrors) errors.push_back(error);
+    std::sort(errors.begin(), errors.end());
+    const size_t n = errors.size();
+    EXPECT_DOUBLE_EQ(t.medianFrequencyError, n % 2 ? errors[n / 2] : 0.5 * (errors[n / 2 - 1] + errors[n / 2]));
   }
+  // What the sized pack's model of the chosen kind is fitted to: the chosen trial's pairs.
+  const SearchTrial& chosen = *std::find_if(loose.value().trials.begin(), loose.value().trials.end(), [&](const SearchTrial& t) {
+    return t.kind == loose.value().kind && t.checks == loose.value().checks;
+  });
+  EXPECT_EQ(loose.value().distanceErrors, chosen.distanceErrors);
   auto strict = chooseSearch(database.value(), fragments.value(), {glass}, 1e-9, s);
   ASSERT_TRUE(strict);
   EXPECT_FALSE(strict.value().targetMet);

@@ -59,7 +59,9 @@ nlohmann::json reportJson(const SceneSizingReport& r) {
     }
     search = {{"descriptor", descriptorKindName(r.search->kind)}, {"checks", r.search->checks},
               {"target_met", r.search->targetMet}, {"median_frequency_error", r.search->medianFrequencyError},
-              {"median_match_ms", r.search->medianMatchMs}, {"fragments", r.search->fragments}, {"trials", trials}};
+              {"median_match_ms", r.search->medianMatchMs}, {"fragments", r.search->fragments}, {"trials", trials},
+              // The sized pack's model of the chosen kind is fitted to these when there are ≥ 8 (MatchErrors.h).
+              {"match_error_samples", r.search->distanceErrors.size()}};
   }
   return {{"target_peak_stress_error", r.targetError},
           {"target_frequency_error", r.frequencyTargetError},

@@ -11,6 +11,11 @@
 // Both error curves are made non-decreasing in the distance (a running maximum): a farther match
 // is never predicted to be better than a nearer one.
 //
+// A scene's calibration. `brittle size` breaks the scene's own objects over its impact range and
+// matches each fragment against the database, the fragment's own modes being the truth: those
+// (distance, error) pairs are queries of the runtime's kind, and the sized pack stores the model
+// fitted to them (fitMatchErrors) for the descriptor kind it chose, in place of the leave-one-out one.
+//
 // Prediction. A match at distance d takes the first bin whose upper distance is ≥ d; beyond the
 // last bin, the last bin's errors (an extrapolation, flagged by MatchErrorPrediction::beyondRange).
 //
@@ -22,6 +27,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "brittle/core/Result.h"
@@ -54,6 +60,12 @@ struct MatchErrorSettings {
 /// entries, bins < 1), those of DescriptorIndex::build.
 Result<MatchErrorModel> calibrateMatchErrors(const FragmentDatabase& database, DescriptorKind kind,
                                              const MatchErrorSettings& settings = {});
+
+/// The binned model of (descriptor distance, relative error) samples, as above: the leave-one-out
+/// calibration's, or a scene's own fragments matched against the database (`brittle size`).
+/// Errors: InvalidArgument (no samples, a negative or non-finite one, bins < 1).
+Result<MatchErrorModel> fitMatchErrors(std::vector<std::pair<double, double>> samples,
+                                       const MatchErrorSettings& settings = {});
 
 /// Calibrates every kind that has descriptors into database.matchErrors when the database has
 /// physics and at least two entries; otherwise clears them. Errors: those of calibrateMatchErrors.

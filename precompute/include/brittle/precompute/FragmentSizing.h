@@ -60,6 +60,9 @@ struct SearchTrial {
   int matched = 0;                    ///< fragments matched (a frame can be undefined)
   double medianFrequencyError = std::numeric_limits<double>::quiet_NaN();
   double medianMatchMs = 0.0;
+  /// Per matched fragment: the match's descriptor distance and its error against the fragment's
+  /// own first three frequencies (what MatchErrors.h's models are fitted to).
+  std::vector<std::pair<double, double>> distanceErrors;
 };
 
 struct SearchSizing {
@@ -70,6 +73,7 @@ struct SearchSizing {
   double medianMatchMs = 0.0;
   int fragments = 0;
   std::vector<SearchTrial> trials;
+  std::vector<std::pair<double, double>> distanceErrors;  ///< the chosen trial's
   /// The index settings the sized pack stores for the chosen kind.
   DescriptorIndexSettings indexSettings() const;
 };
