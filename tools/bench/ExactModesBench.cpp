@@ -100,7 +100,7 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
       return makeError(ErrorCode::InvalidArgument, "bench exact-modes: no object '" + name + "' in the pack");
     }
   FragmentMatcherSettings ms;
-  for (DescriptorKind k : kAllDescriptorKinds) ms.enabled[static_cast<size_t>(k)] = k == DescriptorKind::Moment;
+  for (DescriptorKind k : kAllDescriptorKinds) ms.enabled[static_cast<size_t>(k)] = k == s.descriptor;
   auto matcher = FragmentMatcher::build(p.database, ms);
   if (!matcher) return matcher.error();
 
@@ -151,7 +151,7 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
           double distance = std::numeric_limits<double>::quiet_NaN();
           MatchErrorPrediction predicted;
           const double matchS = medianSeconds(s.repeats, [&] {
-            auto m = matcher.value().match(fr.surface, DescriptorKind::Moment, 1);
+            auto m = matcher.value().match(fr.surface, s.descriptor, 1);
             if (!m) return;
             distance = m.value().front().distance;
             predicted = m.value().front().predictedError;

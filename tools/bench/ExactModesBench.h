@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "brittle/core/Result.h"
+#include "brittle/descriptors/ShapeDescriptors.h"
 
 namespace brittle::bench {
 
@@ -38,6 +39,7 @@ struct ExactModesBenchSettings {
   int64_t referenceMaxTets = 20000;              ///< no reference above this size of the exact mesh (×8 refined)
   int exactModes = 20;                           ///< modes of the exact path (FractureSettings::exactModeCount)
   int repeats = 3;                               ///< timings: the median of this many runs
+  DescriptorKind descriptor = DescriptorKind::Moment;  ///< the kind fragments are matched with
   std::filesystem::path csv = "docs/results/data/exact_modes.csv";
   bool quiet = false;
 };

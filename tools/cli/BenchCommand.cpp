@@ -170,6 +170,10 @@ Runner addBenchCommand(CLI::App& app) {
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   exact->add_option("--exact-modes", xb->exactModes, "Modes of the exact path")->capture_default_str()->check(CLI::Range(1, 500));
   exact->add_option("--repeats", xb->repeats, "Timing repeats (median)")->capture_default_str()->check(CLI::Range(1, 100));
+  auto exactDescriptor = std::make_shared<std::string>("moment");
+  exact->add_option("--descriptor", *exactDescriptor, "Descriptor kind the fragments are matched with")
+      ->check(CLI::IsMember({"moment", "voxel", "voxel-improved"}))->capture_default_str();
+  exact->callback([xb, exactDescriptor] { xb->descriptor = parseDescriptorKind(*exactDescriptor).value(); });
   exact->add_option("--csv", xb->csv, "Output CSV")->capture_default_str();
   exact->add_flag("--quiet", xb->quiet, "No progress lines");
   return [s, shapes, kinds, indices, impact, is, place, pb, integrators, ib, modes, mb, resolution, rb, elements, eb, fracture,

@@ -8,7 +8,7 @@ and prints the figures docs/results/ quotes, with the largest size bin whose med
 stays within the budget (--budget-ms, default 20 ms).
 
 When the CSV has the match's predicted error (packs from version 4: the database's leave-one-out
-calibration, MatchErrors.h), it also writes match_error_calibration.png: the predicted median and
+calibration, MatchErrors.h), it also writes <csv name>_calibration.png: the predicted median and
 90th percentile against the measured error of each match, and prints how well they are calibrated
 (the share of measured errors within each: 0.5 and 0.9 if calibrated) and the rank correlation of
 predicted and measured errors."""
@@ -101,7 +101,7 @@ def main():
     print(f"exact time ~ tets^{fit[0]:.2f}; the fit crosses {args.budget_ms:g} ms at {crossing:.0f} tets "
           f"(largest fragment within the budget: {max(within) if within else 0} tets)")
     if "predicted_err_p90" in rows[0]:
-        calibration(rows, Path(args.csv).parent / "match_error_calibration.png")
+        calibration(rows, Path(args.csv).with_name(Path(args.csv).stem + "_calibration.png"))
 
 
 def ranks(values):
