@@ -16,7 +16,7 @@ case $seconds in '' | *[!0-9]*) echo "usage: tools/run-fuzzers.sh [SECONDS_PER_T
 # llvm-symbolizer (llvm-14), which turns the sanitizers' stacks into file and line.
 PACKAGES=(cmake make clang-14 libclang-rt-14-dev llvm-14
   libeigen3-dev libtbb-dev libcgal-dev libopenvdb-dev libboost-iostreams-dev libhdf5-dev
-  nlohmann-json3-dev libflann-dev libhnswlib-dev)
+  nlohmann-json3-dev libflann-dev libhnswlib-dev libfaiss-dev libblas-dev liblapack-dev)
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 missing=()

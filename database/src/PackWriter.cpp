@@ -454,13 +454,13 @@ void writeDatabase(FileWriter& w, const FragmentDatabase& db) {
     for (DescriptorKind kind : kAllDescriptorKinds) {
       const MatchErrorModel& m = db.matchErrors[static_cast<size_t>(kind)];
       if (m.empty()) continue;
-      const std::string group = std::string("/database/match_errors/") + descriptorKindName(kind);
-      Handle g = w.createGroup(group);
+      const std::string kindPath = std::string("/database/match_errors/") + descriptorKindName(kind);
+      Handle kindGroup = w.createGroup(kindPath);
       const hsize_t bins = m.distance.size();
-      w.f64(group + "/distance", m.distance, {bins}, "1");
-      w.f64(group + "/median_error", m.medianError, {bins}, "1");
-      w.f64(group + "/p90_error", m.p90Error, {bins}, "1");
-      w.i64(group + "/samples", {m.samples}, {1});
+      w.f64(kindPath + "/distance", m.distance, {bins}, "1");
+      w.f64(kindPath + "/median_error", m.medianError, {bins}, "1");
+      w.f64(kindPath + "/p90_error", m.p90Error, {bins}, "1");
+      w.i64(kindPath + "/samples", {m.samples}, {1});
     }
   }
 }

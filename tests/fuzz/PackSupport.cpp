@@ -111,6 +111,12 @@ Pack makeSeedPack() {
   for (DescriptorKind kind : kAllDescriptorKinds) {
     db.descriptors[static_cast<size_t>(kind)] = DescriptorMatrix::Constant(2, descriptorSize(kind, db.descriptorSettings), 0.5f);
   }
+  // A match-error model (MatchErrors.h) for one kind, so the fuzzers reach its reader.
+  MatchErrorModel& errors = db.matchErrors[static_cast<size_t>(DescriptorKind::Moment)];
+  errors.distance = {0.1, 0.5};
+  errors.medianError = {0.05, 0.1};
+  errors.p90Error = {0.1, 0.3};
+  errors.samples = 4;
   return pack;
 }
 
