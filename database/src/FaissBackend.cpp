@@ -196,8 +196,7 @@ Result<std::unique_ptr<Backend>> buildFaiss(const float* data, int64_t rows, int
     return invalidArgument("DescriptorIndex: FAISS backends need rows and dims <= INT32_MAX");
   try {
     OneOpenMpThread one;
-    const bool binary = settings.kind == Kind::FaissBinaryFlat || settings.kind == Kind::FaissBinaryHnsw;
-    return binary ? buildBinary(data, rows, dims, settings) : buildFloat(data, rows, dims, settings);
+    return indexTakesBits(settings.kind) ? buildBinary(data, rows, dims, settings) : buildFloat(data, rows, dims, settings);
   } catch (const std::exception& e) {
     return invalidArgument(std::string("DescriptorIndex: ") + descriptorIndexKindName(settings.kind) +
                            " build failed: " + e.what());

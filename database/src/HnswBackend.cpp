@@ -154,7 +154,7 @@ Result<std::unique_ptr<Backend>> buildHnsw(const float* data, int64_t rows, int6
   if (rows > static_cast<int64_t>(std::numeric_limits<uint32_t>::max()))
     return invalidArgument("DescriptorIndex: HNSW needs rows <= UINT32_MAX");
   try {
-    if (settings.kind == DescriptorIndexSettings::Kind::HnswBinary) {
+    if (indexTakesBits(settings.kind)) {
       if (Status st = checkZeroOne(data, rows, dims, false); !st) return st.error();
       return std::unique_ptr<Backend>(std::make_unique<HnswBackend<HammingSpace, true>>(data, rows, dims, settings));
     }

@@ -23,6 +23,11 @@ double quantileOfSorted(const std::vector<double>& sorted, double q) {
 
 }  // namespace
 
+double matchFrequencyError(const Eigen::VectorXd& matchedHz, const Eigen::VectorXd& truthHz) {
+  if (matchedHz.size() < 3 || truthHz.size() < 3) return std::numeric_limits<double>::quiet_NaN();
+  return ((matchedHz.head<3>() - truthHz.head<3>()).array().abs() / truthHz.head<3>().array().abs()).maxCoeff();
+}
+
 Result<MatchErrorModel> calibrateMatchErrors(const FragmentDatabase& database, DescriptorKind kind,
                                              const MatchErrorSettings& settings) {
   const DescriptorMatrix& rows = database.descriptorsOf(kind);
@@ -39,13 +44,12 @@ Result<MatchErrorModel> calibrateMatchErrors(const FragmentDatabase& database, D
   float squared[2];
   for (int64_t i = 0; i < count; ++i) {
     const Eigen::VectorXd& own = database.entries[static_cast<size_t>(i)].asset.modal.frequenciesHz;
-    if (own.size() < 3) continue;
+    if (own.size() < 3) continue;  // before the search: an entry without three modes is no query
     if (Status st = index.value().query(rows.data() + i * rows.cols(), 2, ids, squared); !st) return st.error();
     // The nearest other entry: a duplicate of entry i may come first, so take whichever is not i.
     const int slot = ids[0] == i ? 1 : 0;
-    const Eigen::VectorXd& other = database.entries[static_cast<size_t>(ids[slot])].asset.modal.frequenciesHz;
-    if (other.size() < 3) continue;
-    const double error = ((other.head<3>() - own.head<3>()).array().abs() / own.head<3>().array()).maxCoeff();
+    const double error = matchFrequencyError(database.entries[static_cast<size_t>(ids[slot])].asset.modal.frequenciesHz, own);
+    if (std::isnan(error)) continue;
     pairs.emplace_back(std::sqrt(static_cast<double>(std::max(squared[slot], 0.0f))), error);
   }
   if (pairs.size() < 2) return invalidArgument("match errors: fewer than two entries with three modes");

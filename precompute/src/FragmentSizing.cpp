@@ -166,8 +166,7 @@ Result<SearchSizing> chooseSearch(const FragmentDatabase& database, const std::v
                                        database.referenceMaterial, *material[i], m.value().front().queryFrame);
         times.push_back(1e3 * secondsSince(start));
         if (!placed || placed.value().modal.frequenciesHz.size() < 3) continue;
-        const Eigen::Vector3d hz = placed.value().modal.frequenciesHz.head<3>();
-        errors.push_back(((hz - fragments[i].frequenciesHz).array().abs() / fragments[i].frequenciesHz.array()).maxCoeff());
+        errors.push_back(matchFrequencyError(placed.value().modal.frequenciesHz, fragments[i].frequenciesHz));
         t.distanceErrors.emplace_back(m.value().front().distance, errors.back());
         ++t.matched;
       }

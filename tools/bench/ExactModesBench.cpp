@@ -19,12 +19,6 @@
 namespace brittle::bench {
 namespace {
 
-
-double maxRelative3(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-  if (a.size() < 3 || b.size() < 3) return std::numeric_limits<double>::quiet_NaN();
-  return maxRelative(a.head<3>(), b.head<3>());
-}
-
 // A steel ball on the centroid of a boundary face drawn by the seed, along the face's normal.
 ImpactDesc impactFor(const ObjectAsset& a, ObjectId id, uint64_t seed, double speed) {
   std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 11);
@@ -189,8 +183,8 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
               << (sub ? sub.value().wholeTets + sub.value().splitTets : 0) << "," << (sub ? sub.value().mesh.tets.rows() : 0) << ","
               << (sub ? sub.value().droppedVolumeM3 / asset.massProperties.volumeM3 : nan) << ","
               << (exact ? exact.value().modal.modes.cols() : 0) << "," << matchS << "," << (exact ? exactS : nan) << ","
-              << referenceS << "," << distance << "," << (reference && matched ? maxRelative3(matchHz, refHz) : nan) << ","
-              << (reference && exact ? maxRelative3(exactHz, refHz) : nan) << "," << (reference ? refHz[0] : nan) << ","
+              << referenceS << "," << distance << "," << (reference && matched ? matchFrequencyError(matchHz, refHz) : nan) << ","
+              << (reference && exact ? matchFrequencyError(exactHz, refHz) : nan) << "," << (reference ? refHz[0] : nan) << ","
               << (exact ? exactHz[0] : nan) << "," << (matched ? matchHz[0] : nan) << "," << predicted.median << ","
               << predicted.p90 << "," << (predicted.beyondRange ? 1 : 0) << "\n";
           if (!s.quiet) {

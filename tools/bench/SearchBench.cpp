@@ -90,11 +90,6 @@ Result<IndexChoice> parseIndexChoice(const std::string& text) {
   return c;
 }
 
-bool isBinaryIndex(DescriptorIndexSettings::Kind kind) {
-  return kind == DescriptorIndexSettings::Kind::HnswBinary || kind == DescriptorIndexSettings::Kind::FaissBinaryFlat ||
-         kind == DescriptorIndexSettings::Kind::FaissBinaryHnsw;
-}
-
 Status runSearchBench(const SearchBenchSettings& s) {
   if (s.sizes.empty() || s.kinds.empty() || s.shapes.empty() || s.queries < 1) {
     return makeError(ErrorCode::InvalidArgument, "bench search needs sizes, kinds, shapes and queries");
@@ -267,7 +262,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
       std::vector<float> exactDistance;
       double bruteMedian = 0.0;
       for (const IndexChoice& choice : choices) {
-        if (isBinaryIndex(choice.settings.kind) && kind != DescriptorKind::Voxel) continue;  // 0/1 codes only
+        if (indexTakesBits(choice.settings.kind) && kind != DescriptorKind::Voxel) continue;  // 0/1 codes only
         FragmentMatcherSettings ms;
         ms.enabled = {false, false, false};
         ms.enabled[static_cast<size_t>(kind)] = true;

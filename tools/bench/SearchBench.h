@@ -31,8 +31,6 @@ struct IndexChoice {
 /// "kd-forest:TREES:CHECKS", "hnsw:M:EF", "hnsw-binary:M:EF", "faiss-hnsw:M:EF", "faiss-ivf:LISTS:PROBES",
 /// "faiss-binary-hnsw:M:EF", "autotuned:PRECISION", "brute-force" or "faiss-binary-flat".
 Result<IndexChoice> parseIndexChoice(const std::string& text);
-/// The binary kinds (hnsw-binary and FAISS's) take 0/1 descriptors: the benchmark runs them on the voxel kind only.
-bool isBinaryIndex(DescriptorIndexSettings::Kind kind);
 
 struct SearchBenchSettings {
   std::vector<BaseShapeDefinition> shapes;

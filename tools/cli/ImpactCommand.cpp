@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "../bench/BenchSupport.h"
@@ -223,9 +224,11 @@ Runner addImpactCommand(CLI::App& app) {
                      {"area_m2", r.fracture.crackAreaM2}, {"energy_budget_j", r.fracture.energyBudgetJ},
                      {"energy_spent_j", r.fracture.energySpentJ}, {"arrested_by_energy", r.fracture.arrestedByEnergy}};
     doc["fragments"] = nlohmann::json::array();
-    nlohmann::json paths = {{"debris", 0}, {"exact_modes", 0}, {"matched", 0}, {"surface_only", 0}};
+    std::map<std::string, int> paths;
+    for (FragmentPath p : {FragmentPath::Debris, FragmentPath::ExactModes, FragmentPath::Matched, FragmentPath::SurfaceOnly})
+      paths[std::string(fragmentPathName(p))] = 0;
     for (const FragmentResult& f : r.fragments) {
-      paths[std::string(fragmentPathName(f.path))] = paths[std::string(fragmentPathName(f.path))].get<int>() + 1;
+      ++paths[std::string(fragmentPathName(f.path))];
       auto orNull = [](double x) { return std::isnan(x) ? nlohmann::json() : nlohmann::json(x); };
       doc["fragments"].push_back({{"volume_m3", f.massProperties.volumeM3}, {"mass_kg", f.massProperties.massKg},
                                   {"center_of_mass_m", vec(f.massProperties.centerOfMassM)},

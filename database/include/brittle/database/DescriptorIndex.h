@@ -82,6 +82,12 @@ inline constexpr DescriptorIndexSettings::Kind kAllDescriptorIndexKinds[] = {
     DescriptorIndexSettings::Kind::FaissHnsw,       DescriptorIndexSettings::Kind::FaissIvf,
     DescriptorIndexSettings::Kind::FaissBinaryFlat, DescriptorIndexSettings::Kind::FaissBinaryHnsw};
 
+/// The kinds that index 0/1 descriptors as bits (HnswBinary and the FAISS binary kinds).
+constexpr bool indexTakesBits(DescriptorIndexSettings::Kind kind) {
+  return kind == DescriptorIndexSettings::Kind::HnswBinary || kind == DescriptorIndexSettings::Kind::FaissBinaryFlat ||
+         kind == DescriptorIndexSettings::Kind::FaissBinaryHnsw;
+}
+
 /// "brute-force", "kd-forest", "autotuned", "hnsw", "hnsw-binary", "faiss-hnsw", "faiss-ivf", "faiss-binary-flat"
 /// or "faiss-binary-hnsw" (the CLI and pack spelling).
 const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind);

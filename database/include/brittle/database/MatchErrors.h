@@ -30,6 +30,8 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "brittle/core/Result.h"
 #include "brittle/descriptors/ShapeDescriptors.h"
 
@@ -54,6 +56,11 @@ struct MatchErrorPrediction {
 struct MatchErrorSettings {
   int bins = 8;  ///< at most; fewer when there are fewer than 4 samples a bin
 };
+
+/// The error of a match: the largest relative error of the first three frequencies of `matchedHz`
+/// against `truthHz` (the measure the models, `brittle size` and `bench exact-modes` share). NaN
+/// when either has fewer than three.
+double matchFrequencyError(const Eigen::VectorXd& matchedHz, const Eigen::VectorXd& truthHz);
 
 /// Leave-one-out calibration of `kind` over `database` (see above). Entries without three modes
 /// are skipped. Errors: InvalidArgument (no physics, the kind has no descriptors, fewer than two
