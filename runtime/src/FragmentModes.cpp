@@ -86,6 +86,42 @@ std::vector<int64_t> fragmentTetCounts(const TetMesh& parent, const Eigen::Vecto
   return counts;
 }
 
+int64_t fragmentCutDof(const TetMesh& parent, const TetTopology& topology, const Eigen::VectorXi& nodeLabels, int label,
+                       ElementOrder order) {
+  const Eigen::Index n = parent.nodes.rows(), t = parent.tets.rows();
+  if (nodeLabels.size() != n || topology.tetEdges.rows() != t || topology.neighbours.rows() != t) return 0;
+  auto mine = [&](int32_t v) { return v >= 0 && v < n && nodeLabels[v] == label; };
+  // Points: the label's nodes, a crack point per edge with one end in it (every such edge lies in a
+  // crossed tet of the label, whose faces through that end use the point).
+  int64_t points = 0, edges = 0;
+  for (Eigen::Index v = 0; v < n; ++v) points += nodeLabels[v] == label ? 1 : 0;
+  for (Eigen::Index e = 0; e < topology.edges.rows(); ++e) {
+    const int ends = (mine(topology.edges(e, 0)) ? 1 : 0) + (mine(topology.edges(e, 1)) ? 1 : 0);
+    if (ends == 1) ++points, ++edges;  // the crack point, and its segment to the label's end
+    if (ends == 2) ++edges;            // kept as it is
+  }
+  // Per crossed tet with c of its corners in the label: the tet point, joined to the c corners, the
+  // c(4 − c) crack points and the points of the faces that are crossed (3, 4, 3 of them for c = 1,
+  // 2, 3). Per crossed face with m corners in the label (counted once, from the lower tet or on the
+  // boundary): its face point, joined to the m corners and the two crack points around them.
+  static constexpr std::array<int, 4> kCrossedFaces = {0, 3, 4, 3};
+  for (Eigen::Index e = 0; e < t; ++e) {
+    int c = 0;
+    for (int k = 0; k < 4; ++k) c += mine(parent.tets(e, k)) ? 1 : 0;
+    if (c == 0 || c == 4) continue;
+    points += 1;
+    edges += c + c * (4 - c) + kCrossedFaces[static_cast<size_t>(c)];
+    for (int f = 0; f < 4; ++f) {
+      const int m = c - (mine(parent.tets(e, f)) ? 1 : 0);  // face f is opposite corner f
+      const int32_t across = topology.neighbours(e, f);
+      if (m == 0 || m == 3 || (across >= 0 && across < e)) continue;
+      points += 1;
+      edges += m + 2;
+    }
+  }
+  return 3 * (order == ElementOrder::P2 ? points + edges : points);
+}
+
 Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology& topology,
                                         const Eigen::VectorXi& nodeLabels, const Eigen::VectorXd& edgeCuts, int label) {
   const Eigen::Index n = parent.nodes.rows(), t = parent.tets.rows();

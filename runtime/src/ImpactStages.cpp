@@ -260,17 +260,21 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const doub
 // the analysis fail, the object takes the fragment's database match when there is a database.
 std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::shared_ptr<const BrokenParent>& parent,
                                               const FragmentResult& fr, size_t i, std::string& reason) {
+  const FractureSettings& fs = *job.settings;
+  const ElementOrder order = parent->body->asset.elementOrder;
+  // The size before the cut: the sub-mesh below has exactly this many degrees of freedom, or fewer
+  // where a part of it is dropped (fragmentCutDof).
+  if (const int64_t dof = fragmentCutDof(parent->body->asset.tetMesh, parent->body->topology, parent->nodeLabels,
+                                         static_cast<int>(i), order);
+      fs.exactModesMaxDof > 0 && dof > fs.exactModesMaxDof) {
+    reason = "exact path: its " + std::string(elementOrderName(order)) + " model has " + std::to_string(dof) +
+             " degrees of freedom, over exactModesMaxDof = " + std::to_string(fs.exactModesMaxDof);
+    return nullptr;
+  }
   auto sub = fragmentSubMesh(parent->body->asset.tetMesh, parent->body->topology, parent->nodeLabels, parent->edgeCuts,
                              static_cast<int>(i));
   if (!sub) {
     reason = "exact path: " + sub.error().message;
-    return nullptr;
-  }
-  const FractureSettings& fs = *job.settings;
-  const ElementOrder order = parent->body->asset.elementOrder;
-  if (const Eigen::Index dof = 3 * femNodeCount(sub.value().mesh, order); fs.exactModesMaxDof > 0 && dof > fs.exactModesMaxDof) {
-    reason = "exact path: its " + std::string(elementOrderName(order)) + " model has " + std::to_string(dof) +
-             " degrees of freedom, over exactModesMaxDof = " + std::to_string(fs.exactModesMaxDof);
     return nullptr;
   }
   ExactModesSettings es;

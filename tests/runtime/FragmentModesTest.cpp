@@ -129,6 +129,54 @@ TEST(FragmentModes, SubMeshesHoldTheVolumesOfTheFragmentSurfaces) {
   EXPECT_NEAR(total, 0.2 * 0.1 * 0.08, 1e-14);
 }
 
+TEST(FragmentModes, TheCountBeforeTheCutIsTheSubMeshsOwn) {
+  // fragmentCutDof counts, from the labels alone, the degrees of freedom that fragmentSubMesh's
+  // mesh then has, in both orders: the World refuses the exact path on it before cutting. Two
+  // labellings of a box, cut at uneven parameters: three slanted pieces, and five pieces around
+  // seeds (every crossed tet kind: one, two and three corners in a piece).
+  const TetMesh box = testing::makeBoxTetMesh(0.2, 0.1, 0.08, 6, 4, 3);
+  const TetTopology topology = buildTetTopology(box).value();
+  Eigen::VectorXd cuts(topology.edges.rows());
+  for (Eigen::Index e = 0; e < cuts.size(); ++e) cuts[e] = 0.1 + 0.8 * std::fmod(0.618034 * static_cast<double>(e), 1.0);
+  const std::vector<Eigen::Vector3d> seeds = {{0.02, 0.02, 0.02}, {0.15, 0.08, 0.06}, {0.1, 0.01, 0.07}, {0.05, 0.09, 0.04},
+                                              {0.18, 0.02, 0.01}};
+  for (int labelling = 0; labelling < 2; ++labelling) {
+    Eigen::VectorXi labels(box.nodes.rows());
+    int count = labelling == 0 ? 3 : static_cast<int>(seeds.size());
+    for (Eigen::Index i = 0; i < box.nodes.rows(); ++i) {
+      const Eigen::Vector3d x = box.nodes.row(i);
+      if (labelling == 0) {
+        labels[i] = x.x() + 0.4 * x.z() < 0.07 ? 0 : (x.y() - 0.3 * x.x() < 0.04 ? 1 : 2);
+        continue;
+      }
+      int nearest = 0;
+      for (int s = 1; s < count; ++s)
+        if ((x - seeds[static_cast<size_t>(s)]).norm() < (x - seeds[static_cast<size_t>(nearest)]).norm()) nearest = s;
+      labels[i] = nearest;
+    }
+    int64_t crossed = 0;
+    for (int label = 0; label < count; ++label) {
+      auto sub = fragmentSubMesh(box, topology, labels, cuts, label);
+      ASSERT_TRUE(sub) << sub.error().message;
+      crossed += sub.value().splitTets;
+      for (ElementOrder order : {ElementOrder::P1, ElementOrder::P2}) {
+        const int64_t counted = fragmentCutDof(box, topology, labels, label, order);
+        if (sub.value().droppedVolumeM3 == 0.0) {
+          EXPECT_EQ(counted, 3 * femNodeCount(sub.value().mesh, order)) << labelling << " " << label;
+        } else {
+          EXPECT_GE(counted, 3 * femNodeCount(sub.value().mesh, order)) << labelling << " " << label;
+        }
+      }
+    }
+    EXPECT_GT(crossed, 0);
+    EXPECT_EQ(fragmentCutDof(box, topology, labels, count, ElementOrder::P2), 0);  // no node has that label
+  }
+  EXPECT_EQ(fragmentCutDof(box, topology, Eigen::VectorXi::Zero(3), 0, ElementOrder::P1), 0);  // sizes
+  // One label: the whole mesh, nothing cut.
+  EXPECT_EQ(fragmentCutDof(box, topology, Eigen::VectorXi::Zero(box.nodes.rows()), 0, ElementOrder::P2),
+            3 * femNodeCount(box, ElementOrder::P2));
+}
+
 TEST(FragmentModes, BadInputsGiveTypedErrors) {
   const TetMesh bar = testing::makeBoxTetMesh(0.1, 0.05, 0.05, 2, 1, 1);
   const TetTopology topology = buildTetTopology(bar).value();
