@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 
 PACKAGES=(cmake g++ pkg-config make ninja-build ccache
   libeigen3-dev libarpack2-dev libcgal-dev libopenvdb-dev libboost-iostreams-dev libhdf5-dev
-  libblas-dev liblapack-dev libflann-dev libceres-dev calculix-ccx libhnswlib-dev libfaiss-dev libopenmpi-dev openmpi-bin libsuitesparse-dev libtbb-dev libspectra-dev libcli11-dev nlohmann-json3-dev
+  libblas-dev liblapack-dev libflann-dev libceres-dev calculix-ccx libhnswlib-dev libfaiss-dev libopenmpi-dev openmpi-bin libsuitesparse-dev libmetis-dev libtbb-dev libspectra-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev python3-matplotlib python3-numpy python3-h5py)
 # The player (brittle play): Bullet for the rigid bodies, tinygltf for the replays.
 PACKAGES+=(libbullet-dev libtinygltf-dev)

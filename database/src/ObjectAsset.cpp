@@ -22,4 +22,15 @@ Eigen::Index femNodeCount(const TetMesh& mesh, ElementOrder order) {
   return mesh.nodes.rows() + static_cast<Eigen::Index>(std::unique(keys.begin(), keys.end()) - keys.begin());
 }
 
+bool isPermutation(const Eigen::VectorXi& order, Eigen::Index n) {
+  if (order.size() != n) return false;
+  std::vector<char> seen(static_cast<size_t>(n), 0);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const int v = order[k];
+    if (v < 0 || v >= n || seen[static_cast<size_t>(v)]) return false;
+    seen[static_cast<size_t>(v)] = 1;
+  }
+  return true;
+}
+
 }  // namespace brittle

@@ -178,6 +178,15 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
   const Array<double> stressModes = r.f64(prefix + "/stress_modes", {kAny});
   const auto stressOffsets =
       readOffsets(r, prefix + "/stress_modes_value_offsets", o, stressModes.dims[0], prefix + "/stress_modes");
+  // Optional, without a version bump (PACK_SCHEMA.md): packs baked before it have none.
+  const bool hasElimination = r.exists(prefix + "/elimination_order");
+  Array<int32_t> elimination;
+  std::vector<int64_t> eliminationOffsets;
+  if (hasElimination) {
+    elimination = r.i32(prefix + "/elimination_order", {kAny});
+    eliminationOffsets = readOffsets(r, prefix + "/elimination_order_offsets", o, elimination.dims[0],
+                                     prefix + "/elimination_order");
+  }
 
   const auto qNodes = r.i64(prefix + "/quality/node_count", {o}).values;
   const auto qTets = r.i64(prefix + "/quality/tet_count", {o}).values;
@@ -244,6 +253,15 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
     const int64_t femNodes = femNodeCount(a.tetMesh, a.elementOrder);
     checkBlockSize(modesOffsets, i, prefix + "/modes", 3, femNodes, m, a.name);
     checkBlockSize(stressOffsets, i, prefix + "/stress_modes", 6 * stressPointsPerElement(a.elementOrder), t, m, a.name);
+    if (hasElimination && eliminationOffsets[i + 1] > eliminationOffsets[i]) {
+      a.eliminationOrder = Eigen::Map<const Eigen::VectorXi>(elimination.values.data() + eliminationOffsets[i],
+                                                             eliminationOffsets[i + 1] - eliminationOffsets[i]);
+      if (!isPermutation(a.eliminationOrder, 3 * femNodes)) {
+        fail(ErrorCode::PackCorrupt, "dataset '" + prefix + "/elimination_order' of object '" + a.name +
+                                         "' is not a permutation of its " + std::to_string(3 * femNodes) +
+                                         " degrees of freedom");
+      }
+    }
 
     MassProperties& mp = a.massProperties;
     mp.massKg = massKg[i];

@@ -100,6 +100,10 @@ Status validateObject(const ObjectAsset& o, const std::string& label, const std:
                    std::to_string(m.modes.cols()) + ", expected 3N by r = " + std::to_string(3 * fem) + " by " +
                    std::to_string(r) + " (" + elementOrderName(o.elementOrder) + ")");
   }
+  if (o.eliminationOrder.size() > 0 && !isPermutation(o.eliminationOrder, 3 * fem)) {
+    return invalidArgument(label + ": eliminationOrder is not a permutation of its " + std::to_string(3 * fem) +
+                           " degrees of freedom");
+  }
   if (o.stressModes.rows() != 6 * points * t || o.stressModes.cols() != r) {
     return invalidArgument(label + ": stressModes is " + std::to_string(o.stressModes.rows()) + " by " +
                    std::to_string(o.stressModes.cols()) + ", expected 6PT by r = " + std::to_string(6 * points * t) +
@@ -317,6 +321,15 @@ void writeObjects(FileWriter& w, const std::string& prefix, const ObjectList& ob
   w.f64(prefix + "/stress_modes",
         concat<double>(objects, [](const O& o) -> const MatrixXdRow& { return o.stressModes; }),
         {static_cast<hsize_t>(stressValueOffsets.back())}, "Pa/(kg^1/2*m)");
+  // The optional elimination orders (ObjectAsset::eliminationOrder), written when an object has
+  // one; an object without one has an empty block.
+  if (std::any_of(objects.begin(), objects.end(), [](const O* o) { return o->eliminationOrder.size() > 0; })) {
+    const auto orderOffsets = offsetsOf(objects, [](const O& o) { return o.eliminationOrder.size(); });
+    w.i64(prefix + "/elimination_order_offsets", orderOffsets, {count + 1});
+    w.i32(prefix + "/elimination_order",
+          concat<int32_t>(objects, [](const O& o) -> const Eigen::VectorXi& { return o.eliminationOrder; }),
+          {static_cast<hsize_t>(orderOffsets.back())});
+  }
 
   // Mesh quality.
   {

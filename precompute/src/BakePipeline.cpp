@@ -4,6 +4,7 @@
 
 #include "brittle/core/Timing.h"
 #include "brittle/descriptors/MassProperties.h"
+#include "brittle/precompute/FillOrdering.h"
 #include "brittle/precompute/MeshIO.h"
 #include "brittle/precompute/MeshValidation.h"
 
@@ -102,6 +103,12 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
   if (!fem) return inObject(name, fem.error());
   auto system = assembleFem(fem.value(), s.material, s.fem);
   if (!system) return inObject(name, system.error());
+  // The runtime's factorisation order (FillOrdering.h): on K's pattern, which K + μM shares.
+  if (s.fillOrdering) {
+    auto order = fillReducingOrdering(system.value().stiffness);
+    if (!order) return inObject(name, order.error());
+    asset.eliminationOrder = std::move(order).value();
+  }
   rec.assemblyS = secondsSince(t);
 
   t = SteadyClock::now();

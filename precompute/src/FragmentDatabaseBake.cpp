@@ -117,6 +117,7 @@ Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std:
     bake.material = settings.referenceMaterial;
     bake.tetMesh = settings.tetMesh;
     bake.modal.modeCount = settings.modeCount;
+    bake.fillOrdering = false;  // not stored for entries (BakePipeline.h)
     // A fragment thinner than the cell size in places comes out of Mesh_3 in pieces: mesh the
     // same fragment finer (2×, 4× the tets) before the caller draws another one.
     auto asset = bakeSurface(entry.surface, bake, progress);

@@ -68,6 +68,7 @@ Result<RuntimeFragmentSource> RuntimeFragmentSource::build(const std::vector<Bas
     b.material = material;
     b.tetMesh.targetTets = settings.targetTets;
     b.modal.modeCount = settings.modeCount;
+    b.fillOrdering = false;  // broken here to make database entries, as before the baked orders
     auto asset = bakeSurface(surfaces[i], b);
     if (!asset) return Error{asset.error().code, "runtime fragments, base shape '" + shapes[i].name + "': " + asset.error().message};
     source.mObjects.push_back(std::move(asset).value());

@@ -11,6 +11,51 @@
 #include "brittle/runtime/FemAssembly.h"
 
 namespace brittle {
+namespace {
+
+// Eigen's SimplicialLDLT::compute() with the elimination order given instead of computed: the same
+// steps as its ordering() (P a Pᵀ's upper triangle from a's lower one), analysis and factorisation.
+class OrderedFactor final : public ShiftedFactor {
+ public:
+  OrderedFactor(const SparseMatrixd& a, const Eigen::VectorXi& order, bool factorise) {
+    m_Pinv.indices() = order;  // Eigen's inverse permutation: new position → row
+    m_P = m_Pinv.inverse();
+    CholMatrixType ap(a.rows(), a.cols());
+    ap.selfadjointView<Eigen::Upper>() = a.selfadjointView<Eigen::Lower>().twistedBy(m_P);
+    analyzePattern_preordered(ap, true);
+    if (factorise) factorize_preordered<true>(ap);
+  }
+  Eigen::Index analysedNonZeros() const { return m_matrix.nonZeros(); }
+};
+
+// The non-zeros of AMD's L after its analysis alone.
+class AmdAnalysis final : public ShiftedFactor {
+ public:
+  explicit AmdAnalysis(const SparseMatrixd& a) { analyzePattern(a); }
+  Eigen::Index analysedNonZeros() const { return m_matrix.nonZeros(); }
+};
+
+}  // namespace
+
+Result<std::shared_ptr<const ShiftedFactor>> factorInOrder(const SparseMatrixd& a, const Eigen::VectorXi& order) {
+  std::shared_ptr<const ShiftedFactor> factor;
+  if (order.size() == 0) {
+    factor = std::make_shared<ShiftedFactor>(a);
+  } else {
+    if (a.rows() != a.cols() || !isPermutation(order, a.rows())) {
+      return makeError(ErrorCode::InvalidArgument, "factorInOrder: the order is not a permutation of the matrix's rows");
+    }
+    factor = std::make_shared<OrderedFactor>(a, order, true);
+  }
+  if (factor->info() != Eigen::Success) return makeError(ErrorCode::FactorizationFailed, "the matrix did not factorise");
+  return factor;
+}
+
+Eigen::Index factorNonZeros(const SparseMatrixd& a, const Eigen::VectorXi& order) {
+  if (order.size() == 0) return AmdAnalysis(a).analysedNonZeros();
+  if (a.rows() != a.cols() || !isPermutation(order, a.rows())) return -1;
+  return OrderedFactor(a, order, false).analysedNonZeros();
+}
 
 struct StaticCorrection::Data {
   Eigen::Index femNodes = 0;
@@ -36,11 +81,12 @@ Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const
     return makeError(ErrorCode::InvalidArgument, "static correction: '" + asset.name + "' has no modes");
   }
   const double mu = 1e-6 * asset.modal.eigenvaluesRad2PerS2[0];
-  auto factor = std::make_shared<ShiftedFactor>(fem.value().stiffness + mu * fem.value().mass);
-  if (factor->info() != Eigen::Success) {
-    return makeError(ErrorCode::FactorizationFailed, "static correction: K + μM of '" + asset.name + "' did not factorise");
+  // In the pack's elimination order where the bake stored one (less fill: FillOrdering.h).
+  auto factor = factorInOrder(fem.value().stiffness + mu * fem.value().mass, asset.eliminationOrder);
+  if (!factor) {
+    return makeError(factor.error().code, "static correction: K + μM of '" + asset.name + "': " + factor.error().message);
   }
-  return fromFactor(asset, material, modes, mesh.value(), fem.value(), std::move(factor), mu);
+  return fromFactor(asset, material, modes, mesh.value(), fem.value(), std::move(factor).value(), mu);
 }
 
 Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const Material& material, int modes,

@@ -140,6 +140,9 @@ Pack makePack() {
                    6.6e10, 0.17, 2400.3));  // UTF-8 name
   p.objects.push_back(makeObject("plate", p.materials[0], 3, 2, 1, 7, 11));
   p.objects.push_back(makeObject("cup", p.materials[1], 2, 2, 2, 4, 12, ElementOrder::P2));
+  // The cup has a baked elimination order (optional: the plate has none), here its DOFs reversed.
+  ObjectAsset& cup = p.objects.back();
+  cup.eliminationOrder = Eigen::VectorXi::LinSpaced(cup.modal.modes.rows(), static_cast<int>(cup.modal.modes.rows()) - 1, 0);
   return p;
 }
 
@@ -205,6 +208,8 @@ void expectSamePack(const Pack& a, const Pack& b) {
     expectSameDouble(x.modal.orthonormalityError, y.modal.orthonormalityError, "orthonormalityError");
     expectSameDoubles(x.modal.modes, y.modal.modes, "modes");
     expectSameDoubles(x.stressModes, y.stressModes, "stressModes");
+    ASSERT_EQ(x.eliminationOrder.size(), y.eliminationOrder.size());
+    EXPECT_TRUE(x.eliminationOrder == y.eliminationOrder);
 
     EXPECT_EQ(x.bake.sourceMesh, y.bake.sourceMesh);
     EXPECT_EQ(x.bake.targetTets, y.bake.targetTets);
@@ -557,6 +562,29 @@ TEST_F(PackTest, ModesOfTheWrongElementOrderAreRefused) {
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().code, ErrorCode::InvalidArgument);
   EXPECT_NE(s.error().message.find("modal.modes"), std::string::npos) << s.error().message;
+}
+
+TEST_F(PackTest, AnEliminationOrderThatIsNotAPermutationIsCorrupt) {
+  // The optional order (PACK_SCHEMA.md) of the cup with one DOF twice: refused by name; the writer
+  // refuses it too, and a pack without the dataset reads with no order.
+  writeValidPack();
+  const int32_t first = makePack().objects[1].eliminationOrder[0];
+  editPack(mPath, [first](hid_t f) { writeElement<int32_t>(f, "/objects/elimination_order", H5T_NATIVE_INT32, {1}, first); });
+  expectReadError(ErrorCode::PackCorrupt, "/objects/elimination_order");
+  Pack pack = makePack();
+  pack.objects[1].eliminationOrder[1] = pack.objects[1].eliminationOrder[0];
+  const Status s = writePack(pack, mPath);
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().code, ErrorCode::InvalidArgument);
+  EXPECT_NE(s.error().message.find("eliminationOrder"), std::string::npos) << s.error().message;
+  writeValidPack();
+  editPack(mPath, [](hid_t f) {
+    ASSERT_GE(H5Ldelete(f, "/objects/elimination_order", H5P_DEFAULT), 0);
+    ASSERT_GE(H5Ldelete(f, "/objects/elimination_order_offsets", H5P_DEFAULT), 0);
+  });
+  auto read = readPack(mPath);
+  ASSERT_TRUE(read) << read.error().message;
+  EXPECT_EQ(read.value().objects[1].eliminationOrder.size(), 0);
 }
 
 TEST_F(PackTest, MissingDataset) {

@@ -97,7 +97,15 @@ struct ObjectAsset {
   /// 6PT by r, P = stressPointsPerElement(elementOrder): rows 6(Pe + c)..6(Pe + c)+5 are
   /// C B_e(c) Φ_e, the stress at point c of element e (P2: corner c) per unit modal coordinate.
   MatrixXdRow stressModes;
+  /// Optional (empty: none): the order in which a factorisation of K eliminates its 3N rows,
+  /// position k holding the row eliminated k-th, baked as the one with less fill than AMD
+  /// (FillOrdering.h); the runtime's static correction factorises in it. Pack: the optional
+  /// dataset /objects/elimination_order.
+  Eigen::VectorXi eliminationOrder;
   BakeRecord bake;
 };
+
+/// Whether `order` holds each of 0..n−1 exactly once.
+bool isPermutation(const Eigen::VectorXi& order, Eigen::Index n);
 
 }  // namespace brittle

@@ -29,6 +29,9 @@ struct ObjectBakeSettings {
   ElementOrder elementOrder = ElementOrder::P1;
   FemSettings fem;
   ModalSettings modal;               ///< shiftRad2PerS2 == 0 means defaultShift()
+  /// Bake an elimination order for the runtime's factorisation (FillOrdering.h). Database entries
+  /// go without: the pack does not store theirs, and a database bakes thousands of them.
+  bool fillOrdering = true;
 };
 
 /// What the bake measured beyond the asset itself.

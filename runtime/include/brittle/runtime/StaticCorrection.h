@@ -33,6 +33,15 @@ namespace brittle {
 /// A sparse LDLᵀ factorisation of K + μM (μ > 0).
 using ShiftedFactor = Eigen::SimplicialLDLT<SparseMatrixd>;
 
+/// The factorisation of `a` (its lower triangle) eliminating its rows in `order`
+/// (ObjectAsset::eliminationOrder: position k holds the row eliminated k-th), or in Eigen's AMD
+/// order where `order` is empty. Errors: InvalidArgument (an order that is not a permutation of
+/// a's rows), FactorizationFailed.
+Result<std::shared_ptr<const ShiftedFactor>> factorInOrder(const SparseMatrixd& a, const Eigen::VectorXi& order);
+/// Non-zeros of that factor's strict lower L, from the symbolic analysis alone (what the bake
+/// compares orders by). `order` as above; one that is not a permutation gives −1.
+Eigen::Index factorNonZeros(const SparseMatrixd& a, const Eigen::VectorXi& order);
+
 class StaticCorrection {
  public:
   /// Factorises the object's K + μM, μ = 10⁻⁶ λ₁, for the first `modes` stored modes.
