@@ -83,6 +83,9 @@ Pack makeSeedPack() {
   Pack pack;
   pack.materials = {makeMaterial("glass", 7.0e10, 0.2), makeMaterial("stone", 6.0e10, 0.25)};
   pack.objects = {makeObject("tet", "glass", false, 2), makeObject("pair", "stone", true, 1)};
+  // The optional elimination order (PACK_SCHEMA.md) on one object: its DOFs reversed.
+  const auto dofs = static_cast<int>(pack.objects[1].modal.modes.rows());
+  pack.objects[1].eliminationOrder = Eigen::VectorXi::LinSpaced(dofs, dofs - 1, 0);
 
   FragmentDatabase& db = pack.database;
   db.referenceMaterial = makeMaterial("reference", 7.0e10, 0.2);
