@@ -190,6 +190,47 @@ Status DescriptorIndex::queryBatch(const float* descriptors, int64_t count, int 
   return Ok{};
 }
 
+Status DescriptorIndex::queryNearestOfSet(const float* descriptors, int64_t count, int k, int64_t* ids,
+                                          float* squaredDistances, int32_t* rows, bool eachRow) const {
+  if (descriptors == nullptr) return invalidArgument("DescriptorIndex queryNearestOfSet: descriptors is null");
+  if (ids == nullptr || squaredDistances == nullptr || rows == nullptr)
+    return invalidArgument("DescriptorIndex queryNearestOfSet: ids, squaredDistances or rows is null");
+  if (count < 1)
+    return invalidArgument("DescriptorIndex queryNearestOfSet: count must be >= 1, got " + std::to_string(count));
+  for (int64_t q = 0; q < count; ++q) {
+    if (Status valid = validateQuery(descriptors + q * mDims, k, q, true); !valid) return valid;
+  }
+  if (!eachRow && mBackend && mBackend->searchesSets()) return mBackend->querySet(descriptors, count, k, ids, squaredDistances, rows);
+  // Each row's k nearest, merged: the best distance per entry, ordered by (distance, id); a stable
+  // sort keeps rows in order, so an entry's first hit is from the lowest row reaching it.
+  struct Hit {
+    float distance;
+    int64_t id;
+    int32_t row;
+  };
+  std::vector<int64_t> rowIds(static_cast<size_t>(k));
+  std::vector<float> rowDistances(static_cast<size_t>(k));
+  std::vector<Hit> hits;
+  hits.reserve(static_cast<size_t>(count * k));
+  for (int64_t q = 0; q < count; ++q) {
+    if (Status st = queryBackend(descriptors + q * mDims, k, rowIds.data(), rowDistances.data()); !st) return st;
+    for (int j = 0; j < k; ++j) hits.push_back({rowDistances[static_cast<size_t>(j)], rowIds[static_cast<size_t>(j)], static_cast<int32_t>(q)});
+  }
+  std::stable_sort(hits.begin(), hits.end(), [](const Hit& a, const Hit& b) {
+    return a.distance != b.distance ? a.distance < b.distance : a.id < b.id;
+  });
+  int filled = 0;
+  for (const Hit& h : hits) {
+    if (filled == k) break;
+    if (std::find(ids, ids + filled, h.id) != ids + filled) continue;
+    ids[filled] = h.id;
+    squaredDistances[filled] = h.distance;
+    rows[filled] = h.row;
+    ++filled;
+  }
+  return Ok{};  // row 0 alone holds k distinct entries
+}
+
 void DescriptorIndex::queryBruteForce(const float* descriptor, int k, int64_t* ids,
                                       float* squaredDistances) const {
   // Keeps the best k so far, sorted by (distance, id), in the caller's arrays. Rows are scanned

@@ -14,6 +14,7 @@ Result<FragmentMatcher> FragmentMatcher::build(const FragmentDatabase& database,
                               : static_cast<int64_t>(database.entries.size()));
   FragmentMatcher matcher;
   matcher.mDatabase = &database;
+  matcher.mFramesAsOneSet = settings.framesAsOneSet;
   for (DescriptorKind kind : kAllDescriptorKinds) {
     const auto slot = static_cast<size_t>(kind);
     if (!settings.enabled[slot]) continue;
@@ -80,34 +81,22 @@ Result<std::vector<FragmentMatch>> FragmentMatcher::matchDescriptors(const Canon
                          std::to_string(candidates) + "), got " + std::to_string(descriptors.rows()) + " x " +
                          std::to_string(descriptors.cols()));
   }
-  std::vector<int64_t> ids(static_cast<size_t>(candidates * k));
+  // The fragment's candidate frames as one set: each entry at its distance in the nearest frame.
+  std::vector<int64_t> ids(static_cast<size_t>(k));
   std::vector<float> squared(ids.size());
-  if (Status st = index->queryBatch(descriptors.data(), candidates, k, ids.data(), squared.data()); !st) {
+  std::vector<int32_t> rows(ids.size());
+  if (Status st = index->queryNearestOfSet(descriptors.data(), candidates, k, ids.data(), squared.data(), rows.data(),
+                                           !mFramesAsOneSet);
+      !st) {
     return st.error();
   }
-  // Merge: best distance per entry over all candidates; order by (distance, entry id).
-  std::vector<FragmentMatch> all;
-  all.reserve(ids.size());
-  for (Eigen::Index c = 0; c < candidates; ++c) {
-    for (int j = 0; j < k; ++j) {
-      const size_t at = static_cast<size_t>(c * k + j);
-      FragmentMatch m;
-      m.entry = ids[at];
-      m.distance = std::sqrt(std::max(squared[at], 0.0f));
-      m.candidate = static_cast<int>(c);
-      m.queryFrame = frames.candidates[static_cast<size_t>(c)];
-      all.push_back(m);
-    }
-  }
-  std::stable_sort(all.begin(), all.end(), [](const FragmentMatch& a, const FragmentMatch& b) {
-    return a.distance != b.distance ? a.distance < b.distance : a.entry < b.entry;
-  });
-  std::vector<FragmentMatch> out;
-  out.reserve(static_cast<size_t>(k));
-  for (const FragmentMatch& m : all) {
-    if (static_cast<int>(out.size()) == k) break;
-    const bool seen = std::any_of(out.begin(), out.end(), [&](const FragmentMatch& o) { return o.entry == m.entry; });
-    if (!seen) out.push_back(m);
+  std::vector<FragmentMatch> out(static_cast<size_t>(k));
+  for (size_t j = 0; j < out.size(); ++j) {
+    FragmentMatch& m = out[j];
+    m.entry = ids[j];
+    m.distance = std::sqrt(std::max(squared[j], 0.0f));
+    m.candidate = rows[j];
+    m.queryFrame = frames.candidates[static_cast<size_t>(rows[j])];
   }
   const MatchErrorModel& model = mDatabase->matchErrors[static_cast<size_t>(kind)];
   for (FragmentMatch& m : out) m.predictedError = predictMatchError(model, m.distance);

@@ -2,12 +2,15 @@
 // over float descriptors (squared L2) or over the binary codes of 0/1 descriptors (Hamming).
 #include <cstddef>
 #include <cstdint>
+#include <algorithm>
 #include <cstring>
 #include <vector>
 #include <exception>
 #include <limits>
 #include <memory>
+#include <queue>
 #include <string>
+#include <utility>
 
 #include <Eigen/Core>
 // hnswlib 0.6.2's SSE path prefetches through the entry one past a full link list, a heap
@@ -22,24 +25,25 @@ namespace brittle::search {
 namespace {
 
 // Squared L2 over `dims` floats, as hnswlib's L2Space but through Eigen's SIMD.
+float squaredL2(const void* a, const void* b, const void* param) {
+  const auto n = static_cast<Eigen::Index>(*static_cast<const size_t*>(param));
+  if (n == 28) {  // the default moment descriptor (order 4): unrolled at compile time
+    using Fixed = Eigen::Matrix<float, 28, 1>;
+    return (Eigen::Map<const Fixed>(static_cast<const float*>(a)) - Eigen::Map<const Fixed>(static_cast<const float*>(b)))
+        .squaredNorm();
+  }
+  const Eigen::Map<const Eigen::VectorXf> x(static_cast<const float*>(a), n), y(static_cast<const float*>(b), n);
+  return (x - y).squaredNorm();
+}
+
 class EigenL2Space : public hnswlib::SpaceInterface<float> {
  public:
   explicit EigenL2Space(size_t dims) : mDims(dims) {}
   size_t get_data_size() override { return mDims * sizeof(float); }
-  hnswlib::DISTFUNC<float> get_dist_func() override { return &distance; }
+  hnswlib::DISTFUNC<float> get_dist_func() override { return &squaredL2; }
   void* get_dist_func_param() override { return &mDims; }
 
  private:
-  static float distance(const void* a, const void* b, const void* param) {
-    const auto n = static_cast<Eigen::Index>(*static_cast<const size_t*>(param));
-    if (n == 28) {  // the default moment descriptor (order 4): unrolled at compile time
-      using Fixed = Eigen::Matrix<float, 28, 1>;
-      return (Eigen::Map<const Fixed>(static_cast<const float*>(a)) - Eigen::Map<const Fixed>(static_cast<const float*>(b)))
-          .squaredNorm();
-    }
-    const Eigen::Map<const Eigen::VectorXf> x(static_cast<const float*>(a), n), y(static_cast<const float*>(b), n);
-    return (x - y).squaredNorm();
-  }
   size_t mDims;
 };
 
@@ -125,6 +129,109 @@ class HnswBackend final : public Backend {
       return invalidArgument(std::string("DescriptorIndex query: HNSW search failed: ") + e.what());
     }
     sortByDistanceThenId(k, ids, squaredDistances);
+    return Ok{};
+  }
+
+  bool searchesSets() const override { return true; }
+
+  // A set of queries (a fragment's candidate frames) in one search: each row descends the upper
+  // levels on its own, as a single query would, and the base layer is then searched once from all
+  // their entry points (HNSW's best-first search, Malkov & Yashunin 2018, algorithm 2, with several
+  // entry points) under the set's distance, the smallest over its rows. Every row's neighbourhood
+  // is entered, so no row's nearest is lost to another's basin, and a node is measured once for
+  // the set. Row r was inserted r-th, so its internal id is r.
+  Status querySet(const float* descriptors, int64_t count, int k, int64_t* ids, float* squaredDistances,
+                  int32_t* rows) const override {
+    using hnswlib::tableint;
+    using Scored = std::pair<float, tableint>;
+    try {
+      const size_t stride = kBinary ? static_cast<size_t>(codeBytes(mDims, 8)) : static_cast<size_t>(mDims) * sizeof(float);
+      std::vector<uint8_t> codes(kBinary ? stride * static_cast<size_t>(count) : 0);
+      if constexpr (kBinary) packBits(descriptors, count, mDims, 8, codes.data());
+      const auto* base = kBinary ? codes.data() : reinterpret_cast<const unsigned char*>(descriptors);
+      const auto rowOf = [&](int64_t q) { return static_cast<const void*>(base + static_cast<size_t>(q) * stride); };
+      const hnswlib::DISTFUNC<float> distance = mGraph.fstdistfunc_;
+      const void* param = mGraph.dist_func_param_;
+      const auto setDistance = [&](tableint node) {
+        const char* data = mGraph.getDataByInternalId(node);
+        float best = distance(rowOf(0), data, param);
+        for (int64_t q = 1; q < count; ++q) best = std::min(best, distance(rowOf(q), data, param));
+        return best;
+      };
+      // The upper levels, row by row (greedy, as hnswlib's searchKnn).
+      std::vector<tableint> entries;
+      for (int64_t q = 0; q < count; ++q) {
+        tableint current = mGraph.enterpoint_node_;
+        float best = distance(rowOf(q), mGraph.getDataByInternalId(current), param);
+        for (int level = mGraph.maxlevel_; level > 0; --level) {
+          for (bool moved = true; moved;) {
+            moved = false;
+            hnswlib::linklistsizeint* links = mGraph.get_linklist(current, level);
+            const tableint* neighbours = reinterpret_cast<const tableint*>(links + 1);
+            for (int i = 0, size = mGraph.getListCount(links); i < size; ++i) {
+              const float d = distance(rowOf(q), mGraph.getDataByInternalId(neighbours[i]), param);
+              if (d < best) best = d, current = neighbours[i], moved = true;
+            }
+          }
+        }
+        if (std::find(entries.begin(), entries.end(), current) == entries.end()) entries.push_back(current);
+      }
+      // The base layer, once for the set: `kept` holds the ef best so far (farthest on top),
+      // `frontier` the nodes still to expand (nearest on top).
+      hnswlib::VisitedList* visitedList = mGraph.visited_list_pool_->getFreeVisitedList();
+      struct Release {
+        hnswlib::VisitedListPool* pool;
+        hnswlib::VisitedList* list;
+        ~Release() { pool->releaseVisitedList(list); }
+      } release{mGraph.visited_list_pool_, visitedList};
+      const auto tag = visitedList->curV;
+      auto* visited = visitedList->mass;
+      const size_t ef = std::max(mGraph.ef_, static_cast<size_t>(k));
+      std::priority_queue<Scored> kept;
+      std::priority_queue<Scored, std::vector<Scored>, std::greater<Scored>> frontier;
+      auto offer = [&](tableint node) {
+        visited[node] = tag;
+        const float d = setDistance(node);
+        if (kept.size() < ef || d < kept.top().first) {
+          frontier.emplace(d, node);
+          kept.emplace(d, node);
+          if (kept.size() > ef) kept.pop();
+        }
+      };
+      for (tableint e : entries) offer(e);
+      while (!frontier.empty()) {
+        const auto [d, node] = frontier.top();
+        if (d > kept.top().first) break;
+        frontier.pop();
+        hnswlib::linklistsizeint* links = mGraph.get_linklist0(node);
+        const tableint* neighbours = reinterpret_cast<const tableint*>(links + 1);
+        for (int i = 0, size = mGraph.getListCount(links); i < size; ++i) {
+          if (visited[neighbours[i]] != tag) offer(neighbours[i]);
+        }
+      }
+      while (kept.size() > static_cast<size_t>(k)) kept.pop();
+      if (static_cast<int>(kept.size()) < k)
+        return invalidArgument("DescriptorIndex query: HNSW returned " + std::to_string(kept.size()) + " of " +
+                               std::to_string(k) + " neighbours");
+      for (int i = k - 1; i >= 0; --i) {
+        squaredDistances[i] = kept.top().first;
+        ids[i] = static_cast<int64_t>(mGraph.getExternalLabel(kept.top().second));
+        kept.pop();
+      }
+      sortByDistanceThenId(k, ids, squaredDistances);
+      for (int i = 0; i < k; ++i) {  // the lowest row reaching each result's distance
+        const char* data = mGraph.getDataByInternalId(static_cast<tableint>(ids[i]));
+        rows[i] = 0;
+        for (int64_t q = 0; q < count; ++q) {
+          if (distance(rowOf(q), data, param) == squaredDistances[i]) {
+            rows[i] = static_cast<int32_t>(q);
+            break;
+          }
+        }
+      }
+    } catch (const std::exception& e) {
+      return invalidArgument(std::string("DescriptorIndex query: HNSW search failed: ") + e.what());
+    }
     return Ok{};
   }
 

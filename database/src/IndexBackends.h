@@ -21,6 +21,15 @@ class Backend {
   /// Checks what the backend needs of one query beyond finite values (binary codes need 0 or 1).
   virtual Status validateQuery(const float* /*descriptor*/, int64_t /*dims*/) const { return Ok{}; }
   virtual Status query(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const = 0;
+  /// Whether querySet() searches a set of queries in one pass (DescriptorIndex::queryNearestOfSet
+  /// merges per-row answers otherwise).
+  virtual bool searchesSets() const { return false; }
+  /// The k nearest rows to a set of `count` validated queries (distance: the smallest over the
+  /// set), with the lowest query row reaching each; ordered as query().
+  virtual Status querySet(const float* /*descriptors*/, int64_t /*count*/, int /*k*/, int64_t* /*ids*/,
+                          float* /*squaredDistances*/, int32_t* /*rows*/) const {
+    return makeError(ErrorCode::InvalidArgument, "DescriptorIndex: this backend does not search sets");
+  }
   /// Bytes held beyond DescriptorIndex's own copy of the data.
   virtual int64_t memoryBytes() const = 0;
 };

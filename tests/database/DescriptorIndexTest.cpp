@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <random>
@@ -188,6 +189,167 @@ std::pair<std::vector<int64_t>, std::vector<float>> run200(const DescriptorIndex
   std::vector<float> d(200 * 3);
   EXPECT_TRUE(index.queryBatch(q.data(), 200, 3, ids.data(), d.data()).ok());
   return {ids, d};
+}
+
+// The exact answer to a set query: every entry at its smallest squared distance over the rows (in
+// double), the lowest row reaching it, the k best by (distance, id).
+struct SetAnswer {
+  std::vector<int64_t> ids;
+  std::vector<double> distances;
+  std::vector<int32_t> rows;
+};
+SetAnswer exactSetAnswer(const std::vector<float>& data, int64_t dims, const float* set, int64_t count, int k) {
+  const auto n = static_cast<int64_t>(data.size()) / dims;
+  std::vector<std::pair<double, int64_t>> order;
+  std::vector<int32_t> rowOf(static_cast<size_t>(n));
+  for (int64_t e = 0; e < n; ++e) {
+    double best = std::numeric_limits<double>::infinity();
+    for (int64_t q = 0; q < count; ++q) {
+      double sum = 0.0;
+      for (int64_t c = 0; c < dims; ++c) {
+        const double diff = double(data[e * dims + c]) - double(set[q * dims + c]);
+        sum += diff * diff;
+      }
+      if (sum < best) best = sum, rowOf[e] = static_cast<int32_t>(q);
+    }
+    order.emplace_back(best, e);
+  }
+  std::sort(order.begin(), order.end());
+  SetAnswer a;
+  for (int j = 0; j < k; ++j) {
+    a.ids.push_back(order[j].second);
+    a.distances.push_back(order[j].first);
+    a.rows.push_back(rowOf[order[j].second]);
+  }
+  return a;
+}
+
+// A set query (a fragment in its candidate frames) is answered as the nearest entries to any of its
+// rows: exactly by brute force and by the kd-forest's merge of per-row answers. The HNSW walk under
+// the set's distance: every answer is that entry's own distance to the set, reached at the row it
+// names; a one-row set is hnswlib's own search; a beam as wide as the data is all but exact; and asked to
+// (eachRow), the graph merges per-row searches instead.
+TEST(DescriptorIndex, SetQueryFindsTheNearestEntryToAnyRow) {
+  const int64_t rows = 3000, dims = 28, sets = 200, count = 4;
+  const int k = 3;
+  const auto data = randomMatrix(rows, dims, 7);
+  const auto q = randomMatrix(sets * count, dims, 8);
+  const DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+  DescriptorIndexSettings forestSettings = settingsFor(Kind::KdForest, 100000);
+  forestSettings.trees = 1;
+  const DescriptorIndex forest = buildOrDie(data, dims, forestSettings);  // checks every leaf: exact
+  const DescriptorIndex graph = buildOrDie(data, dims, settingsFor(Kind::Hnsw, 32));
+  const DescriptorIndex wide = buildOrDie(data, dims, settingsFor(Kind::Hnsw, static_cast<int>(rows)));
+  int wideHits = 0;
+  for (int64_t s = 0; s < sets; ++s) {
+    const float* set = q.data() + s * count * dims;
+    const int64_t n = 1 + s % count;  // 1 to 4 candidate frames
+    const SetAnswer truth = exactSetAnswer(data, dims, set, n, k);
+    for (const DescriptorIndex* index : {&exact, &forest}) {
+      int64_t ids[k];
+      float d[k];
+      int32_t r[k];
+      ASSERT_TRUE(index->queryNearestOfSet(set, n, k, ids, d, r).ok());
+      for (int j = 0; j < k; ++j) {
+        ASSERT_EQ(ids[j], truth.ids[j]) << "set " << s << " rank " << j;
+        ASSERT_NEAR(d[j], truth.distances[j], 1e-5 * truth.distances[j]);
+        ASSERT_EQ(r[j], truth.rows[j]);
+      }
+    }
+    int64_t ids[k];
+    float d[k];
+    int32_t r[k];
+    ASSERT_TRUE(wide.queryNearestOfSet(set, n, 1, ids, d, r).ok());
+    wideHits += ids[0] == truth.ids[0];
+    ASSERT_TRUE(graph.queryNearestOfSet(set, n, k, ids, d, r).ok());
+    for (int j = 0; j < k; ++j) {
+      const SetAnswer own = exactSetAnswer(std::vector<float>(data.begin() + ids[j] * dims, data.begin() + (ids[j] + 1) * dims),
+                                           dims, set, n, 1);
+      ASSERT_NEAR(d[j], own.distances[0], 1e-5 * own.distances[0]);
+      ASSERT_EQ(r[j], own.rows[0]);
+      if (j > 0) ASSERT_LE(d[j - 1], d[j]);
+    }
+    if (n == 1) {  // one row: the same walk as a single query
+      int64_t single[k];
+      float singleD[k];
+      ASSERT_TRUE(graph.query(set, k, single, singleD).ok());
+      for (int j = 0; j < k; ++j) {
+        ASSERT_EQ(ids[j], single[j]);
+        ASSERT_EQ(d[j], singleD[j]);
+      }
+    }
+    // Row by row: the merge of each row's own k nearest.
+    std::vector<int64_t> batchIds(static_cast<size_t>(n * k));
+    std::vector<float> batchD(batchIds.size());
+    ASSERT_TRUE(graph.queryBatch(set, n, k, batchIds.data(), batchD.data()).ok());
+    ASSERT_TRUE(graph.queryNearestOfSet(set, n, k, ids, d, r, /*eachRow=*/true).ok());
+    for (int j = 0; j < k; ++j) {
+      ASSERT_EQ(batchIds[static_cast<size_t>(r[j] * k)] == ids[j] ||
+                    std::find(batchIds.begin() + r[j] * k, batchIds.begin() + (r[j] + 1) * k, ids[j]) != batchIds.begin() + (r[j] + 1) * k,
+                true);
+      for (int64_t other = 0; other < n * k; ++other) ASSERT_FALSE(batchD[static_cast<size_t>(other)] < d[0]);
+    }
+  }
+  // A beam as wide as the data walks all of level 0 that the entry points reach: nearly exact.
+  EXPECT_GE(double(wideHits) / double(sets), 0.97);
+}
+
+// The binary graph searches sets too: on 0/1 rows its Hamming distance is the squared L2 exactly,
+// and a beam as wide as the data finds brute force's distance.
+TEST(DescriptorIndex, BinarySetQueryMatchesBruteForce) {
+  const int64_t rows = 1000, dims = 256, sets = 60, count = 3;
+  std::mt19937 rng(5);
+  std::bernoulli_distribution bit(0.3);
+  std::vector<float> data(static_cast<size_t>(rows * dims)), q(static_cast<size_t>(sets * count * dims));
+  for (float& x : data) x = bit(rng) ? 1.0f : 0.0f;
+  for (float& x : q) x = bit(rng) ? 1.0f : 0.0f;
+  const DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+  const DescriptorIndex graph = buildOrDie(data, dims, settingsFor(Kind::HnswBinary, 32));
+  const DescriptorIndex wide = buildOrDie(data, dims, settingsFor(Kind::HnswBinary, static_cast<int>(rows)));
+  int wideHits = 0;
+  for (int64_t s = 0; s < sets; ++s) {
+    const float* set = q.data() + s * count * dims;
+    int64_t ids[1], exactIds[1];
+    float d[1], exactD[1];
+    int32_t r[1], exactR[1];
+    ASSERT_TRUE(exact.queryNearestOfSet(set, count, 1, exactIds, exactD, exactR).ok());
+    ASSERT_TRUE(wide.queryNearestOfSet(set, count, 1, ids, d, r).ok());
+    wideHits += d[0] == exactD[0];  // Hamming ties between entries: the distance, not the id
+    ASSERT_TRUE(graph.queryNearestOfSet(set, count, 1, ids, d, r).ok());
+    const SetAnswer own = exactSetAnswer(std::vector<float>(data.begin() + ids[0] * dims, data.begin() + (ids[0] + 1) * dims),
+                                         dims, set, count, 1);
+    ASSERT_EQ(d[0], float(own.distances[0]));  // integers: exact
+    ASSERT_EQ(r[0], own.rows[0]);
+    ASSERT_GE(d[0], exactD[0]);
+  }
+  EXPECT_GE(double(wideHits) / double(sets), 0.97);
+  // A row of the set that is not 0/1 is refused.
+  std::vector<float> bad(q.begin(), q.begin() + count * dims);
+  bad[dims + 3] = 0.5f;
+  int64_t ids[1];
+  float d[1];
+  int32_t r[1];
+  const Status st = graph.queryNearestOfSet(bad.data(), count, 1, ids, d, r);
+  ASSERT_FALSE(st.ok());
+  EXPECT_EQ(st.error().code, ErrorCode::InvalidArgument);
+}
+
+TEST(DescriptorIndex, SetQueryErrors) {
+  const auto data = randomMatrix(50, 4, 3);
+  const DescriptorIndex graph = buildOrDie(data, 4, settingsFor(Kind::Hnsw, 16));
+  std::vector<float> set = randomMatrix(3, 4, 4);
+  int64_t ids[2] = {-7, -7};
+  float d[2];
+  int32_t r[2];
+  EXPECT_EQ(graph.queryNearestOfSet(set.data(), 0, 1, ids, d, r).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(graph.queryNearestOfSet(set.data(), 3, 51, ids, d, r).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(graph.queryNearestOfSet(nullptr, 3, 1, ids, d, r).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(graph.queryNearestOfSet(set.data(), 3, 1, ids, d, nullptr).error().code, ErrorCode::InvalidArgument);
+  set[2 * 4 + 1] = std::numeric_limits<float>::quiet_NaN();
+  const Status st = graph.queryNearestOfSet(set.data(), 3, 2, ids, d, r);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.error().message.find("query row 2"), std::string::npos) << st.error().message;
+  EXPECT_EQ(ids[0], -7);  // nothing written
 }
 
 TEST(DescriptorIndex, DeterministicResults) {

@@ -12,6 +12,8 @@
 #include <map>
 #include <optional>
 #include <random>
+#include <string>
+#include <string_view>
 
 #include "brittle/core/Timing.h"
 #include "brittle/database/FragmentMatcher.h"
@@ -63,7 +65,7 @@ Result<IndexChoice> parseIndexChoice(const std::string& text) {
   auto kind = parseDescriptorIndexKind(name);
   const auto bad = [&] {
     return makeError(ErrorCode::InvalidArgument,
-                     "index '" + text + "': expected kd-forest:TREES:CHECKS, hnsw:M:EF, hnsw-binary:M:EF, faiss-hnsw:M:EF, "
+                     "index '" + text + "': expected kd-forest:TREES:CHECKS, hnsw:M:EF[:each], hnsw-binary:M:EF[:each], faiss-hnsw:M:EF, "
                      "faiss-ivf:LISTS:PROBES, faiss-binary-hnsw:M:EF, autotuned:PRECISION, brute-force or "
                      "faiss-binary-flat");
   };
@@ -83,7 +85,15 @@ Result<IndexChoice> parseIndexChoice(const std::string& text) {
   }
   int trees = 0, checks = 0;
   char tail = 0;
-  if (std::sscanf(text.c_str() + name.size(), ":%d:%d%c", &trees, &checks, &tail) != 2 || trees < 1 || checks < 1)
+  std::string rest = text.substr(name.size());
+  // The graphs' ":each": the candidate frames searched one by one and merged, as before the set search.
+  constexpr std::string_view kEach = ":each";
+  const bool graph = kind.value() == Kind::Hnsw || kind.value() == Kind::HnswBinary;
+  if (graph && rest.size() > kEach.size() && rest.compare(rest.size() - kEach.size(), kEach.size(), kEach) == 0) {
+    rest.resize(rest.size() - kEach.size());
+    c.framesAsOneSet = false;
+  }
+  if (std::sscanf(rest.c_str(), ":%d:%d%c", &trees, &checks, &tail) != 2 || trees < 1 || checks < 1)
     return bad();
   c.settings.trees = trees;
   c.settings.checks = checks;
@@ -268,6 +278,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
         ms.enabled[static_cast<size_t>(kind)] = true;
         ms.entryLimit = n;
         ms.indexOverride[static_cast<size_t>(kind)] = choice.settings;
+        ms.framesAsOneSet = choice.framesAsOneSet;
         auto t = SteadyClock::now();
         auto matcher = FragmentMatcher::build(db, ms);
         if (!matcher) return matcher.error();

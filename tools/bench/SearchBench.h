@@ -26,9 +26,10 @@ namespace brittle::bench {
 struct IndexChoice {
   std::string label;              ///< "kd-forest 4x64", "brute-force"
   DescriptorIndexSettings settings;
+  bool framesAsOneSet = true;  ///< false: ":each", a fragment's candidate frames searched one by one
 };
 
-/// "kd-forest:TREES:CHECKS", "hnsw:M:EF", "hnsw-binary:M:EF", "faiss-hnsw:M:EF", "faiss-ivf:LISTS:PROBES",
+/// "kd-forest:TREES:CHECKS", "hnsw:M:EF[:each]", "hnsw-binary:M:EF[:each]", "faiss-hnsw:M:EF", "faiss-ivf:LISTS:PROBES",
 /// "faiss-binary-hnsw:M:EF", "autotuned:PRECISION", "brute-force" or "faiss-binary-flat".
 Result<IndexChoice> parseIndexChoice(const std::string& text);
 

@@ -118,6 +118,18 @@ class DescriptorIndex {
   [[nodiscard]] Status queryBatch(const float* descriptors, int64_t count, int k, int64_t* ids,
                                   float* squaredDistances) const;
 
+  /// The k entries nearest to a set of `count` queries (`descriptors` is count × dims row-major),
+  /// an entry's distance to the set being its smallest to any row: a fragment searched in all of
+  /// its candidate frames at once. Writes k ids, k squared L2 distances and, in `rows`, the lowest
+  /// query row that reaches each entry's distance; nearest first, ties by lower id, every entry
+  /// once. The graph kinds (Hnsw, HnswBinary) walk their graph once under the set's distance, so a
+  /// set costs about one query; the others answer each row's k nearest and merge them, which is
+  /// exact for the set (an entry among the set's k nearest is among the k nearest of the row that
+  /// reaches it); `eachRow` asks for that merge from every kind. Every row is validated first, so
+  /// on error nothing is written. Errors: as queryBatch().
+  [[nodiscard]] Status queryNearestOfSet(const float* descriptors, int64_t count, int k, int64_t* ids,
+                                         float* squaredDistances, int32_t* rows, bool eachRow = false) const;
+
   /// Bytes held: the descriptor copy plus the backend's structures (FLANN's own count; the graph
   /// links, lists and codes of hnswlib and FAISS).
   int64_t memoryBytes() const;
