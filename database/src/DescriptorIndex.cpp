@@ -71,6 +71,7 @@ const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind) {
     case DescriptorIndexSettings::Kind::Autotuned: return "autotuned";
     case DescriptorIndexSettings::Kind::Hnsw: return "hnsw";
     case DescriptorIndexSettings::Kind::HnswBinary: return "hnsw-binary";
+    case DescriptorIndexSettings::Kind::HnswPooled: return "hnsw-pooled";
     case DescriptorIndexSettings::Kind::FaissHnsw: return "faiss-hnsw";
     case DescriptorIndexSettings::Kind::FaissIvf: return "faiss-ivf";
     case DescriptorIndexSettings::Kind::FaissBinaryFlat: return "faiss-binary-flat";
@@ -123,7 +124,8 @@ Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, 
     case Kind::KdForest:
     case Kind::Autotuned: backend = search::buildFlann(result.mData.data(), rows, dims, settings); break;
     case Kind::Hnsw:
-    case Kind::HnswBinary: backend = search::buildHnsw(result.mData.data(), rows, dims, settings); break;
+    case Kind::HnswBinary:
+    case Kind::HnswPooled: backend = search::buildHnsw(result.mData.data(), rows, dims, settings); break;
     case Kind::FaissHnsw:
     case Kind::FaissIvf:
     case Kind::FaissBinaryFlat:
@@ -238,13 +240,8 @@ void DescriptorIndex::queryBruteForce(const float* descriptor, int k, int64_t* i
   // that is what makes ties go to the lower id.
   int filled = 0;
   for (int64_t r = 0; r < mRows; ++r) {
-    const float* row = mData.data() + r * mDims;
-    double sum = 0.0;  // double accumulation: the reference should not lose digits to rounding
-    for (int64_t c = 0; c < mDims; ++c) {
-      const double diff = static_cast<double>(row[c]) - static_cast<double>(descriptor[c]);
-      sum += diff * diff;
-    }
-    const float d = static_cast<float>(sum);
+    // Double accumulation: the reference should not lose digits to rounding.
+    const float d = search::exactSquaredL2(mData.data() + r * mDims, descriptor, mDims);
     if (filled == k && !(d < squaredDistances[k - 1])) continue;
     int j = filled < k ? filled++ : k - 1;
     while (j > 0 && squaredDistances[j - 1] > d) {

@@ -3,6 +3,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstring>
 #include <vector>
 #include <exception>
@@ -84,6 +86,81 @@ class HammingSpace : public hnswlib::SpaceInterface<float> {
   size_t mWords;
 };
 
+using Scored = std::pair<float, hnswlib::tableint>;
+
+// The `ef` nearest nodes of `graph` to a set of `count` queries (`stride` bytes apart from `base`),
+// nearest first, ties by lower id: a fragment's candidate frames in one search. Each row descends
+// the upper levels on its own, as a single query would, and level 0 is then searched once from all
+// their entry points (HNSW's best-first search, Malkov & Yashunin 2018, algorithm 2, with several
+// entry points) under the set's distance, the smallest over its rows. A node is measured once for
+// the set; the price is that the rows share one beam (docs/results/fragment-database.md).
+std::vector<Scored> walkSet(const hnswlib::HierarchicalNSW<float>& graph, const unsigned char* base, int64_t count,
+                            size_t stride, size_t ef) {
+  using hnswlib::tableint;
+  const auto rowOf = [&](int64_t q) { return static_cast<const void*>(base + static_cast<size_t>(q) * stride); };
+  const hnswlib::DISTFUNC<float> distance = graph.fstdistfunc_;
+  const void* param = graph.dist_func_param_;
+  const auto setDistance = [&](tableint node) {
+    const char* data = graph.getDataByInternalId(node);
+    float best = distance(rowOf(0), data, param);
+    for (int64_t q = 1; q < count; ++q) best = std::min(best, distance(rowOf(q), data, param));
+    return best;
+  };
+  // The upper levels, row by row (greedy, as hnswlib's searchKnn).
+  std::vector<tableint> entries;
+  for (int64_t q = 0; q < count; ++q) {
+    tableint current = graph.enterpoint_node_;
+    float best = distance(rowOf(q), graph.getDataByInternalId(current), param);
+    for (int level = graph.maxlevel_; level > 0; --level) {
+      for (bool moved = true; moved;) {
+        moved = false;
+        hnswlib::linklistsizeint* links = graph.get_linklist(current, level);
+        const auto* neighbours = reinterpret_cast<const tableint*>(links + 1);
+        for (int i = 0, size = graph.getListCount(links); i < size; ++i) {
+          const float d = distance(rowOf(q), graph.getDataByInternalId(neighbours[i]), param);
+          if (d < best) best = d, current = neighbours[i], moved = true;
+        }
+      }
+    }
+    if (std::find(entries.begin(), entries.end(), current) == entries.end()) entries.push_back(current);
+  }
+  // Level 0, once for the set: `kept` holds the ef best so far (farthest on top), `frontier` the
+  // nodes still to expand (nearest on top).
+  hnswlib::VisitedList* visitedList = graph.visited_list_pool_->getFreeVisitedList();
+  struct Release {
+    hnswlib::VisitedListPool* pool;
+    hnswlib::VisitedList* list;
+    ~Release() { pool->releaseVisitedList(list); }
+  } release{graph.visited_list_pool_, visitedList};
+  const auto tag = visitedList->curV;
+  auto* visited = visitedList->mass;
+  std::priority_queue<Scored> kept;
+  std::priority_queue<Scored, std::vector<Scored>, std::greater<Scored>> frontier;
+  auto offer = [&](tableint node) {
+    visited[node] = tag;
+    const float d = setDistance(node);
+    if (kept.size() < ef || d < kept.top().first) {
+      frontier.emplace(d, node);
+      kept.emplace(d, node);
+      if (kept.size() > ef) kept.pop();
+    }
+  };
+  for (tableint e : entries) offer(e);
+  while (!frontier.empty()) {
+    const auto [d, node] = frontier.top();
+    if (d > kept.top().first) break;
+    frontier.pop();
+    hnswlib::linklistsizeint* links = graph.get_linklist0(node);
+    const auto* neighbours = reinterpret_cast<const tableint*>(links + 1);
+    for (int i = 0, size = graph.getListCount(links); i < size; ++i) {
+      if (visited[neighbours[i]] != tag) offer(neighbours[i]);
+    }
+  }
+  std::vector<Scored> out(kept.size());
+  for (size_t i = out.size(); i-- > 0; kept.pop()) out[i] = kept.top();
+  return out;  // ascending (distance, id): the max-heap popped farthest first, ties higher id first
+}
+
 // Float rows are inserted as they are; 0/1 rows as their binary codes (8-byte words).
 template <typename Space, bool kBinary>
 class HnswBackend final : public Backend {
@@ -134,96 +211,27 @@ class HnswBackend final : public Backend {
 
   bool searchesSets() const override { return true; }
 
-  // A set of queries (a fragment's candidate frames) in one search: each row descends the upper
-  // levels on its own, as a single query would, and the base layer is then searched once from all
-  // their entry points (HNSW's best-first search, Malkov & Yashunin 2018, algorithm 2, with several
-  // entry points) under the set's distance, the smallest over its rows. Every row's neighbourhood
-  // is entered, so no row's nearest is lost to another's basin, and a node is measured once for
-  // the set. Row r was inserted r-th, so its internal id is r.
+  // A set of queries (a fragment's candidate frames) in one walk (walkSet); row r was inserted
+  // r-th, so its internal id is r.
   Status querySet(const float* descriptors, int64_t count, int k, int64_t* ids, float* squaredDistances,
                   int32_t* rows) const override {
-    using hnswlib::tableint;
-    using Scored = std::pair<float, tableint>;
     try {
       const size_t stride = kBinary ? static_cast<size_t>(codeBytes(mDims, 8)) : static_cast<size_t>(mDims) * sizeof(float);
       std::vector<uint8_t> codes(kBinary ? stride * static_cast<size_t>(count) : 0);
       if constexpr (kBinary) packBits(descriptors, count, mDims, 8, codes.data());
       const auto* base = kBinary ? codes.data() : reinterpret_cast<const unsigned char*>(descriptors);
-      const auto rowOf = [&](int64_t q) { return static_cast<const void*>(base + static_cast<size_t>(q) * stride); };
-      const hnswlib::DISTFUNC<float> distance = mGraph.fstdistfunc_;
-      const void* param = mGraph.dist_func_param_;
-      const auto setDistance = [&](tableint node) {
-        const char* data = mGraph.getDataByInternalId(node);
-        float best = distance(rowOf(0), data, param);
-        for (int64_t q = 1; q < count; ++q) best = std::min(best, distance(rowOf(q), data, param));
-        return best;
-      };
-      // The upper levels, row by row (greedy, as hnswlib's searchKnn).
-      std::vector<tableint> entries;
-      for (int64_t q = 0; q < count; ++q) {
-        tableint current = mGraph.enterpoint_node_;
-        float best = distance(rowOf(q), mGraph.getDataByInternalId(current), param);
-        for (int level = mGraph.maxlevel_; level > 0; --level) {
-          for (bool moved = true; moved;) {
-            moved = false;
-            hnswlib::linklistsizeint* links = mGraph.get_linklist(current, level);
-            const tableint* neighbours = reinterpret_cast<const tableint*>(links + 1);
-            for (int i = 0, size = mGraph.getListCount(links); i < size; ++i) {
-              const float d = distance(rowOf(q), mGraph.getDataByInternalId(neighbours[i]), param);
-              if (d < best) best = d, current = neighbours[i], moved = true;
-            }
-          }
-        }
-        if (std::find(entries.begin(), entries.end(), current) == entries.end()) entries.push_back(current);
-      }
-      // The base layer, once for the set: `kept` holds the ef best so far (farthest on top),
-      // `frontier` the nodes still to expand (nearest on top).
-      hnswlib::VisitedList* visitedList = mGraph.visited_list_pool_->getFreeVisitedList();
-      struct Release {
-        hnswlib::VisitedListPool* pool;
-        hnswlib::VisitedList* list;
-        ~Release() { pool->releaseVisitedList(list); }
-      } release{mGraph.visited_list_pool_, visitedList};
-      const auto tag = visitedList->curV;
-      auto* visited = visitedList->mass;
-      const size_t ef = std::max(mGraph.ef_, static_cast<size_t>(k));
-      std::priority_queue<Scored> kept;
-      std::priority_queue<Scored, std::vector<Scored>, std::greater<Scored>> frontier;
-      auto offer = [&](tableint node) {
-        visited[node] = tag;
-        const float d = setDistance(node);
-        if (kept.size() < ef || d < kept.top().first) {
-          frontier.emplace(d, node);
-          kept.emplace(d, node);
-          if (kept.size() > ef) kept.pop();
-        }
-      };
-      for (tableint e : entries) offer(e);
-      while (!frontier.empty()) {
-        const auto [d, node] = frontier.top();
-        if (d > kept.top().first) break;
-        frontier.pop();
-        hnswlib::linklistsizeint* links = mGraph.get_linklist0(node);
-        const tableint* neighbours = reinterpret_cast<const tableint*>(links + 1);
-        for (int i = 0, size = mGraph.getListCount(links); i < size; ++i) {
-          if (visited[neighbours[i]] != tag) offer(neighbours[i]);
-        }
-      }
-      while (kept.size() > static_cast<size_t>(k)) kept.pop();
+      const std::vector<Scored> kept = walkSet(mGraph, base, count, stride, std::max(mGraph.ef_, static_cast<size_t>(k)));
       if (static_cast<int>(kept.size()) < k)
         return invalidArgument("DescriptorIndex query: HNSW returned " + std::to_string(kept.size()) + " of " +
                                std::to_string(k) + " neighbours");
-      for (int i = k - 1; i >= 0; --i) {
-        squaredDistances[i] = kept.top().first;
-        ids[i] = static_cast<int64_t>(mGraph.getExternalLabel(kept.top().second));
-        kept.pop();
-      }
-      sortByDistanceThenId(k, ids, squaredDistances);
-      for (int i = 0; i < k; ++i) {  // the lowest row reaching each result's distance
-        const char* data = mGraph.getDataByInternalId(static_cast<tableint>(ids[i]));
+      for (int i = 0; i < k; ++i) {
+        squaredDistances[i] = kept[static_cast<size_t>(i)].first;
+        ids[i] = static_cast<int64_t>(mGraph.getExternalLabel(kept[static_cast<size_t>(i)].second));
+        // The lowest row reaching the set's distance.
+        const char* data = mGraph.getDataByInternalId(kept[static_cast<size_t>(i)].second);
         rows[i] = 0;
         for (int64_t q = 0; q < count; ++q) {
-          if (distance(rowOf(q), data, param) == squaredDistances[i]) {
+          if (mGraph.fstdistfunc_(base + static_cast<size_t>(q) * stride, data, mGraph.dist_func_param_) == squaredDistances[i]) {
             rows[i] = static_cast<int32_t>(q);
             break;
           }
@@ -250,6 +258,145 @@ class HnswBackend final : public Backend {
   hnswlib::HierarchicalNSW<float> mGraph;
 };
 
+// HnswPooled: the graph over a short key per row, the grid's block sums (a cubic grid of R³ values
+// summed over 8 × 8 × 8 blocks of (R/8)³ cells, 512 values, scaled by 1/√cells). By Cauchy–Schwarz
+// the keys' squared distance is a lower bound of the rows' own, so a near row has a near key. The
+// ef rows whose keys are nearest are then ranked by their exact squared distance (as brute force
+// computes it; for rows of 0/1 values, the Hamming distance of their bit codes, the same number),
+// and the k best returned. A query touches the graph's 2 KiB keys and ef full rows only. Blocks
+// of 4³ (64 values) were tried first: on 10⁴ fragments' grids their recall stopped at 0.70
+// (occupancy) and 0.96 (clamped distance) at ef 64 (docs/results/fragment-database.md).
+class PooledHnswBackend final : public Backend {
+ public:
+  static constexpr int kBlocksPerAxis = 8, kKeyDims = kBlocksPerAxis * kBlocksPerAxis * kBlocksPerAxis;
+
+  PooledHnswBackend(const float* data, int64_t rows, int64_t dims, int64_t side, bool binary,
+                    const DescriptorIndexSettings& settings)
+      : mData(data), mDims(dims), mSide(side), mBinary(binary), mWordsPerCode(static_cast<size_t>(codeBytes(dims, 8) / 8)),
+        mKeySpace(kKeyDims), mCodeSpace(mWordsPerCode),
+        mGraph(&mKeySpace, static_cast<size_t>(rows), static_cast<size_t>(settings.trees), size_t{200},
+               static_cast<size_t>(settings.seed)) {
+    if (mBinary) {
+      mCodes.resize(static_cast<size_t>(rows) * mWordsPerCode * 8);
+      packBits(data, rows, dims, 8, mCodes.data());
+    }
+    std::array<float, kKeyDims> key;
+    for (int64_t r = 0; r < rows; ++r) {  // in order, with a seeded level draw: the same graph in any process
+      pool(data + r * dims, key.data());
+      mGraph.addPoint(key.data(), static_cast<hnswlib::labeltype>(r));
+    }
+    mGraph.setEf(static_cast<size_t>(settings.checks));
+  }
+
+  Status validateQuery(const float* descriptor, int64_t dims) const override {
+    if (mBinary) return checkZeroOne(descriptor, 1, dims, true);  // ranked by its bit code
+    return Ok{};
+  }
+
+  Status query(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const override {
+    int32_t rows[1];
+    return k == 1 ? querySet(descriptor, 1, 1, ids, squaredDistances, rows) : rankedQuery(descriptor, k, ids, squaredDistances);
+  }
+
+  bool searchesSets() const override { return true; }
+
+  Status querySet(const float* descriptors, int64_t count, int k, int64_t* ids, float* squaredDistances,
+                  int32_t* rows) const override {
+    try {
+      std::vector<float> keys(static_cast<size_t>(count) * kKeyDims);
+      for (int64_t q = 0; q < count; ++q) pool(descriptors + q * mDims, keys.data() + q * kKeyDims);
+      const std::vector<Scored> candidates =
+          walkSet(mGraph, reinterpret_cast<const unsigned char*>(keys.data()), count, kKeyDims * sizeof(float),
+                  std::max(mGraph.ef_, static_cast<size_t>(k)));
+      if (static_cast<int>(candidates.size()) < k)
+        return invalidArgument("DescriptorIndex query: HNSW returned " + std::to_string(candidates.size()) + " of " +
+                               std::to_string(k) + " neighbours");
+      rank(descriptors, count, candidates, k, ids, squaredDistances, rows);
+    } catch (const std::exception& e) {
+      return invalidArgument(std::string("DescriptorIndex query: HNSW search failed: ") + e.what());
+    }
+    return Ok{};
+  }
+
+  int64_t memoryBytes() const override {
+    int64_t bytes = static_cast<int64_t>(mGraph.max_elements_ * mGraph.size_data_per_element_ + mCodes.size());
+    for (size_t i = 0; i < mGraph.cur_element_count; ++i) {
+      bytes += static_cast<int64_t>(mGraph.size_links_per_element_) * mGraph.element_levels_[i];
+    }
+    return bytes;
+  }
+
+ private:
+  // The block sums of one row, each over √cells: a block's cells are b consecutive values of a
+  // line, summed line by line into the block's slot (no division per value).
+  void pool(const float* row, float* key) const {
+    const int64_t b = mSide / kBlocksPerAxis;
+    std::fill(key, key + kKeyDims, 0.0f);
+    for (int64_t z = 0; z < mSide; ++z) {
+      for (int64_t y = 0; y < mSide; ++y) {
+        const float* line = row + (z * mSide + y) * mSide;
+        float* out = key + ((z / b) * kBlocksPerAxis + y / b) * kBlocksPerAxis;
+        for (int64_t xb = 0; xb < kBlocksPerAxis; ++xb, line += b) {
+          float sum = 0.0f;
+          for (int64_t x = 0; x < b; ++x) sum += line[x];
+          out[xb] += sum;
+        }
+      }
+    }
+    const float scale = 1.0f / std::sqrt(static_cast<float>(b * b * b));
+    for (int i = 0; i < kKeyDims; ++i) key[i] *= scale;
+  }
+
+  Status rankedQuery(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const {
+    std::vector<int32_t> rows(static_cast<size_t>(k));
+    return querySet(descriptor, 1, k, ids, squaredDistances, rows.data());
+  }
+
+  // The candidates by their exact distance to the set (the smallest over its rows; the lowest row
+  // reaching it), the k best by (distance, id).
+  void rank(const float* descriptors, int64_t count, const std::vector<Scored>& candidates, int k, int64_t* ids,
+            float* squaredDistances, int32_t* rows) const {
+    std::vector<uint8_t> queryCodes(mBinary ? static_cast<size_t>(count) * mWordsPerCode * 8 : 0);
+    if (mBinary) packBits(descriptors, count, mDims, 8, queryCodes.data());
+    struct Ranked {
+      float distance;
+      int64_t id;
+      int32_t row;
+    };
+    std::vector<Ranked> ranked;
+    ranked.reserve(candidates.size());
+    for (const Scored& c : candidates) {
+      const auto id = static_cast<int64_t>(mGraph.getExternalLabel(c.second));
+      Ranked best{std::numeric_limits<float>::infinity(), id, 0};
+      for (int64_t q = 0; q < count; ++q) {
+        const float d = mBinary ? mCodeSpace.get_dist_func()(queryCodes.data() + static_cast<size_t>(q) * mWordsPerCode * 8,
+                                                              mCodes.data() + static_cast<size_t>(id) * mWordsPerCode * 8,
+                                                              &mWordsPerCode)
+                                : exactSquaredL2(descriptors + q * mDims, mData + id * mDims, mDims);
+        if (d < best.distance) best.distance = d, best.row = static_cast<int32_t>(q);
+      }
+      ranked.push_back(best);
+    }
+    std::partial_sort(ranked.begin(), ranked.begin() + k, ranked.end(), [](const Ranked& a, const Ranked& b) {
+      return a.distance != b.distance ? a.distance < b.distance : a.id < b.id;
+    });
+    for (int i = 0; i < k; ++i) {
+      ids[i] = ranked[static_cast<size_t>(i)].id;
+      squaredDistances[i] = ranked[static_cast<size_t>(i)].distance;
+      rows[i] = ranked[static_cast<size_t>(i)].row;
+    }
+  }
+
+  const float* mData;  // DescriptorIndex's copy
+  int64_t mDims, mSide;
+  bool mBinary;
+  size_t mWordsPerCode;
+  std::vector<uint8_t> mCodes;  // rows of 0/1 values: their bit codes, for the ranking
+  EigenL2Space mKeySpace;       // declared before the graph, which keeps a pointer to it
+  mutable HammingSpace mCodeSpace;
+  hnswlib::HierarchicalNSW<float> mGraph;
+};
+
 }  // namespace
 
 Result<std::unique_ptr<Backend>> buildHnsw(const float* data, int64_t rows, int64_t dims,
@@ -261,6 +408,14 @@ Result<std::unique_ptr<Backend>> buildHnsw(const float* data, int64_t rows, int6
   if (rows > static_cast<int64_t>(std::numeric_limits<uint32_t>::max()))
     return invalidArgument("DescriptorIndex: HNSW needs rows <= UINT32_MAX");
   try {
+    if (settings.kind == DescriptorIndexSettings::Kind::HnswPooled) {
+      const auto side = static_cast<int64_t>(std::llround(std::cbrt(static_cast<double>(dims))));
+      if (side * side * side != dims || side % PooledHnswBackend::kBlocksPerAxis != 0)
+        return invalidArgument("DescriptorIndex: hnsw-pooled needs a cubic grid whose side is a multiple of 8 (R^3 values), got " +
+                               std::to_string(dims) + " values");
+      const bool binary = checkZeroOne(data, rows, dims, false).ok();
+      return std::unique_ptr<Backend>(std::make_unique<PooledHnswBackend>(data, rows, dims, side, binary, settings));
+    }
     if (indexTakesBits(settings.kind)) {
       if (Status st = checkZeroOne(data, rows, dims, false); !st) return st.error();
       return std::unique_ptr<Backend>(std::make_unique<HnswBackend<HammingSpace, true>>(data, rows, dims, settings));

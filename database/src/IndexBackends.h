@@ -44,6 +44,17 @@ Result<std::unique_ptr<Backend>> buildHnsw(const float* data, int64_t rows, int6
 Result<std::unique_ptr<Backend>> buildFaiss(const float* data, int64_t rows, int64_t dims,
                                             const DescriptorIndexSettings& settings);
 
+/// The squared L2 distance of two rows of `dims` floats, accumulated in double: brute force's
+/// distance, which re-ranking backends reproduce exactly.
+inline float exactSquaredL2(const float* a, const float* b, int64_t dims) {
+  double sum = 0.0;
+  for (int64_t c = 0; c < dims; ++c) {
+    const double diff = static_cast<double>(a[c]) - static_cast<double>(b[c]);
+    sum += diff * diff;
+  }
+  return static_cast<float>(sum);
+}
+
 /// Orders the k results by (distance, id), whatever order a backend found them in.
 void sortByDistanceThenId(int k, int64_t* ids, float* distances);
 

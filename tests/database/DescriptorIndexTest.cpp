@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <random>
@@ -332,6 +333,96 @@ TEST(DescriptorIndex, BinarySetQueryMatchesBruteForce) {
   const Status st = graph.queryNearestOfSet(bad.data(), count, 1, ids, d, r);
   ASSERT_FALSE(st.ok());
   EXPECT_EQ(st.error().code, ErrorCode::InvalidArgument);
+}
+
+// Smooth random fields on a 16³ grid, as the voxel kinds' descriptors are: a few Gaussian bumps per
+// row, and their occupancy (0/1) above the row's median.
+std::vector<float> smoothGrids(int64_t rows, uint32_t seed, bool occupancy) {
+  const int side = 16;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> at(0.0f, float(side)), weight(-1.0f, 1.0f);
+  std::vector<float> m(static_cast<size_t>(rows) * side * side * side);
+  for (int64_t r = 0; r < rows; ++r) {
+    float cx[4], cy[4], cz[4], w[4];
+    for (int b = 0; b < 4; ++b) cx[b] = at(rng), cy[b] = at(rng), cz[b] = at(rng), w[b] = weight(rng);
+    for (int z = 0; z < side; ++z)
+      for (int y = 0; y < side; ++y)
+        for (int x = 0; x < side; ++x) {
+          float v = 0.0f;
+          for (int b = 0; b < 4; ++b)
+            v += w[b] * std::exp(-((x - cx[b]) * (x - cx[b]) + (y - cy[b]) * (y - cy[b]) + (z - cz[b]) * (z - cz[b])) / 18.0f);
+          m[static_cast<size_t>(((r * side + z) * side + y) * side + x)] = v;
+        }
+    if (occupancy) {  // the shape: the cells above the row's median (half full, as a fragment's box is)
+      float* row = m.data() + r * side * side * side;
+      std::vector<float> sorted(row, row + side * side * side);
+      std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+      const float median = sorted[sorted.size() / 2];
+      for (int c = 0; c < side * side * side; ++c) row[c] = row[c] > median ? 1.0f : 0.0f;
+    }
+  }
+  return m;
+}
+
+// The pooled graph answers with exact distances (brute force's, or the bit codes' for 0/1 rows),
+// finds the nearest entry of near-duplicate queries, answers sets like the other graphs, and
+// refuses grids it cannot pool and, over 0/1 rows, queries that are not 0/1.
+TEST(DescriptorIndex, PooledGraphRanksItsCandidatesExactly) {
+  const int64_t rows = 1000, dims = 4096, queries = 60;
+  for (bool occupancy : {false, true}) {
+    const auto data = smoothGrids(rows, 3, occupancy);
+    const DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+    DescriptorIndexSettings pooledSettings = settingsFor(Kind::HnswPooled, 32);
+    pooledSettings.trees = 16;
+    const DescriptorIndex pooled = buildOrDie(data, dims, pooledSettings);
+    EXPECT_EQ(pooled.settings().kind, Kind::HnswPooled);
+    std::mt19937 rng(4);
+    int hits = 0;
+    for (int64_t i = 0; i < queries; ++i) {
+      // An entry with a few values changed: its nearest row is itself.
+      const int64_t target = (i * 97) % rows;
+      std::vector<float> q(data.begin() + target * dims, data.begin() + (target + 1) * dims);
+      for (int c = 0; c < 20; ++c) {
+        float& v = q[static_cast<size_t>(rng() % dims)];
+        v = occupancy ? 1.0f - v : v + 0.05f;
+      }
+      int64_t ids[3], exactIds[3];
+      float d[3], exactD[3];
+      ASSERT_TRUE(pooled.query(q.data(), 3, ids, d).ok());
+      ASSERT_TRUE(exact.query(q.data(), 3, exactIds, exactD).ok());
+      hits += ids[0] == exactIds[0] || d[0] == exactD[0];  // equal grids tie
+      for (int j = 0; j < 3; ++j) {
+        // Each answer at its exact distance, in order.
+        const float own = exactSetAnswer(std::vector<float>(data.begin() + ids[j] * dims, data.begin() + (ids[j] + 1) * dims),
+                                         dims, q.data(), 1, 1).distances[0];
+        ASSERT_EQ(d[j], own) << "query " << i << " rank " << j;
+        ASSERT_GE(d[j], exactD[j]);
+        if (j > 0) ASSERT_LE(d[j - 1], d[j]);
+      }
+      // A set of this query and another row: the same entry, named at row 0.
+      std::vector<float> set(q);
+      const auto other = smoothGrids(1, 100 + uint32_t(i), occupancy);
+      set.insert(set.end(), other.begin(), other.end());
+      int32_t r[1];
+      ASSERT_TRUE(pooled.queryNearestOfSet(set.data(), 2, 1, ids, d, r).ok());
+      const SetAnswer truth = exactSetAnswer(data, dims, set.data(), 2, 1);
+      if (ids[0] == truth.ids[0]) EXPECT_EQ(r[0], truth.rows[0]);
+    }
+    RecordProperty(occupancy ? "pooled_recall_occupancy" : "pooled_recall_field", std::to_string(double(hits) / queries));
+    EXPECT_GE(double(hits) / double(queries), 0.98) << (occupancy ? "occupancy" : "field");
+    if (occupancy) {
+      std::vector<float> half(dims, 0.5f);
+      int64_t ids[1];
+      float d[1];
+      EXPECT_EQ(pooled.query(half.data(), 1, ids, d).error().code, ErrorCode::InvalidArgument);
+    }
+  }
+  // 28 values are no cubic grid; 12³ is one, but not of a side divisible by 8.
+  const auto flat = randomMatrix(10, 28, 1);
+  EXPECT_EQ(DescriptorIndex::build(flat.data(), 10, 28, settingsFor(Kind::HnswPooled)).error().code, ErrorCode::InvalidArgument);
+  const auto cube = randomMatrix(10, 12 * 12 * 12, 1);
+  EXPECT_EQ(DescriptorIndex::build(cube.data(), 10, 12 * 12 * 12, settingsFor(Kind::HnswPooled)).error().code,
+            ErrorCode::InvalidArgument);
 }
 
 TEST(DescriptorIndex, SetQueryErrors) {

@@ -65,7 +65,7 @@ Result<IndexChoice> parseIndexChoice(const std::string& text) {
   auto kind = parseDescriptorIndexKind(name);
   const auto bad = [&] {
     return makeError(ErrorCode::InvalidArgument,
-                     "index '" + text + "': expected kd-forest:TREES:CHECKS, hnsw:M:EF[:each], hnsw-binary:M:EF[:each], faiss-hnsw:M:EF, "
+                     "index '" + text + "': expected kd-forest:TREES:CHECKS, hnsw:M:EF[:set], hnsw-binary:M:EF[:set], hnsw-pooled:M:EF[:set], faiss-hnsw:M:EF, "
                      "faiss-ivf:LISTS:PROBES, faiss-binary-hnsw:M:EF, autotuned:PRECISION, brute-force or "
                      "faiss-binary-flat");
   };
@@ -86,12 +86,12 @@ Result<IndexChoice> parseIndexChoice(const std::string& text) {
   int trees = 0, checks = 0;
   char tail = 0;
   std::string rest = text.substr(name.size());
-  // The graphs' ":each": the candidate frames searched one by one and merged, as before the set search.
-  constexpr std::string_view kEach = ":each";
-  const bool graph = kind.value() == Kind::Hnsw || kind.value() == Kind::HnswBinary;
-  if (graph && rest.size() > kEach.size() && rest.compare(rest.size() - kEach.size(), kEach.size(), kEach) == 0) {
-    rest.resize(rest.size() - kEach.size());
-    c.framesAsOneSet = false;
+  // The graphs' ":set": a fragment's candidate frames in one walk (FragmentMatcherSettings::framesAsOneSet).
+  constexpr std::string_view kSet = ":set";
+  const bool graph = kind.value() == Kind::Hnsw || kind.value() == Kind::HnswBinary || kind.value() == Kind::HnswPooled;
+  if (graph && rest.size() > kSet.size() && rest.compare(rest.size() - kSet.size(), kSet.size(), kSet) == 0) {
+    rest.resize(rest.size() - kSet.size());
+    c.framesAsOneSet = true;
   }
   if (std::sscanf(rest.c_str(), ":%d:%d%c", &trees, &checks, &tail) != 2 || trees < 1 || checks < 1)
     return bad();
@@ -256,7 +256,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
   if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.searchCsv.string());
   csv << "entries,descriptor,index,trees,checks,build_s,memory_mb,query_median_us,query_p99_us,brute_median_us,"
          "speedup_vs_brute,recall_at_1,physics_queries,mass_err_median,inertia_err_median,frequency_err_median,"
-         "database_runtime_fraction,query_source,moment_order,voxel_resolution\n";
+         "database_runtime_fraction,query_source,moment_order,voxel_resolution,frames\n";
 
   for (int64_t n : s.sizes) {
     for (DescriptorKind kind : s.kinds) {
@@ -273,6 +273,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
       double bruteMedian = 0.0;
       for (const IndexChoice& choice : choices) {
         if (indexTakesBits(choice.settings.kind) && kind != DescriptorKind::Voxel) continue;  // 0/1 codes only
+        if (choice.settings.kind == DescriptorIndexSettings::Kind::HnswPooled && kind == DescriptorKind::Moment) continue;  // grids only
         FragmentMatcherSettings ms;
         ms.enabled = {false, false, false};
         ms.enabled[static_cast<size_t>(kind)] = true;
@@ -331,7 +332,13 @@ Status runSearchBench(const SearchBenchSettings& s) {
             << percentile(times, 0.99) << "," << bruteMedian << "," << bruteMedian / median << "," << recall << ","
             << massErr.size() << "," << percentile(massErr, 0.5) << "," << percentile(inertiaErr, 0.5) << ","
             << percentile(freqErr, 0.5) << "," << s.runtimeFraction << "," << (s.runtimeQueries ? "runtime" : "cut") << ","
-            << s.momentOrder << "," << s.voxelResolution << "\n";
+            << s.momentOrder << "," << s.voxelResolution << ","
+            << (choice.framesAsOneSet && (choice.settings.kind == DescriptorIndexSettings::Kind::Hnsw ||
+                                          choice.settings.kind == DescriptorIndexSettings::Kind::HnswBinary ||
+                                          choice.settings.kind == DescriptorIndexSettings::Kind::HnswPooled)
+                    ? "set"
+                    : "each")
+            << "\n";
         csv.flush();
         log(s.quiet, "%7lld %-14s %-22s recall %.3f  median %8.1f us  p99 %8.1f us  (brute %8.1f us)  freq err %.3f\n",
             static_cast<long long>(n), descriptorKindName(kind), choice.label.c_str(), recall, median,

@@ -26,10 +26,10 @@ namespace brittle::bench {
 struct IndexChoice {
   std::string label;              ///< "kd-forest 4x64", "brute-force"
   DescriptorIndexSettings settings;
-  bool framesAsOneSet = true;  ///< false: ":each", a fragment's candidate frames searched one by one
+  bool framesAsOneSet = false;  ///< true: ":set", a fragment's candidate frames in one walk of a graph
 };
 
-/// "kd-forest:TREES:CHECKS", "hnsw:M:EF[:each]", "hnsw-binary:M:EF[:each]", "faiss-hnsw:M:EF", "faiss-ivf:LISTS:PROBES",
+/// "kd-forest:TREES:CHECKS", "hnsw:M:EF[:set]", "hnsw-binary:M:EF[:set]", "hnsw-pooled:M:EF[:set]", "faiss-hnsw:M:EF", "faiss-ivf:LISTS:PROBES",
 /// "faiss-binary-hnsw:M:EF", "autotuned:PRECISION", "brute-force" or "faiss-binary-flat".
 Result<IndexChoice> parseIndexChoice(const std::string& text);
 

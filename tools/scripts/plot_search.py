@@ -20,10 +20,13 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-TEXT = {"descriptor", "index", "query_source"}
+TEXT = {"descriptor", "index", "query_source", "frames"}
 # Index families: the project's own (solid) and FAISS's (dashed).
 FAMILIES = {"brute-force": ("black", ""), "kd-forest": ("tab:blue", "-"), "autotuned": ("tab:cyan", "-"),
-            "hnsw": ("tab:orange", "-"), "hnsw-binary": ("tab:red", "-"), "faiss-hnsw": ("tab:green", "--"),
+            "hnsw": ("tab:orange", "-"), "hnsw-binary": ("tab:red", "-"),
+            "hnsw-pooled": ("tab:brown", "-"),
+            "hnsw, frames as one set": ("navajowhite", "-"), "hnsw-binary, frames as one set": ("lightcoral", "-"),
+            "faiss-hnsw": ("tab:green", "--"),
             "faiss-ivf": ("tab:olive", "--"), "faiss-binary-flat": ("tab:purple", "--"),
             "faiss-binary-hnsw": ("tab:pink", "--")}
 COLORS = {"moment": "tab:blue", "voxel": "tab:orange", "voxel-improved": "tab:green"}
@@ -37,13 +40,17 @@ def load(path):
         for k, v in r.items():
             if k not in TEXT and k != "stage":
                 r[k] = float(v)
+        # A graph that searched a fragment's candidate frames in one walk (its ":set" rows) is its
+        # own family beside the frame-by-frame search (the default, and every row before it).
+        if r["index"] in ("hnsw", "hnsw-binary") and r.get("frames", "each") == "set":
+            r["index"] += ", frames as one set"
     return rows
 
 
 def label(r):
     if r["index"] == "kd-forest":
         return f"kd {int(r['trees'])}x{int(r['checks'])}"
-    if r["index"] in ("hnsw", "hnsw-binary", "faiss-hnsw", "faiss-binary-hnsw"):
+    if r["index"].split(",")[0] in ("hnsw", "hnsw-binary", "hnsw-pooled", "faiss-hnsw", "faiss-binary-hnsw"):
         return f"{r['index']} M{int(r['trees'])} ef{int(r['checks'])}"
     if r["index"] == "faiss-ivf":
         return f"faiss-ivf {int(r['trees'])}/{int(r['checks'])}"
@@ -60,6 +67,7 @@ def main():
 
     fig, axes = plt.subplots(1, len(kinds), figsize=(6 * len(kinds), 5.5), squeeze=False)
     for ax, kind in zip(axes[0], kinds):
+        labelled = set()  # each family in the legend once, at whichever size it first appears
         for si, n in enumerate(sizes):
             for family, (color, style) in FAMILIES.items():
                 pts = [r for r in rows if r["descriptor"] == kind and int(r["entries"]) == n and r["index"] == family]
@@ -68,7 +76,8 @@ def main():
                 pts.sort(key=lambda r: r["query_median_us"])
                 ax.plot([r["query_median_us"] for r in pts], [r["recall_at_1"] for r in pts],
                         style + markers[si % len(markers)], color=color,
-                        label=family if si == 0 else None, alpha=0.85)
+                        label=None if family in labelled else family, alpha=0.85)
+                labelled.add(family)
         ax.axhline(0.99, color="grey", ls=":", lw=1)
         ax.axvline(TARGET_US, color="grey", ls=":", lw=1)
         ax.set_xscale("log")

@@ -18,6 +18,11 @@
 //   - HnswBinary: the same graph over the binary codes of 0/1 descriptors (the occupancy voxel
 //     kind), with the Hamming distance, which equals their squared L2 distance: a 16³ code is 512
 //     bytes instead of 16 KiB of floats. Values other than 0 or 1 are an InvalidArgument.
+//   - HnswPooled: for the voxel kinds (a cubic grid of R³ values, R a multiple of 8): the same
+//     graph over a 512-value key per row, the grid's 8 × 8 × 8 block sums over √cells, whose
+//     distance is a lower bound of the rows' own; the ef rows with the nearest keys are ranked by
+//     their exact distance (brute force's; rows of 0/1 values by their bit codes, so their queries
+//     must be 0/1 too). `trees` and `checks` as Hnsw; ef is also the number ranked.
 //   - FAISS (Debian's libfaiss-dev), the standard baselines for descriptor research:
 //     FaissHnsw (IndexHNSWFlat: `trees` is M, `checks` efSearch, efConstruction 200), FaissIvf
 //     (IndexIVFFlat: `trees` inverted lists from k-means, `checks` lists probed), and on binary
@@ -63,9 +68,9 @@ class Backend;
 }
 
 struct DescriptorIndexSettings {
-  enum class Kind { BruteForce, KdForest, Autotuned, Hnsw, HnswBinary, FaissHnsw, FaissIvf, FaissBinaryFlat, FaissBinaryHnsw };
+  enum class Kind { BruteForce, KdForest, Autotuned, Hnsw, HnswBinary, FaissHnsw, FaissIvf, FaissBinaryFlat, FaissBinaryHnsw, HnswPooled };
   Kind kind = Kind::KdForest;
-  /// KdForest: number of randomized kd-trees, ≥ 1. Hnsw, HnswBinary and the FAISS graphs: M, in
+  /// KdForest: number of randomized kd-trees, ≥ 1. Hnsw, HnswBinary, HnswPooled and the FAISS graphs: M, in
   /// [2, 1024]. FaissIvf: inverted lists, in [1, rows].
   int trees = 4;
   /// KdForest: leaves visited per query, ≥ 1 (more: slower, better). Hnsw and the FAISS graphs:
@@ -78,7 +83,7 @@ struct DescriptorIndexSettings {
 inline constexpr DescriptorIndexSettings::Kind kAllDescriptorIndexKinds[] = {
     DescriptorIndexSettings::Kind::BruteForce,      DescriptorIndexSettings::Kind::KdForest,
     DescriptorIndexSettings::Kind::Autotuned,       DescriptorIndexSettings::Kind::Hnsw,
-    DescriptorIndexSettings::Kind::HnswBinary,
+    DescriptorIndexSettings::Kind::HnswBinary,      DescriptorIndexSettings::Kind::HnswPooled,
     DescriptorIndexSettings::Kind::FaissHnsw,       DescriptorIndexSettings::Kind::FaissIvf,
     DescriptorIndexSettings::Kind::FaissBinaryFlat, DescriptorIndexSettings::Kind::FaissBinaryHnsw};
 
@@ -88,8 +93,8 @@ constexpr bool indexTakesBits(DescriptorIndexSettings::Kind kind) {
          kind == DescriptorIndexSettings::Kind::FaissBinaryHnsw;
 }
 
-/// "brute-force", "kd-forest", "autotuned", "hnsw", "hnsw-binary", "faiss-hnsw", "faiss-ivf", "faiss-binary-flat"
-/// or "faiss-binary-hnsw" (the CLI and pack spelling).
+/// "brute-force", "kd-forest", "autotuned", "hnsw", "hnsw-binary", "hnsw-pooled", "faiss-hnsw", "faiss-ivf",
+/// "faiss-binary-flat" or "faiss-binary-hnsw" (the CLI and pack spelling).
 const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind);
 /// Inverse of descriptorIndexKindName. Error: InvalidArgument listing the valid names.
 Result<DescriptorIndexSettings::Kind> parseDescriptorIndexKind(std::string_view name);

@@ -42,10 +42,12 @@ struct FragmentMatcherSettings {
   /// matches worse; the search benchmark sweeps it.
   int64_t entryLimit = 0;
   /// A fragment's candidate frames (one to four) searched as one set, in one walk of a graph index
-  /// (DescriptorIndex::queryNearestOfSet), rather than one search per frame merged. Same answer
-  /// from the exact and kd-forest indices; on a graph, about one search's cost instead of one per
-  /// frame, at a recall the search benchmark measures against the frame-by-frame search.
-  bool framesAsOneSet = true;
+  /// (DescriptorIndex::queryNearestOfSet), instead of one search per frame, merged. The exact and
+  /// kd-forest indices give the same answer either way. On a graph, a fragment with several frames
+  /// costs about one search, but the frames share one beam. Measured on moment descriptors: at 10⁴
+  /// entries the p99 falls by 45 % at the same recall, and at 10⁵ the recall falls from 0.993 to
+  /// 0.985 with no gain in the median (docs/results/fragment-database.md). So it is off by default.
+  bool framesAsOneSet = false;
 };
 
 class FragmentMatcher {
@@ -81,7 +83,7 @@ class FragmentMatcher {
  private:
   FragmentMatcher() = default;
   const FragmentDatabase* mDatabase = nullptr;
-  bool mFramesAsOneSet = true;
+  bool mFramesAsOneSet = false;
   std::array<std::optional<DescriptorIndex>, kDescriptorKindCount> mIndices;
 };
 
