@@ -276,6 +276,7 @@ class PooledHnswBackend final : public Backend {
         mKeySpace(kKeyDims), mCodeSpace(mWordsPerCode),
         mGraph(&mKeySpace, static_cast<size_t>(rows), static_cast<size_t>(settings.trees), size_t{200},
                static_cast<size_t>(settings.seed)) {
+    mHamming = mCodeSpace.get_dist_func();
     if (mBinary) {
       mCodes.resize(static_cast<size_t>(rows) * mWordsPerCode * 8);
       packBits(data, rows, dims, 8, mCodes.data());
@@ -294,8 +295,8 @@ class PooledHnswBackend final : public Backend {
   }
 
   Status query(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const override {
-    int32_t rows[1];
-    return k == 1 ? querySet(descriptor, 1, 1, ids, squaredDistances, rows) : rankedQuery(descriptor, k, ids, squaredDistances);
+    std::vector<int32_t> rows(static_cast<size_t>(k));
+    return querySet(descriptor, 1, k, ids, squaredDistances, rows.data());
   }
 
   bool searchesSets() const override { return true; }
@@ -347,11 +348,6 @@ class PooledHnswBackend final : public Backend {
     for (int i = 0; i < kKeyDims; ++i) key[i] *= scale;
   }
 
-  Status rankedQuery(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const {
-    std::vector<int32_t> rows(static_cast<size_t>(k));
-    return querySet(descriptor, 1, k, ids, squaredDistances, rows.data());
-  }
-
   // The candidates by their exact distance to the set (the smallest over its rows; the lowest row
   // reaching it), the k best by (distance, id).
   void rank(const float* descriptors, int64_t count, const std::vector<Scored>& candidates, int k, int64_t* ids,
@@ -392,7 +388,7 @@ class PooledHnswBackend final : public Backend {
       const auto id = static_cast<int64_t>(mGraph.getExternalLabel(candidates[i].second));
       Ranked best{std::numeric_limits<float>::infinity(), id, 0};
       for (int64_t q = 0; q < count; ++q) {
-        const float d = mBinary ? mCodeSpace.get_dist_func()(queryCodes.data() + static_cast<size_t>(q) * mWordsPerCode * 8,
+        const float d = mBinary ? mHamming(queryCodes.data() + static_cast<size_t>(q) * mWordsPerCode * 8,
                                                               mCodes.data() + static_cast<size_t>(id) * mWordsPerCode * 8,
                                                               &mWordsPerCode)
                                 : exactSquaredL2(descriptors + q * mDims, mData + id * mDims, mDims);
@@ -416,7 +412,8 @@ class PooledHnswBackend final : public Backend {
   size_t mWordsPerCode;
   std::vector<uint8_t> mCodes;  // rows of 0/1 values: their bit codes, for the ranking
   EigenL2Space mKeySpace;       // declared before the graph, which keeps a pointer to it
-  mutable HammingSpace mCodeSpace;
+  HammingSpace mCodeSpace;
+  hnswlib::DISTFUNC<float> mHamming;  // mCodeSpace's distance, chosen once
   hnswlib::HierarchicalNSW<float> mGraph;
 };
 
