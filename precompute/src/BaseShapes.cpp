@@ -2,6 +2,8 @@
 
 #include "brittle/core/JsonChecks.h"
 #include "brittle/descriptors/MeshRefinement.h"
+#include "brittle/precompute/MeshIO.h"
+#include "brittle/precompute/MeshValidation.h"
 
 #include <algorithm>
 #include <cmath>
@@ -108,17 +110,18 @@ const char* baseShapeKindName(BaseShapeKind kind) {
     case BaseShapeKind::Cone: return "cone";
     case BaseShapeKind::Wedge: return "wedge";
     case BaseShapeKind::Blob: return "blob";
+    case BaseShapeKind::Mesh: return "mesh";
   }
   return "unknown";
 }
 
 Result<BaseShapeKind> parseBaseShapeKind(std::string_view name) {
   for (BaseShapeKind k : {BaseShapeKind::Box, BaseShapeKind::Plate, BaseShapeKind::Rod, BaseShapeKind::Sphere,
-                          BaseShapeKind::Cone, BaseShapeKind::Wedge, BaseShapeKind::Blob}) {
+                          BaseShapeKind::Cone, BaseShapeKind::Wedge, BaseShapeKind::Blob, BaseShapeKind::Mesh}) {
     if (name == baseShapeKindName(k)) return k;
   }
   return makeError(ErrorCode::InvalidArgument, "unknown base shape kind '" + std::string(name) +
-                                                   "' (expected box, plate, rod, sphere, cone, wedge or blob)");
+                                                   "' (expected box, plate, rod, sphere, cone, wedge, blob or mesh)");
 }
 
 namespace {
@@ -126,6 +129,10 @@ namespace {
 // Everything makeBaseShape can refuse: once a definition passes, building it cannot fail.
 Status checkDefinition(const BaseShapeDefinition& d) {
   const std::string label = "base shape '" + d.name + "': ";
+  if (d.kind == BaseShapeKind::Mesh) {
+    if (d.meshPath.empty()) return makeError(ErrorCode::InvalidArgument, label + "a mesh shape needs a mesh file");
+    return Ok{};
+  }
   if (!d.sizeM.allFinite() || !(d.sizeM.minCoeff() > 0.0)) {
     return makeError(ErrorCode::InvalidArgument, label + "size must be finite and positive");
   }
@@ -153,6 +160,17 @@ Result<TriangleMesh> makeBaseShape(const BaseShapeDefinition& d) {
     case BaseShapeKind::Rod: return lathe(d.sizeM, d.segments, false);
     case BaseShapeKind::Cone: return lathe(d.sizeM, d.segments, true);
     case BaseShapeKind::Wedge: return wedge(d.sizeM);
+    case BaseShapeKind::Mesh: {
+      auto mesh = readSurfaceMesh(d.meshPath);
+      if (!mesh) return Error{mesh.error().code, "base shape '" + d.name + "': " + mesh.error().message};
+      if (Status valid = validateSurfaceMesh(mesh.value()); !valid) {
+        return Error{valid.error().code, "base shape '" + d.name + "': " + valid.error().message};
+      }
+      TriangleMesh m = std::move(mesh).value();
+      const Eigen::RowVector3d centre = 0.5 * (m.vertices.colwise().minCoeff() + m.vertices.colwise().maxCoeff());
+      m.vertices.rowwise() -= centre;
+      return m;
+    }
     case BaseShapeKind::Sphere:
     case BaseShapeKind::Blob: {
       TriangleMesh m = unitIcosphere(d.segments);
@@ -196,7 +214,7 @@ Result<std::vector<BaseShapeDefinition>> loadBaseShapes(const std::filesystem::p
   if (!doc.is_object() || !doc.contains("shapes") || !doc["shapes"].is_array() || doc["shapes"].empty()) {
     return makeError(ErrorCode::ParseError, file + ": needs a non-empty \"shapes\" array");
   }
-  static const std::set<std::string> kKeys = {"name", "kind", "size", "segments", "noise", "seed"};
+  static const std::set<std::string> kKeys = {"name", "kind", "size", "segments", "noise", "seed", "mesh"};
   std::set<std::string> names;
   std::vector<BaseShapeDefinition> out;
   for (size_t i = 0; i < doc["shapes"].size(); ++i) {
@@ -207,7 +225,7 @@ Result<std::vector<BaseShapeDefinition>> loadBaseShapes(const std::filesystem::p
     };
     if (!j.is_object()) return makeError(ErrorCode::ParseError, where + ": not an object");
     if (auto key = findUnknownKey(j, kKeys)) return bad(*key, "is not a known key");
-    for (const char* key : {"name", "kind", "size"}) {
+    for (const char* key : {"name", "kind"}) {
       if (!j.contains(key)) return bad(key, "is required");
     }
     BaseShapeDefinition d;
@@ -218,6 +236,23 @@ Result<std::vector<BaseShapeDefinition>> loadBaseShapes(const std::filesystem::p
     auto kind = parseBaseShapeKind(j["kind"].get<std::string>());
     if (!kind) return bad("kind", kind.error().message);
     d.kind = kind.value();
+    if (d.kind == BaseShapeKind::Mesh) {
+      // A surface mesh keeps its own size: the procedural keys do not apply to it.
+      for (const char* key : {"size", "segments", "noise", "seed"}) {
+        if (j.contains(key)) return bad(key, "does not apply to a mesh shape (it keeps its own size)");
+      }
+      if (!j.contains("mesh")) return bad("mesh", "is required for a mesh shape");
+      if (!j["mesh"].is_string() || j["mesh"].get<std::string>().empty()) return bad("mesh", "must be a non-empty path");
+      const std::filesystem::path mesh = j["mesh"].get<std::string>();
+      d.meshPath = mesh.is_absolute() ? mesh : jsonPath.parent_path() / mesh;
+      if (!std::filesystem::is_regular_file(d.meshPath)) {
+        return makeError(ErrorCode::FileNotFound, where + ": mesh file not found: " + d.meshPath.string());
+      }
+      out.push_back(std::move(d));
+      continue;
+    }
+    if (j.contains("mesh")) return bad("mesh", "applies to mesh shapes only");
+    if (!j.contains("size")) return bad("size", "is required");
     const nlohmann::json& size = j["size"];
     if (!size.is_array() || size.size() != 3 || !size[0].is_number() || !size[1].is_number() || !size[2].is_number()) {
       return bad("size", "must be 3 numbers (m)");

@@ -117,6 +117,7 @@ Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std:
     bake.material = settings.referenceMaterial;
     bake.tetMesh = settings.tetMesh;
     bake.modal.modeCount = settings.modeCount;
+    bake.elementOrder = settings.elementOrder;
     bake.fillOrdering = false;  // not stored for entries (BakePipeline.h)
     // A fragment thinner than the cell size in places comes out of Mesh_3 in pieces: mesh the
     // same fragment finer (2×, 4× the tets) before the caller draws another one.
@@ -351,9 +352,11 @@ Result<FragmentDatabase> readChunk(const DatabaseBakeSettings& settings, const D
 std::string describeDatabaseBake(const DatabaseBakeSettings& s) {
   nlohmann::json shapes = nlohmann::json::array();
   for (const BaseShapeDefinition& d : s.shapes) {
-    shapes.push_back({{"name", d.name}, {"kind", baseShapeKindName(d.kind)},
-                      {"size", {d.sizeM.x(), d.sizeM.y(), d.sizeM.z()}}, {"segments", d.segments},
-                      {"noise", d.noiseAmplitude}, {"seed", d.seed}});
+    nlohmann::json shape = {{"name", d.name}, {"kind", baseShapeKindName(d.kind)},
+                            {"size", {d.sizeM.x(), d.sizeM.y(), d.sizeM.z()}}, {"segments", d.segments},
+                            {"noise", d.noiseAmplitude}, {"seed", d.seed}};
+    if (d.kind == BaseShapeKind::Mesh) shape["mesh"] = d.meshPath.filename().generic_string();
+    shapes.push_back(std::move(shape));
   }
   const Material& m = s.referenceMaterial;
   const TetMeshSettings& t = s.tetMesh;
@@ -376,6 +379,7 @@ std::string describeDatabaseBake(const DatabaseBakeSettings& s) {
                     t.facetDistanceFraction, t.cellRadiusEdgeRatio, t.detectSharpFeatures, t.featureAngleDeg,
                     t.optimize, t.sliverBoundDeg, t.seed}},
       {"modes", s.modeCount},
+      {"element", elementOrderName(s.elementOrder)},
       {"frame", {d.frame.eigenGapTolerance, d.frame.skewnessTolerance, d.frame.shapeTolerance,
                  d.frame.tieTolerance, d.frame.duplicateTolerance, d.frame.maxCandidates}},
       {"moment", {d.moment.maxOrder, d.moment.orderWeights}},
@@ -521,7 +525,7 @@ Result<std::optional<DatabaseBakeSettings>> loadDatabaseManifest(const std::file
     if (!d.is_object()) return makeError(ErrorCode::ParseError, where + ": not an object");
     static const std::set<std::string> kKeys = {"shapes", "only", "entries", "seed", "tets", "modes",
                                                 "descriptors_only", "moment_order", "voxel_resolution",
-                                                "runtime_fraction"};
+                                                "runtime_fraction", "element"};
     if (Status st = checkKnownKeys(d, kKeys, where); !st) return st.error();
     if (!d.contains("shapes")) return makeError(ErrorCode::ParseError, where + ": \"shapes\" is required");
     for (const auto& [key, lo, hi] : {std::tuple{"entries", 1.0, 1e7}, std::tuple{"seed", 0.0, 9.007199254740992e15},
@@ -542,6 +546,11 @@ Result<std::optional<DatabaseBakeSettings>> loadDatabaseManifest(const std::file
       return makeError(ErrorCode::ParseError, where + ": \"runtime_fraction\" must be a number in [0, 1]");
     }
     DatabaseBakeSettings s;
+    if (d.contains("element")) {
+      const auto order = d["element"].is_string() ? parseElementOrder(d["element"].get<std::string>()) : std::nullopt;
+      if (!order) return makeError(ErrorCode::ParseError, where + ": \"element\" must be \"p1\" or \"p2\"");
+      s.elementOrder = *order;
+    }
     auto shapes = loadBaseShapes(path.parent_path() / d["shapes"].get<std::string>());
     if (!shapes) return shapes.error();
     s.shapes = std::move(shapes).value();

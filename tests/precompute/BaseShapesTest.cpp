@@ -7,8 +7,10 @@
 #include <limits>
 #include <numbers>
 #include <set>
+#include <tuple>
 
 #include "brittle/descriptors/MassProperties.h"
+#include "brittle/precompute/MeshIO.h"
 #include "brittle/precompute/MeshValidation.h"
 #include "brittle/testing/Fixtures.h"
 #include "SurfaceExpectations.h"
@@ -62,6 +64,7 @@ TEST(BaseShapes, ShippedShapesAreValidSolidsWithTheirVolumes) {
         EXPECT_GT(v, 0.985 * kPi / 6.0 * s.prod());
         break;
       case BaseShapeKind::Blob: EXPECT_GT(v, 0.2 * kPi / 6.0 * s.prod()); break;
+      case BaseShapeKind::Mesh: ADD_FAILURE() << "no mesh shape is shipped in base-shapes.json"; break;
     }
     // Centred on its bounding box, with the extents of sizeM (blob: radii vary by the noise).
     const Eigen::Vector3d lo = mesh.value().vertices.colwise().minCoeff(), hi = mesh.value().vertices.colwise().maxCoeff();
@@ -145,7 +148,7 @@ TEST(BaseShapes, BlobIsSeededBumpyAndValidForEverySeed) {
 
 TEST(BaseShapes, KindNamesRoundTrip) {
   for (BaseShapeKind k : {BaseShapeKind::Box, BaseShapeKind::Plate, BaseShapeKind::Rod, BaseShapeKind::Sphere,
-                          BaseShapeKind::Cone, BaseShapeKind::Wedge, BaseShapeKind::Blob}) {
+                          BaseShapeKind::Cone, BaseShapeKind::Wedge, BaseShapeKind::Blob, BaseShapeKind::Mesh}) {
     auto parsed = parseBaseShapeKind(baseShapeKindName(k));
     ASSERT_TRUE(parsed);
     EXPECT_EQ(parsed.value(), k);
@@ -218,6 +221,73 @@ TEST(BaseShapes, BadFilesGiveTypedErrorsNamingShapeAndKey) {
     EXPECT_NE(r.error().message.find(cases[i].second), std::string::npos) << r.error().message;
     EXPECT_NE(r.error().message.find("case" + std::to_string(i) + ".json"), std::string::npos) << r.error().message;
   }
+}
+
+TEST(BaseShapes, MeshShapesAreTheirFilesCentredAtTheirOwnSize) {
+  // The default objects as base shapes (assets/shapes/default-objects.json): a database of their
+  // own pieces. Each is its file's solid, moved to centre its bounding box: the same volume and
+  // extents, and valid.
+  auto shapes = loadBaseShapes(testing::sourceDir() / "assets" / "shapes" / "default-objects.json");
+  ASSERT_TRUE(shapes) << shapes.error().message;
+  ASSERT_EQ(shapes.value().size(), 4u);
+  for (const BaseShapeDefinition& d : shapes.value()) {
+    SCOPED_TRACE(d.name);
+    EXPECT_EQ(d.kind, BaseShapeKind::Mesh);
+    EXPECT_TRUE(d.meshPath.is_absolute() || d.meshPath.has_parent_path());
+    auto mesh = makeBaseShape(d);
+    ASSERT_TRUE(mesh) << mesh.error().message;
+    expectValid(mesh.value());
+    const TriangleMesh file = readSurfaceMesh(d.meshPath).value();
+    const double v = volumeOf(file);
+    EXPECT_GT(v, 0.0);
+    EXPECT_NEAR(volumeOf(mesh.value()), v, 1e-12 * v);
+    const Eigen::Vector3d lo = mesh.value().vertices.colwise().minCoeff(), hi = mesh.value().vertices.colwise().maxCoeff();
+    const Eigen::Vector3d extent = file.vertices.colwise().maxCoeff() - file.vertices.colwise().minCoeff();
+    EXPECT_LT((hi - lo - extent).norm(), 1e-12 * extent.norm());
+    EXPECT_LT((hi + lo).norm(), 1e-12 * extent.norm());
+  }
+}
+
+TEST(BaseShapes, BadMeshShapesGiveTypedErrors) {
+  const auto dir = testing::makeTempDir("mesh-shapes");
+  const std::filesystem::path plate = testing::sourceDir() / "assets" / "meshes" / "plate.off";
+  auto load = [&](const std::string& name, const std::string& shape) {
+    std::ofstream(dir / name) << R"({"shapes": [)" + shape + "]}";
+    return loadBaseShapes(dir / name);
+  };
+  const std::string path = "\"" + plate.generic_string() + "\"";
+  ASSERT_TRUE(load("ok.json", R"({"name": "p", "kind": "mesh", "mesh": )" + path + "}"));
+  // (shape, code, text the message must contain)
+  const std::vector<std::tuple<std::string, ErrorCode, std::string>> cases = {
+      {R"({"name": "p", "kind": "mesh"})", ErrorCode::ParseError, "\"mesh\" is required"},
+      {R"({"name": "p", "kind": "mesh", "mesh": 3})", ErrorCode::ParseError, "\"mesh\" must be"},
+      {R"({"name": "p", "kind": "mesh", "mesh": )" + path + R"(, "size": [1, 1, 1]})", ErrorCode::ParseError,
+       "\"size\" does not apply"},
+      {R"({"name": "p", "kind": "box", "size": [1, 1, 1], "mesh": )" + path + "}", ErrorCode::ParseError,
+       "\"mesh\" applies to mesh shapes only"},
+      {R"({"name": "p", "kind": "mesh", "mesh": "nowhere.off"})", ErrorCode::FileNotFound, "nowhere.off"},
+  };
+  for (size_t i = 0; i < cases.size(); ++i) {
+    SCOPED_TRACE(std::get<0>(cases[i]));
+    auto r = load("case" + std::to_string(i) + ".json", std::get<0>(cases[i]));
+    ASSERT_FALSE(r);
+    EXPECT_EQ(r.error().code, std::get<1>(cases[i]));
+    EXPECT_NE(r.error().message.find(std::get<2>(cases[i])), std::string::npos) << r.error().message;
+  }
+  // A file that is there but not a closed solid: refused when the shape is built, naming it.
+  TriangleMesh open = readSurfaceMesh(plate).value();
+  open.faces.conservativeResize(open.faces.rows() - 1, 3);
+  ASSERT_TRUE(writeSurfaceMesh(open, dir / "open.off"));
+  auto shapes = load("open.json", R"({"name": "holed", "kind": "mesh", "mesh": "open.off"})");
+  ASSERT_TRUE(shapes) << shapes.error().message;
+  auto built = makeBaseShape(shapes.value()[0]);
+  ASSERT_FALSE(built);
+  EXPECT_EQ(built.error().code, ErrorCode::OpenMesh);
+  EXPECT_NE(built.error().message.find("base shape 'holed'"), std::string::npos) << built.error().message;
+  BaseShapeDefinition none;
+  none.name = "none";
+  none.kind = BaseShapeKind::Mesh;
+  EXPECT_EQ(makeBaseShape(none).error().code, ErrorCode::InvalidArgument);
 }
 
 TEST(BaseShapes, FineShapesAreCheckedNotBuiltWhenLoaded) {

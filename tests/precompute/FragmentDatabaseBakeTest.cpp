@@ -394,7 +394,7 @@ TEST_F(FragmentDatabaseBakeTest, ManifestDatabaseSectionAndErrors) {
   std::ofstream(dir / "m.json") << R"({"database": {"shapes": ")" +
                                        (testing::sourceDir() / "assets/shapes/base-shapes.json").string() +
                                        R"(", "only": ["box", "sphere"], "entries": 5, "seed": 3, "tets": 300, "modes": 4,)"
-                                       R"( "runtime_fraction": 0.25}})";
+                                       R"( "runtime_fraction": 0.25, "element": "p2"}})";
   auto s = loadDatabaseManifest(dir / "m.json");
   ASSERT_TRUE(s) << s.error().message;
   ASSERT_TRUE(s.value().has_value());
@@ -402,6 +402,12 @@ TEST_F(FragmentDatabaseBakeTest, ManifestDatabaseSectionAndErrors) {
   EXPECT_EQ(s.value()->entryCount, 5);
   EXPECT_EQ(s.value()->modeCount, 4);
   EXPECT_EQ(s.value()->runtimeFragments.fraction, 0.25);
+  EXPECT_EQ(s.value()->elementOrder, ElementOrder::P2);
+  std::ofstream(dir / "element.json") << R"({"database": {"shapes": "x.json", "element": "p3"}})";
+  auto element = loadDatabaseManifest(dir / "element.json");
+  ASSERT_FALSE(element);
+  EXPECT_EQ(element.error().code, ErrorCode::ParseError);
+  EXPECT_NE(element.error().message.find("\"element\""), std::string::npos) << element.error().message;
   std::ofstream(dir / "fraction.json") << R"({"database": {"shapes": "x.json", "runtime_fraction": 2}})";
   EXPECT_EQ(loadDatabaseManifest(dir / "fraction.json").error().code, ErrorCode::ParseError);
   std::ofstream(dir / "bad.json") << R"({"database": {"shapes": "x.json", "entries": -3}})";

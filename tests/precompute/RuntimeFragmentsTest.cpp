@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include "brittle/database/Pack.h"
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/MeshValidation.h"
 #include "brittle/testing/DatabaseFixtures.h"
@@ -56,6 +57,57 @@ TEST(RuntimeFragments, FractionPicksAboutThatShareOfEntries) {
   for (const FragmentEntry& e : mixed.value().entries) runtime += e.cut.rfind("runtime: ", 0) == 0 ? 1 : 0;
   EXPECT_GT(runtime, 0);
   EXPECT_LT(runtime, 8);
+}
+
+TEST(RuntimeFragments, PiecesOfAnObjectsOwnMeshInQuadraticTets) {
+  // A database of the brick's own pieces (a mesh base shape, assets/shapes/default-objects.json),
+  // broken off by the runtime, with P2 entries: each entry is a closed piece of the brick, its
+  // tets are quadratic, its modes solve, and it survives the pack. The same piece in P1 tets at
+  // the same size is stiffer (P1 locks in bending), so its first mode is higher.
+  auto shapes = loadBaseShapes(testing::sourceDir() / "assets" / "shapes" / "default-objects.json");
+  ASSERT_TRUE(shapes) << shapes.error().message;
+  DatabaseBakeSettings s = testing::smallDatabaseSettings(2, true);
+  s.shapes = selectBaseShapes(shapes.value(), {"brick"}).value();
+  s.runtimeFragments.fraction = 1.0;
+  s.runtimeFragments.targetTets = 800;
+  s.runtimeFragments.modeCount = 12;
+  s.elementOrder = ElementOrder::P2;
+  s.tetMesh.targetTets = 300;
+  auto db = bakeFragmentDatabase(s);
+  ASSERT_TRUE(db) << db.error().message;
+  ASSERT_EQ(db.value().entries.size(), 2u);
+  for (const FragmentEntry& e : db.value().entries) {
+    SCOPED_TRACE(e.asset.name);
+    EXPECT_EQ(e.baseShape, "brick");
+    EXPECT_EQ(e.cut.rfind("runtime: ", 0), 0u) << e.cut;
+    EXPECT_TRUE(validateSurfaceMesh(e.surface));
+    EXPECT_GT(e.baseVolumeFraction, 0.0);
+    EXPECT_LT(e.baseVolumeFraction, 1.0);
+    EXPECT_EQ(e.asset.elementOrder, ElementOrder::P2);
+    EXPECT_GT(femNodeCount(e.asset.tetMesh, ElementOrder::P2), e.asset.tetMesh.nodes.rows());
+    EXPECT_EQ(e.asset.modal.modes.rows(), 3 * femNodeCount(e.asset.tetMesh, ElementOrder::P2));
+    EXPECT_EQ(e.asset.stressModes.rows(), 6 * 4 * e.asset.tetMesh.tets.rows());
+    EXPECT_LT(e.asset.modal.residuals.maxCoeff(), 1e-8);
+    std::array<Descriptor, kDescriptorKindCount> unused;
+    DatabaseBakeSettings p1 = s;
+    p1.elementOrder = ElementOrder::P1;
+    p1.tetMesh.detectSharpFeatures = false;  // as the runtime's entries are meshed
+    auto linear = bakeFragmentEntry(e.surface, e.asset.name, p1, unused);
+    ASSERT_TRUE(linear) << linear.error().message;
+    EXPECT_NEAR(static_cast<double>(linear.value().asset.tetMesh.tets.rows()),
+                static_cast<double>(e.asset.tetMesh.tets.rows()), 0.35 * static_cast<double>(e.asset.tetMesh.tets.rows()));
+    EXPECT_GT(linear.value().asset.modal.frequenciesHz[0], e.asset.modal.frequenciesHz[0] * 1.001);
+  }
+  Pack pack;
+  pack.database = db.value();
+  const auto path = testing::makeTempDir("runtime-p2") / "db.h5";
+  ASSERT_TRUE(writePack(pack, path));
+  auto back = readPack(path);
+  ASSERT_TRUE(back) << back.error().message;
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(back.value().database.entries[i].asset.elementOrder, ElementOrder::P2);
+    EXPECT_EQ(back.value().database.entries[i].asset.modal.modes, db.value().entries[i].asset.modal.modes);
+  }
 }
 
 TEST(RuntimeFragments, BadSettingsGiveTypedErrors) {

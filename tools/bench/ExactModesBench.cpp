@@ -155,21 +155,24 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
           // Exact path.
           ExactModesSettings es;
           es.modeCount = s.exactModes;
+          es.elementOrder = asset.elementOrder;  // as the World: a fragment keeps its parent's element
           Result<FragmentSubMesh> sub = makeError(ErrorCode::InvalidArgument, "no sub-mesh");
           Result<ObjectAsset> exact = makeError(ErrorCode::InvalidArgument, "no sub-mesh");
           const double exactS = medianSeconds(s.repeats, [&] {
             sub = fragmentSubMesh(asset.tetMesh, topology.value(), r.fracture.nodeLabels, r.fracture.edgeCuts, static_cast<int>(i));
             if (sub) exact = exactFragmentAsset(sub.value(), material, es, name + ".f" + std::to_string(i));
           });
-          // Reference: the fragment's solid at half the element size, three modes.
+          // Reference: the fragment's solid in quadratic tets (on the exact path's mesh, or that
+          // mesh split 1:8 with referenceSplit), three modes.
           Result<ObjectAsset> reference = makeError(ErrorCode::InvalidArgument, "no sub-mesh");
           double referenceS = std::numeric_limits<double>::quiet_NaN();
-          if (sub && sub.value().mesh.tets.rows() <= s.referenceMaxTets) {
+          if (sub && sub.value().mesh.tets.rows() * (s.referenceSplit ? 8 : 1) <= s.referenceMaxTets) {
             const auto t0 = SteadyClock::now();
             FragmentSubMesh fine;
-            fine.mesh = refine(sub.value().mesh);
+            fine.mesh = s.referenceSplit ? refine(sub.value().mesh) : sub.value().mesh;
             ExactModesSettings rs;
             rs.modeCount = 3;
+            rs.elementOrder = ElementOrder::P2;
             reference = exactFragmentAsset(fine, material, rs, name + ".f" + std::to_string(i) + ".fine");
             referenceS = secondsSince(t0);
           }

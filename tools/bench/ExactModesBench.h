@@ -9,9 +9,13 @@
 //     its time and its first three frequencies;
 //   * the exact path: the fragment's tets in the broken body, K and M, modes and stress modes
 //     (exactModes modes, as the World's exactModeCount), its time and its first three frequencies;
-//   * the reference: the same solid at half the element size (every tet of the exact path's mesh
-//     split into eight), and the error of each path's first three frequencies against it (the
-//     largest relative error of the three, as in the search benchmark). A bake of the fragment's
+//   * the reference: the same solid in quadratic (P2) tets on the exact path's mesh, whatever the
+//     parent's element (P1 locks in bending: a shard of the P1 vase wall or of a plate is too stiff
+//     with it), and the error of each path's first three frequencies against it (the largest
+//     relative error of the three, as in the search benchmark). It has the degrees of freedom of
+//     P1 on that mesh split 1:8, the reference before P2 (which missed the locking of thin shards).
+//     referenceSplit splits the mesh 1:8 under P2 as well, to check the reference's own
+//     convergence on smaller fragments. A bake of the fragment's
 //     surface through CGAL was tried first: Mesh_3 split most crack-faceted fragments into
 //     several pieces at a few thousand tets, so it could not serve as the reference;
 //   * the match's predicted error (median, 90th percentile, MatchErrors.h) from the pack's
@@ -36,7 +40,8 @@ struct ExactModesBenchSettings {
   std::vector<double> speedsMps = {10, 30};
   int seeds = 3;
   int maxFragmentsPerImpact = 8;
-  int64_t referenceMaxTets = 20000;              ///< no reference above this size of the exact mesh (×8 refined)
+  int64_t referenceMaxTets = 20000;              ///< no reference above this many tets (of the split mesh with referenceSplit)
+  bool referenceSplit = false;                   ///< the reference on the exact path's mesh split 1:8 (8× the P2 tets)
   int exactModes = 20;                           ///< modes of the exact path (FractureSettings::exactModeCount)
   int repeats = 3;                               ///< timings: the median of this many runs
   DescriptorKind descriptor = DescriptorKind::Moment;  ///< the kind fragments are matched with

@@ -22,6 +22,7 @@ struct BakeDbOptions {
   uint64_t seed = 1;
   int64_t tets = 1000;
   int modes = 12;
+  std::string element = "p1";
   bool descriptorsOnly = false;
   int momentOrder = 4;
   int voxelResolution = 16;
@@ -48,6 +49,11 @@ Runner addBakeDbCommand(CLI::App& app) {
   cmd->add_option("--seed", o->seed, "Seed of the fragment cuts (the bake is reproducible from it)")->capture_default_str();
   cmd->add_option("--tets", o->tets, "Target tetrahedra per fragment")->capture_default_str()->check(CLI::Range(int64_t{100}, int64_t{1000000}));
   cmd->add_option("--modes", o->modes, "Elastic modes per fragment")->capture_default_str()->check(CLI::Range(1, 200));
+  cmd->add_option("--element", o->element,
+                  "Finite element of the entries: p1 (4-node tets) or p2 (10-node tets; pieces of thin parts, which "
+                  "lock in bending with p1)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"p1", "p2"}));
   cmd->add_flag("--descriptors-only", o->descriptorsOnly, "Skip tet meshes and modes (search benchmarks on large databases)");
   cmd->add_option("--moment-order", o->momentOrder, "Highest moment order of the moment descriptor")->capture_default_str()->check(CLI::Range(2, 10));
   cmd->add_option("--voxel-resolution", o->voxelResolution, "Voxels per axis k of both voxel descriptors")->capture_default_str()->check(CLI::Range(2, 64));
@@ -90,6 +96,7 @@ Runner addBakeDbCommand(CLI::App& app) {
     s.tetMesh.targetTets = o->tets;
     s.tetMesh.seed = o->seed;
     s.modeCount = o->modes;
+    s.elementOrder = *parseElementOrder(o->element);
     s.physics = !o->descriptorsOnly;
     s.descriptors.moment.maxOrder = o->momentOrder;
     s.descriptors.voxel.resolution = s.descriptors.voxelImproved.resolution = o->voxelResolution;

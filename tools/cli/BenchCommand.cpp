@@ -166,8 +166,10 @@ Runner addBenchCommand(CLI::App& app) {
   exact->add_option("--max-fragments", xb->maxFragmentsPerImpact, "Largest fragments measured per impact")
       ->capture_default_str()->check(CLI::Range(1, 1000));
   exact->add_option("--reference-max-tets", xb->referenceMaxTets,
-                    "Largest exact mesh that also gets the reference (the same mesh split 1:8)")
+                    "Largest mesh that gets the reference (P2 tets on the exact path's mesh; with --reference-split, that mesh split 1:8)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  exact->add_flag("--reference-split", xb->referenceSplit,
+                  "Reference on the exact path's mesh split 1:8 (8x the P2 tets: checks the reference's convergence)");
   exact->add_option("--exact-modes", xb->exactModes, "Modes of the exact path")->capture_default_str()->check(CLI::Range(1, 500));
   exact->add_option("--repeats", xb->repeats, "Timing repeats (median)")->capture_default_str()->check(CLI::Range(1, 100));
   auto exactDescriptor = std::make_shared<std::string>("moment");

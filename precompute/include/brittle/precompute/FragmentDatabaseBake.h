@@ -42,6 +42,9 @@ struct DatabaseBakeSettings {
   bool physics = true;
   TetMeshSettings tetMesh = defaultFragmentTetMeshSettings();
   int modeCount = 12;
+  /// The entries' finite element. P2 for pieces of thin parts (shards of a plate or a vase wall),
+  /// which P1 tets make too stiff in bending; P1 (the default) for chunky pieces.
+  ElementOrder elementOrder = ElementOrder::P1;
   ShapeDescriptorSettings descriptors;
   /// Kinds to compute. A disabled kind leaves a 0-column matrix, which FragmentMatcher cannot
   /// search and writePack rejects: for benchmarks that need one kind on a huge database.
