@@ -26,6 +26,7 @@
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshValidation.h"
+#include "brittle/runtime/FragmentModes.h"
 
 namespace brittle {
 namespace {
@@ -86,11 +87,12 @@ bool isRuntimeFragmentEntry(uint64_t entrySeed, double fraction) {
 Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std::string& name,
                                         const DatabaseBakeSettings& settings,
                                         std::array<Descriptor, kDescriptorKindCount>& descriptors,
-                                        ProgressSink* progress) {
+                                        ProgressSink* progress, const TetMesh* solid) {
   auto frames = computeCanonicalFrames(fragment, settings.descriptors.frame);
   if (!frames) return frames.error();
+  const CanonicalFrame& frame = frames.value().candidates.front();
   FragmentEntry entry;
-  entry.surface.vertices = frames.value().candidates.front().pointsToCanonical(fragment.vertices);
+  entry.surface.vertices = frame.pointsToCanonical(fragment.vertices);
   entry.surface.faces = fragment.faces;
   if (Status valid = validateSurfaceMesh(entry.surface); !valid) return valid.error();
 
@@ -110,7 +112,20 @@ Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std:
     descriptors[static_cast<size_t>(kind)] = d.value().row(0).transpose();
   }
 
-  if (settings.physics) {
+  if (settings.physics && solid) {
+    // The fragment's own tets, in the same canonical frame as its surface.
+    FragmentSubMesh own;
+    own.mesh.nodes = frame.pointsToCanonical(solid->nodes);
+    own.mesh.tets = solid->tets;
+    ExactModesSettings modes;
+    modes.modeCount = settings.modeCount;
+    modes.elementOrder = settings.elementOrder;
+    auto asset = exactFragmentAsset(own, settings.referenceMaterial, modes, name);
+    if (!asset) return asset.error();
+    entry.asset = std::move(asset).value();
+    entry.asset.bake.sourceMesh = name;
+    entry.asset.bake.generator = std::string("brittle ") + BRITTLE_VERSION;
+  } else if (settings.physics) {
     ObjectBakeSettings bake;
     bake.name = name;
     bake.sourceName = name;
@@ -209,11 +224,7 @@ class EntryBaker {
   }
 
  private:
-  explicit EntryBaker(const DatabaseBakeSettings& settings) : mSettings(settings), mRuntimeEntrySettings(settings) {
-    // Runtime fragments' crack faces zigzag at the runtime mesh's scale: their creases are not
-    // features to keep, and protecting them starves Mesh_3 of cells.
-    mRuntimeEntrySettings.tetMesh.detectSharpFeatures = false;
-  }
+  explicit EntryBaker(const DatabaseBakeSettings& settings) : mSettings(settings) {}
 
   Result<FragmentEntry> bakeEntry(int64_t i, std::array<Descriptor, kDescriptorKindCount>& row) const {
     const size_t shape = static_cast<size_t>(i) % mBases.size();
@@ -223,13 +234,15 @@ class EntryBaker {
     std::optional<Error> lastError;
     for (int attempt = 0; attempt < kEntryAttempts; ++attempt, seed = splitmix64(seed)) {
       std::string cut;
-      auto fragment = fromRuntime ? mRuntime->fragment(shape, seed, &cut)
+      TetMesh solid;
+      const bool ownTets = fromRuntime && mSettings.physics;
+      auto fragment = fromRuntime ? mRuntime->fragment(shape, seed, &cut, ownTets ? &solid : nullptr)
                                   : generateFragment(mBases[shape], mSettings.fragments, seed, &cut);
       if (!fragment) {
         lastError = fragment.error();
         continue;
       }
-      auto entry = bakeFragmentEntry(fragment.value(), name, fromRuntime ? mRuntimeEntrySettings : mSettings, row);
+      auto entry = bakeFragmentEntry(fragment.value(), name, mSettings, row, nullptr, ownTets ? &solid : nullptr);
       if (!entry) {
         lastError = entry.error();
         continue;
@@ -246,7 +259,6 @@ class EntryBaker {
   }
 
   const DatabaseBakeSettings& mSettings;
-  DatabaseBakeSettings mRuntimeEntrySettings;
   std::vector<TriangleMesh> mBases;
   std::vector<double> mBaseVolumes;
   std::optional<RuntimeFragmentSource> mRuntime;

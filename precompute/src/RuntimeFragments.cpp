@@ -8,6 +8,7 @@
 #include "brittle/database/Pack.h"
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/BakePipeline.h"
+#include "brittle/runtime/FragmentModes.h"
 #include "brittle/runtime/World.h"
 #include "Support.h"
 
@@ -71,13 +72,16 @@ Result<RuntimeFragmentSource> RuntimeFragmentSource::build(const std::vector<Bas
     b.fillOrdering = false;  // broken here to make database entries, as before the baked orders
     auto asset = bakeSurface(surfaces[i], b);
     if (!asset) return Error{asset.error().code, "runtime fragments, base shape '" + shapes[i].name + "': " + asset.error().message};
+    auto topology = buildTetTopology(asset.value().tetMesh);
+    if (!topology) return topology.error();
+    source.mTopologies.push_back(std::move(topology).value());
     source.mObjects.push_back(std::move(asset).value());
   }
   if (progress) progress->report("runtime fragment objects", 1.0);
   return source;
 }
 
-Result<TriangleMesh> RuntimeFragmentSource::fragment(size_t shape, uint64_t seed, std::string* how) const {
+Result<TriangleMesh> RuntimeFragmentSource::fragment(size_t shape, uint64_t seed, std::string* how, TetMesh* solid) const {
   if (shape >= mObjects.size()) return bad("runtime fragments: shape index out of range");
   const ObjectAsset& object = mObjects[shape];
   Pack pack;
@@ -121,6 +125,15 @@ Result<TriangleMesh> RuntimeFragmentSource::fragment(size_t shape, uint64_t seed
   }
   if (pieces.empty()) return makeError(ErrorCode::MeshingFailed, "runtime fragments: every fragment is debris");
   const size_t pick = pieces[std::min(pieces.size() - 1, static_cast<size_t>(choice * static_cast<double>(pieces.size())))];
+  if (solid) {
+    auto sub = fragmentSubMesh(object.tetMesh, mTopologies[shape], result.fracture.nodeLabels, result.fracture.edgeCuts,
+                               static_cast<int>(pick));
+    if (!sub) return sub.error();
+    if (sub.value().droppedVolumeM3 > 1e-9 * result.fragments[pick].massProperties.volumeM3) {
+      return makeError(ErrorCode::MeshingFailed, "runtime fragments: the fragment's tets are not one solid");
+    }
+    *solid = std::move(sub.value().mesh);
+  }
   if (how) {
     char buffer[96];
     std::snprintf(buffer, sizeof buffer, "runtime: v=%.1f m/s, fragment %zu of %zu", d.speedMps, pick + 1,

@@ -61,9 +61,10 @@ TEST(RuntimeFragments, FractionPicksAboutThatShareOfEntries) {
 
 TEST(RuntimeFragments, PiecesOfAnObjectsOwnMeshInQuadraticTets) {
   // A database of the brick's own pieces (a mesh base shape, assets/shapes/default-objects.json),
-  // broken off by the runtime, with P2 entries: each entry is a closed piece of the brick, its
-  // tets are quadratic, its modes solve, and it survives the pack. The same piece in P1 tets at
-  // the same size is stiffer (P1 locks in bending), so its first mode is higher.
+  // broken off by the runtime, with P2 entries: each entry is a closed piece of the brick whose
+  // tets are the ones the runtime cut it out with (they enclose its surface's unit volume), its
+  // elements are quadratic, its modes solve, and it survives the pack. The same tets as P1 are
+  // stiffer (P1 locks in bending), so their first mode is higher.
   auto shapes = loadBaseShapes(testing::sourceDir() / "assets" / "shapes" / "default-objects.json");
   ASSERT_TRUE(shapes) << shapes.error().message;
   DatabaseBakeSettings s = testing::smallDatabaseSettings(2, true);
@@ -88,14 +89,14 @@ TEST(RuntimeFragments, PiecesOfAnObjectsOwnMeshInQuadraticTets) {
     EXPECT_EQ(e.asset.modal.modes.rows(), 3 * femNodeCount(e.asset.tetMesh, ElementOrder::P2));
     EXPECT_EQ(e.asset.stressModes.rows(), 6 * 4 * e.asset.tetMesh.tets.rows());
     EXPECT_LT(e.asset.modal.residuals.maxCoeff(), 1e-8);
+    EXPECT_NEAR(e.asset.massProperties.volumeM3, 1.0, 1e-9) << "the runtime's own tets of the unit-volume piece";
     std::array<Descriptor, kDescriptorKindCount> unused;
     DatabaseBakeSettings p1 = s;
     p1.elementOrder = ElementOrder::P1;
-    p1.tetMesh.detectSharpFeatures = false;  // as the runtime's entries are meshed
-    auto linear = bakeFragmentEntry(e.surface, e.asset.name, p1, unused);
+    auto linear = bakeFragmentEntry(e.surface, e.asset.name, p1, unused, nullptr, &e.asset.tetMesh);
     ASSERT_TRUE(linear) << linear.error().message;
-    EXPECT_NEAR(static_cast<double>(linear.value().asset.tetMesh.tets.rows()),
-                static_cast<double>(e.asset.tetMesh.tets.rows()), 0.35 * static_cast<double>(e.asset.tetMesh.tets.rows()));
+    EXPECT_EQ(linear.value().asset.tetMesh.tets, e.asset.tetMesh.tets) << "the same tets";
+    EXPECT_NEAR(linear.value().asset.massProperties.volumeM3, 1.0, 1e-9);
     EXPECT_GT(linear.value().asset.modal.frequenciesHz[0], e.asset.modal.frequenciesHz[0] * 1.001);
   }
   Pack pack;

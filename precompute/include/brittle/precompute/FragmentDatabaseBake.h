@@ -7,9 +7,11 @@
 // the settings and its own seed, seed_i = splitmix64(seed + i), and results are gathered in entry
 // order, so the database is the same for any thread count. Entry i comes from base shape
 // i mod #shapes: cut (FragmentGenerator.h) or, for a seeded share runtimeFragments.fraction of
-// the entries, broken off by the runtime (RuntimeFragments.h). An entry whose fragment, tet
-// meshing or modal solve fails is made again from the next seed of the same stream (at most
-// kEntryAttempts times) before the bake fails.
+// the entries, broken off by the runtime (RuntimeFragments.h). A cut entry is tet-meshed by
+// Mesh_3; a runtime entry keeps the tets the runtime cut it out with (Mesh_3 split most thin
+// shards of a plate into pieces). An entry whose fragment, tet meshing or modal solve fails is
+// made again from the next seed of the same stream (at most kEntryAttempts times) before the
+// bake fails.
 #pragma once
 
 #include <array>
@@ -70,12 +72,15 @@ bool isRuntimeFragmentEntry(uint64_t entrySeed, double fraction);
 
 /// One entry from any closed fragment surface (metres, any pose): canonical surface, descriptors
 /// of every kind (written to `descriptors`, one row each, in kind order) and, when
-/// settings.physics, the tet mesh and modes. name must be unique in the database.
-/// Errors: those of computeCanonicalFrames, validateSurfaceMesh, bakeSurface.
+/// settings.physics, the tet mesh and modes. name must be unique in the database. The tets are
+/// Mesh_3's of the surface, or, when `solid` is given (the fragment's own tets in the surface's
+/// frame, as a runtime fragment has them), those tets moved to the canonical frame, whose modes
+/// are solved as the exact path solves them (exactFragmentAsset, FragmentModes.h).
+/// Errors: those of computeCanonicalFrames, validateSurfaceMesh, bakeSurface, exactFragmentAsset.
 Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std::string& name,
                                         const DatabaseBakeSettings& settings,
                                         std::array<Descriptor, kDescriptorKindCount>& descriptors,
-                                        ProgressSink* progress = nullptr);
+                                        ProgressSink* progress = nullptr, const TetMesh* solid = nullptr);
 
 /// The whole database. Progress reports "fragment database" with the fraction of entries done.
 /// Errors: InvalidArgument (no shapes, entryCount < 1, bad descriptor settings), the first

@@ -20,6 +20,7 @@
 #include "brittle/core/Result.h"
 #include "brittle/precompute/BaseShapes.h"
 #include "brittle/precompute/Progress.h"
+#include "brittle/runtime/TetTopology.h"
 
 namespace brittle {
 
@@ -48,10 +49,13 @@ class RuntimeFragmentSource {
                                              ProgressSink* progress = nullptr);
 
   /// One fragment of shape `shape`, from `seed`, in the shape's frame (m): closed and outward.
-  /// *how (if given) receives "runtime: v=… m/s, fragment i of n". Errors: InvalidArgument
-  /// (shape out of range), MeshingFailed (the body did not break at 8 × the drawn speed, or left
-  /// no fragment that is not debris), those of the World.
-  Result<TriangleMesh> fragment(size_t shape, uint64_t seed, std::string* how = nullptr) const;
+  /// *how (if given) receives "runtime: v=… m/s, fragment i of n". *solid (if given) receives the
+  /// fragment's own tets, cut out of the broken body as the runtime's exact path cuts them
+  /// (fragmentSubMesh, FragmentModes.h): the solid the surface encloses, in the same frame.
+  /// Errors: InvalidArgument (shape out of range), MeshingFailed (the body did not break at 8 ×
+  /// the drawn speed, left no fragment that is not debris, or, with solid, a fragment whose tets
+  /// are not one face-connected solid), those of the World and of fragmentSubMesh.
+  Result<TriangleMesh> fragment(size_t shape, uint64_t seed, std::string* how = nullptr, TetMesh* solid = nullptr) const;
 
   size_t shapeCount() const { return mObjects.size(); }
 
@@ -59,6 +63,7 @@ class RuntimeFragmentSource {
   RuntimeFragmentSettings mSettings;
   Material mMaterial;
   std::vector<ObjectAsset> mObjects;
+  std::vector<TetTopology> mTopologies;  ///< of mObjects' tets, for the fragments' own tets
 };
 
 }  // namespace brittle
