@@ -15,9 +15,13 @@ Eigen::Matrix3d voigtToTensor(const double* v) {
 }
 
 // Rayleigh–Ritz correction for a Poisson ratio ν ≠ ν₀ at the reference size (see the header).
-void correctPoisson(const TetMesh& mesh, const Material& reference, double poissonRatio, ModalBasis& modal,
-                    MatrixXdRow& stressModes) {
+// The strain energy is integrated exactly: P1 strain is constant per tet; straight-sided P2 strain
+// is linear, given by its values ε_c at the four corners (the stress points), and with
+// ∫λ_iλ_j dV = V(1 + δ_ij)/20, ∫εᵀCε dV = V/20 ((Σ_c ε_c)ᵀC(Σ_c ε_c) + Σ_c ε_cᵀCε_c).
+void correctPoisson(const TetMesh& mesh, ElementOrder order, const Material& reference, double poissonRatio,
+                    ModalBasis& modal, MatrixXdRow& stressModes) {
   const Eigen::Index r = modal.modes.cols();
+  const int points = stressPointsPerElement(order);
   const auto c0 = isotropicElasticity(reference.youngsModulusPa, reference.poissonRatio);
   const auto c1 = isotropicElasticity(reference.youngsModulusPa, poissonRatio);
   const Eigen::Matrix<double, 6, 6> c0Inverse = c0.inverse();
@@ -27,16 +31,28 @@ void correctPoisson(const TetMesh& mesh, const Material& reference, double poiss
     const auto t = mesh.tets.row(e);
     const double volume = std::abs(signedTetVolume(mesh.nodes.row(t[0]).transpose(), mesh.nodes.row(t[1]).transpose(),
                                                    mesh.nodes.row(t[2]).transpose(), mesh.nodes.row(t[3]).transpose()));
-    const Eigen::MatrixXd eps = c0Inverse * stressModes.middleRows(6 * e, 6);
-    strains.middleRows(6 * e, 6) = eps;
-    reduced.noalias() += volume * eps.transpose() * c1 * eps;
+    if (points == 1) {
+      const Eigen::MatrixXd eps = c0Inverse * stressModes.middleRows(6 * e, 6);
+      strains.middleRows(6 * e, 6) = eps;
+      reduced.noalias() += volume * eps.transpose() * c1 * eps;
+      continue;
+    }
+    Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(6, r);
+    for (int c = 0; c < points; ++c) {
+      const Eigen::Index row = 6 * (points * e + c);
+      const Eigen::MatrixXd eps = c0Inverse * stressModes.middleRows(row, 6);
+      strains.middleRows(row, 6) = eps;
+      sum += eps;
+      reduced.noalias() += (volume / 20.0) * eps.transpose() * c1 * eps;
+    }
+    reduced.noalias() += (volume / 20.0) * sum.transpose() * c1 * sum;
   }
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(0.5 * (reduced + reduced.transpose()));
   const Eigen::MatrixXd y = solver.eigenvectors();
   modal.eigenvaluesRad2PerS2 = solver.eigenvalues();
   modal.modes = modal.modes * y;
-  for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) {
-    stressModes.middleRows(6 * e, 6) = c1 * strains.middleRows(6 * e, 6) * y;
+  for (Eigen::Index p = 0; p < points * mesh.tets.rows(); ++p) {
+    stressModes.middleRows(6 * p, 6) = c1 * strains.middleRows(6 * p, 6) * y;
   }
 }
 
@@ -68,11 +84,13 @@ Result<ObjectAsset> instantiateEntry(const FragmentEntry& entry, const Material&
     return makeError(ErrorCode::InvalidArgument, "query frame has a non-finite value or a non-positive scale");
   }
   const ObjectAsset& a = entry.asset;
-  const Eigen::Index n = a.tetMesh.nodes.rows(), t = a.tetMesh.tets.rows(), r = a.modal.modes.cols();
+  // P2 entries: the FEM nodes include one per edge, and each tet has four stress points.
+  const Eigen::Index t = a.tetMesh.tets.rows(), r = a.modal.modes.cols();
   if (t == 0 || r == 0) {
     return makeError(ErrorCode::InvalidArgument, "database entry '" + a.name + "' has no physical data (descriptors only)");
   }
-  if (a.modal.modes.rows() != 3 * n || a.stressModes.rows() != 6 * t || a.stressModes.cols() != r ||
+  const Eigen::Index n = femNodeCount(a.tetMesh, a.elementOrder), points = stressPointsPerElement(a.elementOrder);
+  if (n <= 0 || a.modal.modes.rows() != 3 * n || a.stressModes.rows() != 6 * points * t || a.stressModes.cols() != r ||
       a.modal.eigenvaluesRad2PerS2.size() != r) {
     return makeError(ErrorCode::InvalidArgument, "database entry '" + a.name + "' has inconsistent modal arrays");
   }
@@ -82,7 +100,7 @@ Result<ObjectAsset> instantiateEntry(const FragmentEntry& entry, const Material&
   InstantiateReport info;
   info.lengthScaleM = 1.0 / frame.scalePerM;
   if (target.poissonRatio != reference.poissonRatio) {
-    correctPoisson(a.tetMesh, reference, target.poissonRatio, out.modal, out.stressModes);
+    correctPoisson(a.tetMesh, a.elementOrder, reference, target.poissonRatio, out.modal, out.stressModes);
     info.poissonCorrected = true;
   }
 

@@ -162,6 +162,59 @@ TEST_F(ScalingLawsTest, OtherPoissonRatioGoesThroughRayleighRitz) {
   EXPECT_LT((stress - a.stressModes).cwiseAbs().maxCoeff(), 1e-9 * stress.cwiseAbs().maxCoeff());
 }
 
+TEST_F(ScalingLawsTest, QuadraticEntriesRescaleAndTakeAnotherPoissonRatio) {
+  // A P2 entry (pieces of thin parts): its modes live on the FEM nodes (corners and mid-edges) and
+  // its stress modes on four corners per tet. Rescaled at glass's ν, the placed modes are
+  // eigenpairs of the transformed P2 mesh's K and M and its stress modes are C B Φ there; at
+  // steel's ν the Ritz values (the P2 strain energy integrated exactly from the corner strains)
+  // bound the direct P2 frequencies from above, within 2 % for the lowest three.
+  DatabaseBakeSettings s = testing::smallDatabaseSettings(1, true);
+  s.tetMesh.targetTets = 300;
+  s.modeCount = 8;
+  s.elementOrder = ElementOrder::P2;
+  TriangleMesh box = testing::makeBoxSurface(0.3, 0.2, 0.12);
+  std::array<Descriptor, kDescriptorKindCount> descriptors;
+  auto e = bakeFragmentEntry(box, "box-p2", s, descriptors);
+  ASSERT_TRUE(e) << e.error().message;
+  ASSERT_EQ(e.value().asset.elementOrder, ElementOrder::P2);
+  for (const Material& target : {sameNuMaterial(), materialPreset("steel").value()}) {
+    SCOPED_TRACE(target.name);
+    InstantiateReport report;
+    auto placed = instantiateEntry(e.value(), *reference, target, someFrame(0.45), &report);
+    ASSERT_TRUE(placed) << placed.error().message;
+    EXPECT_EQ(report.poissonCorrected, target.poissonRatio != reference->poissonRatio);
+    const ObjectAsset& a = placed.value();
+    EXPECT_EQ(a.elementOrder, ElementOrder::P2);
+    auto fem = makeFemMesh(a.tetMesh, ElementOrder::P2);
+    ASSERT_TRUE(fem);
+    auto system = assembleFem(fem.value(), target, {}).value();
+    const Eigen::MatrixXd phi = a.modal.modes;
+    ASSERT_EQ(phi.rows(), system.stiffness.rows());
+    const Eigen::MatrixXd kphi = system.stiffness * phi, mphi = system.mass * phi;
+    EXPECT_LT((phi.transpose() * mphi - Eigen::MatrixXd::Identity(8, 8)).cwiseAbs().maxCoeff(), 1e-9);
+    const MatrixXdRow stress = computeStressModes(fem.value(), target, a.modal.modes);
+    EXPECT_LT((stress - a.stressModes).cwiseAbs().maxCoeff(), 1e-9 * stress.cwiseAbs().maxCoeff());
+    ModalSettings ms;
+    ms.modeCount = 8;
+    ms.shiftRad2PerS2 = defaultShift(a.tetMesh.nodes, target);
+    auto direct = computeModes(system, fem.value().nodes(), ms);
+    ASSERT_TRUE(direct) << direct.error().message;
+    for (int i = 0; i < 8; ++i) {
+      const double ratio = a.modal.frequenciesHz(i) / direct.value().basis.frequenciesHz(i);
+      if (!report.poissonCorrected) {
+        const double residual = (kphi.col(i) - a.modal.eigenvaluesRad2PerS2(i) * mphi.col(i)).norm() / kphi.col(i).norm();
+        EXPECT_LT(residual, 1e-7) << "mode " << i;
+        EXPECT_NEAR(ratio, 1.0, 1e-7) << "mode " << i;
+        continue;
+      }
+      std::printf("P2 mode %d: Ritz %.2f Hz, direct %.2f Hz (%+.3f%%)\n", i, a.modal.frequenciesHz(i),
+                  direct.value().basis.frequenciesHz(i), 100.0 * (ratio - 1.0));
+      EXPECT_GE(ratio, 1.0 - 1e-9) << "mode " << i;
+      if (i < 3) EXPECT_LT(ratio, 1.02) << "mode " << i;
+    }
+  }
+}
+
 TEST_F(ScalingLawsTest, TypedErrors) {
   Material bad = *reference;
   bad.youngsModulusPa = -1.0;
