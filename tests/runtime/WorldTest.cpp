@@ -150,6 +150,63 @@ TEST_F(WorldTest, BreaksAboveAThresholdWithClosedFragmentsThatConserveVolumeAndM
   EXPECT_GT(r.contact.durationS, 0.0);
 }
 
+TEST(WorldP2Test, FragmentsMatchedToQuadraticEntriesAreQuadraticAndBreakAgain) {
+  // A database of the brick's own pieces in P2 tets (bake-db --element p2 on a mesh base shape,
+  // broken off by the runtime): a matched fragment is its entry placed, P2 (FEM nodes and four
+  // stress points per tet), and it breaks again.
+  auto pack = testing::makeGlassPlatePack(300, 12, 0.15, ElementOrder::P2);
+  ASSERT_TRUE(pack) << pack.error().message;
+  auto shapes = loadBaseShapes(testing::sourceDir() / "assets" / "shapes" / "default-objects.json");
+  ASSERT_TRUE(shapes) << shapes.error().message;
+  DatabaseBakeSettings db = testing::smallDatabaseSettings(4, true);
+  db.shapes = selectBaseShapes(shapes.value(), {"brick"}).value();
+  db.runtimeFragments.fraction = 1.0;
+  db.runtimeFragments.targetTets = 800;
+  db.runtimeFragments.modeCount = 12;
+  db.elementOrder = ElementOrder::P2;
+  db.modeCount = 8;
+  auto database = bakeFragmentDatabase(db);
+  ASSERT_TRUE(database) << database.error().message;
+  pack.value().database = std::move(database).value();
+  WorldSettings settings;
+  settings.fracture.exactModesMaxTets = 0;  // every fragment that is not debris is matched
+  auto world = World::create(std::move(pack).value(), settings);
+  ASSERT_TRUE(world) << world.error().message;
+  ImpactDesc d;
+  d.object = world.value().addObject({.asset = "plate"}).value();
+  d.pointWorld = Eigen::Vector3d(0.07, 0.08, 0.01);
+  d.normalWorld = Eigen::Vector3d::UnitZ();
+  d.speedMps = 60.0;
+  d.impactorMassKg = 0.1;
+  d.impactorRadiusM = 0.02;
+  auto hit = world.value().impact(d);
+  ASSERT_TRUE(hit) << hit.error().message;
+  ASSERT_TRUE(hit.value().broken);
+  int matched = 0, brokeAgain = 0;
+  for (const FragmentResult& f : hit.value().fragments) {
+    if (f.matchedEntry < 0) continue;
+    ++matched;
+    auto asset = world.value().objectAsset(f.object);
+    ASSERT_TRUE(asset) << asset.error().message;
+    const ObjectAsset& a = *asset.value();
+    EXPECT_EQ(a.elementOrder, ElementOrder::P2);
+    EXPECT_EQ(a.modal.modes.rows(), 3 * femNodeCount(a.tetMesh, ElementOrder::P2));
+    EXPECT_EQ(a.stressModes.rows(), 24 * a.tetMesh.tets.rows());
+    EXPECT_NEAR(a.massProperties.volumeM3, f.massProperties.volumeM3, 1e-9 * f.massProperties.volumeM3)
+        << "the entry placed at the fragment's volume";
+    ImpactDesc again = d;
+    again.object = f.object;
+    again.pointWorld = a.tetMesh.nodes.row(a.surfaceFaces(0, 0)).transpose();
+    again.normalWorld = Eigen::Vector3d::UnitZ();
+    again.speedMps = 80.0;
+    auto second = world.value().impact(again);
+    ASSERT_TRUE(second) << second.error().message;
+    brokeAgain += second.value().broken ? 1 : 0;
+  }
+  EXPECT_GE(matched, 2);
+  EXPECT_GE(brokeAgain, 1);
+}
+
 TEST(WorldP2Test, AQuadraticPlateBreaksIntoClosedFragmentsThatKeepTheirElement) {
   // The default pack's plate is P2: its impact scans the elements' corners, its static correction
   // solves with the P2 K, and the exact path gives each fragment its own P2 model.

@@ -76,7 +76,8 @@ TetMesh refine(const TetMesh& mesh) {
 }  // namespace
 
 Status runExactModesBench(const ExactModesBenchSettings& s) {
-  if (s.speedsMps.empty() || s.seeds < 1 || s.maxFragmentsPerImpact < 1 || s.exactModes < 1 || s.repeats < 1 || s.referenceMaxTets < 0) {
+  if (s.speedsMps.empty() || s.seeds < 1 || s.maxFragmentsPerImpact < 1 || s.exactModes < 1 || s.repeats < 1 || s.referenceMaxTets < 0 ||
+      s.entryLimits.empty() || std::any_of(s.entryLimits.begin(), s.entryLimits.end(), [](int64_t n) { return n < 0; })) {
     return makeError(ErrorCode::InvalidArgument,
                      "bench exact-modes: speeds, seeds ≥ 1, max fragments ≥ 1, repeats ≥ 1 and reference max tets ≥ 0 needed");
   }
@@ -95,14 +96,22 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
     }
   FragmentMatcherSettings ms;
   for (DescriptorKind k : kAllDescriptorKinds) ms.enabled[static_cast<size_t>(k)] = k == s.descriptor;
-  auto matcher = FragmentMatcher::build(p.database, ms);
-  if (!matcher) return matcher.error();
+  std::vector<FragmentMatcher> matchers;
+  std::vector<int64_t> entryCounts;
+  for (int64_t limit : s.entryLimits) {
+    ms.entryLimit = limit;
+    auto matcher = FragmentMatcher::build(p.database, ms);
+    if (!matcher) return matcher.error();
+    matchers.push_back(std::move(matcher).value());
+    entryCounts.push_back(limit > 0 ? std::min<int64_t>(limit, static_cast<int64_t>(p.database.entries.size()))
+                                    : static_cast<int64_t>(p.database.entries.size()));
+  }
 
   std::ofstream csv(s.csv);
   if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.csv.string());
   csv << "object,speed_mps,seed,fragment,volume_fraction,parent_tets,sub_tets,dropped_volume_fraction,modes,match_s,exact_s,"
          "reference_s,match_distance,match_freq_err,exact_freq_err,reference_f1_hz,exact_f1_hz,match_f1_hz,"
-         "predicted_err_median,predicted_err_p90,predicted_beyond_range\n";
+         "predicted_err_median,predicted_err_p90,predicted_beyond_range,database_entries\n";
   csv.precision(9);
   for (const std::string& name : objects) {
     const ObjectAsset& asset = *std::find_if(p.objects.begin(), p.objects.end(), [&](const ObjectAsset& a) { return a.name == name; });
@@ -140,18 +149,6 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
         }
         for (size_t i : order) {
           const FragmentResult& fr = r.fragments[i];
-          // Database path.
-          Result<ObjectAsset> matched = makeError(ErrorCode::InvalidArgument, "no match");
-          double distance = std::numeric_limits<double>::quiet_NaN();
-          MatchErrorPrediction predicted;
-          const double matchS = medianSeconds(s.repeats, [&] {
-            auto m = matcher.value().match(fr.surface, s.descriptor, 1);
-            if (!m) return;
-            distance = m.value().front().distance;
-            predicted = m.value().front().predictedError;
-            matched = instantiateEntry(p.database.entries[static_cast<size_t>(m.value().front().entry)],
-                                       p.database.referenceMaterial, material, m.value().front().queryFrame);
-          });
           // Exact path.
           ExactModesSettings es;
           es.modeCount = s.exactModes;
@@ -180,16 +177,31 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
           const Eigen::VectorXd none;
           const Eigen::VectorXd& refHz = reference ? reference.value().modal.frequenciesHz : none;
           const Eigen::VectorXd& exactHz = exact ? exact.value().modal.frequenciesHz : none;
-          const Eigen::VectorXd& matchHz = matched ? matched.value().modal.frequenciesHz : none;
-          csv << name << "," << speed << "," << seed << "," << i << ","
-              << fr.massProperties.volumeM3 / asset.massProperties.volumeM3 << ","
-              << (sub ? sub.value().wholeTets + sub.value().splitTets : 0) << "," << (sub ? sub.value().mesh.tets.rows() : 0) << ","
-              << (sub ? sub.value().droppedVolumeM3 / asset.massProperties.volumeM3 : nan) << ","
-              << (exact ? exact.value().modal.modes.cols() : 0) << "," << matchS << "," << (exact ? exactS : nan) << ","
-              << referenceS << "," << distance << "," << (reference && matched ? matchFrequencyError(matchHz, refHz) : nan) << ","
-              << (reference && exact ? matchFrequencyError(exactHz, refHz) : nan) << "," << (reference ? refHz[0] : nan) << ","
-              << (exact ? exactHz[0] : nan) << "," << (matched ? matchHz[0] : nan) << "," << predicted.median << ","
-              << predicted.p90 << "," << (predicted.beyondRange ? 1 : 0) << "\n";
+          double matchS = nan;
+          for (size_t m = 0; m < matchers.size(); ++m) {
+            // Database path, against the first entryCounts[m] entries.
+            Result<ObjectAsset> matched = makeError(ErrorCode::InvalidArgument, "no match");
+            double distance = nan;
+            MatchErrorPrediction predicted;
+            matchS = medianSeconds(s.repeats, [&] {
+              auto found = matchers[m].match(fr.surface, s.descriptor, 1);
+              if (!found) return;
+              distance = found.value().front().distance;
+              predicted = found.value().front().predictedError;
+              matched = instantiateEntry(p.database.entries[static_cast<size_t>(found.value().front().entry)],
+                                         p.database.referenceMaterial, material, found.value().front().queryFrame);
+            });
+            const Eigen::VectorXd& matchHz = matched ? matched.value().modal.frequenciesHz : none;
+            csv << name << "," << speed << "," << seed << "," << i << ","
+                << fr.massProperties.volumeM3 / asset.massProperties.volumeM3 << ","
+                << (sub ? sub.value().wholeTets + sub.value().splitTets : 0) << "," << (sub ? sub.value().mesh.tets.rows() : 0) << ","
+                << (sub ? sub.value().droppedVolumeM3 / asset.massProperties.volumeM3 : nan) << ","
+                << (exact ? exact.value().modal.modes.cols() : 0) << "," << matchS << "," << (exact ? exactS : nan) << ","
+                << referenceS << "," << distance << "," << (reference && matched ? matchFrequencyError(matchHz, refHz) : nan) << ","
+                << (reference && exact ? matchFrequencyError(exactHz, refHz) : nan) << "," << (reference ? refHz[0] : nan) << ","
+                << (exact ? exactHz[0] : nan) << "," << (matched ? matchHz[0] : nan) << "," << predicted.median << ","
+                << predicted.p90 << "," << (predicted.beyondRange ? 1 : 0) << "," << entryCounts[m] << "\n";
+          }
           if (!s.quiet) {
             std::fprintf(stderr, "%s v=%g seed=%d fragment %zu: %ld tets, match %.2f ms, exact %.2f ms%s%s\n", name.c_str(), speed,
                          seed, i, sub ? static_cast<long>(sub.value().mesh.tets.rows()) : 0L, 1e3 * matchS, 1e3 * exactS,

@@ -45,6 +45,9 @@ struct ExactModesBenchSettings {
   int exactModes = 20;                           ///< modes of the exact path (FractureSettings::exactModeCount)
   int repeats = 3;                               ///< timings: the median of this many runs
   DescriptorKind descriptor = DescriptorKind::Moment;  ///< the kind fragments are matched with
+  /// Match against the first N entries only, for each N here (0: all), one CSV row per fragment
+  /// and N: the match error against the database's size, on the same fragments.
+  std::vector<int64_t> entryLimits = {0};
   std::filesystem::path csv = "docs/results/data/exact_modes.csv";
   bool quiet = false;
 };

@@ -170,6 +170,9 @@ Runner addBenchCommand(CLI::App& app) {
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   exact->add_flag("--reference-split", xb->referenceSplit,
                   "Reference on the exact path's mesh split 1:8 (8x the P2 tets: checks the reference's convergence)");
+  exact->add_option("--entries", xb->entryLimits,
+                    "Match against the database's first N entries only, for each N (0: all): one row per fragment and N")
+      ->delimiter(',')->capture_default_str()->check(CLI::NonNegativeNumber);
   exact->add_option("--exact-modes", xb->exactModes, "Modes of the exact path")->capture_default_str()->check(CLI::Range(1, 500));
   exact->add_option("--repeats", xb->repeats, "Timing repeats (median)")->capture_default_str()->check(CLI::Range(1, 100));
   auto exactDescriptor = std::make_shared<std::string>("moment");

@@ -48,6 +48,10 @@ def main():
     parser.add_argument("--budget-ms", type=float, default=20.0)
     args = parser.parse_args()
     rows = [r for r in csv.DictReader(open(args.csv, newline="")) if int(r["parent_tets"]) > 0]
+    # With `--entries N,...` each fragment has a row per database size: chart the whole database.
+    if rows and "database_entries" in rows[0]:
+        largest = max(int(r["database_entries"]) for r in rows)
+        rows = [r for r in rows if int(r["database_entries"]) == largest]
     if not rows:
         raise SystemExit("no fragment rows in " + args.csv)
     tets = [int(r["parent_tets"]) for r in rows]
