@@ -65,15 +65,8 @@ TEST(RuntimeFragments, PiecesOfAnObjectsOwnMeshInQuadraticTets) {
   // tets are the ones the runtime cut it out with (they enclose its surface's unit volume), its
   // elements are quadratic, its modes solve, and it survives the pack. The same tets as P1 are
   // stiffer (P1 locks in bending), so their first mode is higher.
-  auto shapes = loadBaseShapes(testing::sourceDir() / "assets" / "shapes" / "default-objects.json");
-  ASSERT_TRUE(shapes) << shapes.error().message;
-  DatabaseBakeSettings s = testing::smallDatabaseSettings(2, true);
-  s.shapes = selectBaseShapes(shapes.value(), {"brick"}).value();
-  s.runtimeFragments.fraction = 1.0;
-  s.runtimeFragments.targetTets = 800;
-  s.runtimeFragments.modeCount = 12;
-  s.elementOrder = ElementOrder::P2;
-  s.tetMesh.targetTets = 300;
+  DatabaseBakeSettings s = testing::brickPiecesDatabase(2);
+  ASSERT_EQ(s.shapes.size(), 1u);
   auto db = bakeFragmentDatabase(s);
   ASSERT_TRUE(db) << db.error().message;
   ASSERT_EQ(db.value().entries.size(), 2u);

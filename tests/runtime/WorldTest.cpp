@@ -150,20 +150,25 @@ TEST_F(WorldTest, BreaksAboveAThresholdWithClosedFragmentsThatConserveVolumeAndM
   EXPECT_GT(r.contact.durationS, 0.0);
 }
 
+// The P2 plate tests' hit: a 100 g ball at 60 m/s on the small plate's top face.
+ImpactDesc quadraticPlateHit(ObjectId plate) {
+  ImpactDesc d;
+  d.object = plate;
+  d.pointWorld = Eigen::Vector3d(0.07, 0.08, 0.01);
+  d.normalWorld = Eigen::Vector3d::UnitZ();
+  d.speedMps = 60.0;
+  d.impactorMassKg = 0.1;
+  d.impactorRadiusM = 0.02;
+  return d;
+}
+
 TEST(WorldP2Test, FragmentsMatchedToQuadraticEntriesAreQuadraticAndBreakAgain) {
   // A database of the brick's own pieces in P2 tets (bake-db --element p2 on a mesh base shape,
   // broken off by the runtime): a matched fragment is its entry placed, P2 (FEM nodes and four
   // stress points per tet), and it breaks again.
   auto pack = testing::makeGlassPlatePack(300, 12, 0.15, ElementOrder::P2);
   ASSERT_TRUE(pack) << pack.error().message;
-  auto shapes = loadBaseShapes(testing::sourceDir() / "assets" / "shapes" / "default-objects.json");
-  ASSERT_TRUE(shapes) << shapes.error().message;
-  DatabaseBakeSettings db = testing::smallDatabaseSettings(4, true);
-  db.shapes = selectBaseShapes(shapes.value(), {"brick"}).value();
-  db.runtimeFragments.fraction = 1.0;
-  db.runtimeFragments.targetTets = 800;
-  db.runtimeFragments.modeCount = 12;
-  db.elementOrder = ElementOrder::P2;
+  DatabaseBakeSettings db = testing::brickPiecesDatabase(4);
   db.modeCount = 8;
   auto database = bakeFragmentDatabase(db);
   ASSERT_TRUE(database) << database.error().message;
@@ -172,13 +177,7 @@ TEST(WorldP2Test, FragmentsMatchedToQuadraticEntriesAreQuadraticAndBreakAgain) {
   settings.fracture.exactModesMaxTets = 0;  // every fragment that is not debris is matched
   auto world = World::create(std::move(pack).value(), settings);
   ASSERT_TRUE(world) << world.error().message;
-  ImpactDesc d;
-  d.object = world.value().addObject({.asset = "plate"}).value();
-  d.pointWorld = Eigen::Vector3d(0.07, 0.08, 0.01);
-  d.normalWorld = Eigen::Vector3d::UnitZ();
-  d.speedMps = 60.0;
-  d.impactorMassKg = 0.1;
-  d.impactorRadiusM = 0.02;
+  ImpactDesc d = quadraticPlateHit(world.value().addObject({.asset = "plate"}).value());
   auto hit = world.value().impact(d);
   ASSERT_TRUE(hit) << hit.error().message;
   ASSERT_TRUE(hit.value().broken);
@@ -221,13 +220,7 @@ TEST(WorldP2Test, AQuadraticPlateBreaksIntoClosedFragmentsThatKeepTheirElement) 
   const Pack source = pack.value();
   auto world = World::create(Pack(source), settings);
   ASSERT_TRUE(world) << world.error().message;
-  ImpactDesc d;
-  d.object = world.value().addObject({.asset = "plate"}).value();
-  d.pointWorld = Eigen::Vector3d(0.07, 0.08, 0.01);
-  d.normalWorld = Eigen::Vector3d::UnitZ();
-  d.speedMps = 60.0;
-  d.impactorMassKg = 0.1;
-  d.impactorRadiusM = 0.02;
+  ImpactDesc d = quadraticPlateHit(world.value().addObject({.asset = "plate"}).value());
   auto hit = world.value().impact(d);
   ASSERT_TRUE(hit) << hit.error().message;
   const ImpactResult& r = hit.value();

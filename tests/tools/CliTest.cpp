@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <iterator>
 #include <string>
 #include <vector>
@@ -335,17 +336,25 @@ TEST_F(CliTest, ExactModesBenchComparesTheMatchWithTheFragmentsOwnModes) {
                                        R"(", "only": ["box", "plate"], "entries": 6, "tets": 300, "modes": 6 } })";
   const CliRun bake = run("bake --manifest " + path("m.json") + " --quiet --out " + path("p.h5"));
   ASSERT_EQ(bake.exitCode, 0) << bake.out;
+  // Each fragment against the first 3 entries and against all 6: a row for each.
   const CliRun bench = run("bench exact-modes " + path("p.h5") + " --speeds 40 --seeds 1 --max-fragments 3 --exact-modes 6 "
-                           "--repeats 1 --quiet --csv " + path("x.csv"));
+                           "--repeats 1 --entries 3,0 --quiet --csv " + path("x.csv"));
   ASSERT_EQ(bench.exitCode, 0) << bench.out;
   const Csv csv = readCsv(dir / "x.csv");
   EXPECT_EQ(csv.header.substr(0, 62), "object,speed_mps,seed,fragment,volume_fraction,parent_tets,sub");
+  EXPECT_EQ(csv.header.substr(csv.header.size() - 17), ",database_entries");
+  std::map<std::string, int> perSize;
   for (const std::string& line : csv.lines) {
     EXPECT_EQ(line.substr(0, 8), "tile,40,") << line;
     EXPECT_EQ(line.find("nan"), std::string::npos) << line;  // both paths and the reference ran
+    ++perSize[line.substr(line.rfind(',') + 1)];
   }
-  EXPECT_GE(csv.lines.size(), 2u);
-  EXPECT_LE(csv.lines.size(), 3u);
+  ASSERT_EQ(perSize.size(), 2u);
+  EXPECT_EQ(perSize["3"], perSize["6"]);
+  EXPECT_GE(perSize["6"], 2);
+  EXPECT_LE(perSize["6"], 3);
+  const CliRun negative = run("bench exact-modes " + path("p.h5") + " --entries -1 --quiet --csv " + path("y.csv"));
+  EXPECT_NE(negative.exitCode, 0);
 }
 
 TEST_F(CliTest, FractureStatisticsBenchWritesOneRowPerSeedAndSpeed) {

@@ -42,4 +42,19 @@ inline DatabaseBakeSettings shippedShapesDatabase(const std::vector<std::string>
   return s;
 }
 
+/// Small settings for a database of the brick's own pieces (assets/shapes/default-objects.json),
+/// broken off by the runtime, in P2 tets: the database of a scene's own objects, kept small. An
+/// unreadable shapes file leaves the shapes empty (the bake then refuses).
+inline DatabaseBakeSettings brickPiecesDatabase(int64_t entries) {
+  DatabaseBakeSettings s = smallDatabaseSettings(entries, true);
+  auto shapes = loadBaseShapes(sourceDir() / "assets" / "shapes" / "default-objects.json");
+  auto brick = shapes ? selectBaseShapes(shapes.value(), {"brick"}) : Result<std::vector<BaseShapeDefinition>>(shapes.error());
+  s.shapes = brick ? std::move(brick).value() : std::vector<BaseShapeDefinition>{};
+  s.runtimeFragments.fraction = 1.0;
+  s.runtimeFragments.targetTets = 800;
+  s.runtimeFragments.modeCount = 12;
+  s.elementOrder = ElementOrder::P2;
+  return s;
+}
+
 }  // namespace brittle::testing
