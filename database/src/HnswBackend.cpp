@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <algorithm>
 #include <array>
+#include <tuple>
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -86,10 +87,28 @@ class HammingSpace : public hnswlib::SpaceInterface<float> {
   size_t mWords;
 };
 
-using Scored = std::pair<float, hnswlib::tableint>;
+// A node found for a set of queries: its distance to the set, the node, and the lowest row of the
+// set at that distance. Ordered by (distance, node); a node appears once, so the row never decides.
+using Scored = std::tuple<float, hnswlib::tableint, int32_t>;
+
+// What every graph's query reports when it found fewer than k neighbours.
+Error tooFewNeighbours(size_t found, int k) {
+  return makeError(ErrorCode::InvalidArgument, "DescriptorIndex query: HNSW returned " + std::to_string(found) + " of " +
+                                                   std::to_string(k) + " neighbours");
+}
+
+// hnswlib's graph in memory: every node's data and level-0 links, and its upper-level links.
+int64_t graphBytes(const hnswlib::HierarchicalNSW<float>& graph) {
+  auto bytes = static_cast<int64_t>(graph.max_elements_ * graph.size_data_per_element_);
+  for (size_t i = 0; i < graph.cur_element_count; ++i) {
+    bytes += static_cast<int64_t>(graph.size_links_per_element_) * graph.element_levels_[i];
+  }
+  return bytes;
+}
 
 // The `ef` nearest nodes of `graph` to a set of `count` queries (`stride` bytes apart from `base`),
-// nearest first, ties by lower id: a fragment's candidate frames in one search. Each row descends
+// nearest first, ties by lower id, each with the lowest row at its distance: a fragment's
+// candidate frames in one search. Each row descends
 // the upper levels on its own, as a single query would, and level 0 is then searched once from all
 // their entry points (HNSW's best-first search, Malkov & Yashunin 2018, algorithm 2, with several
 // entry points) under the set's distance, the smallest over its rows. A node is measured once for
@@ -100,10 +119,13 @@ std::vector<Scored> walkSet(const hnswlib::HierarchicalNSW<float>& graph, const 
   const auto rowOf = [&](int64_t q) { return static_cast<const void*>(base + static_cast<size_t>(q) * stride); };
   const hnswlib::DISTFUNC<float> distance = graph.fstdistfunc_;
   const void* param = graph.dist_func_param_;
-  const auto setDistance = [&](tableint node) {
+  const auto scored = [&](tableint node) {  // the set's distance, from the lowest row reaching it
     const char* data = graph.getDataByInternalId(node);
-    float best = distance(rowOf(0), data, param);
-    for (int64_t q = 1; q < count; ++q) best = std::min(best, distance(rowOf(q), data, param));
+    Scored best{distance(rowOf(0), data, param), node, 0};
+    for (int64_t q = 1; q < count; ++q) {
+      const float d = distance(rowOf(q), data, param);
+      if (d < std::get<0>(best)) best = {d, node, static_cast<int32_t>(q)};
+    }
     return best;
   };
   // The upper levels, row by row (greedy, as hnswlib's searchKnn).
@@ -138,17 +160,17 @@ std::vector<Scored> walkSet(const hnswlib::HierarchicalNSW<float>& graph, const 
   std::priority_queue<Scored, std::vector<Scored>, std::greater<Scored>> frontier;
   auto offer = [&](tableint node) {
     visited[node] = tag;
-    const float d = setDistance(node);
-    if (kept.size() < ef || d < kept.top().first) {
-      frontier.emplace(d, node);
-      kept.emplace(d, node);
+    const Scored found = scored(node);
+    if (kept.size() < ef || std::get<0>(found) < std::get<0>(kept.top())) {
+      frontier.push(found);
+      kept.push(found);
       if (kept.size() > ef) kept.pop();
     }
   };
   for (tableint e : entries) offer(e);
   while (!frontier.empty()) {
-    const auto [d, node] = frontier.top();
-    if (d > kept.top().first) break;
+    const auto [d, node, row] = frontier.top();
+    if (d > std::get<0>(kept.top())) break;
     frontier.pop();
     hnswlib::linklistsizeint* links = graph.get_linklist0(node);
     const auto* neighbours = reinterpret_cast<const tableint*>(links + 1);
@@ -194,9 +216,7 @@ class HnswBackend final : public Backend {
       if constexpr (kBinary) packBits(descriptor, 1, mDims, 8, code.data());
       const void* point = kBinary ? static_cast<const void*>(code.data()) : static_cast<const void*>(descriptor);
       auto found = mGraph.searchKnn(point, static_cast<size_t>(k));  // max-heap: farthest on top
-      if (static_cast<int>(found.size()) < k)
-        return invalidArgument("DescriptorIndex query: HNSW returned " + std::to_string(found.size()) + " of " +
-                               std::to_string(k) + " neighbours");
+      if (static_cast<int>(found.size()) < k) return tooFewNeighbours(found.size(), k);
       for (int i = k - 1; i >= 0; --i) {
         squaredDistances[i] = found.top().first;
         ids[i] = static_cast<int64_t>(found.top().second);
@@ -221,21 +241,12 @@ class HnswBackend final : public Backend {
       if constexpr (kBinary) packBits(descriptors, count, mDims, 8, codes.data());
       const auto* base = kBinary ? codes.data() : reinterpret_cast<const unsigned char*>(descriptors);
       const std::vector<Scored> kept = walkSet(mGraph, base, count, stride, std::max(mGraph.ef_, static_cast<size_t>(k)));
-      if (static_cast<int>(kept.size()) < k)
-        return invalidArgument("DescriptorIndex query: HNSW returned " + std::to_string(kept.size()) + " of " +
-                               std::to_string(k) + " neighbours");
+      if (static_cast<int>(kept.size()) < k) return tooFewNeighbours(kept.size(), k);
       for (int i = 0; i < k; ++i) {
-        squaredDistances[i] = kept[static_cast<size_t>(i)].first;
-        ids[i] = static_cast<int64_t>(mGraph.getExternalLabel(kept[static_cast<size_t>(i)].second));
-        // The lowest row reaching the set's distance.
-        const char* data = mGraph.getDataByInternalId(kept[static_cast<size_t>(i)].second);
-        rows[i] = 0;
-        for (int64_t q = 0; q < count; ++q) {
-          if (mGraph.fstdistfunc_(base + static_cast<size_t>(q) * stride, data, mGraph.dist_func_param_) == squaredDistances[i]) {
-            rows[i] = static_cast<int32_t>(q);
-            break;
-          }
-        }
+        const auto& [distance, node, row] = kept[static_cast<size_t>(i)];
+        squaredDistances[i] = distance;
+        ids[i] = static_cast<int64_t>(mGraph.getExternalLabel(node));
+        rows[i] = row;
       }
     } catch (const std::exception& e) {
       return invalidArgument(std::string("DescriptorIndex query: HNSW search failed: ") + e.what());
@@ -244,13 +255,7 @@ class HnswBackend final : public Backend {
   }
 
   // Level 0 (links, its own copy of the data, labels) plus the upper levels' links.
-  int64_t memoryBytes() const override {
-    int64_t bytes = static_cast<int64_t>(mGraph.max_elements_ * mGraph.size_data_per_element_);
-    for (size_t i = 0; i < mGraph.cur_element_count; ++i) {
-      bytes += static_cast<int64_t>(mGraph.size_links_per_element_) * mGraph.element_levels_[i];
-    }
-    return bytes;
-  }
+  int64_t memoryBytes() const override { return graphBytes(mGraph); }
 
  private:
   int64_t mDims;
@@ -309,9 +314,7 @@ class PooledHnswBackend final : public Backend {
       const std::vector<Scored> candidates =
           walkSet(mGraph, reinterpret_cast<const unsigned char*>(keys.data()), count, kKeyDims * sizeof(float),
                   std::max(mGraph.ef_, static_cast<size_t>(k)));
-      if (static_cast<int>(candidates.size()) < k)
-        return invalidArgument("DescriptorIndex query: HNSW returned " + std::to_string(candidates.size()) + " of " +
-                               std::to_string(k) + " neighbours");
+      if (static_cast<int>(candidates.size()) < k) return tooFewNeighbours(candidates.size(), k);
       rank(descriptors, count, candidates, k, ids, squaredDistances, rows);
     } catch (const std::exception& e) {
       return invalidArgument(std::string("DescriptorIndex query: HNSW search failed: ") + e.what());
@@ -319,13 +322,7 @@ class PooledHnswBackend final : public Backend {
     return Ok{};
   }
 
-  int64_t memoryBytes() const override {
-    int64_t bytes = static_cast<int64_t>(mGraph.max_elements_ * mGraph.size_data_per_element_ + mCodes.size());
-    for (size_t i = 0; i < mGraph.cur_element_count; ++i) {
-      bytes += static_cast<int64_t>(mGraph.size_links_per_element_) * mGraph.element_levels_[i];
-    }
-    return bytes;
-  }
+  int64_t memoryBytes() const override { return graphBytes(mGraph) + static_cast<int64_t>(mCodes.size()); }
 
  private:
   // The block sums of one row, each over √cells: a block's cells are b consecutive values of a
@@ -370,7 +367,7 @@ class PooledHnswBackend final : public Backend {
     float admit = std::numeric_limits<float>::infinity();
     if (!mBinary) {
       for (size_t i = 0; i < candidates.size(); ++i) {
-        const Eigen::Map<const Eigen::VectorXf> row(mData + static_cast<int64_t>(mGraph.getExternalLabel(candidates[i].second)) * mDims, mDims);
+        const Eigen::Map<const Eigen::VectorXf> row(mData + static_cast<int64_t>(mGraph.getExternalLabel(std::get<1>(candidates[i]))) * mDims, mDims);
         float best = std::numeric_limits<float>::infinity();
         for (int64_t q = 0; q < count; ++q) {
           best = std::min(best, (Eigen::Map<const Eigen::VectorXf>(descriptors + q * mDims, mDims) - row).squaredNorm());
@@ -385,7 +382,7 @@ class PooledHnswBackend final : public Backend {
     }
     for (size_t i = 0; i < candidates.size(); ++i) {
       if (!mBinary && approx[i] > admit) continue;
-      const auto id = static_cast<int64_t>(mGraph.getExternalLabel(candidates[i].second));
+      const auto id = static_cast<int64_t>(mGraph.getExternalLabel(std::get<1>(candidates[i])));
       Ranked best{std::numeric_limits<float>::infinity(), id, 0};
       for (int64_t q = 0; q < count; ++q) {
         const float d = mBinary ? mHamming(queryCodes.data() + static_cast<size_t>(q) * mWordsPerCode * 8,

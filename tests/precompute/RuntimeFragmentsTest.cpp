@@ -78,7 +78,6 @@ TEST(RuntimeFragments, PiecesOfAnObjectsOwnMeshInQuadraticTets) {
     EXPECT_GT(e.baseVolumeFraction, 0.0);
     EXPECT_LT(e.baseVolumeFraction, 1.0);
     EXPECT_EQ(e.asset.elementOrder, ElementOrder::P2);
-    EXPECT_GT(femNodeCount(e.asset.tetMesh, ElementOrder::P2), e.asset.tetMesh.nodes.rows());
     EXPECT_EQ(e.asset.modal.modes.rows(), 3 * femNodeCount(e.asset.tetMesh, ElementOrder::P2));
     EXPECT_EQ(e.asset.stressModes.rows(), 6 * 4 * e.asset.tetMesh.tets.rows());
     EXPECT_LT(e.asset.modal.residuals.maxCoeff(), 1e-8);

@@ -333,11 +333,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
             << massErr.size() << "," << percentile(massErr, 0.5) << "," << percentile(inertiaErr, 0.5) << ","
             << percentile(freqErr, 0.5) << "," << s.runtimeFraction << "," << (s.runtimeQueries ? "runtime" : "cut") << ","
             << s.momentOrder << "," << s.voxelResolution << ","
-            << (choice.framesAsOneSet && (choice.settings.kind == DescriptorIndexSettings::Kind::Hnsw ||
-                                          choice.settings.kind == DescriptorIndexSettings::Kind::HnswBinary ||
-                                          choice.settings.kind == DescriptorIndexSettings::Kind::HnswPooled)
-                    ? "set"
-                    : "each")
+            << (choice.framesAsOneSet ? "set" : "each")  // parseIndexChoice sets it for the graphs only
             << "\n";
         csv.flush();
         log(s.quiet, "%7lld %-14s %-22s recall %.3f  median %8.1f us  p99 %8.1f us  (brute %8.1f us)  freq err %.3f\n",

@@ -26,6 +26,7 @@ FAMILIES = {"brute-force": ("black", ""), "kd-forest": ("tab:blue", "-"), "autot
             "hnsw": ("tab:orange", "-"), "hnsw-binary": ("tab:red", "-"),
             "hnsw-pooled": ("tab:brown", "-"),
             "hnsw, frames as one set": ("navajowhite", "-"), "hnsw-binary, frames as one set": ("lightcoral", "-"),
+            "hnsw-pooled, frames as one set": ("rosybrown", "-"),
             "faiss-hnsw": ("tab:green", "--"),
             "faiss-ivf": ("tab:olive", "--"), "faiss-binary-flat": ("tab:purple", "--"),
             "faiss-binary-hnsw": ("tab:pink", "--")}
@@ -42,7 +43,7 @@ def load(path):
                 r[k] = float(v)
         # A graph that searched a fragment's candidate frames in one walk (its ":set" rows) is its
         # own family beside the frame-by-frame search (the default, and every row before it).
-        if r["index"] in ("hnsw", "hnsw-binary") and r.get("frames", "each") == "set":
+        if r["index"] in ("hnsw", "hnsw-binary", "hnsw-pooled") and r.get("frames", "each") == "set":
             r["index"] += ", frames as one set"
     return rows
 

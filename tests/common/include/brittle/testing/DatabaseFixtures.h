@@ -47,9 +47,10 @@ inline DatabaseBakeSettings shippedShapesDatabase(const std::vector<std::string>
 /// unreadable shapes file leaves the shapes empty (the bake then refuses).
 inline DatabaseBakeSettings brickPiecesDatabase(int64_t entries) {
   DatabaseBakeSettings s = smallDatabaseSettings(entries, true);
-  auto shapes = loadBaseShapes(sourceDir() / "assets" / "shapes" / "default-objects.json");
-  auto brick = shapes ? selectBaseShapes(shapes.value(), {"brick"}) : Result<std::vector<BaseShapeDefinition>>(shapes.error());
-  s.shapes = brick ? std::move(brick).value() : std::vector<BaseShapeDefinition>{};
+  s.shapes.clear();
+  if (auto shapes = loadBaseShapes(sourceDir() / "assets" / "shapes" / "default-objects.json")) {
+    if (auto brick = selectBaseShapes(shapes.value(), {"brick"})) s.shapes = std::move(brick).value();
+  }
   s.runtimeFragments.fraction = 1.0;
   s.runtimeFragments.targetTets = 800;
   s.runtimeFragments.modeCount = 12;
