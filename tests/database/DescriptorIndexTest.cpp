@@ -398,7 +398,7 @@ TEST(DescriptorIndex, PooledGraphRanksItsCandidatesExactly) {
         ASSERT_GE(d[j], exactD[j]);
         if (j > 0) ASSERT_LE(d[j - 1], d[j]);
       }
-      // A set of this query and another row: the same entry, named at row 0.
+      // A set of this query and another grid.
       std::vector<float> set(q);
       const auto other = smoothGrids(1, 100 + uint32_t(i), occupancy);
       set.insert(set.end(), other.begin(), other.end());
