@@ -29,7 +29,10 @@ void Body::adoptStaticCorrection(Result<StaticCorrection> correction) const {
 }
 
 const StressBounds& Body::stressBounds() const {
-  std::call_once(mBoundsOnce, [this] { mStressBounds = stressModeBounds(asset.stressModes, modes, omega.cwiseInverse()); });
+  std::call_once(mBoundsOnce, [this] {
+    mStressBounds = stressModeBounds(asset.stressModes, modes, omega.cwiseInverse(),
+                                     stressPointNodes(asset.tetMesh.tets, stressPointsPerElement(asset.elementOrder)));
+  });
   return mStressBounds;
 }
 

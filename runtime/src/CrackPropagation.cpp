@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <limits>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <random>
 
@@ -80,6 +81,33 @@ Voigt elementStress(const MatrixXdRow& S, Eigen::Index e, const double* q, Eigen
   return (Voigt() << s0, s1, s2, s3, s4, s5).finished();
 }
 
+// The split bound of a group's centre stress σ_c,k = S_c q_k + σ̂_c F_k at every instant k < steps
+// into out[k]: S_c is rows 6g..6g+5 of `centres`, q the instants' modal coordinates in float (one
+// column per mode, its rows padded to a multiple of four), force (or null for no static part).
+// Six running sums per instant in mode order, four instants at a time, in float: these sums only
+// bound, and the caller's margin covers their rounding (at most (r + 2) 2⁻²⁴ Σ_j |S_c,j q_j| per
+// component).
+void centreSplitBounds(const MatrixXfRow& centres, Eigen::Index g, const Eigen::MatrixXf& q, Eigen::Index steps,
+                       const Voigt& staticCentre, const double* force, double* out) {
+  using Quad = float __attribute__((vector_size(16)));
+  const Eigen::Index rows = q.rows(), r = q.cols(), stride = centres.cols();
+  const float* c = centres.data() + 6 * g * stride;
+  for (Eigen::Index k = 0; k < steps; k += 4) {
+    Quad acc[6] = {};
+    for (Eigen::Index j = 0; j < r; ++j) {
+      Quad qj;
+      std::memcpy(&qj, q.data() + j * rows + k, sizeof qj);
+      for (int i = 0; i < 6; ++i) acc[i] += c[i * stride + j] * qj;
+    }
+    for (int lane = 0; lane < 4 && k + lane < steps; ++lane) {
+      Voigt sigma;
+      for (int i = 0; i < 6; ++i) sigma[i] = acc[i][lane];
+      if (force) sigma += staticCentre * force[k + lane];
+      out[k + lane] = splitBound(sigma);
+    }
+  }
+}
+
 bool crosses(const Eigen::Vector4d& d) { return d.maxCoeff() > 0.0 && d.minCoeff() < 0.0; }
 
 // Area of the section of the tet where the nodal values d change sign, projected on n: a triangle
@@ -146,7 +174,18 @@ double maxPrincipalStress(const Voigt& s, Eigen::Vector3d* direction) {
   return eig.eigenvalues()[2];
 }
 
-StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::VectorXd& modeScales) {
+std::vector<int32_t> stressPointNodes(const Tetrahedra& tets, int pointsPerElement) {
+  std::vector<int32_t> nodes(static_cast<size_t>(tets.rows() * pointsPerElement));
+  for (Eigen::Index e = 0; e < tets.rows(); ++e) {
+    for (int c = 0; c < pointsPerElement; ++c) {
+      nodes[static_cast<size_t>(e * pointsPerElement + c)] = pointsPerElement == 1 ? tets.row(e).minCoeff() : tets(e, c);
+    }
+  }
+  return nodes;
+}
+
+StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::VectorXd& modeScales,
+                              const std::vector<int32_t>& pointKeys) {
   const Eigen::Index t = s.rows() / 6;
   StressBounds b;
   b.pressureModes.resize(t, modes);
@@ -164,6 +203,65 @@ StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::Vect
     a.topRows<3>().rowwise() -= pressure.cwiseProduct(b.modeScales.transpose());  // the deviator, weighted
     b.deviatorSpectralNorms[e] = spectralNormBound(a);
     b.deviatorNorms.row(e) = a.colwise().norm().cwiseQuotient(b.modeScales.transpose());
+  }
+  if (pointKeys.size() != static_cast<size_t>(t) || t == 0) return b;
+  // Groups by key (in order of their lowest point), each centred on its points' mean.
+  b.groupPoints.resize(static_cast<size_t>(t));
+  std::iota(b.groupPoints.begin(), b.groupPoints.end(), 0);
+  std::stable_sort(b.groupPoints.begin(), b.groupPoints.end(),
+                   [&](int32_t x, int32_t y) { return pointKeys[static_cast<size_t>(x)] < pointKeys[static_cast<size_t>(y)]; });
+  b.groupStart.push_back(0);
+  for (size_t i = 1; i < b.groupPoints.size(); ++i) {
+    if (pointKeys[static_cast<size_t>(b.groupPoints[i])] != pointKeys[static_cast<size_t>(b.groupPoints[i - 1])]) {
+      b.groupStart.push_back(static_cast<int32_t>(i));
+    }
+  }
+  b.groupStart.push_back(static_cast<int32_t>(t));
+  const Eigen::Index groups = static_cast<Eigen::Index>(b.groupStart.size()) - 1;
+  {
+    // Dealt out like cards, every 16th group in a row: groups of neighbouring nodes then fall
+    // into different ranges of the scan (which takes 16 ranges of consecutive groups), so that the
+    // points near a hit, where the search spends its time, are shared by the threads.
+    constexpr Eigen::Index kDeal = 16;
+    std::vector<int32_t> points, start{0};
+    points.reserve(b.groupPoints.size());
+    for (Eigen::Index hand = 0; hand < kDeal; ++hand) {
+      for (Eigen::Index g = hand; g < groups; g += kDeal) {
+        points.insert(points.end(), b.groupPoints.begin() + b.groupStart[static_cast<size_t>(g)],
+                      b.groupPoints.begin() + b.groupStart[static_cast<size_t>(g) + 1]);
+        start.push_back(static_cast<int32_t>(points.size()));
+      }
+    }
+    b.groupPoints = std::move(points);
+    b.groupStart = std::move(start);
+  }
+  b.groupOf.resize(static_cast<size_t>(t));
+  for (Eigen::Index g = 0; g < groups; ++g) {
+    for (int32_t i = b.groupStart[static_cast<size_t>(g)]; i < b.groupStart[static_cast<size_t>(g) + 1]; ++i) {
+      b.groupOf[static_cast<size_t>(b.groupPoints[static_cast<size_t>(i)])] = static_cast<int32_t>(g);
+    }
+  }
+  b.groupCentres.resize(6 * groups, modes);
+  b.groupRadii.resize(groups);
+  b.groupScales.resize(groups);
+  Eigen::Matrix<double, 6, Eigen::Dynamic> centre(6, modes);
+  for (Eigen::Index g = 0; g < groups; ++g) {
+    const int32_t* first = b.groupPoints.data() + b.groupStart[static_cast<size_t>(g)];
+    const int32_t* last = b.groupPoints.data() + b.groupStart[static_cast<size_t>(g) + 1];
+    centre.setZero();
+    for (const int32_t* e = first; e != last; ++e) centre += s.block(6 * *e, 0, 6, modes);
+    centre /= static_cast<double>(last - first);
+    // The centre is what the scan reads, in float; the radius is measured from it.
+    b.groupCentres.middleRows(6 * g, 6) = centre.cast<float>();
+    centre = b.groupCentres.middleRows(6 * g, 6).cast<double>();
+    double radius = 0.0;
+    for (const int32_t* e = first; e != last; ++e) {
+      a.noalias() = kD.asDiagonal() * (s.block(6 * *e, 0, 6, modes) - centre) * b.modeScales.asDiagonal();
+      radius = std::max(radius, spectralNormBound(a));
+    }
+    b.groupRadii[g] = radius;
+    a.noalias() = kD.asDiagonal() * centre * b.modeScales.asDiagonal();
+    b.groupScales[g] = a.norm();
   }
   return b;
 }
@@ -330,28 +428,131 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
                                      pressure + kDeviatorShare * deviator) * (1.0 + 1e-9);
       }
     });
-    // The search runs in 16 fixed ranges of points on the arena's threads, each over a max-heap of
-    // its own points. Every range starts from the same lower bound, the peak of the point with the
-    // largest B_e over all instants, so that ranges without the peak still prune; each finds its
-    // exact maximum above that, and the ranges' maxima are combined in range order with the same
-    // tie rule. The answer, and the evaluation count, are the same on any number of threads.
-    Eigen::Index first = 0;
-    if (t > 0) w.elementBound.maxCoeff(&first);  // the lowest index among equal bounds
-    for (Eigen::Index k = 0; t > 0 && k < steps; ++k) {
-      ++scan.evaluations;
-      consider(first, k, maxPrincipalStress(voigt(first, k)));
+    // The search runs in 16 fixed ranges of points (of groups, below) on the arena's threads, each
+    // over a max-heap of its own points. Every range starts from the same lower bound, the largest
+    // of the ranges' floors (each the peak over all instants of the range's point with the largest
+    // B_e), so that ranges without the peak still prune and none has to climb to it alone; each
+    // finds its exact maximum above that, and the ranges' maxima are combined in range order with
+    // the same tie rule. The answer, and the evaluation count, are the same on any number of threads.
+    const bool grouped = bounds.groupStart.size() >= 2 && bounds.groupStart.back() == t && bounds.groupCentres.cols() >= r;
+    const Eigen::Index groups = grouped ? static_cast<Eigen::Index>(bounds.groupStart.size()) - 1 : 0;
+    constexpr int kPeakRanges = 16;
+    auto rangeSpan = [&](int c) {  // positions [lo, hi) of range c's points (in groupPoints, if grouped)
+      if (!grouped) return std::pair<size_t, size_t>(static_cast<size_t>(t * c / kPeakRanges), static_cast<size_t>(t * (c + 1) / kPeakRanges));
+      return std::pair<size_t, size_t>(static_cast<size_t>(bounds.groupStart[static_cast<size_t>(groups * c / kPeakRanges)]),
+                                       static_cast<size_t>(bounds.groupStart[static_cast<size_t>(groups * (c + 1) / kPeakRanges)]));
+    };
+    auto pointAt = [&](size_t i) { return grouped ? bounds.groupPoints[i] : static_cast<int32_t>(i); };
+    w.rangePeaks.resize(kPeakRanges);
+    tbb::parallel_for(0, kPeakRanges, [&](int c) {
+      StressScanWorkspace::RangePeak& out = w.rangePeaks[static_cast<size_t>(c)];
+      out = StressScanWorkspace::RangePeak{-std::numeric_limits<double>::infinity(), -1, -1, 0};
+      const auto [lo, hi] = rangeSpan(c);
+      int32_t top = -1;
+      for (size_t i = lo; i < hi; ++i) {  // the largest bound, the lowest point among equal ones
+        const int32_t e = pointAt(i);
+        if (top < 0 || w.elementBound[e] > w.elementBound[top] || (w.elementBound[e] == w.elementBound[top] && e < top)) top = e;
+      }
+      for (Eigen::Index k = 0; top >= 0 && k < steps; ++k) {
+        ++out.evaluations;
+        take(maxPrincipalStress(voigt(top, k)), top, k, out.best, out.point, out.instant);
+      }
+    });
+    for (const StressScanWorkspace::RangePeak& p : w.rangePeaks) {
+      scan.evaluations += p.evaluations;
+      if (p.point >= 0) consider(p.point, p.instant, p.best);
     }
     const double floorBest = best;
     const int32_t floorPoint = scan.peakElement, floorInstant = scan.peakInstant;
-    constexpr int kPeakRanges = 16;
-    w.heap.resize(static_cast<size_t>(t));
-    w.rangePeaks.resize(kPeakRanges);
-    auto searchRange = [&](int c) {
+    auto startRange = [&](int c) -> StressScanWorkspace::RangePeak& {
       StressScanWorkspace::RangePeak& out = w.rangePeaks[static_cast<size_t>(c)];
       out.best = floorBest;
       out.point = floorPoint;
       out.instant = floorInstant;
       out.evaluations = 0;
+      return out;
+    };
+    // Point e's instants, skipping those whose group bound (if given) is below the best so far.
+    auto visitPoint = [&](Eigen::Index e, const double* groupBoundAt, StressScanWorkspace::RangePeak& out) {
+      const PointView view = pointView(e);
+      for (Eigen::Index k = 0; k < steps; ++k) {
+        if ((groupBoundAt && groupBoundAt[k] < out.best) || !mayReachAt(view, k, out.best)) continue;
+        double s1 = 0.0;
+        if (!principalAbove(voigt(e, k), out.best, s1)) continue;
+        ++out.evaluations;
+        take(s1, e, k, out.best, out.point, out.instant);
+      }
+    };
+    // With groups (StressBounds), the search runs per range of groups, over a max-heap of groups
+    // by their points' largest B_e. A group taken with at least kGroupVisit points still above the
+    // best has its bound at every instant made (its centre's exact stress, 6r products each, plus
+    // its radii), and is passed over whole where that is below the best at every instant; else
+    // its points above the best are tested, at the instants the group's bound leaves. Smaller
+    // groups' points are tested as without groups, where the search runs per range of points over
+    // a max-heap of them by B_e.
+    constexpr int kGroupVisit = 3;  // a centre costs about what two or three points' tests do
+    // Group g's bound at every instant into groupBoundAt, and their maximum. The static
+    // correction's centre is its points' mean, with a radius of its own; the margin covers the
+    // rounding of the centre's sums.
+    auto groupBounds = [&](Eigen::Index g) {
+      const int32_t* from = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g)];
+      const int32_t* to = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g) + 1];
+      Voigt centre = Voigt::Zero();
+      double staticRadius = 0.0;
+      if (correction) {
+        for (const int32_t* e = from; e != to; ++e) centre += staticStress.segment<6>(6 * *e);
+        centre /= static_cast<double>(to - from);
+        for (const int32_t* e = from; e != to; ++e) {
+          staticRadius = std::max(staticRadius, kD.cwiseProduct(staticStress.segment<6>(6 * *e) - centre).norm());
+        }
+      }
+      const double radius = bounds.groupRadii[g];
+      // The centre's float sums (centreSplitBounds) move its split bound by at most
+      // 2√6 (r + 2) 2⁻²⁴ ‖D S_c W‖_F ‖W⁻¹q_k‖, under 1e-4 of the scale for r < 4000.
+      const double margin = 1e-4 * bounds.groupScales[g] * qNormMax +
+                            1e-9 * (radius * qNormMax + (kD.cwiseProduct(centre).norm() + staticRadius) * forceMax);
+      double* at = w.groupBoundAt.data() + g * steps;
+      centreSplitBounds(bounds.groupCentres, g, w.qFloat, steps, centre, correction ? forceN.data() : nullptr, at);
+      double most = -std::numeric_limits<double>::infinity();
+      for (Eigen::Index k = 0; k < steps; ++k) {
+        at[k] += (radius * w.qNorm[k] + staticRadius * w.forceAbs[k]) * (1.0 + 1e-9) + margin;
+        most = std::max(most, at[k]);
+      }
+      w.groupBound[g] = most;
+    };
+    auto searchGroups = [&](int c) {
+      StressScanWorkspace::RangePeak& out = startRange(c);
+      const Eigen::Index firstGroup = groups * c / kPeakRanges, endGroup = groups * (c + 1) / kPeakRanges;
+      const auto heapBegin = w.heap.begin() + firstGroup;
+      auto heapEnd = w.heap.begin() + endGroup;
+      for (Eigen::Index g = firstGroup; g < endGroup; ++g) {
+        double top = -std::numeric_limits<double>::infinity();
+        for (int32_t i = bounds.groupStart[static_cast<size_t>(g)]; i < bounds.groupStart[static_cast<size_t>(g) + 1]; ++i) {
+          top = std::max(top, w.elementBound[bounds.groupPoints[static_cast<size_t>(i)]]);
+        }
+        w.heap[static_cast<size_t>(g)] = {top, static_cast<int32_t>(g)};
+        w.groupBound[g] = std::numeric_limits<double>::quiet_NaN();
+      }
+      std::make_heap(heapBegin, heapEnd);
+      while (heapBegin != heapEnd && heapBegin->first >= out.best) {
+        std::pop_heap(heapBegin, heapEnd);
+        --heapEnd;
+        const int32_t g = heapEnd->second;
+        const int32_t* from = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g)];
+        const int32_t* to = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g) + 1];
+        const double* at = nullptr;
+        if (std::count_if(from, to, [&](int32_t e) { return w.elementBound[e] >= out.best; }) >= kGroupVisit) {
+          groupBounds(g);
+          if (w.groupBound[g] < out.best) continue;
+          at = w.groupBoundAt.data() + static_cast<size_t>(g) * static_cast<size_t>(steps);
+        }
+        for (const int32_t* e = from; e != to; ++e) {
+          if (w.elementBound[*e] >= out.best) visitPoint(*e, at, out);
+        }
+      }
+    };
+    auto searchPoints = [&](int c) {
+      StressScanWorkspace::RangePeak& out = startRange(c);
       const auto lo = static_cast<size_t>(t * c / kPeakRanges), hi = static_cast<size_t>(t * (c + 1) / kPeakRanges);
       const auto heapBegin = w.heap.begin() + static_cast<std::ptrdiff_t>(lo);
       auto heapEnd = w.heap.begin() + static_cast<std::ptrdiff_t>(hi);
@@ -360,18 +561,20 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
       while (heapBegin != heapEnd && heapBegin->first >= out.best) {
         std::pop_heap(heapBegin, heapEnd);
         --heapEnd;
-        const int32_t e = heapEnd->second;
-        const PointView view = pointView(e);
-        for (Eigen::Index k = 0; k < steps; ++k) {
-          if (!mayReachAt(view, k, out.best)) continue;
-          double s1 = 0.0;
-          if (!principalAbove(voigt(e, k), out.best, s1)) continue;
-          ++out.evaluations;
-          take(s1, e, k, out.best, out.point, out.instant);
-        }
+        visitPoint(heapEnd->second, nullptr, out);
       }
     };
-    tbb::parallel_for(0, kPeakRanges, searchRange);
+    if (grouped) {
+      w.groupBound.resize(groups);
+      w.groupBoundAt.resize(static_cast<size_t>(groups * steps));
+      w.heap.resize(static_cast<size_t>(t));
+      w.qFloat.setZero((steps + 3) / 4 * 4, r);
+      w.qFloat.topRows(steps) = q.cast<float>();
+      tbb::parallel_for(0, kPeakRanges, searchGroups);
+    } else {
+      w.heap.resize(static_cast<size_t>(t));
+      tbb::parallel_for(0, kPeakRanges, searchPoints);
+    }
     for (const StressScanWorkspace::RangePeak& p : w.rangePeaks) {
       scan.evaluations += p.evaluations;
       consider(p.point, p.instant, p.best);

@@ -268,7 +268,9 @@ TEST(DescriptorIndex, SetQueryFindsTheNearestEntryToAnyRow) {
                                            dims, set, n, 1);
       ASSERT_NEAR(d[j], own.distances[0], 1e-5 * own.distances[0]);
       ASSERT_EQ(r[j], own.rows[0]);
-      if (j > 0) ASSERT_LE(d[j - 1], d[j]);
+      if (j > 0) {
+        ASSERT_LE(d[j - 1], d[j]);
+      }
     }
     if (n == 1) {  // one row: the same walk as a single query
       int64_t single[k];
@@ -396,7 +398,9 @@ TEST(DescriptorIndex, PooledGraphRanksItsCandidatesExactly) {
                                          dims, q.data(), 1, 1).distances[0];
         ASSERT_EQ(d[j], own) << "query " << i << " rank " << j;
         ASSERT_GE(d[j], exactD[j]);
-        if (j > 0) ASSERT_LE(d[j - 1], d[j]);
+        if (j > 0) {
+        ASSERT_LE(d[j - 1], d[j]);
+      }
       }
       // A set of this query and another grid.
       std::vector<float> set(q);

@@ -160,6 +160,97 @@ TEST(CrackPropagation, PrunedScanEqualsTheFullScanOnRandomFields) {
   EXPECT_GT(firstSeedCheaper, 0);  // lazily made seeds save evaluations on these fields
 }
 
+TEST(CrackPropagation, GroupedScanEqualsTheFullScanAndItsGroupBoundsHold) {
+  // Points in groups of 1–12 around shared centres (as the corners of the elements at one node
+  // are), each a centre plus a perturbation of 2 % (tight groups) or 100 % (loose ones), and
+  // groups by random keys (any grouping must give true bounds). With and without the static
+  // correction. The grouped scan finds the full scan's peak, element, instant and seeds; every
+  // group bound it made holds at every point and instant of the group; tight groups leave few of
+  // them to visit.
+  int tightLive = 0, tightGroups = 0, checked = 0;
+  for (uint64_t rngSeed : {21u, 22u, 23u}) {
+    std::mt19937_64 rng(rngSeed);
+    std::normal_distribution<double> g(0.0, 1.0);
+    for (int trial = 0; trial < 6; ++trial) {
+      SCOPED_TRACE(::testing::Message() << "seed " << rngSeed << ", trial " << trial);
+      const int modes = 8, instants = 29;  // an odd count: the group bounds take instants four at a time
+      const double spread = trial < 2 ? 0.02 : 1.0;
+      std::vector<int32_t> keys;
+      std::vector<Eigen::MatrixXd> blocks;
+      for (int32_t group = 0; keys.size() < 240; ++group) {
+        Eigen::MatrixXd centre(6, modes);
+        for (Eigen::Index i = 0; i < centre.size(); ++i) centre.data()[i] = 1e6 * g(rng);
+        const int size = 1 + static_cast<int>(rng() % 12);
+        for (int m = 0; m < size; ++m) {
+          Eigen::MatrixXd block = centre;
+          for (Eigen::Index i = 0; i < block.size(); ++i) block.data()[i] += spread * 1e6 * g(rng);
+          blocks.push_back(block);
+          keys.push_back(trial == 5 ? static_cast<int32_t>(rng() % 17) : group);
+        }
+      }
+      // The points of a group are not next to each other in the stress modes' rows.
+      std::vector<size_t> order(keys.size());
+      std::iota(order.begin(), order.end(), size_t{0});
+      std::shuffle(order.begin(), order.end(), rng);
+      const auto points = static_cast<Eigen::Index>(keys.size());
+      MatrixXdRow stressModes(6 * points, modes);
+      std::vector<int32_t> pointKeys(keys.size());
+      for (Eigen::Index e = 0; e < points; ++e) {
+        stressModes.middleRows(6 * e, 6) = blocks[order[static_cast<size_t>(e)]];
+        pointKeys[static_cast<size_t>(e)] = keys[order[static_cast<size_t>(e)]];
+      }
+      Eigen::MatrixXd q(instants, modes);
+      for (Eigen::Index i = 0; i < q.size(); ++i) q.data()[i] = g(rng);
+      const bool correction = trial % 2 == 0;
+      Eigen::VectorXd staticStress;
+      if (correction) {
+        staticStress.resize(6 * points);
+        for (Eigen::Index i = 0; i < staticStress.size(); ++i) staticStress[i] = 1e3 * g(rng);
+      }
+      std::vector<double> force(instants);
+      for (double& f : force) f = 100.0 * std::abs(g(rng));
+      const Eigen::VectorXd scales = Eigen::VectorXd::LinSpaced(modes, 1, modes).cwiseInverse();
+      const StressBounds bounds = stressModeBounds(stressModes, modes, scales, pointKeys);
+      ASSERT_EQ(bounds.groupPoints.size(), keys.size());
+      const double threshold = 2.5e6 + 4e5 * trial;
+      const StressScan full = scanStresses(stressModes, bounds, q, staticStress, force, threshold, false);
+      StressScanWorkspace workspace;
+      StressScan grouped;
+      scanStresses(stressModes, bounds, q, staticStress, force, threshold, true, workspace, grouped);
+      EXPECT_EQ(grouped.peakPrincipalPa, full.peakPrincipalPa);
+      EXPECT_EQ(grouped.peakElement, full.peakElement);
+      EXPECT_EQ(grouped.peakInstant, full.peakInstant);
+      StressField field{&stressModes, q.row(full.peakInstant).transpose(), correction ? &staticStress : nullptr,
+                        force[static_cast<size_t>(full.peakInstant)]};
+      EXPECT_EQ(orderedSeeds(grouped, field), full.seeds);
+      const auto groups = static_cast<Eigen::Index>(bounds.groupStart.size()) - 1;
+      ASSERT_EQ(workspace.groupBound.size(), groups);
+      int live = 0;
+      for (Eigen::Index group = 0; group < groups; ++group) {
+        // Groups whose bounds the scan did not need (too few points left in them, or none) keep NaN.
+        if (std::isnan(workspace.groupBound[group])) continue;
+        ++checked;
+        live += workspace.groupBound[group] >= full.peakPrincipalPa;
+        for (int32_t i = bounds.groupStart[static_cast<size_t>(group)]; i < bounds.groupStart[static_cast<size_t>(group) + 1]; ++i) {
+          const int32_t e = bounds.groupPoints[static_cast<size_t>(i)];
+          for (Eigen::Index k = 0; k < instants; ++k) {
+            StressField at{&stressModes, q.row(k).transpose(), correction ? &staticStress : nullptr, force[static_cast<size_t>(k)]};
+            EXPECT_LE(maxPrincipalStress(at.atPoint(e)), workspace.groupBoundAt[static_cast<size_t>(group * instants + k)])
+                << "group " << group << ", point " << e << ", instant " << k;
+          }
+        }
+      }
+      if (trial < 2) {
+        tightLive += live;
+        tightGroups += static_cast<int>(groups);
+      }
+    }
+  }
+  EXPECT_GT(checked, 100);
+  // Tight groups: a group's bound is near its best point's σ₁, so few reach the peak.
+  EXPECT_LT(tightLive, tightGroups / 4) << tightLive << " of " << tightGroups;
+}
+
 TEST(CrackPropagation, SpectralBoundIsANormBoundWithinSixPercent) {
   // ‖D S_e W‖₂ from the trace of the 16th power of the Gram matrix: never below the exact norm
   // (an SVD), at most 6^(1/32) above it, for any number of the first modes, and so a bound on

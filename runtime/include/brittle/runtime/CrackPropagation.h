@@ -42,6 +42,7 @@
 namespace brittle {
 
 using Voigt = Eigen::Matrix<double, 6, 1>;
+using MatrixXfRow = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 /// Largest principal stress (Pa) of a Voigt stress (xx, yy, zz, yz, xz, xy), and its unit direction.
 double maxPrincipalStress(const Voigt& stress, Eigen::Vector3d* direction = nullptr);
@@ -53,6 +54,17 @@ struct StressBounds {
   Eigen::VectorXd modeScales;    ///< modes: w_j > 0 (1/ω_j: see stressModeBounds)
   Eigen::VectorXd spectralNorms; ///< PT: ‖D S_e W‖₂ over the first `modes` modes, per unit ‖W⁻¹ q‖
   Eigen::VectorXd deviatorSpectralNorms;  ///< PT: ‖D s_e W‖₂, the same for the deviator
+  /// Groups of stress points (empty: none), each with a centre c, the mean of its points' stress
+  /// modes, and a radius ρ_G ≥ ‖D (S_e − S_c) W‖₂ over its points e. By Weyl's inequality
+  /// σ₁(σ_c + Δ) ≤ σ₁(σ_c) + λ_max(Δ) ≤ σ₁(σ_c) + ‖D Δ‖, so at every instant
+  ///   σ₁(e, k) ≤ splitBound(σ_c,k) + ρ_G ‖W⁻¹ q_k‖ (+ the static correction's own radius |F_k|):
+  /// one exact stress (6r products) bounds the whole group, tightly where its points agree.
+  std::vector<int32_t> groupStart;   ///< G + 1 offsets into groupPoints
+  std::vector<int32_t> groupPoints;  ///< PT stress points, group by group, ascending in each
+  std::vector<int32_t> groupOf;      ///< PT: each point's group
+  MatrixXfRow groupCentres;          ///< 6G by modes: S_c, in float (the radii are measured from it)
+  Eigen::VectorXd groupRadii;        ///< G: ρ_G
+  Eigen::VectorXd groupScales;       ///< G: ‖D S_c W‖_F ≥ ‖D S_c W‖₂, the scale of the centre's rounding
 };
 
 /// The bounds of every stress point over the first `modes` modes of stressModes (6PT by ≥ modes).
@@ -60,7 +72,16 @@ struct StressBounds {
 /// ‖D S_e q‖ ≤ ‖D S_e W‖₂ ‖W⁻¹ q‖ (and the deviator's). With w_j = 1/ω_j, ‖W⁻¹ q‖² = Σ ω_j² q_j² is twice the kept
 /// modes' strain energy, which a hit shares out over many modes while the stress per unit q_j
 /// grows with ω_j: the bound is then stress per unit √energy, and holds for any fewer modes.
-StressBounds stressModeBounds(const MatrixXdRow& stressModes, int modes, const Eigen::VectorXd& modeScales = {});
+/// pointKeys (PT entries, or empty for no groups) group the points: points with the same key form
+/// one group. Any grouping gives true bounds; points whose stresses agree give tight ones, and
+/// stressPointNodes groups them by mesh node.
+StressBounds stressModeBounds(const MatrixXdRow& stressModes, int modes, const Eigen::VectorXd& modeScales = {},
+                              const std::vector<int32_t>& pointKeys = {});
+
+/// A mesh node per stress point, to group the points (stressModeBounds): for P2 the corner the
+/// point sits at (the corners of the elements around a node see nearly the same stress); for P1
+/// the element's lowest node, which gathers a few neighbouring elements.
+std::vector<int32_t> stressPointNodes(const Tetrahedra& tets, int pointsPerElement);
 
 struct StressScan {
   double peakPrincipalPa = 0.0;   ///< exact maximum of σ₁ over elements and instants
@@ -110,6 +131,11 @@ struct StressScanWorkspace {
     int64_t evaluations = 0;
   };
   std::vector<RangePeak> rangePeaks;
+  // The groups (StressBounds::groupStart): each group's bound at every instant (G by K, row-major)
+  // and over all of them, for the groups whose bounds the last scan made (NaN for the others).
+  Eigen::VectorXd groupBound;
+  std::vector<double> groupBoundAt;
+  Eigen::MatrixXf qFloat;                      ///< K (padded to a multiple of 4) by r: q in float
   std::vector<char> seedTaken;                 ///< T, when an element has several stress points
 };
 
