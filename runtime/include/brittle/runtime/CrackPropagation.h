@@ -16,7 +16,10 @@
 // A point or instant whose bound is below what is sought is skipped without changing the answer.
 // Points are visited by a bound over all instants (p and the deviator bounded with max |q_j|), and
 // per-instant bounds are formed only for the points visited. On the default P2 plate this leaves
-// 2.3k of its 1.2M (point, instant) pairs above the peak, where ‖σ‖_F's bounds left 153k.
+// 2.3k of its 1.2M (point, instant) pairs above the peak, where ‖σ‖_F's bounds left 153k. Points
+// that share a mesh node are grouped (StressBounds): one exact stress at the group's centre, plus
+// its radius, bounds every point of it at an instant, so that most groups are ruled out whole (on
+// the plate 239 of 2 824 reach the peak, where 23.2k of 29.8k points had an all-instant bound above it).
 // scanStresses with prune = false evaluates everything, for tests and benchmarks.
 //
 // Growth: seeds are the elements whose σ₁ reaches σ_t at the instant of the peak, strongest first,
