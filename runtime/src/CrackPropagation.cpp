@@ -254,10 +254,12 @@ StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::Vect
     // The centre is what the scan reads, in float; the radius is measured from it.
     b.groupCentres.middleRows(6 * g, 6) = centre.cast<float>();
     centre = b.groupCentres.middleRows(6 * g, 6).cast<double>();
+    // The Frobenius norm bounds the spectral one, and costs 6r products instead of a Gram matrix's
+    // powers; on the plate it leaves 263 groups at the peak where the spectral norm leaves 239.
     double radius = 0.0;
     for (const int32_t* e = first; e != last; ++e) {
       a.noalias() = kD.asDiagonal() * (s.block(6 * *e, 0, 6, modes) - centre) * b.modeScales.asDiagonal();
-      radius = std::max(radius, spectralNormBound(a));
+      radius = std::max(radius, a.norm());
     }
     b.groupRadii[g] = radius;
     a.noalias() = kD.asDiagonal() * centre * b.modeScales.asDiagonal();

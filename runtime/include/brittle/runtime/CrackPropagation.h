@@ -19,7 +19,7 @@
 // 2.3k of its 1.2M (point, instant) pairs above the peak, where ‖σ‖_F's bounds left 153k. Points
 // that share a mesh node are grouped (StressBounds): one exact stress at the group's centre, plus
 // its radius, bounds every point of it at an instant, so that most groups are ruled out whole (on
-// the plate 239 of 2 824 reach the peak, where 23.2k of 29.8k points had an all-instant bound above it).
+// the plate 263 of 2 824 reach the peak, where 23.2k of 29.8k points had an all-instant bound above it).
 // scanStresses with prune = false evaluates everything, for tests and benchmarks.
 //
 // Growth: seeds are the elements whose σ₁ reaches σ_t at the instant of the peak, strongest first,
@@ -58,7 +58,7 @@ struct StressBounds {
   Eigen::VectorXd spectralNorms; ///< PT: ‖D S_e W‖₂ over the first `modes` modes, per unit ‖W⁻¹ q‖
   Eigen::VectorXd deviatorSpectralNorms;  ///< PT: ‖D s_e W‖₂, the same for the deviator
   /// Groups of stress points (empty: none), each with a centre c, the mean of its points' stress
-  /// modes, and a radius ρ_G ≥ ‖D (S_e − S_c) W‖₂ over its points e. By Weyl's inequality
+  /// modes, and a radius ρ_G = max ‖D (S_e − S_c) W‖_F ≥ ‖D (S_e − S_c) W‖₂ over its points e. By Weyl's inequality
   /// σ₁(σ_c + Δ) ≤ σ₁(σ_c) + λ_max(Δ) ≤ σ₁(σ_c) + ‖D Δ‖, so at every instant
   ///   σ₁(e, k) ≤ splitBound(σ_c,k) + ρ_G ‖W⁻¹ q_k‖ (+ the static correction's own radius |F_k|):
   /// one exact stress (6r products) bounds the whole group, tightly where its points agree.
