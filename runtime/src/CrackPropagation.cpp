@@ -15,6 +15,10 @@ namespace {
 
 const Voigt kD = (Voigt() << 1.0, 1.0, 1.0, std::sqrt(2.0), std::sqrt(2.0), std::sqrt(2.0)).finished();
 
+// The scan's fixed ranges (of points, of groups, of seeds): work is split into this many, whatever
+// the number of threads, so that the answer does not depend on it.
+constexpr int kScanRanges = 16;
+
 Eigen::Matrix3d tensor(const Voigt& s) {
   Eigen::Matrix3d t;
   t << s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2];
@@ -219,14 +223,13 @@ StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::Vect
   b.groupStart.push_back(static_cast<int32_t>(t));
   const Eigen::Index groups = static_cast<Eigen::Index>(b.groupStart.size()) - 1;
   {
-    // Dealt out like cards, every 16th group in a row: groups of neighbouring nodes then fall
-    // into different ranges of the scan (which takes 16 ranges of consecutive groups), so that the
+    // Dealt out like cards, every kScanRanges-th group in a row: groups of neighbouring nodes
+    // then fall into different ranges of the scan (ranges of consecutive groups), so that the
     // points near a hit, where the search spends its time, are shared by the threads.
-    constexpr Eigen::Index kDeal = 16;
     std::vector<int32_t> points, start{0};
     points.reserve(b.groupPoints.size());
-    for (Eigen::Index hand = 0; hand < kDeal; ++hand) {
-      for (Eigen::Index g = hand; g < groups; g += kDeal) {
+    for (Eigen::Index hand = 0; hand < kScanRanges; ++hand) {
+      for (Eigen::Index g = hand; g < groups; g += kScanRanges) {
         points.insert(points.end(), b.groupPoints.begin() + b.groupStart[static_cast<size_t>(g)],
                       b.groupPoints.begin() + b.groupStart[static_cast<size_t>(g) + 1]);
         start.push_back(static_cast<int32_t>(points.size()));
@@ -308,7 +311,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
   scan.peakElement = scan.peakInstant = -1;
   scan.seeds.clear();
   scan.evaluations = 0;
-  // σ_e at instant k, and its Frobenius norm ‖Dσ‖ (a bound on σ₁ that needs no eigen solve).
+  // σ_e at instant k.
   w.qT = q.transpose();  // r by K: each instant's modal coordinates contiguous
   auto voigt = [&](Eigen::Index e, Eigen::Index k) {
     Voigt s = elementStress(S, e, w.qT.col(k).data(), r);
@@ -412,9 +415,8 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     // and the scale of the rounding in a point's mean stress, Σ|P_e,j| max|q_j| + |p̂_e| max|F|.
     w.elementBound.resize(t);
     w.pressureScale.resize(t);
-    constexpr int kBoundRanges = 16;
-    tbb::parallel_for(0, kBoundRanges, [&](int c) {
-      for (Eigen::Index e = t * c / kBoundRanges; e < t * (c + 1) / kBoundRanges; ++e) {
+    tbb::parallel_for(0, kScanRanges, [&](int c) {
+      for (Eigen::Index e = t * c / kScanRanges; e < t * (c + 1) / kScanRanges; ++e) {
         const double* pe = bounds.pressureModes.row(e).data();
         const double* de = bounds.deviatorNorms.row(e).data();
         double pressure = 0.0, deviator = 0.0;
@@ -438,15 +440,14 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     // the same tie rule. The answer, and the evaluation count, are the same on any number of threads.
     const bool grouped = bounds.groupStart.size() >= 2 && bounds.groupStart.back() == t && bounds.groupCentres.cols() >= r;
     const Eigen::Index groups = grouped ? static_cast<Eigen::Index>(bounds.groupStart.size()) - 1 : 0;
-    constexpr int kPeakRanges = 16;
     auto rangeSpan = [&](int c) {  // positions [lo, hi) of range c's points (in groupPoints, if grouped)
-      if (!grouped) return std::pair<size_t, size_t>(static_cast<size_t>(t * c / kPeakRanges), static_cast<size_t>(t * (c + 1) / kPeakRanges));
-      return std::pair<size_t, size_t>(static_cast<size_t>(bounds.groupStart[static_cast<size_t>(groups * c / kPeakRanges)]),
-                                       static_cast<size_t>(bounds.groupStart[static_cast<size_t>(groups * (c + 1) / kPeakRanges)]));
+      if (!grouped) return std::pair<size_t, size_t>(static_cast<size_t>(t * c / kScanRanges), static_cast<size_t>(t * (c + 1) / kScanRanges));
+      return std::pair<size_t, size_t>(static_cast<size_t>(bounds.groupStart[static_cast<size_t>(groups * c / kScanRanges)]),
+                                       static_cast<size_t>(bounds.groupStart[static_cast<size_t>(groups * (c + 1) / kScanRanges)]));
     };
     auto pointAt = [&](size_t i) { return grouped ? bounds.groupPoints[i] : static_cast<int32_t>(i); };
-    w.rangePeaks.resize(kPeakRanges);
-    tbb::parallel_for(0, kPeakRanges, [&](int c) {
+    w.rangePeaks.resize(kScanRanges);
+    tbb::parallel_for(0, kScanRanges, [&](int c) {
       StressScanWorkspace::RangePeak& out = w.rangePeaks[static_cast<size_t>(c)];
       out = StressScanWorkspace::RangePeak{-std::numeric_limits<double>::infinity(), -1, -1, 0};
       const auto [lo, hi] = rangeSpan(c);
@@ -492,7 +493,9 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     // its points above the best are tested, at the instants the group's bound leaves. Smaller
     // groups' points are tested as without groups, where the search runs per range of points over
     // a max-heap of them by B_e.
-    constexpr int kGroupVisit = 3;  // a centre costs about what two or three points' tests do
+    // A centre's bounds cost 6r products an instant, a point's tests r to 3r: with fewer than three
+    // points left, a group's points are tested as they are (a choice, not tuned).
+    constexpr int kGroupVisit = 3;
     // Group g's bound at every instant into groupBoundAt, and their maximum. The static
     // correction's centre is its points' mean, with a radius of its own; the margin covers the
     // rounding of the centre's sums.
@@ -524,7 +527,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     };
     auto searchGroups = [&](int c) {
       StressScanWorkspace::RangePeak& out = startRange(c);
-      const Eigen::Index firstGroup = groups * c / kPeakRanges, endGroup = groups * (c + 1) / kPeakRanges;
+      const Eigen::Index firstGroup = groups * c / kScanRanges, endGroup = groups * (c + 1) / kScanRanges;
       const auto heapBegin = w.heap.begin() + firstGroup;
       auto heapEnd = w.heap.begin() + endGroup;
       for (Eigen::Index g = firstGroup; g < endGroup; ++g) {
@@ -555,7 +558,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     };
     auto searchPoints = [&](int c) {
       StressScanWorkspace::RangePeak& out = startRange(c);
-      const auto lo = static_cast<size_t>(t * c / kPeakRanges), hi = static_cast<size_t>(t * (c + 1) / kPeakRanges);
+      const auto [lo, hi] = rangeSpan(c);
       const auto heapBegin = w.heap.begin() + static_cast<std::ptrdiff_t>(lo);
       auto heapEnd = w.heap.begin() + static_cast<std::ptrdiff_t>(hi);
       for (size_t e = lo; e < hi; ++e) w.heap[e] = {w.elementBound[static_cast<Eigen::Index>(e)], static_cast<int32_t>(e)};
@@ -566,16 +569,15 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
         visitPoint(heapEnd->second, nullptr, out);
       }
     };
+    w.heap.resize(static_cast<size_t>(t));  // points, or groups (fewer)
     if (grouped) {
       w.groupBound.resize(groups);
       w.groupBoundAt.resize(static_cast<size_t>(groups * steps));
-      w.heap.resize(static_cast<size_t>(t));
       w.qFloat.setZero((steps + 3) / 4 * 4, r);
       w.qFloat.topRows(steps) = q.cast<float>();
-      tbb::parallel_for(0, kPeakRanges, searchGroups);
+      tbb::parallel_for(0, kScanRanges, searchGroups);
     } else {
-      w.heap.resize(static_cast<size_t>(t));
-      tbb::parallel_for(0, kPeakRanges, searchPoints);
+      tbb::parallel_for(0, kScanRanges, searchPoints);
     }
     for (const StressScanWorkspace::RangePeak& p : w.rangePeaks) {
       scan.evaluations += p.evaluations;
@@ -594,14 +596,13 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
   scan.pointsPerElement = pointsPerElement;
   scan.seedCandidates.clear();
   w.seeds.clear();
-  constexpr int kRanges = 16;
-  w.rangeSeeds.resize(kRanges);
-  w.rangeEvaluations.assign(kRanges, 0);
+  w.rangeSeeds.resize(kScanRanges);
+  w.rangeEvaluations.assign(kScanRanges, 0);
   auto seedRange = [&](int c) {
     std::vector<std::pair<double, int32_t>>& out = w.rangeSeeds[static_cast<size_t>(c)];
     out.clear();
     if (k < 0) return;
-    for (Eigen::Index e = t * c / kRanges; e < t * (c + 1) / kRanges; ++e) {
+    for (Eigen::Index e = t * c / kScanRanges; e < t * (c + 1) / kScanRanges; ++e) {
       if (prune) {
         if (!mayReach(e, k, threshold)) continue;
         out.emplace_back(seedBound(e, k), static_cast<int32_t>(e));
@@ -612,9 +613,9 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
       if (s1 >= threshold) out.emplace_back(s1, static_cast<int32_t>(e));
     }
   };
-  tbb::parallel_for(0, kRanges, seedRange);
+  tbb::parallel_for(0, kScanRanges, seedRange);
   std::vector<std::pair<double, int32_t>>& gathered = prune ? scan.seedCandidates : w.seeds;
-  for (int c = 0; c < kRanges; ++c) {
+  for (int c = 0; c < kScanRanges; ++c) {
     scan.evaluations += w.rangeEvaluations[static_cast<size_t>(c)];
     gathered.insert(gathered.end(), w.rangeSeeds[static_cast<size_t>(c)].begin(), w.rangeSeeds[static_cast<size_t>(c)].end());
   }

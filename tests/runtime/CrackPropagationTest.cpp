@@ -18,6 +18,28 @@
 namespace brittle {
 namespace {
 
+// A random hit on `points` stress points, drawn from g in this order: the modal coordinates q
+// (instants by modes), the static correction's stress per newton (left empty without it), and the
+// force at each instant.
+struct RandomHit {
+  Eigen::MatrixXd q;
+  Eigen::VectorXd staticStress;
+  std::vector<double> force;
+};
+RandomHit randomHit(std::mt19937_64& rng, std::normal_distribution<double>& g, Eigen::Index points, int modes,
+                    int instants, bool correction) {
+  RandomHit hit;
+  hit.q.resize(instants, modes);
+  for (Eigen::Index i = 0; i < hit.q.size(); ++i) hit.q.data()[i] = g(rng);
+  if (correction) {
+    hit.staticStress.resize(6 * points);
+    for (Eigen::Index i = 0; i < hit.staticStress.size(); ++i) hit.staticStress[i] = 1e3 * g(rng);
+  }
+  hit.force.resize(static_cast<size_t>(instants));
+  for (double& f : hit.force) f = 100.0 * std::abs(g(rng));
+  return hit;
+}
+
 // The definition, as it was first written: relabel the whole mesh after every merge.
 int mergeCrumbsByRelabelling(const TetTopology& topo, int minNodes, Eigen::VectorXd& edgeCuts, Eigen::VectorXi& labels,
                              int& fragmentCount) {
@@ -103,16 +125,8 @@ TEST(CrackPropagation, PrunedScanEqualsTheFullScanOnRandomFields) {
       const int elements = 200, modes = 8, instants = 30;
       MatrixXdRow stressModes(6 * elements, modes);
       for (Eigen::Index i = 0; i < stressModes.size(); ++i) stressModes.data()[i] = 1e6 * g(rng);
-      Eigen::MatrixXd q(instants, modes);
-      for (Eigen::Index i = 0; i < q.size(); ++i) q.data()[i] = g(rng);
       const bool correction = trial % 2 == 0;
-      Eigen::VectorXd staticStress;
-      if (correction) {
-        staticStress.resize(6 * elements);
-        for (Eigen::Index i = 0; i < staticStress.size(); ++i) staticStress[i] = 1e3 * g(rng);
-      }
-      std::vector<double> force(instants);
-      for (double& f : force) f = 100.0 * std::abs(g(rng));
+      const auto [q, staticStress, force] = randomHit(rng, g, elements, modes, instants, correction);
       // Unit weights, or 1/ω-like ones (the World's), under which the spectral bound is the tighter.
       const Eigen::VectorXd scales =
           trial % 3 == 0 ? Eigen::VectorXd() : Eigen::VectorXd(Eigen::VectorXd::LinSpaced(modes, 1, modes).cwiseInverse());
@@ -199,16 +213,8 @@ TEST(CrackPropagation, GroupedScanEqualsTheFullScanAndItsGroupBoundsHold) {
         stressModes.middleRows(6 * e, 6) = blocks[order[static_cast<size_t>(e)]];
         pointKeys[static_cast<size_t>(e)] = keys[order[static_cast<size_t>(e)]];
       }
-      Eigen::MatrixXd q(instants, modes);
-      for (Eigen::Index i = 0; i < q.size(); ++i) q.data()[i] = g(rng);
       const bool correction = trial % 2 == 0;
-      Eigen::VectorXd staticStress;
-      if (correction) {
-        staticStress.resize(6 * points);
-        for (Eigen::Index i = 0; i < staticStress.size(); ++i) staticStress[i] = 1e3 * g(rng);
-      }
-      std::vector<double> force(instants);
-      for (double& f : force) f = 100.0 * std::abs(g(rng));
+      const auto [q, staticStress, force] = randomHit(rng, g, points, modes, instants, correction);
       const Eigen::VectorXd scales = Eigen::VectorXd::LinSpaced(modes, 1, modes).cwiseInverse();
       const StressBounds bounds = stressModeBounds(stressModes, modes, scales, pointKeys);
       ASSERT_EQ(bounds.groupPoints.size(), keys.size());
