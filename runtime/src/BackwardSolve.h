@@ -3,7 +3,7 @@
 //
 // The static correction solves (K + μM)u = f on every impact. Its forward solve is as sparse as
 // the load, so the backward solve over every non-zero of L is most of its cost (the P2 plate:
-// 8.65M non-zeros, ~20 ms, bound by memory bandwidth). Column j of L holds rows that are all
+// 8.65M non-zeros by AMD, ~20 ms serial through Eigen). Column j of L holds rows that are all
 // ancestors of j in the elimination tree (parent(j) = the first row below the diagonal), so
 // x_j = y_j − Σ_i L_ij x_i needs only its ancestors' values: subtrees that do not contain one
 // another can be solved at once, once the nodes above them are. The plan takes the heaviest
@@ -16,11 +16,17 @@
 // f..g−1 where each column's pattern is the next column's plus that column (the P2 plate's 47.7k
 // columns form 6.8k, 7 wide on average), so that all of them end in the same rows R (those of
 // column g−1). Per supernode, x over R is gathered once into a contiguous buffer, and each column's
-// sum over R is a dense dot product with it (two columns at a time, four running sums each), the
-// rest of the column (rows in the supernode) a short sum of its own. Eigen's per-entry indexed
-// loads made the solve ~2.5× slower than reading L; the plate's backward solve went from 18–25 ms to
-// 12–14 ms on one core. The next supernode's values are prefetched: the solve walks L backwards,
-// which the hardware prefetcher follows badly.
+// sum over R is a dense dot product with it (two columns at a time, four running sums each, in two
+// SSE2 registers), the rest of the column (rows in the supernode) a short sum of its own. Eigen's
+// per-entry indexed loads made the solve ~2.5× slower than reading L; the plate's backward solve
+// went from 18–25 ms to 12–14 ms on one core.
+//
+// The plan keeps its own copy of L's values, laid out in the order the solve reads them (the top's
+// runs, then each part's; in a run, columns descending, each in row order), and asks for the next
+// run's values while it solves one. Walking Eigen's column-major L backwards, which the hardware
+// prefetcher follows badly, left the solve at a third of the machine's bandwidth: the plate's
+// 7.8M non-zeros took 6.7–6.9 ms on two threads, against 4.4–4.5 ms from the copy (median of 60
+// solves; the SSE2 sums alone gave 5.7–6.1). The copy costs 8 bytes a non-zero (62 MB for the plate).
 //
 // Each x_j is computed by one thread, in a fixed order that depends on L alone (its global
 // supernode), so the result is the same bits on any number of threads. It is not the order of
@@ -37,7 +43,7 @@ namespace brittle::detail {
 class BackwardSolvePlan {
  public:
   /// A plan for `parts` threads over the strictly lower, column-major factor `lower` (rows
-  /// ascending in each column, as Eigen's SimplicialLDLT stores L).
+  /// ascending in each column, as Eigen's SimplicialLDLT stores L), with a copy of its values.
   static BackwardSolvePlan make(const Eigen::SparseMatrix<double>& lower, int parts);
 
   /// A run of columns [first, end) inside one supernode whose last column is `last` (end ≤ last + 1).
@@ -48,7 +54,8 @@ class BackwardSolvePlan {
   /// Per-part buffers of solveInPlace, sized on first use: one per caller at a time.
   using Scratch = std::vector<std::vector<double>>;
 
-  /// x ← L⁻ᵀ x for the unit lower triangular L whose strict lower part is `lower`. The parts run
+  /// x ← L⁻ᵀ x for the unit lower triangular L whose strict lower part is `lower`, the matrix the
+  /// plan was made from (its pattern; the values are the plan's copy). The parts run
   /// in parallel (oneTBB) where the caller's arena has threads, else one after the other.
   void solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x, Scratch& scratch) const;
   void solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x) const;
@@ -58,12 +65,19 @@ class BackwardSolvePlan {
   /// The critical path's share of L's non-zeros: the top plus the heaviest part (1 for one part).
   double criticalShare() const { return mCriticalShare; }
   int parts() const { return static_cast<int>(mPartRuns.size()); }
+  /// Bytes of the plan's copy of L's values.
+  size_t valueBytes() const { return sizeof(double) * mValues.size(); }
 
  private:
   std::vector<Run> mTopRuns;                // solved first, descending
   std::vector<std::vector<Run>> mPartRuns;  // per part, descending
   size_t mMaxGather = 0;                    // the most rows below a supernode
+  std::vector<double> mValues;              // L's values in the order the solve reads them
+  std::vector<int64_t> mOffset;             // column j's values start at mValues[mOffset[j]]
+  Eigen::Index mColumns = 0, mNonZeros = 0;  // of the L the plan was made from
   double mParallelShare = 0.0;
+
+  void copyValues(const Eigen::SparseMatrix<double>& lower);
   double mCriticalShare = 1.0;
 };
 

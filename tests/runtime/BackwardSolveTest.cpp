@@ -43,6 +43,7 @@ TEST(BackwardSolve, SameBitsOnAnyNumberOfPartsAndEigensSerialSolveWithinRounding
     detail::BackwardSolvePlan::Scratch scratch;  // reused by every plan below
     for (int parts : {1, 2, 3, 7}) {
       const detail::BackwardSolvePlan plan = detail::BackwardSolvePlan::make(lower, parts);
+      EXPECT_EQ(plan.valueBytes(), sizeof(double) * static_cast<size_t>(lower.nonZeros()));  // each value once
       Eigen::VectorXd x = y;
       plan.solveInPlace(lower, x, scratch);
       EXPECT_EQ(std::memcmp(x.data(), serial.data(), sizeof(double) * static_cast<size_t>(x.size())), 0)
