@@ -165,6 +165,7 @@ BackwardSolvePlan BackwardSolvePlan::make(const Eigen::SparseMatrix<double>& low
   }
   parts = std::max(parts, 1);
   const std::vector<int32_t> superLast = supernodeLast(lower);
+  plan.mSuperLast = superLast;
   for (int32_t j = 0; j < n; ++j) {
     const auto [begin, end] = columnRange(lower, j);
     plan.mMaxGather = std::max(plan.mMaxGather, static_cast<size_t>(end - begin));
@@ -281,6 +282,41 @@ void BackwardSolvePlan::solveInPlace(const Eigen::SparseMatrix<double>& lower, E
     solveRuns(lower, mValues.data(), mOffset.data(), mPartRuns[static_cast<size_t>(part)], x.data(),
               scratch[static_cast<size_t>(part)]);
   });
+}
+
+void BackwardSolvePlan::forwardInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x,
+                                       std::vector<double>& gathered) const {
+  assert(lower.cols() == mColumns && lower.nonZeros() == mNonZeros && x.size() == mColumns);
+  if (gathered.size() < mMaxGather) gathered.resize(mMaxGather);
+  const auto n = static_cast<int32_t>(lower.cols());
+  const double* values = lower.valuePtr();
+  double* b = gathered.data();
+  for (int32_t j = 0; j < n;) {
+    const int32_t last = mSuperLast[static_cast<size_t>(j)];
+    int32_t first = j;
+    while (first <= last && x[first] == 0.0) ++first;
+    if (first > last) {  // nothing to pass on from this part of the supernode
+      j = last + 1;
+      continue;
+    }
+    // Columns first..last share the rows R below `last`: x over R is gathered once, takes each
+    // column's update in column order (as Eigen's loop gives it), and is put back.
+    const auto [lastBegin, lastEnd] = columnRange(lower, last);
+    const Eigen::Index m = lastEnd - lastBegin;
+    const int* rows = lower.innerIndexPtr() + lastBegin;
+    for (Eigen::Index t = 0; t < m; ++t) b[t] = x[rows[t]];
+    for (int32_t c = first; c <= last; ++c) {
+      const double xc = x[c];
+      if (xc == 0.0) continue;
+      const auto [begin, end] = columnRange(lower, c);
+      const Eigen::Index inside = end - begin - m;
+      for (Eigen::Index p = 0; p < inside; ++p) x[c + 1 + p] -= xc * values[begin + p];
+      const double* tail = values + begin + inside;
+      for (Eigen::Index t = 0; t < m; ++t) b[t] -= xc * tail[t];
+    }
+    for (Eigen::Index t = 0; t < m; ++t) x[rows[t]] = b[t];
+    j = last + 1;
+  }
 }
 
 void BackwardSolvePlan::solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x) const {

