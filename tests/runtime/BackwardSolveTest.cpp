@@ -8,6 +8,8 @@
 
 #include <Eigen/SparseCholesky>
 #include <cstring>
+#include <functional>
+#include <memory>
 #include <random>
 
 #include "brittle/runtime/FemAssembly.h"
@@ -18,17 +20,30 @@
 namespace brittle {
 namespace {
 
-TEST(BackwardSolve, SameBitsOnAnyNumberOfPartsAndEigensSerialSolveWithinRounding) {
+// The factor the static correction makes of a glass box's K + M (1.2k tets of `order`).
+std::unique_ptr<ShiftedFactor> glassBoxFactor(ElementOrder order) {
+  const ObjectAsset plate = testing::makeGlassPlatePack(1200, 6, 0.1, order).value().objects[0];
+  auto mesh = makeFemMesh(plate.tetMesh, order);
+  if (!mesh) return nullptr;
+  auto fem = assembleFem(mesh.value(), testing::presetGlass(), FemSettings{});
+  if (!fem) return nullptr;
+  auto factor = std::make_unique<ShiftedFactor>(fem.value().stiffness + 1.0 * fem.value().mass);
+  return factor->info() == Eigen::Success ? std::move(factor) : nullptr;
+}
+
+// `check` on the factors of a P1 and a P2 box.
+void forEachBoxFactor(
+    const std::function<void(ElementOrder, const ShiftedFactor&, const Eigen::SparseMatrix<double>&)>& check) {
   for (ElementOrder order : {ElementOrder::P1, ElementOrder::P2}) {
     SCOPED_TRACE(elementOrderName(order));
-    const ObjectAsset plate = testing::makeGlassPlatePack(1200, 6, 0.1, order).value().objects[0];
-    auto mesh = makeFemMesh(plate.tetMesh, order);
-    ASSERT_TRUE(mesh);
-    auto fem = assembleFem(mesh.value(), testing::presetGlass(), FemSettings{});
-    ASSERT_TRUE(fem);
-    const ShiftedFactor factor(fem.value().stiffness + 1.0 * fem.value().mass);
-    ASSERT_EQ(factor.info(), Eigen::Success);
-    const Eigen::SparseMatrix<double>& lower = factor.matrixL().nestedExpression();
+    const std::unique_ptr<ShiftedFactor> factor = glassBoxFactor(order);
+    ASSERT_NE(factor, nullptr);
+    check(order, *factor, factor->matrixL().nestedExpression());
+  }
+}
+
+TEST(BackwardSolve, SameBitsOnAnyNumberOfPartsAndEigensSerialSolveWithinRounding) {
+  forEachBoxFactor([&](ElementOrder order, const ShiftedFactor& factor, const Eigen::SparseMatrix<double>& lower) {
     std::mt19937_64 rng(5);
     std::normal_distribution<double> g(0.0, 1.0);
     Eigen::VectorXd y(lower.rows());
@@ -63,22 +78,13 @@ TEST(BackwardSolve, SameBitsOnAnyNumberOfPartsAndEigensSerialSolveWithinRounding
                     100.0 * plan.criticalShare());
       }
     }
-  }
+  });
 }
 
 TEST(BackwardSolve, TheForwardSolveIsEigensBitForBitForSparseAndDenseRightHandSides) {
   // Eigen's loop passes x_j on to the rows of column j, column by column, skipping exact zeros;
   // gathering each supernode's rows below it changes where the sums live, not their order.
-  for (ElementOrder order : {ElementOrder::P1, ElementOrder::P2}) {
-    SCOPED_TRACE(elementOrderName(order));
-    const ObjectAsset plate = testing::makeGlassPlatePack(1200, 6, 0.1, order).value().objects[0];
-    auto mesh = makeFemMesh(plate.tetMesh, order);
-    ASSERT_TRUE(mesh);
-    auto fem = assembleFem(mesh.value(), testing::presetGlass(), FemSettings{});
-    ASSERT_TRUE(fem);
-    const ShiftedFactor factor(fem.value().stiffness + 1.0 * fem.value().mass);
-    ASSERT_EQ(factor.info(), Eigen::Success);
-    const Eigen::SparseMatrix<double>& lower = factor.matrixL().nestedExpression();
+  forEachBoxFactor([&](ElementOrder, const ShiftedFactor& factor, const Eigen::SparseMatrix<double>& lower) {
     const detail::BackwardSolvePlan plan = detail::BackwardSolvePlan::make(lower, 2);
     std::mt19937_64 rng(7);
     std::normal_distribution<double> g(0.0, 1.0);
@@ -98,7 +104,7 @@ TEST(BackwardSolve, TheForwardSolveIsEigensBitForBitForSparseAndDenseRightHandSi
           << nonZeros << " non-zeros: max difference " << (x - expected).cwiseAbs().maxCoeff();
       EXPECT_GT((x - y).cwiseAbs().maxCoeff(), 0.0);  // (the solve did pass values on)
     }
-  }
+  });
 }
 
 TEST(BackwardSolve, AChainIsSolvedAloneAndAnEmptyFactorIsFine) {
