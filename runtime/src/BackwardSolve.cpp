@@ -250,6 +250,14 @@ BackwardSolvePlan BackwardSolvePlan::make(const Eigen::SparseMatrix<double>& low
   return plan;
 }
 
+void BackwardSolvePlan::sizeScratch(Scratch& scratch) const {
+  const size_t buffers = std::max<size_t>(mPartRuns.size(), 1);
+  if (scratch.size() < buffers) scratch.resize(buffers);
+  for (auto& buffer : scratch) {
+    if (buffer.size() < mMaxGather) buffer.resize(mMaxGather);
+  }
+}
+
 void BackwardSolvePlan::copyValues(const Eigen::SparseMatrix<double>& lower) {
   mColumns = lower.cols();
   mNonZeros = lower.nonZeros();
@@ -272,11 +280,7 @@ void BackwardSolvePlan::copyValues(const Eigen::SparseMatrix<double>& lower) {
 void BackwardSolvePlan::solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x,
                                      Scratch& scratch) const {
   assert(lower.cols() == mColumns && lower.nonZeros() == mNonZeros && x.size() == mColumns);
-  const size_t buffers = std::max<size_t>(mPartRuns.size(), 1);
-  if (scratch.size() < buffers) scratch.resize(buffers);
-  for (auto& buffer : scratch) {
-    if (buffer.size() < mMaxGather) buffer.resize(mMaxGather);
-  }
+  sizeScratch(scratch);
   solveRuns(lower, mValues.data(), mOffset.data(), mTopRuns, x.data(), scratch[0]);
   tbb::parallel_for(0, static_cast<int>(mPartRuns.size()), [&](int part) {
     solveRuns(lower, mValues.data(), mOffset.data(), mPartRuns[static_cast<size_t>(part)], x.data(),
@@ -285,9 +289,10 @@ void BackwardSolvePlan::solveInPlace(const Eigen::SparseMatrix<double>& lower, E
 }
 
 void BackwardSolvePlan::forwardInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x,
-                                       std::vector<double>& gathered) const {
+                                       Scratch& scratch) const {
   assert(lower.cols() == mColumns && lower.nonZeros() == mNonZeros && x.size() == mColumns);
-  if (gathered.size() < mMaxGather) gathered.resize(mMaxGather);
+  sizeScratch(scratch);
+  std::vector<double>& gathered = scratch[0];
   const auto n = static_cast<int32_t>(lower.cols());
   const double* values = lower.valuePtr();
   double* b = gathered.data();

@@ -63,8 +63,8 @@ class BackwardSolvePlan {
   /// x ← L⁻¹ x, the forward solve, on one thread: the same arithmetic in the same order as
   /// Eigen's sparse triangular solve (a column whose x is exactly zero passes nothing on, so a
   /// sparse right-hand side costs only its reach in the elimination tree), with each supernode's
-  /// rows below it gathered once. `gathered`: a buffer, sized on first use.
-  void forwardInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x, std::vector<double>& gathered) const;
+  /// rows below it gathered once, in the first buffer of `scratch` (sized as solveInPlace sizes it).
+  void forwardInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x, Scratch& scratch) const;
 
   /// The share of L's non-zeros solved in parallel (0 for one part); what the plan is worth.
   double parallelShare() const { return mParallelShare; }
@@ -83,9 +83,10 @@ class BackwardSolvePlan {
   std::vector<int32_t> mSuperLast;          // per column, the last column of its supernode
   Eigen::Index mColumns = 0, mNonZeros = 0;  // of the L the plan was made from
   double mParallelShare = 0.0;
-
-  void copyValues(const Eigen::SparseMatrix<double>& lower);
   double mCriticalShare = 1.0;
+
+  void copyValues(const Eigen::SparseMatrix<double>& lower);  // mValues, mOffset, mColumns, mNonZeros
+  void sizeScratch(Scratch& scratch) const;  // a buffer per part (at least one) of mMaxGather
 };
 
 }  // namespace brittle::detail

@@ -202,8 +202,7 @@ Status StaticCorrection::solvePerNewton(const std::vector<std::pair<int32_t, dou
   } else {
     w.scratch = w.load;
   }
-  if (w.gathered.empty()) w.gathered.resize(1);
-  d.backward.forwardInPlace(d.solver->matrixL().nestedExpression(), w.scratch, w.gathered[0]);  // = matrixL().solveInPlace
+  d.backward.forwardInPlace(d.solver->matrixL().nestedExpression(), w.scratch, w.gathered);  // = matrixL().solveInPlace
   w.scratch.noalias() -= d.reliefForward * rigid;  // inertia relief: the solve of f_e from here on
   w.scratch.array() *= d.inverseD.array();
   d.backward.solveInPlace(d.solver->matrixL().nestedExpression(), w.scratch, w.gathered);  // = matrixU().solveInPlace

@@ -89,7 +89,7 @@ TEST(BackwardSolve, TheForwardSolveIsEigensBitForBitForSparseAndDenseRightHandSi
     std::mt19937_64 rng(7);
     std::normal_distribution<double> g(0.0, 1.0);
     std::uniform_int_distribution<Eigen::Index> row(0, lower.rows() - 1);
-    std::vector<double> gathered;
+    detail::BackwardSolvePlan::Scratch gathered;
     for (int nonZeros : {1, 3, 12, -1}) {  // -1: every entry
       Eigen::VectorXd y = Eigen::VectorXd::Zero(lower.rows());
       if (nonZeros < 0) {
@@ -128,7 +128,7 @@ TEST(BackwardSolve, AChainIsSolvedAloneAndAnEmptyFactorIsFine) {
   EXPECT_EQ(x, expected);
   Eigen::VectorXd forward = Eigen::VectorXd::LinSpaced(n, 1.0, 2.0), forwardExpected = forward;
   factor.matrixL().solveInPlace(forwardExpected);
-  std::vector<double> gathered;
+  detail::BackwardSolvePlan::Scratch gathered;
   plan.forwardInPlace(lower, forward, gathered);
   EXPECT_EQ(forward, forwardExpected);
   const Eigen::SparseMatrix<double> empty(0, 0);
