@@ -395,19 +395,8 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     w.qNorm.resize(steps);  // ‖W⁻¹ q_k‖
     for (Eigen::Index k = 0; k < steps; ++k) w.qNorm[k] = w.qT.col(k).cwiseQuotient(bounds.modeScales.head(r)).norm();
     w.forceAbs.setZero(steps);
-    w.staticNorm.setZero(t);
-    w.staticPressure.setZero(t);
-    w.staticDeviator.setZero(t);
     if (correction) {
       for (Eigen::Index k = 0; k < steps; ++k) w.forceAbs[k] = std::abs(forceN[static_cast<size_t>(k)]);
-      for (Eigen::Index e = 0; e < t; ++e) {
-        const Voigt se = staticStress.segment<6>(6 * e);
-        Voigt d = kD.cwiseProduct(se);
-        w.staticNorm[e] = d.norm();
-        w.staticPressure[e] = (se[0] + se[1] + se[2]) / 3.0;
-        d.head<3>().array() -= w.staticPressure[e];
-        w.staticDeviator[e] = d.norm();
-      }
     }
     const double forceMax = steps > 0 ? w.forceAbs.maxCoeff() : 0.0, qNormMax = steps > 0 ? w.qNorm.maxCoeff() : 0.0;
     // B_e = min(‖D S_e W‖₂ max‖W⁻¹q_k‖ + ‖Dσ̂_e‖ max|F|,
@@ -415,8 +404,23 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     // and the scale of the rounding in a point's mean stress, Σ|P_e,j| max|q_j| + |p̂_e| max|F|.
     w.elementBound.resize(t);
     w.pressureScale.resize(t);
+    w.staticNorm.resize(t);
+    w.staticPressure.resize(t);
+    w.staticDeviator.resize(t);
     tbb::parallel_for(0, kScanRanges, [&](int c) {
       for (Eigen::Index e = t * c / kScanRanges; e < t * (c + 1) / kScanRanges; ++e) {
+        // The static correction's norms at e, here with the bounds that read them (on the
+        // plate's 29.8k points this was 0.5 ms on one thread before the bounds).
+        if (correction) {
+          const Voigt se = staticStress.segment<6>(6 * e);
+          Voigt d = kD.cwiseProduct(se);
+          w.staticNorm[e] = d.norm();
+          w.staticPressure[e] = (se[0] + se[1] + se[2]) / 3.0;
+          d.head<3>().array() -= w.staticPressure[e];
+          w.staticDeviator[e] = d.norm();
+        } else {
+          w.staticNorm[e] = w.staticPressure[e] = w.staticDeviator[e] = 0.0;
+        }
         const double* pe = bounds.pressureModes.row(e).data();
         const double* de = bounds.deviatorNorms.row(e).data();
         double pressure = 0.0, deviator = 0.0;
