@@ -12,6 +12,7 @@ struct MonomialTables {
   std::vector<std::array<int, 3>> exponents;  ///< (p, q, r) per graded index
   std::vector<int> degree;                    ///< p + q + r
   std::vector<double> factorial;              ///< p! q! r!
+  std::vector<double> multinomial;            ///< n! / (p! q! r!), n = p + q + r: a directional moment's weight
   std::vector<std::array<int, 3>> times;      ///< index of this monomial times x, y, z (−1 at top)
   std::vector<std::array<int, 3>> lower;      ///< index of this monomial divided by x, y, z (−1 if absent)
   std::vector<int> parent;                    ///< this monomial divided by parentVar (−1 for 1)

@@ -24,6 +24,7 @@ const MonomialTables& monomialTables() {
     t.times.assign(count, {-1, -1, -1});
     t.lower.assign(count, {-1, -1, -1});
     t.factorial.resize(count);
+    t.multinomial.resize(count);
     int i = 0;
     for (int n = 0; n <= kMaxMomentOrder; ++n) {
       for (int p = n; p >= 0; --p) {
@@ -44,6 +45,7 @@ const MonomialTables& monomialTables() {
     for (int m = 0; m < count; ++m) {
       const auto [p, q, r] = t.exponents[m];
       t.factorial[m] = fact(p) * fact(q) * fact(r);
+      t.multinomial[m] = fact(p + q + r) / t.factorial[m];
       t.lower[m] = {p > 0 ? t.lookup[p - 1][q][r] : -1, q > 0 ? t.lookup[p][q - 1][r] : -1,
                     r > 0 ? t.lookup[p][q][r - 1] : -1};
       if (t.degree[m] < kMaxMomentOrder) {
@@ -84,23 +86,17 @@ struct Powers {
   }
 };
 
-double factorialOf(int n) {
-  double f = 1.0;
-  for (int j = 2; j <= n; ++j) f *= j;
-  return f;
-}
-
 }  // namespace
 
 double VolumeMoments::directional(const Eigen::Vector3d& u, int order) const {
   assert(order >= 0 && order <= maxOrder);
   const auto& t = detail::monomialTables();
   const Powers pw(u, order);
-  const double nFact = factorialOf(order);
   double sum = 0.0;
+  // n!/(p!q!r!) from the table: the same quotient as dividing here, without a division a term.
   for (int m = monomialCount(order - 1); m < monomialCount(order); ++m) {
     const auto [p, q, r] = t.exponents[m];
-    sum += nFact / t.factorial[m] * pw.x[p] * pw.y[q] * pw.z[r] * values[m];
+    sum += t.multinomial[m] * pw.x[p] * pw.y[q] * pw.z[r] * values[m];
   }
   return sum;
 }
@@ -109,11 +105,10 @@ Eigen::Vector3d VolumeMoments::directionalGradient(const Eigen::Vector3d& u, int
   assert(order >= 1 && order <= maxOrder);
   const auto& t = detail::monomialTables();
   const Powers pw(u, order);
-  const double nFact = factorialOf(order);
   Eigen::Vector3d g = Eigen::Vector3d::Zero();
   for (int m = monomialCount(order - 1); m < monomialCount(order); ++m) {
     const auto [p, q, r] = t.exponents[m];
-    const double c = nFact / t.factorial[m] * values[m];
+    const double c = t.multinomial[m] * values[m];
     if (p > 0) g.x() += c * p * pw.x[p - 1] * pw.y[q] * pw.z[r];
     if (q > 0) g.y() += c * q * pw.x[p] * pw.y[q - 1] * pw.z[r];
     if (r > 0) g.z() += c * r * pw.x[p] * pw.y[q] * pw.z[r - 1];
