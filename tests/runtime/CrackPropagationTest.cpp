@@ -12,6 +12,9 @@
 #include <initializer_list>
 #include <limits>
 #include <random>
+#include <cstring>
+
+#include <oneapi/tbb/task_arena.h>
 
 #include "brittle/testing/Fixtures.h"
 
@@ -530,6 +533,56 @@ TEST(CrackPropagation, ACrumbJoinsTheFragmentItWasCutFrom) {
   // A mesh that is a single fragment has nothing to merge, however large minNodes is.
   EXPECT_EQ(mergeCrumbs(topo, 1000, chipped, labels, count), 0);
   EXPECT_EQ(count, 1);
+}
+
+// Growth asks a helper thread to compute ahead the stresses it will want next. Whoever computes
+// a stress, it is the same field.at(e), so the fracture is the same bits on one thread (no helper)
+// and on two or four: on a random field of quadratic-element corners, several noisy cracks.
+TEST(CrackPropagation, TheLookAheadHelperChangesNothing) {
+  const TetMesh mesh = testing::makeBoxTetMesh(0.4, 0.2, 0.2, 10, 5, 5);
+  const TetTopology topo = buildTetTopology(mesh).value();
+  constexpr int kPoints = 4, kModes = 8;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g(0.0, 1.0);
+  MatrixXdRow stressModes(6 * kPoints * mesh.tets.rows(), kModes);
+  for (Eigen::Index i = 0; i < stressModes.size(); ++i) stressModes.data()[i] = g(rng);
+  Eigen::MatrixXd q(1, kModes);
+  for (int j = 0; j < kModes; ++j) q(0, j) = 20e6 * (1.0 + 0.2 * g(rng));
+  const double strengthPa = 40e6;
+  const StressScan scan = scanStresses(stressModes, stressModeBounds(stressModes, kModes), q, Eigen::VectorXd(), {0.0},
+                                       strengthPa, true, kPoints);
+  ASSERT_TRUE(scan.hasSeeds());
+  StressField field;
+  field.stressModes = &stressModes;
+  field.pointsPerElement = kPoints;
+  field.q = q.row(0).transpose();
+  CrackSettings settings;
+  settings.maxCracks = 4;
+  settings.seed = 5;
+  auto growOn = [&](int threads) {
+    FractureState state;
+    CrackWorkspace workspace;
+    tbb::task_arena arena(threads);
+    Status status = Ok{};
+    arena.execute([&] { status = propagateCracks(mesh, topo, scan, field, strengthPa, 8.0, 5.0, settings, workspace, state); });
+    EXPECT_TRUE(status) << status.error().message;
+    return state;
+  };
+  const FractureState one = growOn(1);
+  ASSERT_GT(one.cutElements.size(), 100u) << "the cracks should run far enough to ask for stresses ahead";
+  ASSERT_GE(one.fragmentCount, 2);
+  for (int threads : {2, 4}) {
+    SCOPED_TRACE(threads);
+    const FractureState other = growOn(threads);
+    EXPECT_EQ(other.cutElements, one.cutElements);
+    ASSERT_EQ(other.edgeCuts.size(), one.edgeCuts.size());
+    EXPECT_EQ(std::memcmp(other.edgeCuts.data(), one.edgeCuts.data(), sizeof(double) * static_cast<size_t>(one.edgeCuts.size())), 0);
+    EXPECT_EQ(other.nodeLabels, one.nodeLabels);
+    EXPECT_EQ(other.fragmentCount, one.fragmentCount);
+    EXPECT_EQ(other.crackCount, one.crackCount);
+    EXPECT_EQ(other.energySpentJ, one.energySpentJ);
+    EXPECT_EQ(other.crackAreaM2, one.crackAreaM2);
+  }
 }
 
 TEST(CrackPropagation, BadSettingsAndMaterialValuesGiveTypedErrors) {

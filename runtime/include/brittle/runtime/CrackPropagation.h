@@ -249,7 +249,8 @@ struct CrackWorkspace {
     Eigen::Vector3d point, point2;  ///< the parent's cut through the shared face
   };
   std::vector<Front> front;              ///< a max-heap
-  std::vector<char> cut, stressKnown;    ///< #T
+  std::vector<char> cut, stressKnown;    ///< #T (stressKnown: 0 unknown, 1 being computed, 2 known)
+  std::vector<int32_t> wanted;           ///< a ring of elements whose stress the helper computes ahead
   std::vector<Voigt> stressCache;        ///< #T
   std::vector<double> phi;               ///< cracks × #N: each crack's nodal level set
   std::vector<char> cutBy;               ///< cracks × #T
