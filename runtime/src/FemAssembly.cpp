@@ -2,13 +2,13 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
-#include <oneapi/tbb/parallel_for.h>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include "FixedRanges.h"
 #include "brittle/runtime/QuadraticTetMesh.h"
 
 namespace brittle {
@@ -378,11 +378,9 @@ void ElementStresses::all(const Eigen::VectorXd& u, Eigen::VectorXd& stress) con
   const int rows = 6 * pointsPerElement();
   const Eigen::Index count = elementCount();
   stress.resize(rows * count);
-  // Each element's stress is its own arithmetic, so fixed ranges on the caller's arena give the
-  // same bits on any number of threads.
-  constexpr int kRanges = 16;
-  tbb::parallel_for(0, kRanges, [&](int c) {
-    for (Eigen::Index e = count * c / kRanges; e < count * (c + 1) / kRanges; ++e) element(e, u, stress.data() + rows * e);
+  // Each element's stress is its own arithmetic, so the bits do not depend on the threads.
+  detail::forFixedRanges(count, 16, [&](int, Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index e = begin; e < end; ++e) element(e, u, stress.data() + rows * e);
   });
 }
 

@@ -1,11 +1,12 @@
 #include "brittle/runtime/FragmentSurfaces.h"
 
 #include <Eigen/Geometry>
-#include <oneapi/tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <array>
 #include <string>
+
+#include "FixedRanges.h"
 
 namespace brittle {
 namespace {
@@ -326,9 +327,9 @@ Status fragmentVolumeMoments(const TetMesh& mesh, const TetTopology& topology, c
   const size_t block = static_cast<size_t>(labelCount) * count;
   chunkSums.assign(block * kMomentChunks, 0.0);
   const Eigen::Index tets = mesh.tets.rows();
-  tbb::parallel_for(0, kMomentChunks, [&](int c) {
-    addRangeMoments(mesh, topology, tetMoments, nodeLabels, edgeCuts, body, tets * c / kMomentChunks,
-                    tets * (c + 1) / kMomentChunks, chunkSums.data() + block * static_cast<size_t>(c));
+  detail::forFixedRanges(tets, kMomentChunks, [&](int c, Eigen::Index begin, Eigen::Index end) {
+    addRangeMoments(mesh, topology, tetMoments, nodeLabels, edgeCuts, body, begin, end,
+                    chunkSums.data() + block * static_cast<size_t>(c));
   });
   for (int c = 0; c < kMomentChunks; ++c) {
     const double* sums = chunkSums.data() + block * static_cast<size_t>(c);

@@ -1,12 +1,12 @@
 #include "brittle/runtime/StaticCorrection.h"
 
 #include <Eigen/SparseCholesky>
-#include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 #include <cmath>
 #include <string>
 
 #include "BackwardSolve.h"
+#include "FixedRanges.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/runtime/FemAssembly.h"
 
@@ -222,9 +222,7 @@ Status StaticCorrection::solvePerNewton(const std::vector<std::pair<int32_t, dou
   // threads, each row's dot product in row order. Each row's sum is the same arithmetic in any
   // range, so the bits do not depend on the split or the thread count. Kept row-major, Φ streams:
   // the plate's subtraction took 1.5 ms as a column-major matrix-vector product, 0.5 ms so.
-  constexpr int kRanges = 16;
-  tbb::parallel_for(0, kRanges, [&](int c) {
-    const Eigen::Index begin = dofs * c / kRanges, end = dofs * (c + 1) / kRanges;
+  detail::forFixedRanges(dofs, 16, [&](int, Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index i = begin; i < end; ++i) w.displacement[i] -= d.modes.row(i).dot(w.modal);
   });
   compliance = w.load.dot(w.displacement);
