@@ -37,24 +37,39 @@ struct AxisChoice {
   std::array<bool, 3> signFixed{};
 };
 
-std::vector<Eigen::Vector3d> sampleDirections(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
-                                              bool plane) {
-  std::vector<Eigen::Vector3d> out;
-  if (plane) {
-    out.reserve(kCircleSamples);
+// The circle's cos θ_k, sin θ_k and the Fibonacci sphere's directions, made once: they are the
+// same for every solid (std::cos and std::sin of the same angles, so the same bits as making them
+// per call, which cost about as much as the moments' pass).
+struct SampleTables {
+  std::array<double, kCircleSamples> cosine{}, sine{};
+  std::vector<Eigen::Vector3d> sphere;
+  SampleTables() {
     for (int k = 0; k < kCircleSamples; ++k) {
       const double theta = 2.0 * std::numbers::pi * k / kCircleSamples;
-      out.push_back(std::cos(theta) * p + std::sin(theta) * q);
+      cosine[k] = std::cos(theta), sine[k] = std::sin(theta);
     }
-  } else {  // Fibonacci sphere: near-uniform, deterministic.
-    out.reserve(kSphereSamples);
+    sphere.reserve(kSphereSamples);  // Fibonacci sphere: near-uniform, deterministic.
     const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
     for (int k = 0; k < kSphereSamples; ++k) {
       const double z = 1.0 - (2.0 * k + 1.0) / kSphereSamples;
       const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-      out.emplace_back(r * std::cos(golden * k), r * std::sin(golden * k), z);
+      sphere.emplace_back(r * std::cos(golden * k), r * std::sin(golden * k), z);
     }
   }
+};
+
+const SampleTables& sampleTables() {
+  static const SampleTables tables;
+  return tables;
+}
+
+std::vector<Eigen::Vector3d> sampleDirections(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
+                                              bool plane) {
+  const SampleTables& t = sampleTables();
+  if (!plane) return t.sphere;
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(kCircleSamples);
+  for (int k = 0; k < kCircleSamples; ++k) out.push_back(t.cosine[k] * p + t.sine[k] * q);
   return out;
 }
 
@@ -96,7 +111,7 @@ std::vector<DirectionChoice> chooseDirections(const VolumeMoments& m, const Eige
       plane ? Eigen::Matrix3d(p * p.transpose() + q * q.transpose()) : Eigen::Matrix3d::Identity();
   std::vector<double> values(samples.size());
   for (int order = 3; order <= 4; ++order) {
-    for (size_t k = 0; k < samples.size(); ++k) values[k] = m.directional(samples[k], order);
+    m.directional(samples.data(), samples.size(), order, values.data());
     const auto [minIt, maxIt] = std::minmax_element(values.begin(), values.end());
     const double lo = *minIt, hi = *maxIt, range = hi - lo;
     if (!(range > settings.shapeTolerance * std::pow(secondMoment, 0.5 * order))) continue;

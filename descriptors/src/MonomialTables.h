@@ -4,6 +4,7 @@
 #include <array>
 #include <vector>
 
+#include "brittle/core/Simd.h"
 #include "brittle/descriptors/VolumeMoments.h"
 
 namespace brittle::detail {
@@ -22,5 +23,15 @@ struct MonomialTables {
 
 /// Built once, thread-safe (function-local static).
 const MonomialTables& monomialTables();
+
+/// computeVolumeMoments' pass at order 4 over the first faces, a register's worth at a time (two
+/// with Narrow lanes, four with Wide), adding each face's terms to sum[0..34] in face order:
+/// the generic loop's operations, so the same bits with either lanes. Returns how many faces it
+/// did; the caller does the rest. Wide needs widestLanes() == Lanes::Wide.
+Eigen::Index surfaceMomentsOrder4(const TriangleMesh& surface, const Eigen::Vector3d& originM, double* sum, Lanes lanes);
+
+/// VolumeMoments::directional over count directions with the given lanes (the same bits with
+/// either). Wide needs widestLanes() == Lanes::Wide.
+void directional(const VolumeMoments& moments, const Eigen::Vector3d* u, size_t count, int order, double* out, Lanes lanes);
 
 }  // namespace brittle::detail

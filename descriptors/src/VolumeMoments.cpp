@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -101,6 +102,73 @@ double VolumeMoments::directional(const Eigen::Vector3d& u, int order) const {
   return sum;
 }
 
+namespace {
+
+template <int L>
+struct DoublePack;  // L doubles to a register (a dependent vector_size is not taken in a template)
+template <>
+struct DoublePack<2> {
+  using type = double __attribute__((vector_size(16)));
+};
+template <>
+struct DoublePack<4> {
+  using type = double __attribute__((vector_size(32)));
+};
+
+// VolumeMoments::directional for directions [0, L⌊count/L⌋), L to a register: each lane takes
+// the scalar loop's operations in its order (the powers, then each term's products left to right
+// and the sum from 0.0), so each value is the same bits. Returns how many it did.
+template <int L>
+[[gnu::always_inline]] inline size_t directionalInLanes(const VolumeMoments& moments, const Eigen::Vector3d* u, size_t count,
+                                                        int order, double* out) {
+  using Pack = typename DoublePack<L>::type;
+  const auto& t = detail::monomialTables();
+  const int begin = monomialCount(order - 1), end = monomialCount(order);
+  const size_t packs = count / L;
+  for (size_t i = 0; i < packs; ++i) {
+    Pack x[kMaxMomentOrder + 1], y[kMaxMomentOrder + 1], z[kMaxMomentOrder + 1], ux, uy, uz;
+    for (int l = 0; l < L; ++l) {
+      const Eigen::Vector3d& d = u[L * i + l];
+      x[0][l] = y[0][l] = z[0][l] = 1.0;
+      ux[l] = d.x(), uy[l] = d.y(), uz[l] = d.z();
+    }
+    for (int k = 1; k <= order; ++k) x[k] = x[k - 1] * ux, y[k] = y[k - 1] * uy, z[k] = z[k - 1] * uz;
+    Pack sum = {};
+    for (int m = begin; m < end; ++m) {
+      const auto [p, q, r] = t.exponents[m];
+      sum += t.multinomial[m] * x[p] * y[q] * z[r] * moments.values[m];
+    }
+    std::memcpy(out + L * i, &sum, sizeof sum);
+  }
+  return L * packs;
+}
+
+size_t directionalNarrow(const VolumeMoments& moments, const Eigen::Vector3d* u, size_t count, int order, double* out) {
+  return directionalInLanes<2>(moments, u, count, order, out);
+}
+
+BRITTLE_TARGET_AVX size_t directionalWide(const VolumeMoments& moments, const Eigen::Vector3d* u, size_t count, int order,
+                                          double* out) {
+  return directionalInLanes<4>(moments, u, count, order, out);
+}
+
+}  // namespace
+
+namespace detail {
+
+void directional(const VolumeMoments& moments, const Eigen::Vector3d* u, size_t count, int order, double* out, Lanes lanes) {
+  assert(order >= 0 && order <= moments.maxOrder);
+  size_t k = lanes == Lanes::Wide ? directionalWide(moments, u, count, order, out)
+                                  : directionalNarrow(moments, u, count, order, out);
+  for (; k < count; ++k) out[k] = moments.directional(u[k], order);
+}
+
+}  // namespace detail
+
+void VolumeMoments::directional(const Eigen::Vector3d* u, size_t count, int order, double* out) const {
+  detail::directional(*this, u, count, order, out, widestLanes());
+}
+
 Eigen::Vector3d VolumeMoments::directionalGradient(const Eigen::Vector3d& u, int order) const {
   assert(order >= 1 && order <= maxOrder);
   const auto& t = detail::monomialTables();
@@ -115,10 +183,6 @@ Eigen::Vector3d VolumeMoments::directionalGradient(const Eigen::Vector3d& u, int
   }
   return g;
 }
-
-namespace {
-Eigen::Index surfaceMomentsOrder4(const TriangleMesh& surface, const Eigen::Vector3d& originM, double* sum);
-}  // namespace
 
 Result<VolumeMoments> computeVolumeMoments(const TriangleMesh& surface, int maxOrder,
                                            const Eigen::Vector3d& originM) {
@@ -135,9 +199,9 @@ Result<VolumeMoments> computeVolumeMoments(const TriangleMesh& surface, int maxO
   // gather form: [u^α] (w·u) P = Σ_{j: α_j > 0} w_j [u^(α−e_j)] P.
   std::vector<double> ha(count), hab(count), habc(count), sum(count, 0.0);
   ha[0] = hab[0] = habc[0] = 1.0;
-  // Order 4 (the canonical frames' and the default descriptor's): two faces at a time, the same
-  // arithmetic lane by lane, so the sums are this loop's bit for bit (surfaceMomentsOrder4).
-  const Eigen::Index paired = maxOrder == 4 ? surfaceMomentsOrder4(surface, originM, sum.data()) : 0;
+  // Order 4 (the canonical frames' and the default descriptor's): two or four faces at a time, the
+  // same arithmetic lane by lane, so the sums are this loop's bit for bit (surfaceMomentsOrder4).
+  const Eigen::Index paired = maxOrder == 4 ? detail::surfaceMomentsOrder4(surface, originM, sum.data(), widestLanes()) : 0;
   for (Eigen::Index f = paired; f < surface.faces.rows(); ++f) {
     const Eigen::Vector3d a = surface.vertices.row(surface.faces(f, 0)).transpose() - originM;
     const Eigen::Vector3d b = surface.vertices.row(surface.faces(f, 1)).transpose() - originM;
@@ -225,37 +289,40 @@ constexpr Order4Tables makeOrder4Tables() {
 
 constexpr Order4Tables kOrder4 = makeOrder4Tables();
 
-// computeVolumeMoments' loop at order 4 for faces [0, 2⌊F/2⌋), two faces at a time: each SSE2
-// register holds face f in its low lane and f + 1 in its high one, and every lane takes the
-// generic loop's operations in its order (a sum from 0.0, a product then a sum, no fused
-// multiply-add on x86-64), so each face's h values are the same bits; sum[m] takes face f's term
-// and then face f + 1's, as the generic loop adds them. The tables are known at compile time, so
-// the loop unrolls into straight-line code: 71 → 37–41 ns a face. Returns the number of faces done.
-Eigen::Index surfaceMomentsOrder4(const TriangleMesh& surface, const Eigen::Vector3d& originM, double* sum) {
-  using Pair = double __attribute__((vector_size(16)));
+// computeVolumeMoments' loop at order 4 for faces [0, L⌊F/L⌋), L faces at a time: lane l of each
+// register (two doubles to an SSE2 register, four to an AVX one) holds face f + l, and every lane
+// takes the generic loop's operations in its order (a sum from 0.0, a product then a sum, no fused
+// multiply-add), so each face's h values are the same bits; sum[m] takes face f's term, then
+// f + 1's and so on, as the generic loop adds them. The tables are known at compile time, so the
+// loop unrolls into straight-line code: 71 → 37–41 ns a face with two lanes. Returns the number of
+// faces done.
+template <int L>
+[[gnu::always_inline]] inline Eigen::Index momentsOrder4InLanes(const TriangleMesh& surface, const Eigen::Vector3d& originM,
+                                                                double* sum) {
+  using Pack = typename DoublePack<L>::type;
   constexpr int count = Order4Tables::kCount;
-  const Eigen::Index pairs = surface.faces.rows() / 2;
-  Pair ha[count], hab[count], habc[count];
-  ha[0] = hab[0] = habc[0] = Pair{1.0, 1.0};
-  for (Eigen::Index i = 0; i < pairs; ++i) {
-    Eigen::Vector3d v[2][3];
-    double det[2];
-    for (int l = 0; l < 2; ++l) {
-      for (int k = 0; k < 3; ++k) v[l][k] = surface.vertices.row(surface.faces(2 * i + l, k)).transpose() - originM;
-      det[l] = v[l][0].dot(v[l][1].cross(v[l][2]));
+  const Eigen::Index packs = surface.faces.rows() / L;
+  Pack ha[count], hab[count], habc[count];
+  Pack one;
+  for (int l = 0; l < L; ++l) one[l] = 1.0;
+  ha[0] = hab[0] = habc[0] = one;
+  for (Eigen::Index i = 0; i < packs; ++i) {
+    // Filled lane by lane (faster here than loading them from arrays); GCC 12 takes the lane stores
+    // for reads of unset registers and warns.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+    Pack a[3], b[3], c[3], dets;
+    for (int l = 0; l < L; ++l) {
+      Eigen::Vector3d v[3];
+      for (int k = 0; k < 3; ++k) v[k] = surface.vertices.row(surface.faces(L * i + l, k)).transpose() - originM;
+      dets[l] = v[0].dot(v[1].cross(v[2]));
+      for (int j = 0; j < 3; ++j) a[j][l] = v[0][j], b[j][l] = v[1][j], c[j][l] = v[2][j];
     }
-    Pair a[3], b[3], c[3];
-    for (int j = 0; j < 3; ++j) {
-      a[j] = Pair{v[0][0][j], v[1][0][j]};
-      b[j] = Pair{v[0][1][j], v[1][1][j]};
-      c[j] = Pair{v[0][2][j], v[1][2][j]};
-    }
-    const Pair dets = {det[0], det[1]};
-    sum[0] += det[0];
-    sum[0] += det[1];
+#pragma GCC diagnostic pop
+    for (int l = 0; l < L; ++l) sum[0] += dets[l];
 #pragma GCC unroll 40
     for (int m = 1; m < count; ++m) {
-      Pair sa = {0.0, 0.0}, sb = {0.0, 0.0}, sc = {0.0, 0.0};
+      Pack sa = {}, sb = {}, sc = {};
       for (int j = 0; j < 3; ++j) {
         const int src = kOrder4.lower[m][j];
         if (src < 0) continue;
@@ -266,15 +333,31 @@ Eigen::Index surfaceMomentsOrder4(const TriangleMesh& surface, const Eigen::Vect
       ha[m] = sa;
       hab[m] = sa + sb;
       habc[m] = sa + sb + sc;
-      const Pair term = dets * habc[m];
-      sum[m] += term[0];
-      sum[m] += term[1];
+      const Pack term = dets * habc[m];
+      for (int l = 0; l < L; ++l) sum[m] += term[l];
     }
   }
-  return 2 * pairs;
+  return L * packs;
+}
+
+Eigen::Index momentsOrder4Narrow(const TriangleMesh& surface, const Eigen::Vector3d& originM, double* sum) {
+  return momentsOrder4InLanes<2>(surface, originM, sum);
+}
+
+BRITTLE_TARGET_AVX Eigen::Index momentsOrder4Wide(const TriangleMesh& surface, const Eigen::Vector3d& originM,
+                                                  double* sum) {
+  return momentsOrder4InLanes<4>(surface, originM, sum);
 }
 
 }  // namespace
+
+namespace detail {
+
+Eigen::Index surfaceMomentsOrder4(const TriangleMesh& surface, const Eigen::Vector3d& originM, double* sum, Lanes lanes) {
+  return lanes == Lanes::Wide ? momentsOrder4Wide(surface, originM, sum) : momentsOrder4Narrow(surface, originM, sum);
+}
+
+}  // namespace detail
 
 void addTetVolumeMoments(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                          const Eigen::Vector3d& d, int maxOrder, double* values) {

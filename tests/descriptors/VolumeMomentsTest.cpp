@@ -6,8 +6,11 @@
 #include <cstring>
 #include <utility>
 #include <numbers>
+#include <random>
+#include <vector>
 
 #include "DescriptorTestShapes.h"
+#include "MonomialTables.h"
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/testing/Fixtures.h"
 
@@ -153,6 +156,55 @@ TEST(VolumeMoments, OrderFourIsTheGeneralPassBitForBit) {
     ASSERT_EQ(four.value().values.size(), monomialCount(4));
     EXPECT_EQ(std::memcmp(four.value().values.data(), five.value().values.data(), sizeof(double) * monomialCount(4)), 0)
         << "largest difference " << (four.value().values - five.value().values.head(monomialCount(4))).cwiseAbs().maxCoeff();
+  }
+}
+
+// The lanes this machine can run: both forms where it has AVX, else the SSE2 one alone.
+std::vector<Lanes> runnableLanes() {
+  std::vector<Lanes> lanes{Lanes::Narrow};
+  if (widestLanes() == Lanes::Wide) lanes.push_back(Lanes::Wide);
+  return lanes;
+}
+
+TEST(VolumeMoments, OrderFourPassIsTheSameBitsInEitherLanes) {
+  // Two faces to an SSE2 register or four to an AVX one, each face's terms added in face order: the
+  // two forms' sums are the same bits (and computeVolumeMoments, which takes the widest, equals the
+  // general loop: OrderFourIsTheGeneralPassBitForBit). The faces are cut to a multiple of four so
+  // that both forms do them all; the cut mesh is open, which the pass itself does not check.
+  TriangleMesh solid = subdivideMidpoints(testing::makeIrregularSolid());
+  solid.faces.conservativeResize(4 * (solid.faces.rows() / 4), 3);
+  const Eigen::Vector3d origin(0.013, -0.021, 0.034);
+  std::vector<double> narrow(monomialCount(4), 0.0);
+  ASSERT_EQ(detail::surfaceMomentsOrder4(solid, origin, narrow.data(), Lanes::Narrow), solid.faces.rows());
+  EXPECT_NE(narrow[monomialIndex(4, 0, 0)], 0.0);
+  if (widestLanes() != Lanes::Wide) GTEST_SKIP() << "this CPU has no AVX: the SSE2 form alone runs here";
+  std::vector<double> wide(monomialCount(4), 0.0);
+  ASSERT_EQ(detail::surfaceMomentsOrder4(solid, origin, wide.data(), Lanes::Wide), solid.faces.rows());
+  EXPECT_EQ(std::memcmp(narrow.data(), wide.data(), sizeof(double) * narrow.size()), 0);
+}
+
+TEST(VolumeMoments, DirectionalInLanesIsTheScalarBitForBit) {
+  // Directional moments of many directions at once (the canonical frames' samples) are the scalar
+  // call's bits in either lanes, for every order, and for counts that are not whole registers.
+  const auto moments = computeVolumeMoments(subdivideMidpoints(testing::makeIrregularSolid()), 4,
+                                            Eigen::Vector3d(0.013, -0.021, 0.034));
+  ASSERT_TRUE(moments.ok());
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<Eigen::Vector3d> u(37);
+  for (auto& d : u) d = Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+  u[3] = Eigen::Vector3d(0.0, -0.0, 1.0);  // signed zeros in a lane
+  for (Lanes lanes : runnableLanes()) {
+    for (int order = 0; order <= 4; ++order) {
+      for (size_t count : {size_t{0}, size_t{1}, size_t{3}, size_t{4}, size_t{37}}) {
+        std::vector<double> batch(count, -1.0);
+        detail::directional(moments.value(), u.data(), count, order, batch.data(), lanes);
+        for (size_t k = 0; k < count; ++k) {
+          const double one = moments.value().directional(u[k], order);
+          EXPECT_EQ(std::memcmp(&batch[k], &one, sizeof one), 0) << "order " << order << ", direction " << k;
+        }
+      }
+    }
   }
 }
 

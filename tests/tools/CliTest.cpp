@@ -646,7 +646,7 @@ TEST_F(CliTest, SearchBenchWritesItsCsv) {
   std::ifstream cost(dir / "cost.csv");
   const std::string costText((std::istreambuf_iterator<char>(cost)), std::istreambuf_iterator<char>());
   for (const char* stage : {"fragment-cut", "canonical-frame", "moment", "voxel", "voxel-improved", "moment-total",
-                            "voxel-total", "voxel-improved-total"}) {
+                            "voxel-total", "voxel-improved-total", "canonical-frame-warm", "moment-total-warm"}) {
     EXPECT_NE(costText.find(std::string("\n") + stage + ","), std::string::npos) << stage;
   }
 }

@@ -25,6 +25,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstddef>
 
 #include "brittle/core/MeshTypes.h"
 #include "brittle/core/Result.h"
@@ -59,6 +60,10 @@ struct VolumeMoments {
   /// Directional moment ∫ (u·x)^order dV for a direction u (any length; not normalised).
   /// Precondition: order ≤ maxOrder.
   double directional(const Eigen::Vector3d& u, int order) const;
+
+  /// directional(u[k], order) into out[k] for k < count: the same bits, several directions to a
+  /// vector register.
+  void directional(const Eigen::Vector3d* u, size_t count, int order, double* out) const;
 
   /// Gradient of directional(u, order) with respect to u (3-vector).
   Eigen::Vector3d directionalGradient(const Eigen::Vector3d& u, int order) const;

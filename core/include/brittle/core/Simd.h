@@ -1,0 +1,36 @@
+// Simd.h — 256-bit vector lanes where the CPU has them, with the bits of the 128-bit ones.
+//
+// A few hot loops are written with GCC vector types: two doubles or four floats to an SSE2
+// register, which every x86-64 CPU has. Each also comes in a 256-bit (AVX) form, chosen at run
+// time. Every lane takes the same IEEE operations in the same order in both forms, and neither
+// contracts a product and a sum into a fused multiply-add (AVX has none; FMA is a separate
+// extension that no target here enables). So the results are the same bits on a CPU with AVX and
+// on one without: fractures and packs stay bit-identical across machines. Tests run both forms.
+#pragma once
+
+namespace brittle {
+
+/// Which registers a vectorised loop uses.
+enum class Lanes {
+  Narrow,  ///< 128-bit (SSE2): every x86-64 CPU
+  Wide,    ///< 256-bit (AVX), where the CPU has it
+};
+
+/// The widest lanes this CPU runs.
+inline Lanes widestLanes() {
+#if defined(__x86_64__) || defined(__i386__)
+  static const Lanes lanes = __builtin_cpu_supports("avx") ? Lanes::Wide : Lanes::Narrow;
+  return lanes;
+#else
+  return Lanes::Narrow;
+#endif
+}
+
+}  // namespace brittle
+
+/// Marks a function compiled for AVX (no FMA), called only where widestLanes() is Wide.
+#if defined(__x86_64__) || defined(__i386__)
+#define BRITTLE_TARGET_AVX __attribute__((target("avx")))
+#else
+#define BRITTLE_TARGET_AVX
+#endif
