@@ -104,24 +104,13 @@ double VolumeMoments::directional(const Eigen::Vector3d& u, int order) const {
 
 namespace {
 
-template <int L>
-struct DoublePack;  // L doubles to a register (a dependent vector_size is not taken in a template)
-template <>
-struct DoublePack<2> {
-  using type = double __attribute__((vector_size(16)));
-};
-template <>
-struct DoublePack<4> {
-  using type = double __attribute__((vector_size(32)));
-};
-
 // VolumeMoments::directional for directions [0, L⌊count/L⌋), L to a register: each lane takes
 // the scalar loop's operations in its order (the powers, then each term's products left to right
 // and the sum from 0.0), so each value is the same bits. Returns how many it did.
 template <int L>
 [[gnu::always_inline]] inline size_t directionalInLanes(const VolumeMoments& moments, const Eigen::Vector3d* u, size_t count,
                                                         int order, double* out) {
-  using Pack = typename DoublePack<L>::type;
+  using Pack = VectorOf<double, L>;
   const auto& t = detail::monomialTables();
   const int begin = monomialCount(order - 1), end = monomialCount(order);
   const size_t packs = count / L;
@@ -299,7 +288,7 @@ constexpr Order4Tables kOrder4 = makeOrder4Tables();
 template <int L>
 [[gnu::always_inline]] inline Eigen::Index momentsOrder4InLanes(const TriangleMesh& surface, const Eigen::Vector3d& originM,
                                                                 double* sum) {
-  using Pack = typename DoublePack<L>::type;
+  using Pack = VectorOf<double, L>;
   constexpr int count = Order4Tables::kCount;
   const Eigen::Index packs = surface.faces.rows() / L;
   Pack ha[count], hab[count], habc[count];

@@ -17,6 +17,7 @@
 #include <random>
 
 #include "FixedRanges.h"
+#include "brittle/core/Simd.h"
 
 namespace brittle {
 namespace {
@@ -95,29 +96,46 @@ Voigt elementStress(const MatrixXdRow& S, Eigen::Index e, const double* q, Eigen
 
 // The split bound of a group's centre stress σ_c,k = S_c q_k + σ̂_c F_k at every instant k < steps
 // into out[k]: S_c is rows 6g..6g+5 of `centres`, q the instants' modal coordinates in float (one
-// column per mode, its rows padded to a multiple of four), force (or null for no static part).
-// Six running sums per instant in mode order, four instants at a time, in float: these sums only
-// bound, and the caller's margin covers their rounding (at most (r + 2) 2⁻²⁴ Σ_j |S_c,j q_j| per
-// component).
-void centreSplitBounds(const MatrixXfRow& centres, Eigen::Index g, const Eigen::MatrixXf& q, Eigen::Index steps,
-                       const Voigt& staticCentre, const double* force, double* out) {
-  using Quad = float __attribute__((vector_size(16)));
+// column per mode, its rows padded to a multiple of kInstantPad), force (or null for no static
+// part). Six running sums per instant in mode order, L instants at a time (four to an SSE2
+// register, eight to an AVX one: each lane the same operations, so the same bits), in float: these
+// sums only bound, and the caller's margin covers their rounding (at most (r + 2) 2⁻²⁴ Σ_j |S_c,j q_j|
+// per component).
+template <int L>
+[[gnu::always_inline]] inline void centreSplitBoundsInLanes(const MatrixXfRow& centres, Eigen::Index g, const Eigen::MatrixXf& q,
+                                                            Eigen::Index steps, const Voigt& staticCentre, const double* force,
+                                                            double* out) {
+  using Pack = VectorOf<float, L>;
   const Eigen::Index rows = q.rows(), r = q.cols(), stride = centres.cols();
   const float* c = centres.data() + 6 * g * stride;
-  for (Eigen::Index k = 0; k < steps; k += 4) {
-    Quad acc[6] = {};
+  for (Eigen::Index k = 0; k < steps; k += L) {
+    Pack acc[6] = {};
     for (Eigen::Index j = 0; j < r; ++j) {
-      Quad qj;
+      Pack qj;
       std::memcpy(&qj, q.data() + j * rows + k, sizeof qj);
       for (int i = 0; i < 6; ++i) acc[i] += c[i * stride + j] * qj;
     }
-    for (int lane = 0; lane < 4 && k + lane < steps; ++lane) {
+    for (int lane = 0; lane < L && k + lane < steps; ++lane) {
       Voigt sigma;
       for (int i = 0; i < 6; ++i) sigma[i] = acc[i][lane];
       if (force) sigma += staticCentre * force[k + lane];
       out[k + lane] = splitBound(sigma);
     }
   }
+}
+
+// Rows of the float q are padded to a multiple of this, so that either form reads whole registers.
+constexpr Eigen::Index kInstantPad = 8;
+
+void centreSplitBoundsNarrow(const MatrixXfRow& centres, Eigen::Index g, const Eigen::MatrixXf& q, Eigen::Index steps,
+                             const Voigt& staticCentre, const double* force, double* out) {
+  centreSplitBoundsInLanes<4>(centres, g, q, steps, staticCentre, force, out);
+}
+
+BRITTLE_TARGET_AVX void centreSplitBoundsWide(const MatrixXfRow& centres, Eigen::Index g, const Eigen::MatrixXf& q,
+                                              Eigen::Index steps, const Voigt& staticCentre, const double* force,
+                                              double* out) {
+  centreSplitBoundsInLanes<8>(centres, g, q, steps, staticCentre, force, out);
 }
 
 // A spin-wait's pause (a hint to the core that this thread only waits).
@@ -536,7 +554,8 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
       const double margin = 1e-4 * bounds.groupScales[g] * qNormMax +
                             1e-9 * (radius * qNormMax + (kD.cwiseProduct(centre).norm() + staticRadius) * forceMax);
       double* at = w.groupBoundAt.data() + g * steps;
-      centreSplitBounds(bounds.groupCentres, g, w.qFloat, steps, centre, correction ? forceN.data() : nullptr, at);
+      (w.lanes == Lanes::Wide ? centreSplitBoundsWide : centreSplitBoundsNarrow)(bounds.groupCentres, g, w.qFloat, steps, centre,
+                                                                   correction ? forceN.data() : nullptr, at);
       double most = -std::numeric_limits<double>::infinity();
       for (Eigen::Index k = 0; k < steps; ++k) {
         at[k] += (radius * w.qNorm[k] + staticRadius * w.forceAbs[k]) * (1.0 + 1e-9) + margin;
@@ -592,7 +611,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     if (grouped) {
       w.groupBound.resize(groups);
       w.groupBoundAt.resize(static_cast<size_t>(groups * steps));
-      w.qFloat.setZero((steps + 3) / 4 * 4, r);
+      w.qFloat.setZero((steps + kInstantPad - 1) / kInstantPad * kInstantPad, r);
       w.qFloat.topRows(steps) = q.cast<float>();
       tbb::parallel_for(0, kScanRanges, searchGroups);
     } else {

@@ -190,7 +190,7 @@ TEST(CrackPropagation, GroupedScanEqualsTheFullScanAndItsGroupBoundsHold) {
     std::normal_distribution<double> g(0.0, 1.0);
     for (int trial = 0; trial < 6; ++trial) {
       SCOPED_TRACE(::testing::Message() << "seed " << rngSeed << ", trial " << trial);
-      const int modes = 8, instants = 29;  // an odd count: the group bounds take instants four at a time
+      const int modes = 8, instants = 29;  // an odd count: the group bounds take instants four or eight at a time
       const double spread = trial < 2 ? 0.02 : 1.0;
       std::vector<int32_t> keys;
       std::vector<Eigen::MatrixXd> blocks;
@@ -232,6 +232,19 @@ TEST(CrackPropagation, GroupedScanEqualsTheFullScanAndItsGroupBoundsHold) {
       StressField field{&stressModes, q.row(full.peakInstant).transpose(), correction ? &staticStress : nullptr,
                         force[static_cast<size_t>(full.peakInstant)]};
       EXPECT_EQ(orderedSeeds(grouped, field), full.seeds);
+      // The group bounds in SSE2 registers, four instants to one, are the same bits as the widest
+      // lanes' (eight to an AVX register where the CPU has it), and so is the whole scan.
+      StressScanWorkspace narrowWorkspace;
+      narrowWorkspace.lanes = Lanes::Narrow;
+      StressScan narrow;
+      scanStresses(stressModes, bounds, q, staticStress, force, threshold, true, narrowWorkspace, narrow);
+      EXPECT_EQ(narrow.peakPrincipalPa, grouped.peakPrincipalPa);
+      EXPECT_EQ(narrow.evaluations, grouped.evaluations);
+      EXPECT_EQ(narrow.seeds, grouped.seeds);
+      ASSERT_EQ(narrowWorkspace.groupBoundAt.size(), workspace.groupBoundAt.size());
+      EXPECT_EQ(std::memcmp(narrowWorkspace.groupBoundAt.data(), workspace.groupBoundAt.data(),
+                            sizeof(double) * workspace.groupBoundAt.size()),
+                0);
       const auto groups = static_cast<Eigen::Index>(bounds.groupStart.size()) - 1;
       ASSERT_EQ(workspace.groupBound.size(), groups);
       int live = 0;

@@ -40,6 +40,7 @@
 
 #include "brittle/database/ObjectAsset.h"
 #include "brittle/core/Result.h"
+#include "brittle/core/Simd.h"
 #include "brittle/runtime/TetTopology.h"
 
 namespace brittle {
@@ -138,7 +139,10 @@ struct StressScanWorkspace {
   // and over all of them, for the groups whose bounds the last scan made (NaN for the others).
   Eigen::VectorXd groupBound;
   std::vector<double> groupBoundAt;
-  Eigen::MatrixXf qFloat;                      ///< K (padded to a multiple of 4) by r: q in float
+  Eigen::MatrixXf qFloat;                      ///< K (padded to a multiple of 8) by r: q in float
+  /// The group centres' bounds take instants four to an SSE2 register or eight to an AVX one, with
+  /// the same bits (brittle/core/Simd.h); tests run both.
+  Lanes lanes = widestLanes();
   std::vector<char> seedTaken;                 ///< T, when an element has several stress points
 };
 
