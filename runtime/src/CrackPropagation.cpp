@@ -94,48 +94,56 @@ Voigt elementStress(const MatrixXdRow& S, Eigen::Index e, const double* q, Eigen
   return (Voigt() << s0, s1, s2, s3, s4, s5).finished();
 }
 
-// The split bound of a group's centre stress σ_c,k = S_c q_k + σ̂_c F_k at every instant k < steps
-// into out[k]: S_c is rows 6g..6g+5 of `centres`, q the instants' modal coordinates in float (one
-// column per mode, its rows padded to a multiple of kInstantPad), force (or null for no static
-// part). Six running sums per instant in mode order, L instants at a time (four to an SSE2
-// register, eight to an AVX one: each lane the same operations, so the same bits), in float: these
-// sums only bound, and the caller's margin covers their rounding (at most (r + 2) 2⁻²⁴ Σ_j |S_c,j q_j|
-// per component).
+// A group's centre stress S_c q_k at instants k..k+L−1 into sums[i][lane]: S_c is rows 6g..6g+5 of
+// `centres`, q the instants' modal coordinates in float (one column per mode, its rows padded to a
+// multiple of kInstantPad). Six running sums per instant in mode order, L instants at a time (four
+// to an SSE2 register, eight to an AVX one: each lane the same operations, so the same bits).
 template <int L>
-[[gnu::always_inline]] inline void centreSplitBoundsInLanes(const MatrixXfRow& centres, Eigen::Index g, const Eigen::MatrixXf& q,
-                                                            Eigen::Index steps, const Voigt& staticCentre, const double* force,
-                                                            double* out) {
+[[gnu::always_inline]] inline void centreSumsInLanes(const float* c, Eigen::Index stride, const Eigen::MatrixXf& q,
+                                                     Eigen::Index k, float (*sums)[8]) {
   using Pack = VectorOf<float, L>;
-  const Eigen::Index rows = q.rows(), r = q.cols(), stride = centres.cols();
-  const float* c = centres.data() + 6 * g * stride;
-  for (Eigen::Index k = 0; k < steps; k += L) {
-    Pack acc[6] = {};
-    for (Eigen::Index j = 0; j < r; ++j) {
-      Pack qj;
-      std::memcpy(&qj, q.data() + j * rows + k, sizeof qj);
-      for (int i = 0; i < 6; ++i) acc[i] += c[i * stride + j] * qj;
-    }
-    for (int lane = 0; lane < L && k + lane < steps; ++lane) {
-      Voigt sigma;
-      for (int i = 0; i < 6; ++i) sigma[i] = acc[i][lane];
-      if (force) sigma += staticCentre * force[k + lane];
-      out[k + lane] = splitBound(sigma);
-    }
+  const Eigen::Index rows = q.rows(), r = q.cols();
+  Pack acc[6] = {};
+  for (Eigen::Index j = 0; j < r; ++j) {
+    Pack qj;
+    std::memcpy(&qj, q.data() + j * rows + k, sizeof qj);
+    for (int i = 0; i < 6; ++i) acc[i] += c[i * stride + j] * qj;
   }
+  for (int i = 0; i < 6; ++i) std::memcpy(sums[i], &acc[i], sizeof acc[i]);
 }
 
 // Rows of the float q are padded to a multiple of this, so that either form reads whole registers.
 constexpr Eigen::Index kInstantPad = 8;
 
-void centreSplitBoundsNarrow(const MatrixXfRow& centres, Eigen::Index g, const Eigen::MatrixXf& q, Eigen::Index steps,
-                             const Voigt& staticCentre, const double* force, double* out) {
-  centreSplitBoundsInLanes<4>(centres, g, q, steps, staticCentre, force, out);
+void centreSumsNarrow(const float* c, Eigen::Index stride, const Eigen::MatrixXf& q, Eigen::Index k, float (*sums)[8]) {
+  centreSumsInLanes<4>(c, stride, q, k, sums);
 }
 
-BRITTLE_TARGET_AVX void centreSplitBoundsWide(const MatrixXfRow& centres, Eigen::Index g, const Eigen::MatrixXf& q,
-                                              Eigen::Index steps, const Voigt& staticCentre, const double* force,
-                                              double* out) {
-  centreSplitBoundsInLanes<8>(centres, g, q, steps, staticCentre, force, out);
+// AVX: nothing is called while its registers are live, so GCC clears their upper halves on return
+// (vzeroupper), and the SSE2 code after it runs at full speed.
+BRITTLE_TARGET_AVX void centreSumsWide(const float* c, Eigen::Index stride, const Eigen::MatrixXf& q, Eigen::Index k,
+                                       float (*sums)[8]) {
+  centreSumsInLanes<8>(c, stride, q, k, sums);
+}
+
+// The split bound of a group's centre stress σ_c,k = S_c q_k + σ̂_c F_k at every instant k < steps
+// into out[k] (centreSums), with force null for no static part. The sums are in float: they only
+// bound, and the caller's margin covers their rounding (at most (r + 2) 2⁻²⁴ Σ_j |S_c,j q_j| per
+// component).
+void centreSplitBounds(const MatrixXfRow& centres, Eigen::Index g, const Eigen::MatrixXf& q, Eigen::Index steps,
+                       const Voigt& staticCentre, const double* force, Lanes lanes, double* out) {
+  const Eigen::Index stride = centres.cols(), width = lanes == Lanes::Wide ? 8 : 4;
+  const float* c = centres.data() + 6 * g * stride;
+  float sums[6][8];
+  for (Eigen::Index k = 0; k < steps; k += width) {
+    (lanes == Lanes::Wide ? centreSumsWide : centreSumsNarrow)(c, stride, q, k, sums);
+    for (Eigen::Index lane = 0; lane < width && k + lane < steps; ++lane) {
+      Voigt sigma;
+      for (int i = 0; i < 6; ++i) sigma[i] = sums[i][lane];
+      if (force) sigma += staticCentre * force[k + lane];
+      out[k + lane] = splitBound(sigma);
+    }
+  }
 }
 
 // A spin-wait's pause (a hint to the core that this thread only waits).
@@ -554,8 +562,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
       const double margin = 1e-4 * bounds.groupScales[g] * qNormMax +
                             1e-9 * (radius * qNormMax + (kD.cwiseProduct(centre).norm() + staticRadius) * forceMax);
       double* at = w.groupBoundAt.data() + g * steps;
-      (w.lanes == Lanes::Wide ? centreSplitBoundsWide : centreSplitBoundsNarrow)(bounds.groupCentres, g, w.qFloat, steps, centre,
-                                                                   correction ? forceN.data() : nullptr, at);
+      centreSplitBounds(bounds.groupCentres, g, w.qFloat, steps, centre, correction ? forceN.data() : nullptr, w.lanes, at);
       double most = -std::numeric_limits<double>::infinity();
       for (Eigen::Index k = 0; k < steps; ++k) {
         at[k] += (radius * w.qNorm[k] + staticRadius * w.forceAbs[k]) * (1.0 + 1e-9) + margin;
