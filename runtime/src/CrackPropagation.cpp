@@ -7,6 +7,7 @@
 #include <oneapi/tbb/task_group.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#include <immintrin.h>
 #endif
 #include <atomic>
 #include <algorithm>
@@ -119,25 +120,65 @@ void centreSumsNarrow(const float* c, Eigen::Index stride, const Eigen::MatrixXf
   centreSumsInLanes<4>(c, stride, q, k, sums);
 }
 
-// AVX: nothing is called while its registers are live, so GCC clears their upper halves on return
-// (vzeroupper), and the SSE2 code after it runs at full speed.
-BRITTLE_TARGET_AVX void centreSumsWide(const float* c, Eigen::Index stride, const Eigen::MatrixXf& q, Eigen::Index k,
-                                       float (*sums)[8]) {
+// The split bounds of eight instants k..k+7 (those below `steps`) into out[k..]: centreSumsInLanes
+// in an AVX register, then splitBound four instants to a register, each lane splitBound's
+// operations in its order (the mean stress ((σ₀ + σ₁) + σ₂)/3; the deviator's squared norm summed as
+// Eigen sums a 6-vector in SSE2 pairs, (d₀² + (d₂² + d₄²)) + (d₁² + (d₃² + d₅²)); then p + √(2/3)‖d‖),
+// so the same bits (CrackPropagation.GroupedScanEqualsTheFullScanAndItsGroupBoundsHold compares them
+// with the SSE2 form, which calls splitBound). It calls nothing while its registers are live, so GCC
+// clears their upper halves on return (vzeroupper) and the SSE2 code after it runs at full speed.
+BRITTLE_TARGET_AVX void centreSplitBoundsWide(const float* c, Eigen::Index stride, const Eigen::MatrixXf& q, Eigen::Index k,
+                                              Eigen::Index steps, const double* staticCentre, const double* force,
+                                              double* out) {
+  using Quad = VectorOf<double, 4>;
+  float sums[6][8];
   centreSumsInLanes<8>(c, stride, q, k, sums);
+  double bound[8];
+  for (int half = 0; half < 2; ++half) {
+    Quad s[6];
+    for (int i = 0; i < 6; ++i) {
+      const float* v = sums[i] + 4 * half;
+      s[i] = Quad{v[0], v[1], v[2], v[3]};
+    }
+    if (force) {
+      Quad f = {};
+      for (int l = 0; l < 4 && k + 4 * half + l < steps; ++l) f[l] = force[k + 4 * half + l];
+      for (int i = 0; i < 6; ++i) s[i] = s[i] + staticCentre[i] * f;
+    }
+    const Quad p = (s[0] + s[1] + s[2]) / 3.0;
+    Quad d[6];
+    for (int i = 0; i < 6; ++i) d[i] = kD[i] * s[i];
+    for (int i = 0; i < 3; ++i) d[i] = d[i] - p;
+    const Quad even = d[0] * d[0] + (d[2] * d[2] + d[4] * d[4]);
+    const Quad odd = d[1] * d[1] + (d[3] * d[3] + d[5] * d[5]);
+#if defined(__x86_64__)
+    const Quad norm = _mm256_sqrt_pd(even + odd);
+#else
+    Quad norm = even + odd;
+    for (int l = 0; l < 4; ++l) norm[l] = std::sqrt(norm[l]);
+#endif
+    const Quad b = p + kDeviatorShare * norm;
+    std::memcpy(bound + 4 * half, &b, sizeof b);
+  }
+  for (int l = 0; l < 8 && k + l < steps; ++l) out[k + l] = bound[l];
 }
 
 // The split bound of a group's centre stress σ_c,k = S_c q_k + σ̂_c F_k at every instant k < steps
-// into out[k] (centreSums), with force null for no static part. The sums are in float: they only
-// bound, and the caller's margin covers their rounding (at most (r + 2) 2⁻²⁴ Σ_j |S_c,j q_j| per
-// component).
+// into out[k] (centreSumsInLanes), with force null for no static part. The sums are in float: they
+// only bound, and the caller's margin covers their rounding (at most (r + 2) 2⁻²⁴ Σ_j |S_c,j q_j|
+// per component).
 void centreSplitBounds(const MatrixXfRow& centres, Eigen::Index g, const Eigen::MatrixXf& q, Eigen::Index steps,
                        const Voigt& staticCentre, const double* force, Lanes lanes, double* out) {
-  const Eigen::Index stride = centres.cols(), width = lanes == Lanes::Wide ? 8 : 4;
+  const Eigen::Index stride = centres.cols();
   const float* c = centres.data() + 6 * g * stride;
+  if (lanes == Lanes::Wide) {
+    for (Eigen::Index k = 0; k < steps; k += 8) centreSplitBoundsWide(c, stride, q, k, steps, staticCentre.data(), force, out);
+    return;
+  }
   float sums[6][8];
-  for (Eigen::Index k = 0; k < steps; k += width) {
-    (lanes == Lanes::Wide ? centreSumsWide : centreSumsNarrow)(c, stride, q, k, sums);
-    for (Eigen::Index lane = 0; lane < width && k + lane < steps; ++lane) {
+  for (Eigen::Index k = 0; k < steps; k += 4) {
+    centreSumsNarrow(c, stride, q, k, sums);
+    for (Eigen::Index lane = 0; lane < 4 && k + lane < steps; ++lane) {
       Voigt sigma;
       for (int i = 0; i < 6; ++i) sigma[i] = sums[i][lane];
       if (force) sigma += staticCentre * force[k + lane];
