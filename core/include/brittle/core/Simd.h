@@ -12,6 +12,9 @@
 // with them live made every later stage of an impact slower, the untouched ones included.
 #pragma once
 
+#include <cstdlib>
+#include <cstring>
+
 namespace brittle {
 
 /// Which registers a vectorised loop uses.
@@ -20,10 +23,16 @@ enum class Lanes {
   Wide,    ///< 256-bit (AVX), where the CPU has it
 };
 
-/// The widest lanes this CPU runs.
+/// The widest lanes this CPU runs. The environment variable BRITTLE_SIMD=sse2 keeps a process to the
+/// 128-bit forms, as on a CPU without AVX: the determinism check runs one of its three processes so
+/// and requires the same packs and fractures from it.
 inline Lanes widestLanes() {
 #if defined(__x86_64__) || defined(__i386__)
-  static const Lanes lanes = __builtin_cpu_supports("avx") ? Lanes::Wide : Lanes::Narrow;
+  static const Lanes lanes = [] {
+    const char* forced = std::getenv("BRITTLE_SIMD");
+    if (forced && std::strcmp(forced, "sse2") == 0) return Lanes::Narrow;
+    return __builtin_cpu_supports("avx") ? Lanes::Wide : Lanes::Narrow;
+  }();
   return lanes;
 #else
   return Lanes::Narrow;
