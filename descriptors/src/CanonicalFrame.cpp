@@ -63,10 +63,9 @@ const SampleTables& sampleTables() {
   return tables;
 }
 
-std::vector<Eigen::Vector3d> sampleDirections(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
-                                              bool plane) {
+// The circle's samples in the plane spanned by p, q.
+std::vector<Eigen::Vector3d> circleDirections(const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
   const SampleTables& t = sampleTables();
-  if (!plane) return t.sphere;
   std::vector<Eigen::Vector3d> out;
   out.reserve(kCircleSamples);
   for (int k = 0; k < kCircleSamples; ++k) out.push_back(t.cosine[k] * p + t.sine[k] * q);
@@ -106,7 +105,8 @@ bool sameDirection(const Eigen::Vector3d& a, const Eigen::Vector3d& b, bool line
 std::vector<DirectionChoice> chooseDirections(const VolumeMoments& m, const Eigen::Vector3d& p,
                                               const Eigen::Vector3d& q, bool plane, double secondMoment,
                                               const CanonicalFrameSettings& settings) {
-  const auto samples = sampleDirections(p, q, plane);
+  const std::vector<Eigen::Vector3d> circle = plane ? circleDirections(p, q) : std::vector<Eigen::Vector3d>();
+  const std::vector<Eigen::Vector3d>& samples = plane ? circle : sampleTables().sphere;  // the sphere's, not a copy
   const Eigen::Matrix3d projector =
       plane ? Eigen::Matrix3d(p * p.transpose() + q * q.transpose()) : Eigen::Matrix3d::Identity();
   std::vector<double> values(samples.size());

@@ -68,11 +68,25 @@ inline __attribute__((always_inline)) double dotInOrder(const double* a, const d
 // σ₁ where σ is compressive (p < 0), which ‖σ‖_F does not see.
 constexpr double kDeviatorShare = 0.816496580927726;  // √(2/3)
 
+// The terms of the split bound p + √(2/3)‖d‖ of the Voigt components s[0..5], of one stress
+// (V = double) or of four in an AVX register's lanes (V = VectorOf<double, 4>), with the same
+// operations in the same order either way: the mean ((s₀ + s₁) + s₂)/3 and the deviator's squared
+// norm as (d₀² + (d₂² + d₄²)) + (d₁² + (d₃² + d₅²)), the order in which Eigen sums a 6-vector in SSE2
+// pairs, which this bound used before (so no bit moved). The caller takes the square root, with
+// the instruction of its own target.
+template <class V>
+[[gnu::always_inline]] inline void splitBoundTerms(const V* s, V& p, V& squaredDeviator) {
+  p = (s[0] + s[1] + s[2]) / 3.0;
+  V d[6];
+  for (int i = 0; i < 6; ++i) d[i] = kD[i] * s[i];
+  for (int i = 0; i < 3; ++i) d[i] = d[i] - p;
+  squaredDeviator = (d[0] * d[0] + (d[2] * d[2] + d[4] * d[4])) + (d[1] * d[1] + (d[3] * d[3] + d[5] * d[5]));
+}
+
 double splitBound(const Voigt& s) {
-  const double p = (s[0] + s[1] + s[2]) / 3.0;
-  Voigt d = kD.cwiseProduct(s);
-  d.head<3>().array() -= p;
-  return p + kDeviatorShare * d.norm();
+  double p, squaredDeviator;
+  splitBoundTerms(s.data(), p, squaredDeviator);
+  return p + kDeviatorShare * std::sqrt(squaredDeviator);
 }
 
 // σ_e = S_e q over the first r modes: S's rows 6e..6e+5 (row-major, contiguous) against q, in one
@@ -121,12 +135,10 @@ void centreSumsNarrow(const float* c, Eigen::Index stride, const Eigen::MatrixXf
 }
 
 // The split bounds of eight instants k..k+7 (those below `steps`) into out[k..]: centreSumsInLanes
-// in an AVX register, then splitBound four instants to a register, each lane splitBound's
-// operations in its order (the mean stress ((σ₀ + σ₁) + σ₂)/3; the deviator's squared norm summed as
-// Eigen sums a 6-vector in SSE2 pairs, (d₀² + (d₂² + d₄²)) + (d₁² + (d₃² + d₅²)); then p + √(2/3)‖d‖),
-// so the same bits (CrackPropagation.GroupedScanEqualsTheFullScanAndItsGroupBoundsHold compares them
-// with the SSE2 form, which calls splitBound). It calls nothing while its registers are live, so GCC
-// clears their upper halves on return (vzeroupper) and the SSE2 code after it runs at full speed.
+// in an AVX register, then splitBoundTerms four instants to a register, the same operations as the
+// SSE2 form's splitBound, so the same bits (CrackPropagation.GroupedScanEqualsTheFullScanAndItsGroupBoundsHold
+// compares the two forms). It calls nothing while its registers are live, so GCC clears their upper
+// halves on return (vzeroupper) and the SSE2 code after it runs at full speed.
 BRITTLE_TARGET_AVX void centreSplitBoundsWide(const float* c, Eigen::Index stride, const Eigen::MatrixXf& q, Eigen::Index k,
                                               Eigen::Index steps, const double* staticCentre, const double* force,
                                               double* out) {
@@ -145,16 +157,12 @@ BRITTLE_TARGET_AVX void centreSplitBoundsWide(const float* c, Eigen::Index strid
       for (int l = 0; l < 4 && k + 4 * half + l < steps; ++l) f[l] = force[k + 4 * half + l];
       for (int i = 0; i < 6; ++i) s[i] = s[i] + staticCentre[i] * f;
     }
-    const Quad p = (s[0] + s[1] + s[2]) / 3.0;
-    Quad d[6];
-    for (int i = 0; i < 6; ++i) d[i] = kD[i] * s[i];
-    for (int i = 0; i < 3; ++i) d[i] = d[i] - p;
-    const Quad even = d[0] * d[0] + (d[2] * d[2] + d[4] * d[4]);
-    const Quad odd = d[1] * d[1] + (d[3] * d[3] + d[5] * d[5]);
+    Quad p, squaredDeviator;
+    splitBoundTerms(s, p, squaredDeviator);
 #if defined(__x86_64__)
-    const Quad norm = _mm256_sqrt_pd(even + odd);
+    const Quad norm = _mm256_sqrt_pd(squaredDeviator);
 #else
-    Quad norm = even + odd;
+    Quad norm = squaredDeviator;
     for (int l = 0; l < 4; ++l) norm[l] = std::sqrt(norm[l]);
 #endif
     const Quad b = p + kDeviatorShare * norm;

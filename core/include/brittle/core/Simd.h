@@ -39,26 +39,12 @@ inline Lanes widestLanes() {
 #endif
 }
 
-/// L values of T to one register, as a GCC vector type: VectorOf<double, 2> and VectorOf<float, 4> fill
-/// an SSE2 register, VectorOf<double, 4> and VectorOf<float, 8> an AVX one. (GCC takes vector_size only
-/// from a constant, not from a template parameter, hence the specialisations.)
+/// L values of T to one register, as a GCC vector type: VectorOf<double, 2> and VectorOf<float, 4>
+/// fill an SSE2 register, VectorOf<double, 4> and VectorOf<float, 8> an AVX one. (GCC takes a
+/// dependent vector_size in a class template's typedef, not in an alias template.)
 template <class T, int L>
-struct SimdPack;
-template <>
-struct SimdPack<double, 2> {
-  using type = double __attribute__((vector_size(16)));
-};
-template <>
-struct SimdPack<double, 4> {
-  using type = double __attribute__((vector_size(32)));
-};
-template <>
-struct SimdPack<float, 4> {
-  using type = float __attribute__((vector_size(16)));
-};
-template <>
-struct SimdPack<float, 8> {
-  using type = float __attribute__((vector_size(32)));
+struct SimdPack {
+  typedef T type __attribute__((vector_size(L * sizeof(T))));
 };
 template <class T, int L>
 using VectorOf = typename SimdPack<T, L>::type;
