@@ -1,21 +1,22 @@
 #include "BackwardSolve.h"
 
-#if defined(__SSE2__)
-#include <emmintrin.h>  // part of x86-64 itself
-#endif
+#include "brittle/core/Simd.h"
+
 #include <oneapi/tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
 #include <cassert>
+#include <cstring>
 #include <queue>
+#include <type_traits>
 #include <utility>
 
 namespace brittle::detail {
 namespace {
 
 // Column j's non-zeros: [begin, end) of the value and row arrays.
-std::pair<Eigen::Index, Eigen::Index> columnRange(const Eigen::SparseMatrix<double>& lower, Eigen::Index j) {
+[[gnu::always_inline]] inline std::pair<Eigen::Index, Eigen::Index> columnRange(const Eigen::SparseMatrix<double>& lower, Eigen::Index j) {
   const Eigen::Index begin = lower.outerIndexPtr()[j];
   const Eigen::Index end = lower.isCompressed() ? lower.outerIndexPtr()[j + 1] : begin + lower.innerNonZeroPtr()[j];
   return {begin, end};
@@ -23,84 +24,150 @@ std::pair<Eigen::Index, Eigen::Index> columnRange(const Eigen::SparseMatrix<doub
 
 // Σ_t col_c,t b_t over t < m for C columns at once (C = 1, 2), each in four running sums
 // (t mod 4) added pairwise: the sums over a supernode's rows of its columns, sharing the loads of b.
-// The four sums are two SSE2 registers (lanes t mod 4 = 0, 1 and 2, 3), a product then a sum per
-// lane as in plain C++, so the bits are those of the scalar loop on any x86-64; GCC's own
-// vectorisation of that loop shuffled lanes and ran ~15 % slower. A column's sum is the same
-// arithmetic whichever C it is computed with.
-template <int C>
-void dotColumns(const std::array<const double*, C>& cols, const double* b, Eigen::Index m, std::array<double, C>& sums) {
+// The four sums are 4/W registers of W lanes (two SSE2 registers, W = 2, or one AVX register,
+// W = 4; lane l of register r holds t mod 4 = rW + l), a product then a sum per lane as in plain
+// C++, so the bits are those of the scalar loop in either form; GCC's own vectorisation of that
+// loop shuffled lanes and ran ~15 % slower. A column's sum is the same arithmetic whichever C it is
+// computed with.
+template <int W, int C, class V>
+[[gnu::always_inline]] inline void dotColumns(const std::array<const V*, C>& cols, const double* b, Eigen::Index m,
+                                              std::array<double, C>& sums) {
+  using Pack = VectorOf<double, W>;
+  constexpr int R = 4 / W;  // registers per four rows
+  // Four of column c's values from row t, as doubles (exact from float) in R registers.
+  auto load = [&](int c, Eigen::Index t, Pack* out) {
+    if constexpr (std::is_same_v<V, double>) {
+      for (int r = 0; r < R; ++r) loadLanes<W>(cols[c] + t + r * W, out[r]);
+    } else {
+      VectorOf<float, 4> f;
+      loadLanes<4>(cols[c] + t, f);
+      if constexpr (W == 4) {
+        out[0] = __builtin_convertvector(f, Pack);
+      } else {
+        out[0] = __builtin_convertvector(__builtin_shufflevector(f, f, 0, 1), Pack);
+        out[1] = __builtin_convertvector(__builtin_shufflevector(f, f, 2, 3), Pack);
+      }
+    }
+  };
   double acc[C][4] = {};
   Eigen::Index t = 0;
-#if defined(__SSE2__)
-  __m128d low[C], high[C];
-  for (int c = 0; c < C; ++c) low[c] = high[c] = _mm_setzero_pd();
+  Pack s0[R] = {}, s1[R] = {};
   for (; t + 4 <= m; t += 4) {
-    const __m128d b0 = _mm_loadu_pd(b + t), b1 = _mm_loadu_pd(b + t + 2);
-    for (int c = 0; c < C; ++c) {
-      low[c] = _mm_add_pd(low[c], _mm_mul_pd(_mm_loadu_pd(cols[c] + t), b0));
-      high[c] = _mm_add_pd(high[c], _mm_mul_pd(_mm_loadu_pd(cols[c] + t + 2), b1));
+    Pack bt[R], col[R];
+    for (int r = 0; r < R; ++r) loadLanes<W>(b + t + r * W, bt[r]);
+    load(0, t, col);
+    for (int r = 0; r < R; ++r) s0[r] += col[r] * bt[r];
+    if constexpr (C == 2) {
+      load(1, t, col);
+      for (int r = 0; r < R; ++r) s1[r] += col[r] * bt[r];
     }
   }
-  for (int c = 0; c < C; ++c) {
-    _mm_storeu_pd(acc[c], low[c]);
-    _mm_storeu_pd(acc[c] + 2, high[c]);
+  for (int r = 0; r < R; ++r) {
+    __builtin_memcpy(acc[0] + r * W, &s0[r], sizeof s0[r]);
+    if constexpr (C == 2) __builtin_memcpy(acc[C - 1] + r * W, &s1[r], sizeof s1[r]);
   }
-#else
-  for (; t + 4 <= m; t += 4) {
-    for (int c = 0; c < C; ++c) {
-      for (int l = 0; l < 4; ++l) acc[c][l] += cols[c][t + l] * b[t + l];
-    }
-  }
-#endif
   for (int l = 0; t + l < m; ++l) {
-    for (int c = 0; c < C; ++c) acc[c][l] += cols[c][t + l] * b[t + l];
+    for (int c = 0; c < C; ++c) acc[c][l] += static_cast<double>(cols[c][t + l]) * b[t + l];
   }
   for (int c = 0; c < C; ++c) sums[c] = (acc[c][0] + acc[c][1]) + (acc[c][2] + acc[c][3]);
 }
 
+// Column j's non-zero count.
+[[gnu::always_inline]] inline Eigen::Index columnLength(const Eigen::SparseMatrix<double>& lower, int32_t j) {
+  const auto [begin, end] = columnRange(lower, j);
+  return end - begin;
+}
+
 // Columns [run.first, run.end), descending, of the supernode that ends at run.last. Column j holds
 // rows j+1..last (in the supernode) then R, the rows of column `last`, whose x are gathered. Column
-// j's values are at values + offset[j] (the plan's copy, in the order this loop reads them).
-void solveRuns(const Eigen::SparseMatrix<double>& lower, const double* values, const int64_t* offset,
-               const std::vector<BackwardSolvePlan::Run>& runs, double* x, std::vector<double>& gathered) {
-  auto length = [&](int32_t j) {
-    const auto [begin, end] = columnRange(lower, j);
-    return end - begin;
-  };
+// j's values are at values + offset[j] (the plan's copy, in the order this loop reads them). W is
+// the lanes of dotColumns.
+template <int W, class V>
+[[gnu::always_inline]] inline void solveRunsInLanes(const Eigen::SparseMatrix<double>& lower, const V* values,
+                                                    const int64_t* offset, const std::vector<BackwardSolvePlan::Run>& runs,
+                                                    double* x, double* b) {
   for (size_t i = 0; i < runs.size(); ++i) {
     const BackwardSolvePlan::Run& run = runs[i];
     if (i + 1 < runs.size()) {  // the next run's values follow this one's: ask for them now
       const BackwardSolvePlan::Run& next = runs[i + 1];
-      const double* end = values + offset[next.first] + length(next.first);
-      for (const double* p = values + offset[next.end - 1]; p < end; p += 8) __builtin_prefetch(p);
+      const V* end = values + offset[next.first] + columnLength(lower, next.first);
+      for (const V* p = values + offset[next.end - 1]; p < end; p += 64 / sizeof(V)) __builtin_prefetch(p);
     }
     const auto [lastBegin, lastEnd] = columnRange(lower, run.last);
     const Eigen::Index m = lastEnd - lastBegin;
     const int* rows = lower.innerIndexPtr() + lastBegin;
-    double* b = gathered.data();
     for (Eigen::Index t = 0; t < m; ++t) b[t] = x[rows[t]];
     // Column j: its sum over R (its last m values), then over rows j+1..last, in row order.
-    auto tail = [&](int32_t j) { return values + offset[j] + length(j) - m; };
+    auto tail = [&](int32_t j) { return values + offset[j] + columnLength(lower, j) - m; };
     auto finish = [&](int32_t j, double overR) {
-      const double* column = values + offset[j];
-      const Eigen::Index inside = length(j) - m;
+      const V* column = values + offset[j];
+      const Eigen::Index inside = columnLength(lower, j) - m;
       double t = overR;
-      for (Eigen::Index p = 0; p < inside; ++p) t += column[p] * x[j + 1 + p];
+      for (Eigen::Index p = 0; p < inside; ++p) t += static_cast<double>(column[p]) * x[j + 1 + p];
       x[j] -= t;
     };
     int32_t j = run.end - 1;
     for (; j - 1 >= run.first; j -= 2) {
       std::array<double, 2> sums{};
-      dotColumns<2>({tail(j), tail(j - 1)}, b, m, sums);
+      dotColumns<W, 2, V>({tail(j), tail(j - 1)}, b, m, sums);
       finish(j, sums[0]);
       finish(j - 1, sums[1]);
     }
     if (j == run.first) {
       std::array<double, 1> sum{};
-      dotColumns<1>({tail(j)}, b, m, sum);
+      dotColumns<W, 1, V>({tail(j)}, b, m, sum);
       finish(j, sum[0]);
     }
   }
+}
+
+template <class V>
+void solveRunsNarrow(const Eigen::SparseMatrix<double>& lower, const V* values, const int64_t* offset,
+                     const std::vector<BackwardSolvePlan::Run>& runs, double* x, double* b) {
+  solveRunsInLanes<2>(lower, values, offset, runs, x, b);
+}
+
+// The same, with the dot products in AVX registers (the same bits). It calls nothing while they
+// are live, so GCC clears their upper halves on return (brittle/core/Simd.h).
+template <class V>
+BRITTLE_TARGET_AVX void solveRunsWide(const Eigen::SparseMatrix<double>& lower, const V* values, const int64_t* offset,
+                                      const std::vector<BackwardSolvePlan::Run>& runs, double* x, double* b) {
+  solveRunsInLanes<4>(lower, values, offset, runs, x, b);
+}
+
+template <class V>
+void solveRuns(const Eigen::SparseMatrix<double>& lower, const V* values, const int64_t* offset,
+               const std::vector<BackwardSolvePlan::Run>& runs, double* x, std::vector<double>& gathered, Lanes lanes) {
+  if (lanes == Lanes::Wide) {
+    solveRunsWide(lower, values, offset, runs, x, gathered.data());
+  } else {
+    solveRunsNarrow(lower, values, offset, runs, x, gathered.data());
+  }
+}
+
+// y_i ← (y_i − h_i·c) s_i over rows [begin, end) of the row-major h (m columns): each dot product
+// dotColumns' (four running sums, the same bits in either lanes).
+template <int W, class V>
+[[gnu::always_inline]] inline void subtractRowProductsInLanes(const V* h, Eigen::Index m, Eigen::Index begin,
+                                                              Eigen::Index end, const double* c, const double* s,
+                                                              double* y) {
+  for (Eigen::Index i = begin; i < end; ++i) {
+    std::array<double, 1> sum{};
+    dotColumns<W, 1, V>({h + i * m}, c, m, sum);
+    y[i] = (y[i] - sum[0]) * s[i];
+  }
+}
+
+template <class V>
+void subtractRowProductsNarrow(const V* h, Eigen::Index m, Eigen::Index begin, Eigen::Index end, const double* c,
+                               const double* s, double* y) {
+  subtractRowProductsInLanes<2>(h, m, begin, end, c, s, y);
+}
+
+template <class V>
+BRITTLE_TARGET_AVX void subtractRowProductsWide(const V* h, Eigen::Index m, Eigen::Index begin, Eigen::Index end,
+                                                const double* c, const double* s, double* y) {
+  subtractRowProductsInLanes<4>(h, m, begin, end, c, s, y);
 }
 
 // A supernode's last column per column: j and j + 1 share one when j's first row is j + 1 and j
@@ -136,8 +203,9 @@ std::vector<BackwardSolvePlan::Run> toRuns(const std::vector<int32_t>& descendin
 
 }  // namespace
 
-BackwardSolvePlan BackwardSolvePlan::make(const Eigen::SparseMatrix<double>& lower, int parts) {
+BackwardSolvePlan BackwardSolvePlan::make(const Eigen::SparseMatrix<double>& lower, int parts, bool floatValues) {
   BackwardSolvePlan plan;
+  plan.mFloatValues = floatValues;
   const auto n = static_cast<int32_t>(lower.cols());
   std::vector<int32_t> parent(static_cast<size_t>(n), -1);
   std::vector<double> subtreeWork(static_cast<size_t>(n), 0.0);
@@ -263,13 +331,23 @@ void BackwardSolvePlan::copyValues(const Eigen::SparseMatrix<double>& lower) {
   mNonZeros = lower.nonZeros();
   mOffset.assign(static_cast<size_t>(lower.cols()), 0);
   mValues.clear();
-  mValues.reserve(static_cast<size_t>(lower.nonZeros()));
+  mFloats.clear();
+  if (mFloatValues) {
+    mFloats.reserve(static_cast<size_t>(lower.nonZeros()));
+  } else {
+    mValues.reserve(static_cast<size_t>(lower.nonZeros()));
+  }
   auto copy = [&](const std::vector<Run>& runs) {
     for (const Run& run : runs) {
       for (int32_t j = run.end - 1; j >= run.first; --j) {
         const auto [begin, end] = columnRange(lower, j);
-        mOffset[static_cast<size_t>(j)] = static_cast<int64_t>(mValues.size());
-        mValues.insert(mValues.end(), lower.valuePtr() + begin, lower.valuePtr() + end);
+        if (mFloatValues) {
+          mOffset[static_cast<size_t>(j)] = static_cast<int64_t>(mFloats.size());
+          for (Eigen::Index p = begin; p < end; ++p) mFloats.push_back(static_cast<float>(lower.valuePtr()[p]));
+        } else {
+          mOffset[static_cast<size_t>(j)] = static_cast<int64_t>(mValues.size());
+          mValues.insert(mValues.end(), lower.valuePtr() + begin, lower.valuePtr() + end);
+        }
       }
     }
   };
@@ -277,15 +355,22 @@ void BackwardSolvePlan::copyValues(const Eigen::SparseMatrix<double>& lower) {
   for (const auto& runs : mPartRuns) copy(runs);
 }
 
-void BackwardSolvePlan::solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x,
-                                     Scratch& scratch) const {
+void BackwardSolvePlan::solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x, Scratch& scratch,
+                                     Lanes lanes) const {
   assert(lower.cols() == mColumns && lower.nonZeros() == mNonZeros && x.size() == mColumns);
   sizeScratch(scratch);
-  solveRuns(lower, mValues.data(), mOffset.data(), mTopRuns, x.data(), scratch[0]);
-  tbb::parallel_for(0, static_cast<int>(mPartRuns.size()), [&](int part) {
-    solveRuns(lower, mValues.data(), mOffset.data(), mPartRuns[static_cast<size_t>(part)], x.data(),
-              scratch[static_cast<size_t>(part)]);
-  });
+  auto solve = [&](const auto* values) {
+    solveRuns(lower, values, mOffset.data(), mTopRuns, x.data(), scratch[0], lanes);
+    tbb::parallel_for(0, static_cast<int>(mPartRuns.size()), [&](int part) {
+      solveRuns(lower, values, mOffset.data(), mPartRuns[static_cast<size_t>(part)], x.data(),
+                scratch[static_cast<size_t>(part)], lanes);
+    });
+  };
+  if (mFloatValues) {
+    solve(mFloats.data());
+  } else {
+    solve(mValues.data());
+  }
 }
 
 void BackwardSolvePlan::forwardInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x,
@@ -328,5 +413,20 @@ void BackwardSolvePlan::solveInPlace(const Eigen::SparseMatrix<double>& lower, E
   Scratch scratch;
   solveInPlace(lower, x, scratch);
 }
+
+template <class V>
+void subtractRowProducts(const V* h, Eigen::Index m, Eigen::Index begin, Eigen::Index end, const double* c,
+                         const double* s, double* y, Lanes lanes) {
+  if (lanes == Lanes::Wide) {
+    subtractRowProductsWide(h, m, begin, end, c, s, y);
+  } else {
+    subtractRowProductsNarrow(h, m, begin, end, c, s, y);
+  }
+}
+
+template void subtractRowProducts<float>(const float*, Eigen::Index, Eigen::Index, Eigen::Index, const double*,
+                                         const double*, double*, Lanes);
+template void subtractRowProducts<double>(const double*, Eigen::Index, Eigen::Index, Eigen::Index, const double*,
+                                          const double*, double*, Lanes);
 
 }  // namespace brittle::detail

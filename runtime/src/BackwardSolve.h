@@ -17,16 +17,19 @@
 // columns form 6.8k, 7 wide on average), so that all of them end in the same rows R (those of
 // column g−1). Per supernode, x over R is gathered once into a contiguous buffer, and each column's
 // sum over R is a dense dot product with it (two columns at a time, four running sums each, in two
-// SSE2 registers), the rest of the column (rows in the supernode) a short sum of its own. Eigen's
-// per-entry indexed loads made the solve ~2.5× slower than reading L; the plate's backward solve
-// went from 18–25 ms to 12–14 ms on one core.
+// SSE2 registers or one AVX register, with the same bits), the rest of the column (rows in the
+// supernode) a short sum of its own. Eigen's per-entry indexed loads made the solve ~2.5× slower
+// than reading L; the plate's backward solve went from 18–25 ms to 12–14 ms on one core.
 //
 // The plan keeps its own copy of L's values, laid out in the order the solve reads them (the top's
 // runs, then each part's; in a run, columns descending, each in row order), and asks for the next
 // run's values while it solves one. Walking Eigen's column-major L backwards, which the hardware
 // prefetcher follows badly, left the solve at a third of the machine's bandwidth: the plate's
 // 7.8M non-zeros took 6.7–6.9 ms on two threads, against 4.4–4.5 ms from the copy (median of 60
-// solves; the SSE2 sums alone gave 5.7–6.1). The copy costs 8 bytes a non-zero (62 MB for the plate).
+// solves; the SSE2 sums alone gave 5.7–6.1). The copy costs 8 bytes a non-zero (62 MB for the plate),
+// or 4 in float (the static correction's default, CorrectionStorage: its solve is of the
+// correction itself, so float rounding is relative to it), where AVX registers pay: the plate's
+// solve 7.5–8.2 → 6.3–6.8 ms on a machine that streams 9 GB/s a core.
 //
 // Each x_j is computed by one thread, in a fixed order that depends on L alone (its global
 // supernode), so the result is the same bits on any number of threads. It is not the order of
@@ -38,13 +41,17 @@
 #include <cstdint>
 #include <vector>
 
+#include "brittle/core/Simd.h"
+
 namespace brittle::detail {
 
 class BackwardSolvePlan {
  public:
   /// A plan for `parts` threads over the strictly lower, column-major factor `lower` (rows
-  /// ascending in each column, as Eigen's SimplicialLDLT stores L), with a copy of its values.
-  static BackwardSolvePlan make(const Eigen::SparseMatrix<double>& lower, int parts);
+  /// ascending in each column, as Eigen's SimplicialLDLT stores L), with a copy of its values:
+  /// in double, or rounded to float where `floatValues` (half the bytes to read; the sums stay in
+  /// double, each value widened exactly).
+  static BackwardSolvePlan make(const Eigen::SparseMatrix<double>& lower, int parts, bool floatValues = false);
 
   /// A run of columns [first, end) inside one supernode whose last column is `last` (end ≤ last + 1).
   struct Run {
@@ -57,7 +64,9 @@ class BackwardSolvePlan {
   /// x ← L⁻ᵀ x for the unit lower triangular L whose strict lower part is `lower`, the matrix the
   /// plan was made from (its pattern; the values are the plan's copy). The parts run
   /// in parallel (oneTBB) where the caller's arena has threads, else one after the other.
-  void solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x, Scratch& scratch) const;
+  /// `lanes` picks the dot products' registers (brittle/core/Simd.h): the same bits either way.
+  void solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x, Scratch& scratch,
+                    Lanes lanes = widestLanes()) const;
   void solveInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x) const;
 
   /// x ← L⁻¹ x, the forward solve, on one thread: the same arithmetic in the same order as
@@ -72,13 +81,15 @@ class BackwardSolvePlan {
   double criticalShare() const { return mCriticalShare; }
   int parts() const { return static_cast<int>(mPartRuns.size()); }
   /// Bytes of the plan's copy of L's values.
-  size_t valueBytes() const { return sizeof(double) * mValues.size(); }
+  size_t valueBytes() const { return sizeof(double) * mValues.size() + sizeof(float) * mFloats.size(); }
 
  private:
   std::vector<Run> mTopRuns;                // solved first, descending
   std::vector<std::vector<Run>> mPartRuns;  // per part, descending
   size_t mMaxGather = 0;                    // the most rows below a supernode
-  std::vector<double> mValues;              // L's values in the order the solve reads them
+  std::vector<double> mValues;              // L's values in the order the solve reads them,
+  std::vector<float> mFloats;               // or those rounded to float (one of the two is empty)
+  bool mFloatValues = false;
   std::vector<int64_t> mOffset;             // column j's values start at mValues[mOffset[j]]
   std::vector<int32_t> mSuperLast;          // per column, the last column of its supernode
   Eigen::Index mColumns = 0, mNonZeros = 0;  // of the L the plan was made from
@@ -88,5 +99,12 @@ class BackwardSolvePlan {
   void copyValues(const Eigen::SparseMatrix<double>& lower);  // mValues, mOffset, mColumns, mNonZeros
   void sizeScratch(Scratch& scratch) const;  // a buffer per part (at least one) of mMaxGather
 };
+
+/// y_i ← (y_i − h_i·c) s_i for the rows i in [begin, end) of the row-major h (m columns, double or
+/// float, each value widened exactly): each dot product in four running sums (k mod 4) added
+/// pairwise, the same bits in either lanes.
+template <class V>
+void subtractRowProducts(const V* h, Eigen::Index m, Eigen::Index begin, Eigen::Index end, const double* c,
+                         const double* s, double* y, Lanes lanes = widestLanes());
 
 }  // namespace brittle::detail

@@ -57,22 +57,27 @@ Eigen::Index factorNonZeros(const SparseMatrixd& a, const Eigen::VectorXi& order
   return OrderedFactor(a, order, false).analysedNonZeros();
 }
 
+using MatrixXfRow = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
 struct StaticCorrection::Data {
   Eigen::Index femNodes = 0;
   SparseMatrixd mass;
   Eigen::MatrixXd rigid;        // Ψ: 3N by 6, M-orthonormal
   Eigen::MatrixXd massRigid;    // M Ψ
-  Eigen::MatrixXd reliefForward;  // L⁻¹ P M Ψ: the inertia relief after the forward solve
-  MatrixXdRow modes;            // Φ: 3N by r, a row per degree of freedom (read in row order per impact)
+  MatrixXdRow modes;            // Φ: 3N by r (an impact reads its load's rows)
   Eigen::MatrixXd modesMassRigid;  // Φᵀ M Ψ: r by 6 (zero up to rounding for elastic modes)
-  Eigen::VectorXd lambdas;      // r, shifted by μ
+  // H = L⁻¹ P M [Ψ Φ]: the inertia relief's and the kept modes' share of the forward solve, a row
+  // per unknown (read in row order per impact), in double or rounded to float (CorrectionStorage).
+  MatrixXdRow loadsForward;
+  MatrixXfRow loadsForwardFloat;
   std::shared_ptr<const ShiftedFactor> solver;  // of K + μM
   Eigen::VectorXd inverseD;     // of the LDLᵀ factor (vectorD() returns a copy)
   detail::BackwardSolvePlan backward;  // Lᵀ's solve, shared by the arena's threads
   ElementStresses recovery;     // σ at each element's stress points from u
 };
 
-Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const Material& material, int modes) {
+Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const Material& material, int modes,
+                                                 CorrectionStorage storage) {
   auto mesh = makeFemMesh(asset.tetMesh, asset.elementOrder);
   if (!mesh) return mesh.error();
   auto fem = assembleFem(mesh.value(), material, FemSettings{});
@@ -86,20 +91,21 @@ Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const
   if (!factor) {
     return makeError(factor.error().code, "static correction: K + μM of '" + asset.name + "': " + factor.error().message);
   }
-  return fromFactor(asset, material, modes, mesh.value(), fem.value(), std::move(factor).value(), mu);
+  return fromFactor(asset, material, modes, mesh.value(), fem.value(), std::move(factor).value(), mu, storage);
 }
 
 Result<StaticCorrection> StaticCorrection::build(const ObjectAsset& asset, const Material& material, int modes,
                                                  const FemSystem& fem, std::shared_ptr<const ShiftedFactor> factor,
-                                                 double mu) {
+                                                 double mu, CorrectionStorage storage) {
   auto mesh = makeFemMesh(asset.tetMesh, asset.elementOrder);
   if (!mesh) return mesh.error();
-  return fromFactor(asset, material, modes, mesh.value(), fem, std::move(factor), mu);
+  return fromFactor(asset, material, modes, mesh.value(), fem, std::move(factor), mu, storage);
 }
 
 Result<StaticCorrection> StaticCorrection::fromFactor(const ObjectAsset& asset, const Material& material, int modes,
                                                       const FemMesh& mesh, const FemSystem& fem,
-                                                      std::shared_ptr<const ShiftedFactor> factor, double mu) {
+                                                      std::shared_ptr<const ShiftedFactor> factor, double mu,
+                                                      CorrectionStorage storage) {
   if (!factor || factor->info() != Eigen::Success || factor->rows() != fem.stiffness.rows() || !(mu > 0.0)) {
     return makeError(ErrorCode::InvalidArgument, "static correction: a factor of K + μM with μ > 0 is needed");
   }
@@ -118,23 +124,33 @@ Result<StaticCorrection> StaticCorrection::fromFactor(const ObjectAsset& asset, 
   data->rigid = rigidBodyModes(nodes, data->mass);
   const int r = std::min<int>(modes, static_cast<int>(asset.modal.modes.cols()));
   data->modes = asset.modal.modes.leftCols(r);
-  data->lambdas = asset.modal.eigenvaluesRad2PerS2.head(r).array() + mu;
   data->solver = std::move(factor);
   const ShiftedFactor& solver = *data->solver;
   data->inverseD = solver.vectorD().cwiseInverse();
+  const bool floats = storage == CorrectionStorage::Float;
   data->backward = detail::BackwardSolvePlan::make(solver.matrixL().nestedExpression(),
-                                                   tbb::this_task_arena::max_concurrency());
-  // The inertia relief's share of every forward solve, once: f_e = f − MΨΨᵀf, so
-  // L⁻¹P f_e = L⁻¹P f − (L⁻¹P MΨ) Ψᵀf, and an impact's forward solve stays as sparse as its load.
-  // (Not (K + μM)⁻¹MΨ after the whole solve: that is Ψ/μ, and taking it away from (K + μM)⁻¹f
-  // would cancel six digits of the elastic part.)
+                                                   tbb::this_task_arena::max_concurrency(), floats);
+  // H = L⁻¹P M[Ψ Φ], once: L⁻¹P f̃ = L⁻¹P f − H [Ψᵀf; Φᵀf_e] (f̃ = f_e − MΦΦᵀf_e, f_e = f − MΨΨᵀf),
+  // so an impact's forward solve stays as sparse as its load. (Not (K + μM)⁻¹MΨ after the whole
+  // solve: that is Ψ/μ, and taking it away from (K + μM)⁻¹f would cancel six digits of the
+  // elastic part.) Each column is the plan's forward solve (Eigen's arithmetic).
   data->massRigid = data->mass * data->rigid;
-  if (solver.permutationP().size() > 0) {
-    data->reliefForward = solver.permutationP() * data->massRigid;
-  } else {
-    data->reliefForward = data->massRigid;
+  const Eigen::Index dofs = 3 * data->femNodes;
+  MatrixXdRow forward(dofs, 6 + r);
+  forward.leftCols(6) = data->massRigid;
+  forward.rightCols(r) = data->mass * asset.modal.modes.leftCols(r);
+  if (solver.permutationP().size() > 0) forward = solver.permutationP() * forward;
+  // Every column at once, in one pass over L: row i takes −L_ij (row j) for the columns j of L in
+  // order, each entry Eigen's column-by-column forward solve's arithmetic in its order.
+  const SparseMatrixd& lower = solver.matrixL().nestedExpression();
+  for (Eigen::Index j = 0; j < lower.outerSize(); ++j) {
+    for (SparseMatrixd::InnerIterator it(lower, j); it; ++it) forward.row(it.index()) -= it.value() * forward.row(j);
   }
-  solver.matrixL().solveInPlace(data->reliefForward);
+  if (floats) {
+    data->loadsForwardFloat = forward.cast<float>();
+  } else {
+    data->loadsForward = forward;
+  }
   data->modesMassRigid = data->modes.transpose() * data->massRigid;
   return StaticCorrection(std::move(data));
 }
@@ -176,23 +192,26 @@ Status StaticCorrection::solvePerNewton(const std::vector<std::pair<int32_t, dou
   const Eigen::Index dofs = 3 * d.femNodes;
   const Eigen::Index r = d.modes.cols();
   // Every product below writes into a sized buffer (noalias, fixed-size rigid coefficients). The
-  // load touches a few nodes, so Ψᵀf and Φᵀf are sums over them.
+  // load touches a few nodes, so Ψᵀf and Φᵀf are sums over them. w.modal holds H's coefficients:
+  // Ψᵀf, then Φᵀf_e = Φᵀf − ΦᵀMΨ Ψᵀf.
   w.load.setZero(dofs);
-  w.modal.setZero(r);
-  Eigen::Matrix<double, 6, 1> rigid = Eigen::Matrix<double, 6, 1>::Zero();
+  w.modal.setZero(6 + r);
+  auto rigid = w.modal.head<6>();
+  auto modal = w.modal.tail(r);
   double sum = 0.0;
   for (const auto& [node, weight] : weights) {
     if (node < 0 || node >= d.femNodes) return makeError(ErrorCode::InvalidArgument, "static correction: node out of range");
     const Eigen::Vector3d f = weight * direction;
     w.load.segment<3>(3 * node) += f;
     rigid.noalias() += d.rigid.middleRows<3>(3 * node).transpose() * f;
-    w.modal.noalias() += d.modes.middleRows(3 * node, 3).transpose() * f;
+    modal.noalias() += d.modes.middleRows(3 * node, 3).transpose() * f;
     sum += weight;
   }
   if (std::abs(sum - 1.0) > 1e-9) return makeError(ErrorCode::InvalidArgument, "static correction: weights must sum to 1");
+  modal.noalias() -= d.modesMassRigid * rigid;
   w.scratch.resize(dofs);
   w.displacement.resize(dofs);
-  // u = (K + μM)⁻¹ f_e from the factors P(K + μM)Pᵀ = L D Lᵀ, step by step: Eigen's solve() permutes
+  // u = (K + μM)⁻¹ f̃ from the factors P(K + μM)Pᵀ = L D Lᵀ, step by step: Eigen's solve() permutes
   // its result in place, and that allocates a mask on every call. The forward solve skips the
   // zeros of a sparse right-hand side, so it costs only the load's reach in the elimination tree
   // (Eigen's arithmetic, a supernode's rows gathered once: the plate's 0.56 → 0.32 ms warm); the
@@ -203,28 +222,28 @@ Status StaticCorrection::solvePerNewton(const std::vector<std::pair<int32_t, dou
     w.scratch = w.load;
   }
   d.backward.forwardInPlace(d.solver->matrixL().nestedExpression(), w.scratch, w.gathered);  // = matrixL().solveInPlace
-  w.scratch.noalias() -= d.reliefForward * rigid;  // inertia relief: the solve of f_e from here on
-  w.scratch.array() *= d.inverseD.array();
+  // y ← D⁻¹(y − H [Ψᵀf; Φᵀf_e]): the forward solve of f̃. H's rows in 16 fixed ranges on the
+  // arena's threads; each row's sum is the same arithmetic in any range, so the bits do not depend
+  // on the split or the thread count.
+  detail::forFixedRanges(dofs, 16, [&](int, Eigen::Index begin, Eigen::Index end) {
+    if (d.loadsForwardFloat.size() > 0) {
+      detail::subtractRowProducts(d.loadsForwardFloat.data(), 6 + r, begin, end, w.modal.data(), d.inverseD.data(),
+                                  w.scratch.data());
+    } else {
+      detail::subtractRowProducts(d.loadsForward.data(), 6 + r, begin, end, w.modal.data(), d.inverseD.data(),
+                                  w.scratch.data());
+    }
+  });
   d.backward.solveInPlace(d.solver->matrixL().nestedExpression(), w.scratch, w.gathered);  // = matrixU().solveInPlace
   if (d.solver->permutationPinv().size() > 0) {
     w.displacement.noalias() = d.solver->permutationPinv() * w.scratch;
   } else {
     w.displacement = w.scratch;
   }
-  // The elastic part only: u −= Ψ Ψᵀ M u.
+  // The elastic part only: u −= Ψ Ψᵀ M u (rounding's rigid share, amplified by 1/μ).
   Eigen::Matrix<double, 6, 1> rigidPart;
   rigidPart.noalias() = d.massRigid.transpose() * w.displacement;
   w.displacement.noalias() -= d.rigid * rigidPart;
-  // Minus the kept modes: u −= Φ (Φᵀ f_e / λ), Φᵀf_e = Φᵀf − ΦᵀMΨ Ψᵀf.
-  w.modal.noalias() -= d.modesMassRigid * rigid;
-  w.modal.array() /= d.lambdas.array();
-  // Φ (15 MB on the P2 plate) is read once per impact: its rows in 16 fixed ranges on the arena's
-  // threads, each row's dot product in row order. Each row's sum is the same arithmetic in any
-  // range, so the bits do not depend on the split or the thread count. Kept row-major, Φ streams:
-  // the plate's subtraction took 1.5 ms as a column-major matrix-vector product, 0.5 ms so.
-  detail::forFixedRanges(dofs, 16, [&](int, Eigen::Index begin, Eigen::Index end) {
-    for (Eigen::Index i = begin; i < end; ++i) w.displacement[i] -= d.modes.row(i).dot(w.modal);
-  });
   compliance = w.load.dot(w.displacement);
   d.recovery.all(w.displacement, stress);
   return Ok{};

@@ -1,7 +1,8 @@
 // BackwardSolve.h (private to the runtime): the backward solve by supernodes, split over subtrees
 // of the elimination tree, gives the same bits for any number of parts and equals Eigen's serial
 // solve within rounding, on the factors the static correction makes (a P1 and a P2 glass box), and
-// most of it runs in parallel; the forward solve is Eigen's bit for bit.
+// most of it runs in parallel, in SSE2 or AVX registers alike, from L's values in double or in
+// float; the forward solve is Eigen's bit for bit.
 #include "BackwardSolve.h"
 
 #include <gtest/gtest.h>
@@ -11,6 +12,7 @@
 #include <functional>
 #include <memory>
 #include <random>
+#include <vector>
 
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/StaticCorrection.h"
@@ -42,6 +44,13 @@ void forEachBoxFactor(
   }
 }
 
+// The lanes this CPU runs: SSE2 always, AVX where it has it.
+std::vector<Lanes> lanesHere() {
+  std::vector<Lanes> lanes{Lanes::Narrow};
+  if (widestLanes() == Lanes::Wide) lanes.push_back(Lanes::Wide);
+  return lanes;
+}
+
 TEST(BackwardSolve, SameBitsOnAnyNumberOfPartsAndEigensSerialSolveWithinRounding) {
   forEachBoxFactor([&](ElementOrder order, const ShiftedFactor& factor, const Eigen::SparseMatrix<double>& lower) {
     std::mt19937_64 rng(5);
@@ -51,18 +60,31 @@ TEST(BackwardSolve, SameBitsOnAnyNumberOfPartsAndEigensSerialSolveWithinRounding
     Eigen::VectorXd eigen = y;
     factor.matrixU().solveInPlace(eigen);
     Eigen::VectorXd serial = y;
-    detail::BackwardSolvePlan::make(lower, 1).solveInPlace(lower, serial);
+    detail::BackwardSolvePlan::Scratch scratch;  // reused by every plan below
+    detail::BackwardSolvePlan::make(lower, 1).solveInPlace(lower, serial, scratch, Lanes::Narrow);
+    // L's values in float, the sums in double: within float rounding of the double solve.
+    Eigen::VectorXd serialFloat = y;
+    detail::BackwardSolvePlan::make(lower, 1, true).solveInPlace(lower, serialFloat, scratch, Lanes::Narrow);
+    const double movedByFloat = (serialFloat - serial).cwiseAbs().maxCoeff();
+    EXPECT_LT(movedByFloat, 1e-5 * serial.cwiseAbs().maxCoeff());
+    EXPECT_GT(movedByFloat, 1e-10 * serial.cwiseAbs().maxCoeff()) << "the float copy was not read";
     // The sums run in another order than Eigen's: equal within a few ulps of the largest |x|.
     EXPECT_LT((serial - eigen).cwiseAbs().maxCoeff(), 1e-13 * eigen.cwiseAbs().maxCoeff());
     EXPECT_GT((serial - eigen).cwiseAbs().maxCoeff(), 0.0);  // (it is not Eigen's order)
-    detail::BackwardSolvePlan::Scratch scratch;  // reused by every plan below
     for (int parts : {1, 2, 3, 7}) {
       const detail::BackwardSolvePlan plan = detail::BackwardSolvePlan::make(lower, parts);
+      const detail::BackwardSolvePlan floats = detail::BackwardSolvePlan::make(lower, parts, true);
       EXPECT_EQ(plan.valueBytes(), sizeof(double) * static_cast<size_t>(lower.nonZeros()));  // each value once
-      Eigen::VectorXd x = y;
-      plan.solveInPlace(lower, x, scratch);
-      EXPECT_EQ(std::memcmp(x.data(), serial.data(), sizeof(double) * static_cast<size_t>(x.size())), 0)
-          << parts << " parts: max difference " << (x - serial).cwiseAbs().maxCoeff();
+      EXPECT_EQ(floats.valueBytes(), sizeof(float) * static_cast<size_t>(lower.nonZeros()));
+      for (Lanes lanes : lanesHere()) {  // SSE2 and, where the CPU has it, AVX: the same bits
+        for (const auto& [p, expected] : {std::pair{&plan, &serial}, std::pair{&floats, &serialFloat}}) {
+          Eigen::VectorXd x = y;
+          p->solveInPlace(lower, x, scratch, lanes);
+          EXPECT_EQ(std::memcmp(x.data(), expected->data(), sizeof(double) * static_cast<size_t>(x.size())), 0)
+              << parts << " parts, " << (lanes == Lanes::Wide ? "AVX" : "SSE2") << (p == &floats ? ", float" : "")
+              << ": max difference " << (x - *expected).cwiseAbs().maxCoeff();
+        }
+      }
       if (parts == 1) {
         EXPECT_EQ(plan.parallelShare(), 0.0);
         EXPECT_EQ(plan.criticalShare(), 1.0);
@@ -105,6 +127,41 @@ TEST(BackwardSolve, TheForwardSolveIsEigensBitForBitForSparseAndDenseRightHandSi
       EXPECT_GT((x - y).cwiseAbs().maxCoeff(), 0.0);  // (the solve did pass values on)
     }
   });
+}
+
+// y_i ← (y_i − h_i·c) s_i, the static correction's pass over H = L⁻¹PM[Ψ Φ]: each row's dot
+// product in four running sums (k mod 4) added pairwise, exactly, for float and double rows, row
+// counts and widths that are not whole registers, in either lanes.
+template <class V>
+void checkRowProducts() {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (Eigen::Index m : {1, 7, 46}) {
+    const Eigen::Index rows = 37;
+    std::vector<V> h(static_cast<size_t>(rows * m));
+    for (V& v : h) v = static_cast<V>(g(rng));
+    std::vector<double> c(static_cast<size_t>(m)), scale(static_cast<size_t>(rows)), y0(static_cast<size_t>(rows));
+    for (double& v : c) v = g(rng);
+    for (double& v : scale) v = g(rng);
+    for (double& v : y0) v = g(rng);
+    std::vector<double> expected = y0;
+    for (Eigen::Index i = 3; i < rows; ++i) {  // rows [3, rows): the rows before stay
+      double acc[4] = {};
+      for (Eigen::Index k = 0; k < m; ++k) acc[k % 4] += static_cast<double>(h[static_cast<size_t>(i * m + k)]) * c[static_cast<size_t>(k)];
+      expected[static_cast<size_t>(i)] = (y0[static_cast<size_t>(i)] - ((acc[0] + acc[1]) + (acc[2] + acc[3]))) * scale[static_cast<size_t>(i)];
+    }
+    for (Lanes lanes : lanesHere()) {
+      std::vector<double> y = y0;
+      detail::subtractRowProducts(h.data(), m, 3, rows, c.data(), scale.data(), y.data(), lanes);
+      EXPECT_EQ(std::memcmp(y.data(), expected.data(), sizeof(double) * y.size()), 0)
+          << m << " columns, " << (lanes == Lanes::Wide ? "AVX" : "SSE2");
+    }
+  }
+}
+
+TEST(BackwardSolve, RowProductsAreFourRunningSumsInEitherLanes) {
+  checkRowProducts<double>();
+  checkRowProducts<float>();
 }
 
 TEST(BackwardSolve, AChainIsSolvedAloneAndAnEmptyFactorIsFine) {

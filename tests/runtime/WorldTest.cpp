@@ -496,7 +496,7 @@ TEST_F(WorldTest, FastImpactsSkipTheFactorisationButUseACorrectionThatIsSchedule
 
 // A matched fragment's static correction is its entry's placed (WorldSettings::shareEntryCorrections)
 // or its own factorisation: the same soft hit on the same fragment reads the same corrected peak
-// within rounding either way, and every matched fragment's correction is there once its body is.
+// within float rounding either way, and every matched fragment's correction is there once its body is.
 TEST_F(WorldTest, AMatchedFragmentsSharedEntryCorrectionEqualsItsOwnFactorisation) {
   std::vector<double> peaks, compliances;
   for (const bool share : {true, false}) {
@@ -517,7 +517,9 @@ TEST_F(WorldTest, AMatchedFragmentsSharedEntryCorrectionEqualsItsOwnFactorisatio
     EXPECT_TRUE(hit.value().staticCorrectionUsed);
     peaks.push_back(hit.value().peakPrincipalStressPa);
   }
-  EXPECT_NEAR(peaks[0] / peaks[1], 1.0, 1e-9);
+  // Two factorisations whose L the corrections keep rounded to float (CorrectionStorage::Float):
+  // rounding apart, 5e-9 measured (1e-9 before float storage).
+  EXPECT_NEAR(peaks[0] / peaks[1], 1.0, 1e-7);
 }
 
 TEST_F(WorldTest, BadInputsGiveTypedErrorsNeverCrashes) {

@@ -45,9 +45,18 @@ inline Lanes widestLanes() {
 template <class T, int L>
 struct SimdPack {
   typedef T type __attribute__((vector_size(L * sizeof(T))));
+  typedef T unaligned __attribute__((vector_size(L * sizeof(T)), aligned(alignof(T)), may_alias));
 };
 template <class T, int L>
 using VectorOf = typename SimdPack<T, L>::type;
+
+/// v ← L values from p, which need only T's alignment: one unaligned load. (Not a memcpy: GCC's
+/// generic tuning copies 32 bytes as two 16-byte halves through the stack. An output argument,
+/// not a return value: a 256-bit return type changes the ABI where AVX is not enabled.)
+template <int L, class T>
+[[gnu::always_inline]] inline void loadLanes(const T* p, VectorOf<T, L>& v) {
+  v = *reinterpret_cast<const typename SimdPack<T, L>::unaligned*>(p);
+}
 
 }  // namespace brittle
 
