@@ -133,7 +133,7 @@ Result<StaticCorrection> StaticCorrection::fromFactor(const ObjectAsset& asset, 
   // H = L⁻¹P M[Ψ Φ], once: L⁻¹P f̃ = L⁻¹P f − H [Ψᵀf; Φᵀf_e] (f̃ = f_e − MΦΦᵀf_e, f_e = f − MΨΨᵀf),
   // so an impact's forward solve stays as sparse as its load. (Not (K + μM)⁻¹MΨ after the whole
   // solve: that is Ψ/μ, and taking it away from (K + μM)⁻¹f would cancel six digits of the
-  // elastic part.) Each column is the plan's forward solve (Eigen's arithmetic).
+  // elastic part.)
   data->massRigid = data->mass * data->rigid;
   const Eigen::Index dofs = 3 * data->femNodes;
   MatrixXdRow forward(dofs, 6 + r);
