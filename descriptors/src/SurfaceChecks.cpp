@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <string>
 #include <vector>
 
@@ -23,7 +22,7 @@ bool allFinite(const Points& p) {
   for (Eigen::Index b = 0; b < blocks; ++b) {
     for (int i = 0; i < 4; ++i) {
       Pair v;
-      std::memcpy(&v, x + 8 * b + 2 * i, sizeof v);
+      loadLanes<2>(x + 8 * b + 2 * i, v);
       acc[i] += v * 0.0;
     }
   }

@@ -121,7 +121,7 @@ template <int L>
   Pack acc[6] = {};
   for (Eigen::Index j = 0; j < r; ++j) {
     Pack qj;
-    std::memcpy(&qj, q.data() + j * rows + k, sizeof qj);
+    loadLanes<L>(q.data() + j * rows + k, qj);
     for (int i = 0; i < 6; ++i) acc[i] += c[i * stride + j] * qj;
   }
   for (int i = 0; i < 6; ++i) std::memcpy(sums[i], &acc[i], sizeof acc[i]);

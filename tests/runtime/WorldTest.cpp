@@ -518,8 +518,8 @@ TEST_F(WorldTest, AMatchedFragmentsSharedEntryCorrectionEqualsItsOwnFactorisatio
     peaks.push_back(hit.value().peakPrincipalStressPa);
   }
   // Two factorisations whose L the corrections keep rounded to float (CorrectionStorage::Float):
-  // rounding apart, 5e-9 measured (1e-9 before float storage).
-  EXPECT_NEAR(peaks[0] / peaks[1], 1.0, 1e-7);
+  // rounding apart: 5.3e-9 measured, the same on every machine (1e-9 before float storage).
+  EXPECT_NEAR(peaks[0] / peaks[1], 1.0, 2e-8);
 }
 
 TEST_F(WorldTest, BadInputsGiveTypedErrorsNeverCrashes) {
