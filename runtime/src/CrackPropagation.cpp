@@ -89,6 +89,11 @@ double splitBound(const Voigt& s) {
   return p + kDeviatorShare * std::sqrt(squaredDeviator);
 }
 
+// A bound on σ₁ of an evaluated σ: its split bound, with a margin for the eigen solve's rounding
+// (maxPrincipalStress(σ) ≤ principalBound(σ)), at the price of a square root where the eigen solve
+// costs an atan2, a sincos and a scaling.
+double principalBound(const Voigt& sigma) { return splitBound(sigma) + 1e-9 * kD.cwiseProduct(sigma).norm(); }
+
 // σ_e = S_e q over the first r modes: S's rows 6e..6e+5 (row-major, contiguous) against q, in one
 // pass with six running sums in mode order. Eigen's general matrix-vector kernel costs several times
 // the 6r products for so small a block, and the scan and the cracks make tens of thousands of
@@ -369,16 +374,44 @@ Voigt StressField::atPoint(Eigen::Index point) const {
 
 Voigt StressField::at(int32_t e) const {
   if (pointsPerElement == 1) return atPoint(e);
-  Voigt best = atPoint(static_cast<Eigen::Index>(pointsPerElement) * e);
-  double bestS1 = maxPrincipalStress(best);
-  for (int c = 1; c < pointsPerElement; ++c) {
-    const Voigt s = atPoint(static_cast<Eigen::Index>(pointsPerElement) * e + c);
-    if (const double s1 = maxPrincipalStress(s); s1 > bestS1) {
-      best = s;
+  const Eigen::Index first = static_cast<Eigen::Index>(pointsPerElement) * e;
+  constexpr int kMostPoints = 4;  // P2's corners
+  if (pointsPerElement > kMostPoints) {
+    Voigt best = atPoint(first);
+    double bestS1 = maxPrincipalStress(best);
+    for (int c = 1; c < pointsPerElement; ++c) {
+      const Voigt s = atPoint(first + c);
+      if (const double s1 = maxPrincipalStress(s); s1 > bestS1) {
+        best = s;
+        bestS1 = s1;
+      }
+    }
+    return best;
+  }
+  // The point with the largest σ₁, the first of equals. Points are solved in order of their split
+  // bounds, and one whose bound is below the best σ₁ found cannot win, so its eigen solve is left
+  // out: the same point, and the same bits, as solving every one in order.
+  Voigt s[kMostPoints];
+  double bound[kMostPoints] = {};
+  int order[kMostPoints] = {0, 1, 2, 3};
+  for (int c = 0; c < pointsPerElement; ++c) {
+    s[c] = atPoint(first + c);
+    bound[c] = principalBound(s[c]);
+  }
+  for (int i = 1; i < pointsPerElement; ++i) {  // by falling bound, the first of equals first
+    for (int j = i; j > 0 && bound[order[j]] > bound[order[j - 1]]; --j) std::swap(order[j], order[j - 1]);
+  }
+  int best = order[0];
+  double bestS1 = maxPrincipalStress(s[best]);
+  for (int i = 1; i < pointsPerElement; ++i) {
+    const int c = order[i];
+    if (bound[c] < bestS1) break;  // nor any later one
+    if (const double s1 = maxPrincipalStress(s[c]); s1 > bestS1 || (s1 == bestS1 && c < best)) {
+      best = c;
       bestS1 = s1;
     }
   }
-  return best;
+  return s[best];
 }
 
 StressScan scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen::MatrixXd& q,
@@ -465,7 +498,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
   // The evaluated σ: skipped below `level` by its split bound (with a margin for the eigen
   // solve's rounding), else its σ₁.
   auto principalAbove = [&](const Voigt& sigma, double level, double& s1) {
-    if (splitBound(sigma) + 1e-9 * kD.cwiseProduct(sigma).norm() < level) return false;
+    if (principalBound(sigma) < level) return false;
     s1 = maxPrincipalStress(sigma);
     return true;
   };
@@ -736,6 +769,7 @@ SeedOrder::SeedOrder(const StressScan& scan, const StressField& field, SeedOrder
     : mScan(scan), mField(field), mW(workspace) {
   mW.candidates.assign(scan.seedCandidates.begin(), scan.seedCandidates.end());  // a heap already
   mW.evaluated.clear();
+  mW.bounded.clear();
   if (scan.seeds.empty() && scan.pointsPerElement > 1 && field.stressModes) {
     mW.taken.assign(static_cast<size_t>(field.stressModes->rows() / 6 / scan.pointsPerElement), 0);
   }
@@ -747,23 +781,53 @@ bool SeedOrder::next(int32_t& element) {
     element = mScan.seeds[mNext++];
     return true;
   }
+  // The candidates are taken exactly as if each were solved when evaluated: while nothing
+  // evaluated reaches σ_t, or the top candidate's bound reaches the strongest σ₁ evaluated. An
+  // evaluated σ waits in `bounded` with its split bound until that bound decides a comparison;
+  // then its eigen solve moves it to `evaluated` (or drops it below σ_t). The evaluations, and
+  // the seeds in their order, are those of solving each at once.
+  auto& candidates = mW.candidates;
+  auto& evaluated = mW.evaluated;
+  auto& bounded = mW.bounded;
+  const double threshold = mScan.seedThresholdPa;
+  auto lowerBounded = [](const SeedOrderWorkspace::Bounded& a, const SeedOrderWorkspace::Bounded& b) {
+    return lowerSeed({a.bound, a.point}, {b.bound, b.point});
+  };
+  auto solveStrongestBounded = [&] {
+    std::pop_heap(bounded.begin(), bounded.end(), lowerBounded);
+    const SeedOrderWorkspace::Bounded b = bounded.back();
+    bounded.pop_back();
+    const double s1 = maxPrincipalStress(b.sigma);
+    if (s1 < threshold) return;
+    evaluated.emplace_back(s1, b.point);
+    std::push_heap(evaluated.begin(), evaluated.end(), lowerSeed);
+  };
   for (;;) {
-    // A candidate whose bound reaches the strongest stress evaluated may be stronger (or as strong
-    // with a lower index): evaluate it first.
-    while (!mW.candidates.empty() && (mW.evaluated.empty() || mW.candidates.front().first >= mW.evaluated.front().first)) {
-      std::pop_heap(mW.candidates.begin(), mW.candidates.end(), lowerSeed);
-      const int32_t point = mW.candidates.back().second;
-      mW.candidates.pop_back();
+    while (!candidates.empty()) {
+      const double top = candidates.front().first;
+      if (!evaluated.empty() && top < evaluated.front().first) break;
+      if (!bounded.empty() && bounded.front().bound > top) {  // it may be stronger than the candidate
+        solveStrongestBounded();
+        continue;
+      }
+      std::pop_heap(candidates.begin(), candidates.end(), lowerSeed);
+      const int32_t point = candidates.back().second;
+      candidates.pop_back();
       ++mEvaluations;
-      const double s1 = maxPrincipalStress(mField.atPoint(point));
-      if (s1 < mScan.seedThresholdPa) continue;
-      mW.evaluated.emplace_back(s1, point);
-      std::push_heap(mW.evaluated.begin(), mW.evaluated.end(), lowerSeed);
+      const Voigt sigma = mField.atPoint(point);
+      const double bound = principalBound(sigma);
+      if (bound < threshold) continue;  // σ₁ < σ_t without its eigen solve
+      bounded.push_back({bound, point, sigma});
+      std::push_heap(bounded.begin(), bounded.end(), lowerBounded);
     }
-    if (mW.evaluated.empty()) return false;
-    std::pop_heap(mW.evaluated.begin(), mW.evaluated.end(), lowerSeed);
-    const int32_t point = mW.evaluated.back().second;
-    mW.evaluated.pop_back();
+    // The strongest of both: a bound that reaches the strongest σ₁ is solved first.
+    while (!bounded.empty() && (evaluated.empty() || bounded.front().bound >= evaluated.front().first)) {
+      solveStrongestBounded();
+    }
+    if (evaluated.empty()) return false;
+    std::pop_heap(evaluated.begin(), evaluated.end(), lowerSeed);
+    const int32_t point = evaluated.back().second;
+    evaluated.pop_back();
     element = point / mScan.pointsPerElement;
     if (mScan.pointsPerElement > 1) {  // each element once, at its strongest point
       char& taken = mW.taken[static_cast<size_t>(element)];
@@ -787,6 +851,7 @@ void CrackWorkspace::reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index
   front.reserve(4 * t);
   seedOrder.candidates.reserve(4 * t);  // stress points: up to 4 per element (P2)
   seedOrder.evaluated.reserve(4 * t);
+  seedOrder.bounded.reserve(4 * t);
   seedOrder.taken.reserve(t);
   cut.reserve(t);
   stressKnown.reserve(t);

@@ -380,6 +380,61 @@ TEST(CrackPropagation, ScanOfFourPointsPerElementNamesEachElementOnceByItsStrong
   }
 }
 
+TEST(CrackPropagation, AnElementsStressIsItsStrongestPointTheFirstOfEquals) {
+  // StressField::at solves its points' eigenproblems in order of their split bounds and leaves out
+  // those that cannot win: the answer must be the point that solving every one in order gives,
+  // bit for bit. Random corners, then ties and uniaxial stresses (where the split bound is tight).
+  constexpr int kPoints = 4;
+  auto firstStrongest = [](const StressField& field, int e) {
+    Voigt best = field.atPoint(kPoints * e);
+    double bestS1 = maxPrincipalStress(best);
+    for (int c = 1; c < kPoints; ++c) {
+      const Voigt s = field.atPoint(kPoints * e + c);
+      if (const double s1 = maxPrincipalStress(s); s1 > bestS1) {
+        best = s;
+        bestS1 = s1;
+      }
+    }
+    return best;
+  };
+  std::mt19937_64 rng(31);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const int random = 300, crafted = 8, elements = random + crafted, modes = 3;
+  MatrixXdRow stressModes(6 * kPoints * elements, modes);
+  for (Eigen::Index i = 0; i < stressModes.size(); ++i) stressModes.data()[i] = 1e6 * g(rng);
+  auto setPoint = [&](int e, int c, const Voigt& s) {  // σ = s at q = (1, 0, 0)
+    stressModes.block(6 * (kPoints * e + c), 0, 6, modes).setZero();
+    stressModes.block<6, 1>(6 * (kPoints * e + c), 0) = s;
+  };
+  const Voigt uniaxial = (Voigt() << 7e6, 0, 0, 0, 0, 0).finished();
+  const Voigt alongY = (Voigt() << 0, 7e6, 0, 0, 0, 0).finished(), alongZ = (Voigt() << 0, 0, 7e6, 0, 0, 0).finished();
+  const Voigt shear = (Voigt() << 0, 0, 0, 7e6, 0, 0).finished();
+  const Voigt weaker = (Voigt() << 1e6, -2e6, 0.5e6, 0, 0.1e6, 0).finished();
+  const Voigt pattern[crafted][kPoints] = {
+      {uniaxial, uniaxial, uniaxial, uniaxial},  // all equal: the first
+      {weaker, uniaxial, weaker, uniaxial},      // two equal strongest: the first of them
+      {weaker, weaker, weaker, uniaxial},        // the last alone
+      {shear, uniaxial, shear, weaker},          // σ₁ equal, split bounds not
+      {uniaxial * (1.0 - 1e-15), uniaxial, uniaxial * (1.0 - 1e-15), weaker},
+      {weaker, weaker, weaker, weaker},
+      {alongY, uniaxial, alongZ, weaker},        // the same σ₁ in other directions: the first
+      {weaker, alongZ, weaker, alongY},
+  };
+  for (int k = 0; k < crafted; ++k) {
+    for (int c = 0; c < kPoints; ++c) setPoint(random + k, c, pattern[k][c]);
+  }
+  ASSERT_EQ(maxPrincipalStress(alongY), maxPrincipalStress(uniaxial));  // ties that the choice sees
+  ASSERT_EQ(maxPrincipalStress(alongZ), maxPrincipalStress(uniaxial));
+  for (const Eigen::Vector3d& qValues : {Eigen::Vector3d(1.0, 0.0, 0.0), Eigen::Vector3d(0.3, -1.2, 0.8)}) {
+    const StressField field{&stressModes, qValues, nullptr, 0.0, kPoints};
+    for (int e = 0; e < elements; ++e) {
+      SCOPED_TRACE(::testing::Message() << "element " << e << ", q " << qValues.transpose());
+      const Voigt expected = firstStrongest(field, e), got = field.at(e);
+      EXPECT_EQ(std::memcmp(expected.data(), got.data(), sizeof(double) * 6), 0);
+    }
+  }
+}
+
 // A uniform tension σ_xx along a box of 8 × 2 × 2 cells (0.05 m each): every element is a seed
 // and the principal direction is x everywhere, so one crack (maxCracks = 1, no noise) grows along
 // the plane x = 0.0375 through the centroid of element 0 and costs G_c × 0.1 × 0.1 m² to cross the

@@ -207,7 +207,7 @@ struct StressField {
   const Eigen::VectorXd* staticStress = nullptr;  ///< 6PT per newton, or null
   double forceN = 0.0;
   int pointsPerElement = 1;                  ///< P: 1 (P1) or 4 (P2, the corners)
-  /// The element's stress: at its point of largest σ₁ (the one point of a P1 element).
+  /// The element's stress: at its point of largest σ₁, the first of equals (the one point of a P1 element).
   Voigt at(int32_t element) const;
   /// The stress at one stress point (row block `point` of stressModes).
   Voigt atPoint(Eigen::Index point) const;
@@ -215,13 +215,21 @@ struct StressField {
 
 /// Buffers of SeedOrder, kept between calls.
 struct SeedOrderWorkspace {
+  /// A candidate evaluated whose eigen solve waits until its split bound decides an order.
+  struct Bounded {
+    double bound;  ///< σ₁ ≤ bound: the split bound of σ, with a margin for the eigen solve's rounding
+    int32_t point;
+    Voigt sigma;
+  };
   std::vector<std::pair<double, int32_t>> candidates, evaluated;  ///< max-heaps: (bound, point), (σ₁, point)
+  std::vector<Bounded> bounded;                                   ///< a max-heap by (bound, point)
   std::vector<char> taken;                                        ///< per element, with several points each
 };
 
 /// The seeds of a scan, strongest first, exactly the unpruned scan's list, made as they are taken:
 /// a pruned scan's candidates are evaluated at the peak instant (`field`) in the order of their
-/// bounds, and a seed is handed out once no candidate left could be stronger. Crack growth takes
+/// bounds, and a seed is handed out once no candidate left could be stronger. An evaluated σ's
+/// eigen solve is left until its split bound decides an order (most never need one). Crack growth takes
 /// seeds until it has started its cracks; a shattering hit puts most of a body over σ_t and
 /// evaluates a fraction of it here.
 class SeedOrder {
