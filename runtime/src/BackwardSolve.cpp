@@ -96,14 +96,15 @@ template <int W, class V>
     const Eigen::Index m = lastEnd - lastBegin;
     const int* rows = lower.innerIndexPtr() + lastBegin;
     for (Eigen::Index t = 0; t < m; ++t) b[t] = x[rows[t]];
-    // Column j: its sum over R (its last m values), then over rows j+1..last, in row order.
+    // Column j: its sum over R (its last m values), plus its sum over rows j+1..last (the
+    // supernode's triangle: 14 % of the plate's L, 16–20 % of the other default objects'), both
+    // in dotColumns' four running sums. The triangle's x are contiguous; summed in one running
+    // sum, its add latency had set the pace of the largest supernodes.
     auto tail = [&](int32_t j) { return values + offset[j] + columnLength(lower, j) - m; };
     auto finish = [&](int32_t j, double overR) {
-      const V* column = values + offset[j];
-      const Eigen::Index inside = columnLength(lower, j) - m;
-      double t = overR;
-      for (Eigen::Index p = 0; p < inside; ++p) t += static_cast<double>(column[p]) * x[j + 1 + p];
-      x[j] -= t;
+      std::array<double, 1> inside{};
+      dotColumns<W, 1, V>({values + offset[j]}, x + j + 1, columnLength(lower, j) - m, inside);
+      x[j] -= overR + inside[0];
     };
     int32_t j = run.end - 1;
     for (; j - 1 >= run.first; j -= 2) {
