@@ -18,7 +18,7 @@
 // column g−1). Per supernode, x over R is gathered once into a contiguous buffer, and each column's
 // sum over R is a dense dot product with it (two columns at a time, four running sums each, in two
 // SSE2 registers or one AVX register, with the same bits), the rest of the column (rows in the
-// supernode) a short sum of its own. Eigen's per-entry indexed loads made the solve ~2.5× slower
+// supernode, whose x are contiguous) a dot product of the same kind. Eigen's per-entry indexed loads made the solve ~2.5× slower
 // than reading L; the plate's backward solve went from 18–25 ms to 12–14 ms on one core.
 //
 // The plan keeps its own copy of L's values, laid out in the order the solve reads them (the top's
