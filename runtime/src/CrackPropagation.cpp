@@ -374,44 +374,21 @@ Voigt StressField::atPoint(Eigen::Index point) const {
 
 Voigt StressField::at(int32_t e) const {
   if (pointsPerElement == 1) return atPoint(e);
+  // The point with the largest σ₁, the first of equals. A later point whose bound does not exceed
+  // the best σ₁ so far can at most tie, and a tie keeps the earlier one, so its eigen solve is left
+  // out: the same point, and the same bits, as solving every one.
   const Eigen::Index first = static_cast<Eigen::Index>(pointsPerElement) * e;
-  constexpr int kMostPoints = 4;  // P2's corners
-  if (pointsPerElement > kMostPoints) {
-    Voigt best = atPoint(first);
-    double bestS1 = maxPrincipalStress(best);
-    for (int c = 1; c < pointsPerElement; ++c) {
-      const Voigt s = atPoint(first + c);
-      if (const double s1 = maxPrincipalStress(s); s1 > bestS1) {
-        best = s;
-        bestS1 = s1;
-      }
-    }
-    return best;
-  }
-  // The point with the largest σ₁, the first of equals. Points are solved in order of their split
-  // bounds, and one whose bound is below the best σ₁ found cannot win, so its eigen solve is left
-  // out: the same point, and the same bits, as solving every one in order.
-  Voigt s[kMostPoints];
-  double bound[kMostPoints] = {};
-  int order[kMostPoints] = {0, 1, 2, 3};
-  for (int c = 0; c < pointsPerElement; ++c) {
-    s[c] = atPoint(first + c);
-    bound[c] = principalBound(s[c]);
-  }
-  for (int i = 1; i < pointsPerElement; ++i) {  // by falling bound, the first of equals first
-    for (int j = i; j > 0 && bound[order[j]] > bound[order[j - 1]]; --j) std::swap(order[j], order[j - 1]);
-  }
-  int best = order[0];
-  double bestS1 = maxPrincipalStress(s[best]);
-  for (int i = 1; i < pointsPerElement; ++i) {
-    const int c = order[i];
-    if (bound[c] < bestS1) break;  // nor any later one
-    if (const double s1 = maxPrincipalStress(s[c]); s1 > bestS1 || (s1 == bestS1 && c < best)) {
-      best = c;
+  Voigt best = atPoint(first);
+  double bestS1 = maxPrincipalStress(best);
+  for (int c = 1; c < pointsPerElement; ++c) {
+    const Voigt s = atPoint(first + c);
+    if (principalBound(s) <= bestS1) continue;
+    if (const double s1 = maxPrincipalStress(s); s1 > bestS1) {
+      best = s;
       bestS1 = s1;
     }
   }
-  return s[best];
+  return best;
 }
 
 StressScan scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen::MatrixXd& q,
