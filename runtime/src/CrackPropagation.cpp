@@ -603,11 +603,14 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     // Group g's bound at every instant into groupBoundAt, and their maximum. The static
     // correction's centre is its points' mean, with a radius of its own; the margin covers the
     // rounding of the centre's sums.
-    auto groupBounds = [&](Eigen::Index g) {
+    // The static correction's centre of group g (its points' mean) and radius, and the margin of
+    // the group's bound: the centre's float sums (centreSplitBounds) move its split bound by at
+    // most 2√6 (r + 2) 2⁻²⁴ ‖D S_c W‖_F ‖W⁻¹q_k‖, under 1e-4 of the scale for r < 4000.
+    auto groupStatic = [&](Eigen::Index g, Voigt& centre, double& staticRadius, double& margin) {
       const int32_t* from = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g)];
       const int32_t* to = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g) + 1];
-      Voigt centre = Voigt::Zero();
-      double staticRadius = 0.0;
+      centre.setZero();
+      staticRadius = 0.0;
       if (correction) {
         for (const int32_t* e = from; e != to; ++e) centre += staticStress.segment<6>(6 * *e);
         centre /= static_cast<double>(to - from);
@@ -615,11 +618,21 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
           staticRadius = std::max(staticRadius, kD.cwiseProduct(staticStress.segment<6>(6 * *e) - centre).norm());
         }
       }
+      margin = 1e-4 * bounds.groupScales[g] * qNormMax +
+               1e-9 * (bounds.groupRadii[g] * qNormMax + (kD.cwiseProduct(centre).norm() + staticRadius) * forceMax);
+    };
+    // Made once an impact for every group (the search reads them for the groups it bounds, the
+    // seeds' test for all).
+    auto cachedStatic = [&](Eigen::Index g, Voigt& centre, double& staticRadius, double& margin) {
+      centre = Eigen::Map<const Voigt>(w.groupStaticCentre.data() + 6 * g);
+      staticRadius = w.groupStaticRadius[static_cast<size_t>(g)];
+      margin = w.groupMargin[static_cast<size_t>(g)];
+    };
+    auto groupBounds = [&](Eigen::Index g) {
+      Voigt centre;
+      double staticRadius, margin;
+      cachedStatic(g, centre, staticRadius, margin);
       const double radius = bounds.groupRadii[g];
-      // The centre's float sums (centreSplitBounds) move its split bound by at most
-      // 2√6 (r + 2) 2⁻²⁴ ‖D S_c W‖_F ‖W⁻¹q_k‖, under 1e-4 of the scale for r < 4000.
-      const double margin = 1e-4 * bounds.groupScales[g] * qNormMax +
-                            1e-9 * (radius * qNormMax + (kD.cwiseProduct(centre).norm() + staticRadius) * forceMax);
       double* at = w.groupBoundAt.data() + g * steps;
       centreSplitBounds(bounds.groupCentres, g, w.qFloat, steps, centre, correction ? forceN.data() : nullptr, w.lanes, at);
       double most = -std::numeric_limits<double>::infinity();
@@ -675,6 +688,16 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     };
     w.heap.resize(static_cast<size_t>(t));  // points, or groups (fewer)
     if (grouped) {
+      w.groupStaticCentre.resize(static_cast<size_t>(6 * groups));
+      w.groupStaticRadius.resize(static_cast<size_t>(groups));
+      w.groupMargin.resize(static_cast<size_t>(groups));
+      detail::forFixedRanges(groups, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
+        for (Eigen::Index g = begin; g < end; ++g) {
+          Voigt centre;
+          groupStatic(g, centre, w.groupStaticRadius[static_cast<size_t>(g)], w.groupMargin[static_cast<size_t>(g)]);
+          Eigen::Map<Voigt>(w.groupStaticCentre.data() + 6 * g) = centre;
+        }
+      });
       w.groupBound.resize(groups);
       w.groupBoundAt.resize(static_cast<size_t>(groups * steps));
       w.qFloat.setZero((steps + kInstantPad - 1) / kInstantPad * kInstantPad, r);
@@ -686,6 +709,34 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     for (const StressScanWorkspace::RangePeak& p : w.rangePeaks) {
       scan.evaluations += p.evaluations;
       consider(p.point, p.instant, p.best);
+    }
+    // Each group's bound at the peak instant (the search's, at one instant; its centre's sums in
+    // double from the same float centre, so within the same margin): no point of a group below σ_t
+    // there is a seed. At the plate's peak the spectral test alone let 86 % of its points through
+    // to the exact mean stress, a cache-missing row each.
+    w.seedGroupBound.clear();
+    if (grouped && scan.peakInstant >= 0) {
+      const Eigen::Index k = scan.peakInstant;
+      w.seedGroupBound.resize(groups);
+      detail::forFixedRanges(groups, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
+        const double* qk = w.qT.col(k).data();
+        const Eigen::Index stride = bounds.groupCentres.cols();
+        for (Eigen::Index g = begin; g < end; ++g) {
+          Voigt staticCentre;
+          double staticRadius, margin;
+          cachedStatic(g, staticCentre, staticRadius, margin);
+          const float* c = bounds.groupCentres.data() + 6 * g * stride;
+          double sums[6] = {};
+          for (Eigen::Index j = 0; j < r; ++j) {  // six running sums in mode order
+            for (int i = 0; i < 6; ++i) sums[i] += static_cast<double>(c[i * stride + j]) * qk[j];
+          }
+          Voigt sigma;
+          for (int i = 0; i < 6; ++i) sigma[i] = sums[i];
+          if (correction) sigma += staticCentre * forceN[static_cast<size_t>(k)];
+          w.seedGroupBound[g] = splitBound(sigma) + 1e-9 * kD.cwiseProduct(sigma).norm() +
+                                (bounds.groupRadii[g] * w.qNorm[k] + staticRadius * w.forceAbs[k]) * (1.0 + 1e-9) + margin;
+        }
+      });
     }
   }
   scan.peakPrincipalPa = best;
@@ -708,6 +759,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     if (k < 0) return;
     for (Eigen::Index e = begin; e < end; ++e) {
       if (prune) {
+        if (!w.seedGroupBound.empty() && w.seedGroupBound[bounds.groupOf[static_cast<size_t>(e)]] < threshold) continue;
         if (!mayReach(e, k, threshold)) continue;
         out.emplace_back(seedBound(e, k), static_cast<int32_t>(e));
         continue;

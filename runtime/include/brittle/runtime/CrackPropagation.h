@@ -138,6 +138,9 @@ struct StressScanWorkspace {
   // The groups (StressBounds::groupStart): each group's bound at every instant (G by K, row-major)
   // and over all of them, for the groups whose bounds the last scan made (NaN for the others).
   Eigen::VectorXd groupBound;
+  std::vector<double> seedGroupBound;          ///< G: each group's bound at the peak instant (empty: no groups)
+  /// Per group: the static correction's centre (6G), radius and the bound's margin (G each).
+  std::vector<double> groupStaticCentre, groupStaticRadius, groupMargin;
   std::vector<double> groupBoundAt;
   Eigen::MatrixXf qFloat;                      ///< K (padded to a multiple of 8) by r: q in float
   /// The group centres' bounds take instants four to an SSE2 register or eight to an AVX one, with
