@@ -12,6 +12,7 @@
 #include <initializer_list>
 #include <limits>
 #include <random>
+#include <tuple>
 #include <cstring>
 
 #include <oneapi/tbb/task_arena.h>
@@ -325,6 +326,60 @@ TEST(CrackPropagation, SpectralBoundIsANormBoundWithinSixPercent) {
     const double exact = Eigen::JacobiSVD<Eigen::MatrixXd>(a).singularValues()[0];
     EXPECT_GE(bounds.deviatorSpectralNorms[e], exact) << "point " << e;
     EXPECT_LE(bounds.deviatorSpectralNorms[e], std::pow(6.0, 1.0 / 32.0) * exact * (1 + 1e-9)) << "point " << e;
+  }
+}
+
+TEST(CrackPropagation, P1PointsGroupByNodeClustersAndP2PointsByCorner) {
+  // P1: a key (a cluster's first node) is the lowest node of its cluster, each element's lowest
+  // node is its key or shares a tet with it, a key's own elements are in its cluster, a cluster
+  // holds at most 16 elements (or its first node's own, if more), and there are far fewer groups
+  // than lowest nodes (grouping by lowest node alone fails that). P2: each corner's own node.
+  for (const auto& [nx, ny, nz] : {std::tuple{8, 8, 2}, std::tuple{5, 3, 4}}) {
+    const TetMesh mesh = testing::makeBoxTetMesh(0.2, 0.2, 0.05, nx, ny, nz);
+    const Eigen::Index t = mesh.tets.rows(), n = mesh.nodes.rows();
+    SCOPED_TRACE(::testing::Message() << t << " tets");
+    std::vector<std::vector<bool>> adjacent(static_cast<size_t>(n), std::vector<bool>(static_cast<size_t>(n), false));
+    for (Eigen::Index e = 0; e < t; ++e) {
+      for (int a = 0; a < 4; ++a) {
+        for (int b = 0; b < 4; ++b) adjacent[static_cast<size_t>(mesh.tets(e, a))][static_cast<size_t>(mesh.tets(e, b))] = true;
+      }
+    }
+    const std::vector<int32_t> keys = stressPointNodes(mesh.tets, 1);
+    ASSERT_EQ(keys.size(), static_cast<size_t>(t));
+    std::vector<bool> isKey(static_cast<size_t>(n), false), isLowest(static_cast<size_t>(n), false);
+    for (Eigen::Index e = 0; e < t; ++e) {
+      const int32_t key = keys[static_cast<size_t>(e)], lowest = mesh.tets.row(e).minCoeff();
+      ASSERT_GE(key, 0);
+      ASSERT_LT(key, n);
+      EXPECT_LE(key, lowest) << "element " << e;
+      EXPECT_TRUE(adjacent[static_cast<size_t>(key)][static_cast<size_t>(lowest)]) << "element " << e;
+      isKey[static_cast<size_t>(key)] = true;
+      isLowest[static_cast<size_t>(lowest)] = true;
+    }
+    for (Eigen::Index e = 0; e < t; ++e) {  // a key's own elements are in its cluster
+      const int32_t lowest = mesh.tets.row(e).minCoeff();
+      if (isKey[static_cast<size_t>(lowest)]) {
+        EXPECT_EQ(keys[static_cast<size_t>(e)], lowest) << "element " << e;
+      }
+    }
+    std::vector<int> clusterSize(static_cast<size_t>(n), 0), ownSize(static_cast<size_t>(n), 0);
+    for (Eigen::Index e = 0; e < t; ++e) {
+      ++clusterSize[static_cast<size_t>(keys[static_cast<size_t>(e)])];
+      ++ownSize[static_cast<size_t>(mesh.tets.row(e).minCoeff())];
+    }
+    int keyCount = 0, lowestCount = 0;
+    for (Eigen::Index u = 0; u < n; ++u) {
+      keyCount += isKey[static_cast<size_t>(u)];
+      lowestCount += isLowest[static_cast<size_t>(u)];
+      EXPECT_LE(clusterSize[static_cast<size_t>(u)], std::max(16, ownSize[static_cast<size_t>(u)])) << "cluster " << u;
+    }
+    EXPECT_LT(3 * keyCount, 2 * lowestCount) << keyCount << " groups";
+    EXPECT_EQ(stressPointNodes(mesh.tets, 1), keys);  // the same on every call
+    const std::vector<int32_t> corners = stressPointNodes(mesh.tets, 4);
+    ASSERT_EQ(corners.size(), static_cast<size_t>(4 * t));
+    for (Eigen::Index e = 0; e < t; ++e) {
+      for (int c = 0; c < 4; ++c) EXPECT_EQ(corners[static_cast<size_t>(4 * e + c)], mesh.tets(e, c));
+    }
   }
 }
 
