@@ -636,17 +636,16 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     // A centre's bounds cost 6r products an instant, a point's tests r to 3r: with fewer than three
     // points left, a group's points are tested as they are (a choice, not tuned).
     constexpr int kGroupVisit = 3;
-    // Group g's bound at every instant into groupBoundAt, and their maximum. The static
-    // correction's centre is its points' mean, with a radius of its own; the margin covers the
-    // rounding of the centre's sums.
     // The static correction's centre of group g (its points' mean) and radius, and the margin of
-    // the group's bound: the centre's float sums (centreSplitBounds) move its split bound by at
-    // most 2√6 (r + 2) 2⁻²⁴ ‖D S_c W‖_F ‖W⁻¹q_k‖, under 1e-4 of the scale for r < 4000.
-    auto groupStatic = [&](Eigen::Index g, Voigt& centre, double& staticRadius, double& margin) {
+    // the group's bound, into the workspace, once an impact for every group (the search reads them
+    // for the groups it bounds, the seeds' test for all). The centre's float sums
+    // (centreSplitBounds) move its split bound by at most 2√6 (r + 2) 2⁻²⁴ ‖D S_c W‖_F ‖W⁻¹q_k‖,
+    // under 1e-4 of the scale for r < 4000.
+    auto groupStatic = [&](Eigen::Index g) {
       const int32_t* from = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g)];
       const int32_t* to = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g) + 1];
-      centre.setZero();
-      staticRadius = 0.0;
+      Voigt centre = Voigt::Zero();
+      double staticRadius = 0.0;
       if (correction) {
         for (const int32_t* e = from; e != to; ++e) centre += staticStress.segment<6>(6 * *e);
         centre /= static_cast<double>(to - from);
@@ -654,23 +653,20 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
           staticRadius = std::max(staticRadius, kD.cwiseProduct(staticStress.segment<6>(6 * *e) - centre).norm());
         }
       }
-      margin = 1e-4 * bounds.groupScales[g] * qNormMax +
-               1e-9 * (bounds.groupRadii[g] * qNormMax + (kD.cwiseProduct(centre).norm() + staticRadius) * forceMax);
+      Eigen::Map<Voigt>(w.groupStaticCentre.data() + 6 * g) = centre;
+      w.groupStaticRadius[static_cast<size_t>(g)] = staticRadius;
+      w.groupMargin[static_cast<size_t>(g)] =
+          1e-4 * bounds.groupScales[g] * qNormMax +
+          1e-9 * (bounds.groupRadii[g] * qNormMax + (kD.cwiseProduct(centre).norm() + staticRadius) * forceMax);
     };
-    // Made once an impact for every group (the search reads them for the groups it bounds, the
-    // seeds' test for all).
-    auto cachedStatic = [&](Eigen::Index g, Voigt& centre, double& staticRadius, double& margin) {
-      centre = Eigen::Map<const Voigt>(w.groupStaticCentre.data() + 6 * g);
-      staticRadius = w.groupStaticRadius[static_cast<size_t>(g)];
-      margin = w.groupMargin[static_cast<size_t>(g)];
-    };
+    auto staticCentreOf = [&](Eigen::Index g) { return Eigen::Map<const Voigt>(w.groupStaticCentre.data() + 6 * g); };
+    // Group g's bound at every instant into groupBoundAt, and their maximum.
     auto groupBounds = [&](Eigen::Index g) {
-      Voigt centre;
-      double staticRadius, margin;
-      cachedStatic(g, centre, staticRadius, margin);
-      const double radius = bounds.groupRadii[g];
+      const double radius = bounds.groupRadii[g], staticRadius = w.groupStaticRadius[static_cast<size_t>(g)],
+                   margin = w.groupMargin[static_cast<size_t>(g)];
       double* at = w.groupBoundAt.data() + g * steps;
-      centreSplitBounds(bounds.groupCentres, g, w.qFloat, steps, centre, correction ? forceN.data() : nullptr, w.lanes, at);
+      centreSplitBounds(bounds.groupCentres, g, w.qFloat, steps, staticCentreOf(g), correction ? forceN.data() : nullptr,
+                        w.lanes, at);
       double most = -std::numeric_limits<double>::infinity();
       for (Eigen::Index k = 0; k < steps; ++k) {
         at[k] += (radius * w.qNorm[k] + staticRadius * w.forceAbs[k]) * (1.0 + 1e-9) + margin;
@@ -728,11 +724,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
       w.groupStaticRadius.resize(static_cast<size_t>(groups));
       w.groupMargin.resize(static_cast<size_t>(groups));
       detail::forFixedRanges(groups, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
-        for (Eigen::Index g = begin; g < end; ++g) {
-          Voigt centre;
-          groupStatic(g, centre, w.groupStaticRadius[static_cast<size_t>(g)], w.groupMargin[static_cast<size_t>(g)]);
-          Eigen::Map<Voigt>(w.groupStaticCentre.data() + 6 * g) = centre;
-        }
+        for (Eigen::Index g = begin; g < end; ++g) groupStatic(g);
       });
       w.groupBound.resize(groups);
       w.groupBoundAt.resize(static_cast<size_t>(groups * steps));
@@ -758,9 +750,6 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
         const double* qk = w.qT.col(k).data();
         const Eigen::Index stride = bounds.groupCentres.cols();
         for (Eigen::Index g = begin; g < end; ++g) {
-          Voigt staticCentre;
-          double staticRadius, margin;
-          cachedStatic(g, staticCentre, staticRadius, margin);
           const float* c = bounds.groupCentres.data() + 6 * g * stride;
           double sums[6] = {};
           for (Eigen::Index j = 0; j < r; ++j) {  // six running sums in mode order
@@ -768,9 +757,11 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
           }
           Voigt sigma;
           for (int i = 0; i < 6; ++i) sigma[i] = sums[i];
-          if (correction) sigma += staticCentre * forceN[static_cast<size_t>(k)];
-          w.seedGroupBound[g] = splitBound(sigma) + 1e-9 * kD.cwiseProduct(sigma).norm() +
-                                (bounds.groupRadii[g] * w.qNorm[k] + staticRadius * w.forceAbs[k]) * (1.0 + 1e-9) + margin;
+          if (correction) sigma += staticCentreOf(g) * forceN[static_cast<size_t>(k)];
+          w.seedGroupBound[g] = principalBound(sigma) +
+                                (bounds.groupRadii[g] * w.qNorm[k] + w.groupStaticRadius[static_cast<size_t>(g)] * w.forceAbs[k]) *
+                                    (1.0 + 1e-9) +
+                                w.groupMargin[static_cast<size_t>(g)];
         }
       });
     }
