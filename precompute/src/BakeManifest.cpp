@@ -32,7 +32,7 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
       return makeError(ErrorCode::ParseError, "manifest " + path.filename().string() + ": needs an \"objects\" array");
     }
     static const std::set<std::string> kKeys = {"name", "mesh", "material", "tets", "modes", "element", "repair", "lumped_mass", "seed",
-                                                "sharp_features", "sliver_bound", "meshing_runs"};
+                                                "sharp_features", "sliver_bound", "meshing_runs", "stretch"};
     for (size_t i = 0; i < doc["objects"].size(); ++i) {
       const auto& o = doc["objects"][i];
       const std::string where = "manifest " + path.filename().string() + ", object " + std::to_string(i);
@@ -54,14 +54,16 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
         if (!o.contains(key)) return true;
         if (!o[key].is_number()) return false;
         const double v = o[key].get<double>();
-        return v >= lo && v <= hi && (std::string(key) == "sliver_bound" || v == std::floor(v));
+        const bool real = std::string(key) == "sliver_bound" || std::string(key) == "stretch";
+        return v >= lo && v <= hi && (real || v == std::floor(v));
       };
       for (const auto& [key, lo, hi] : {std::tuple{"tets", 0.0, 5e6}, std::tuple{"modes", 1.0, 2000.0},
                                          std::tuple{"seed", 0.0, 9.007199254740992e15}, std::tuple{"sliver_bound", 0.0, 30.0},
-                                         std::tuple{"meshing_runs", 1.0, 8.0}}) {
+                                         std::tuple{"meshing_runs", 1.0, 8.0}, std::tuple{"stretch", 1.0, 16.0}}) {
         if (!checked(key, lo, hi)) {
           return makeError(ErrorCode::ParseError, where + ": \"" + key + "\" must be a number in [" + std::to_string(lo) + ", " +
-                                                      std::to_string(hi) + "]" + (std::string(key) == "sliver_bound" ? "" : ", integer"));
+                                                      std::to_string(hi) + "]" +
+                                                      (std::string(key) == "sliver_bound" || std::string(key) == "stretch" ? "" : ", integer"));
         }
       }
       if (o.contains("element")) {
@@ -76,6 +78,7 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
       s.tetMesh.detectSharpFeatures = o.value("sharp_features", true);
       s.tetMesh.sliverBoundDeg = o.value("sliver_bound", s.tetMesh.sliverBoundDeg);
       s.tetMesh.meshingRuns = o.value("meshing_runs", s.tetMesh.meshingRuns);
+      s.tetMesh.thinStretch = o.value("stretch", s.tetMesh.thinStretch);
       const auto seed = o.value("seed", static_cast<uint64_t>(1));
       s.modal.seed = s.tetMesh.seed = seed;
       out.push_back(std::move(s));

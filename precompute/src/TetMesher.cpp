@@ -10,6 +10,8 @@
 #include <CGAL/Random.h>
 #include <CGAL/make_mesh_3.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -224,9 +226,8 @@ std::string describe(const Check& c, int run) {
          " m^3)";
 }
 
-}  // namespace
-
-Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshSettings& s, ProgressSink* progress) {
+// tetrahedralize without the stretch: the mesh of `surface` as given.
+Result<TetMeshResult> meshSurface(const TriangleMesh& surface, const TetMeshSettings& s, ProgressSink* progress) {
   if (s.targetTets <= 0 && !(s.cellSizeM > 0.0)) {
     return makeError(ErrorCode::InvalidArgument, "tet meshing needs a target tet count or a cell size > 0");
   }
@@ -362,6 +363,54 @@ Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshS
   best.surfaceFaces = boundaryFaces(best.mesh);
   best.quality = computeMeshQuality(best.mesh);
   return best;
+}
+
+Eigen::Vector3d thinAxis(const TriangleMesh& surface) {
+  // The second moment of volume's smallest principal value is the direction the solid extends
+  // least in. Eigen's self-adjoint solver sorts its values ascending and is deterministic.
+  const Eigen::Matrix3d second = computeSurfaceMassProperties(surface, 1.0).secondMomentM5;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(second);
+  return eigen.eigenvectors().col(0);
+}
+
+}  // namespace
+
+Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshSettings& s, ProgressSink* progress) {
+  if (!(s.thinStretch >= 1.0 && s.thinStretch <= 16.0)) {
+    return makeError(ErrorCode::InvalidArgument, "tet meshing needs a thin-axis stretch in [1, 16]");
+  }
+  if (s.thinStretch == 1.0) return meshSurface(surface, s, progress);
+  // Mesh_3 makes near-regular tets, so a thin part gets as many elements as its thickness
+  // demands. Stretched by k across its thinnest axis n (x' = c + A(x − c), A = I + (k − 1) n nᵀ),
+  // the part is meshed with tets k times wider than thick once A⁻¹ takes the nodes back. The
+  // cell size and the target count are those of the stretched solid.
+  const Eigen::Vector3d n = thinAxis(surface);
+  const Eigen::Vector3d c = surface.vertices.colwise().mean().transpose();
+  const double k = s.thinStretch;
+  auto apply = [&](Points& points, double factor) {
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+      const Eigen::Vector3d d = points.row(i).transpose() - c;
+      points.row(i) = (c + d + (factor - 1.0) * n.dot(d) * n).transpose();
+    }
+  };
+  TriangleMesh stretched = surface;
+  apply(stretched.vertices, k);
+  auto out = meshSurface(stretched, s, progress);
+  if (!out) return out;
+  TetMeshResult& r = out.value();
+  apply(r.mesh.nodes, 1.0 / k);
+  // Volumes shrink by k and the threshold with the extent, so the check is made again.
+  const double threshold = degenerateTetVolumeM3(r.mesh.nodes);
+  for (Eigen::Index t = 0; t < r.mesh.tets.rows(); ++t) {
+    const double v = signedTetVolume(r.mesh.nodes.row(r.mesh.tets(t, 0)).transpose(), r.mesh.nodes.row(r.mesh.tets(t, 1)).transpose(),
+                                     r.mesh.nodes.row(r.mesh.tets(t, 2)).transpose(), r.mesh.nodes.row(r.mesh.tets(t, 3)).transpose());
+    if (!(v > threshold)) {
+      return makeError(ErrorCode::DegenerateElement, "tet " + std::to_string(t) + " is degenerate (" + fmt(v) +
+                                                         " m^3) once the thin-axis stretch " + fmt(k) + " is undone");
+    }
+  }
+  r.quality = computeMeshQuality(r.mesh);
+  return out;
 }
 
 }  // namespace brittle

@@ -142,6 +142,15 @@ TEST_F(BakePipelineTest, ManifestLoadsAndRejectsTypos) {
   EXPECT_EQ(runs.value()[0].tetMesh.meshingRuns, 2);
   std::ofstream(dir / "noruns.json") << R"({"objects": [{"mesh": "cube.off", "material": "glass", "meshing_runs": 0}]})";
   EXPECT_EQ(loadBakeManifest(dir / "noruns.json").error().code, ErrorCode::ParseError);
+  EXPECT_EQ(ok.value()[0].tetMesh.thinStretch, 1.0);
+  std::ofstream(dir / "stretch.json") << R"({"objects": [{"mesh": "cube.off", "material": "glass", "stretch": 2.5}]})";
+  auto stretch = loadBakeManifest(dir / "stretch.json");
+  ASSERT_TRUE(stretch.ok()) << stretch.error().message;
+  EXPECT_EQ(stretch.value()[0].tetMesh.thinStretch, 2.5);
+  for (const char* bad : {"0.5", "17", "\"2\""}) {
+    std::ofstream(dir / "nostretch.json") << R"({"objects": [{"mesh": "cube.off", "material": "glass", "stretch": )" << bad << "}]}";
+    EXPECT_EQ(loadBakeManifest(dir / "nostretch.json").error().code, ErrorCode::ParseError) << bad;
+  }
 }
 
 }  // namespace

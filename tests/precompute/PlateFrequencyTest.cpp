@@ -14,9 +14,13 @@
 //   389.6317 Hz with its own C3D10 mass, 389.6316 Hz with the exact one, as brittle's P2.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "brittle/core/Timing.h"
+#include "brittle/descriptors/MassProperties.h"
+#include "brittle/precompute/BakeManifest.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshIO.h"
 #include "brittle/precompute/ModalAnalysis.h"
@@ -36,11 +40,12 @@ struct PlateMesh {
   double meshingS = 0.0;
 };
 
-PlateMesh meshPlate(int64_t targetTets) {
+PlateMesh meshPlate(int64_t targetTets, double stretch = 1.0) {
   auto surface = readSurfaceMesh(testing::sourceDir() / "assets" / "meshes" / "plate.off");
   EXPECT_TRUE(surface.ok()) << surface.error().message;
-  TetMeshSettings ts;  // the bake's defaults, as for the default pack
+  TetMeshSettings ts;  // the bake's defaults
   ts.targetTets = targetTets;
+  ts.thinStretch = stretch;
   const auto start = SteadyClock::now();
   auto tets = tetrahedralize(surface.value(), ts);
   EXPECT_TRUE(tets.ok()) << tets.error().message;
@@ -84,6 +89,61 @@ TEST(PlateFrequency, P2ReachesTheConvergedFirstModeWithAQuarterOfTheP1Elements) 
   // P2 converges from above as P1 does (a conforming displacement method), and P1 locks.
   EXPECT_GT(p2.hz, kConvergedHz * (1.0 - 1e-3));
   EXPECT_GT(p1.hz, 1.3 * p2.hz);
+}
+
+TEST(PlateFrequency, TheDefaultPacksStretchedPlateIsWithinAFifthOfAPercentWithFewerTets) {
+  // The default pack meshes the plate with tets twice as wide as thick (TetMesher.h): its bending
+  // needs one quadratic element through the thickness, not elements as wide as it is thick.
+  // Measured at 4 007 tets: 389.9 Hz (+0.13 %), against 389.63 Hz (+0.06 %) at 7 446 near-regular
+  // ones; the impacts' cost: docs/realtime.md.
+  auto manifest = loadBakeManifest(testing::sourceDir() / "assets" / "default-pack.json");
+  ASSERT_TRUE(manifest) << manifest.error().message;
+  const auto plate = std::find_if(manifest.value().begin(), manifest.value().end(),
+                                  [](const ObjectBakeSettings& o) { return o.name == "glass-plate"; });
+  ASSERT_NE(plate, manifest.value().end());
+  ASSERT_EQ(plate->elementOrder, ElementOrder::P2);
+  ASSERT_GT(plate->tetMesh.thinStretch, 1.0);
+  const PlateMesh stretched = meshPlate(plate->tetMesh.targetTets, plate->tetMesh.thinStretch);
+  const PlateMesh regular = meshPlate(plate->tetMesh.targetTets);
+  const int64_t tets = stretched.mesh.tets.rows();
+  EXPECT_LT(static_cast<double>(tets), 0.65 * static_cast<double>(regular.mesh.tets.rows()));
+  EXPECT_LE(7 * tets, kP1DefaultTets);  // issue 17 asked for a quarter
+  // Taken back exactly: the same solid, its faces where they were.
+  EXPECT_NEAR(computeTetMassProperties(stretched.mesh, 1.0).volumeM3, 0.3 * 0.3 * 0.01, 1e-9 * 9e-4);
+  EXPECT_NEAR(stretched.mesh.nodes.col(2).maxCoeff(), 0.005, 1e-15);
+  EXPECT_NEAR(stretched.mesh.nodes.col(2).minCoeff(), -0.005, 1e-15);
+  // Fewer, wider tets: their edges reach further in plane (Mesh_3's size, ∝ tets^(-1/3) in the
+  // stretched solid, is the in-plane one).
+  auto inPlaneReach = [](const TetMesh& m) {
+    double sum = 0.0;
+    for (Eigen::Index t = 0; t < m.tets.rows(); ++t) {
+      for (int a = 0; a < 4; ++a) {
+        for (int b = a + 1; b < 4; ++b) sum += (m.nodes.row(m.tets(t, a)) - m.nodes.row(m.tets(t, b))).head<2>().norm();
+      }
+    }
+    return sum / (6.0 * static_cast<double>(m.tets.rows()));
+  };
+  EXPECT_GT(inPlaneReach(stretched.mesh), 1.3 * inPlaneReach(regular.mesh));
+  const Material glass = materialPreset("glass").value();
+  const FirstMode p2 = firstElasticMode(makeQuadraticTetMesh(stretched.mesh).value(), glass);
+  std::printf("plate stretched %.1f: %lld tets (near-regular: %lld), P2 %.2f Hz (%+.2f%%)\n", plate->tetMesh.thinStretch,
+              static_cast<long long>(tets), static_cast<long long>(regular.mesh.tets.rows()), p2.hz,
+              100.0 * (p2.hz / kConvergedHz - 1.0));
+  EXPECT_NEAR(p2.hz / kConvergedHz, 1.0, 0.002);
+  EXPECT_GT(p2.hz, kConvergedHz * (1.0 - 1e-3));
+}
+
+TEST(PlateFrequency, AStretchOutsideOneToSixteenIsATypedError) {
+  auto surface = readSurfaceMesh(testing::sourceDir() / "assets" / "meshes" / "plate.off");
+  ASSERT_TRUE(surface.ok());
+  for (const double bad : {0.5, 17.0, std::nan("")}) {
+    TetMeshSettings ts;
+    ts.targetTets = 1000;
+    ts.thinStretch = bad;
+    auto tets = tetrahedralize(surface.value(), ts);
+    ASSERT_FALSE(tets.ok()) << bad;
+    EXPECT_EQ(tets.error().code, ErrorCode::InvalidArgument);
+  }
 }
 
 // Not run by default (minutes): the refinement that gives the reference value above.

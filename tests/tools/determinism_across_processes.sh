@@ -57,7 +57,7 @@ same_packs "bake-db (threads 1, 2, 1; the third in SSE2)" "$work/db1.h5" "$work/
 cat > "$work/manifest.json" <<JSON
 {
   "objects": [
-    { "name": "glass-plate", "mesh": "$src/assets/meshes/plate.off", "material": "glass", "tets": 1000, "modes": 12, "element": "p2" },
+    { "name": "glass-plate", "mesh": "$src/assets/meshes/plate.off", "material": "glass", "tets": 1000, "modes": 12, "element": "p2", "stretch": 2 },
     { "name": "porcelain-vase", "mesh": "$src/assets/meshes/vase.off", "material": "porcelain", "tets": 1500, "modes": 12 },
     { "name": "brick", "mesh": "$src/assets/meshes/brick.off", "material": "concrete", "tets": 1000, "modes": 12 },
     { "name": "stone-ball", "mesh": "$src/assets/meshes/ball.off", "material": "stone", "tets": 1000, "modes": 12 }

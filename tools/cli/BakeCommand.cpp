@@ -29,6 +29,7 @@ struct BakeOptions {
   bool noFeatures = false;
   double sliverBound = 5.0;
   int meshingRuns = TetMeshSettings{}.meshingRuns;
+  double stretch = 1.0;
   std::string factorization = "cholmod";
   uint64_t seed = 1;
   bool quiet = false;
@@ -63,6 +64,10 @@ Runner addBakeCommand(CLI::App& app) {
                   "Mesh_3 runs allowed for the final mesh: when one splits a thin part or makes a degenerate tet, "
                   "the next adjusts (sharp features off, local size, more tets); 1 = no retry")
       ->capture_default_str()->check(CLI::Range(1, 8));
+  cmd->add_option("--stretch", o->stretch,
+                  "Elements this many times wider than thick across the solid's thinnest axis (flat parts in p2: "
+                  "bending needs one element through the thickness, not one as wide as it is thick); 1 = near-regular tets")
+      ->capture_default_str()->check(CLI::Range(1.0, 16.0));
   cmd->add_option("--element", o->element,
                   "Finite element: p1 (4-node tets) or p2 (10-node tets; thin parts, which lock in bending with p1)")
       ->check(CLI::IsMember({"p1", "p2"}))->capture_default_str();
@@ -76,7 +81,7 @@ Runner addBakeCommand(CLI::App& app) {
   cmd->get_option("--cell-size")->excludes(cmd->get_option("--tets"));
   // A manifest carries its own per-object settings: refuse options it would silently override.
   for (const char* perObject : {"--material", "--name", "--tets", "--cell-size", "--modes", "--repair", "--repair-voxel",
-                                "--element", "--lumped-mass", "--no-sharp-features", "--sliver-bound", "--meshing-runs", "--seed"}) {
+                                "--element", "--lumped-mass", "--no-sharp-features", "--sliver-bound", "--meshing-runs", "--stretch", "--seed"}) {
     cmd->get_option(perObject)->excludes(manifest);
   }
 
@@ -109,6 +114,7 @@ Runner addBakeCommand(CLI::App& app) {
       s.tetMesh.detectSharpFeatures = !o->noFeatures;
       s.tetMesh.sliverBoundDeg = o->sliverBound;
       s.tetMesh.meshingRuns = o->meshingRuns;
+      s.tetMesh.thinStretch = o->stretch;
       s.modal.modeCount = o->modes;
       s.modal.seed = o->seed;
       s.repair = o->repair;

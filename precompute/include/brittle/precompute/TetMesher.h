@@ -15,6 +15,8 @@
 //     a ball around each piece but the largest;
 //   * otherwise: twice the tets (a fresh size search for twice the target, local sizes dropped;
 //     with a cell size instead of a target, the size / 2^(1/3)).
+// A flat part can be meshed with tets wider than thick (TetMeshSettings::thinStretch): Mesh_3
+// meshes the solid stretched across its thinnest principal axis, and the nodes are taken back.
 // This is the only translation unit that instantiates Mesh_3 (it costs ~4 GiB to compile); its
 // interface is flat arrays only.
 #pragma once
@@ -58,6 +60,12 @@ struct TetMeshSettings {
   /// keep a few slivers below the bound (see docs/results/bake-cost.md).
   double sliverBoundDeg = 5.0;
   uint64_t seed = 1;                    ///< seeds CGAL's random generator (determinism)
+  /// Elements this many times wider than thick across the solid's thinnest principal axis, in
+  /// [1, 16]: the surface is stretched by it along that axis, meshed, and the nodes taken back
+  /// (targetTets and cellSizeM are those of the stretched solid). 1 keeps Mesh_3's near-regular
+  /// tets. For flat parts in quadratic tets, whose bending needs one element through the thickness
+  /// but not one as wide as it is thick.
+  double thinStretch = 1.0;
 };
 
 /// One change the mesher made to the settings it was given, and why.
