@@ -7,7 +7,7 @@
 # that the comparison also spans machines with and without it. Checked:
 #   1. a fragment-database bake (bake-db) with 1, 2 and 1 worker threads gives the same pack data;
 #   2. a bake of the four default objects (the default manifest's meshes and materials, at fewer
-#      elements and modes, the plate in P2 as in the default pack) with a small database gives the same
+#      elements and modes, the plate in P2 and stretched as in the default pack) with a small database gives the same
 #      pack data;
 # (pack data: every dataset and attribute bit for bit, the wall-clock bake timings aside;
 # compare_packs.py);
