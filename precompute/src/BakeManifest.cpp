@@ -4,10 +4,10 @@
 #include "brittle/precompute/BakeManifest.h"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <tuple>
 
 #include "brittle/core/JsonChecks.h"
 #include "brittle/precompute/MaterialLibrary.h"
@@ -50,20 +50,20 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
       if (!m) return Error{m.error().code, where + ": " + m.error().message};
       s.material = std::move(m).value();
       // Range checks, so a typo does not become a 2^64 seed or a million-mode solve.
-      auto checked = [&](const char* key, double lo, double hi) -> bool {
-        if (!o.contains(key)) return true;
-        if (!o[key].is_number()) return false;
-        const double v = o[key].get<double>();
-        const bool real = std::string(key) == "sliver_bound" || std::string(key) == "stretch";
-        return v >= lo && v <= hi && (real || v == std::floor(v));
+      struct Range {
+        const char* key;
+        double lo, hi;
+        bool integer;
       };
-      for (const auto& [key, lo, hi] : {std::tuple{"tets", 0.0, 5e6}, std::tuple{"modes", 1.0, 2000.0},
-                                         std::tuple{"seed", 0.0, 9.007199254740992e15}, std::tuple{"sliver_bound", 0.0, 30.0},
-                                         std::tuple{"meshing_runs", 1.0, 8.0}, std::tuple{"stretch", 1.0, 16.0}}) {
-        if (!checked(key, lo, hi)) {
-          return makeError(ErrorCode::ParseError, where + ": \"" + key + "\" must be a number in [" + std::to_string(lo) + ", " +
-                                                      std::to_string(hi) + "]" +
-                                                      (std::string(key) == "sliver_bound" || std::string(key) == "stretch" ? "" : ", integer"));
+      for (const Range& r : {Range{"tets", 0.0, 5e6, true}, Range{"modes", 1.0, 2000.0, true},
+                             Range{"seed", 0.0, 9.007199254740992e15, true}, Range{"sliver_bound", 0.0, 30.0, false},
+                             Range{"meshing_runs", 1.0, 8.0, true}, Range{"stretch", 1.0, 16.0, false}}) {
+        if (!o.contains(r.key)) continue;
+        const double v = o[r.key].is_number() ? o[r.key].get<double>() : std::nan("");
+        if (!(v >= r.lo && v <= r.hi) || (r.integer && v != std::floor(v))) {
+          char range[64];
+          std::snprintf(range, sizeof range, "[%g, %g]", r.lo, r.hi);
+          return makeError(ErrorCode::ParseError, where + ": \"" + r.key + "\" must be a number in " + range + (r.integer ? ", integer" : ""));
         }
       }
       if (o.contains("element")) {

@@ -19,6 +19,7 @@
 #include <string>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -226,8 +227,25 @@ std::string describe(const Check& c, int run) {
          " m^3)";
 }
 
-// tetrahedralize without the stretch: the mesh of `surface` as given.
-Result<TetMeshResult> meshSurface(const TriangleMesh& surface, const TetMeshSettings& s, ProgressSink* progress) {
+// The map x' = c + A(x − c), A = I + (k − 1) n nᵀ: a stretch by k along the unit axis n.
+struct Stretch {
+  Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  double k = 1.0;
+  Eigen::Vector3d apply(const Eigen::Vector3d& x, double factor) const {
+    const Eigen::Vector3d d = x - c;
+    return c + d + (factor - 1.0) * n.dot(d) * n;
+  }
+  void apply(Points& points, double factor) const {
+    for (Eigen::Index i = 0; i < points.rows(); ++i) points.row(i) = apply(Eigen::Vector3d(points.row(i).transpose()), factor).transpose();
+  }
+};
+
+// tetrahedralize of `surface`, given stretched by `stretch`: Mesh_3 meshes it as given, and each
+// run's nodes are taken back before they are checked, so that the checks and their adjustments
+// see the mesh that is returned (a split-off piece's ball is stretched again for the next run).
+Result<TetMeshResult> meshSurface(const TriangleMesh& surface, const TetMeshSettings& s, const Stretch& stretch,
+                                  ProgressSink* progress) {
   if (s.targetTets <= 0 && !(s.cellSizeM > 0.0)) {
     return makeError(ErrorCode::InvalidArgument, "tet meshing needs a target tet count or a cell size > 0");
   }
@@ -309,7 +327,12 @@ Result<TetMeshResult> meshSurface(const TriangleMesh& surface, const TetMeshSett
         return makeError(ErrorCode::MeshingFailed,
                          "CGAL Mesh_3 produced no tetrahedra at cell size " + std::to_string(plan.h) + " m" + tried);
       }
+      if (stretch.k != 1.0) stretch.apply(best.mesh.nodes, 1.0 / stretch.k);
       check = checkMesh(best.mesh, plan.h);
+      for (SizingBall& ball : check.splitOff) {
+        ball.center = stretch.apply(ball.center, stretch.k);
+        ball.radiusM *= stretch.k;
+      }
       if (check.kind == Check::Ok || run == s.meshingRuns) break;
       // The next adjustment (see TetMesher.h).
       MeshingAdjustment adjusted;
@@ -365,12 +388,20 @@ Result<TetMeshResult> meshSurface(const TriangleMesh& surface, const TetMeshSett
   return best;
 }
 
-Eigen::Vector3d thinAxis(const TriangleMesh& surface) {
-  // The second moment of volume's smallest principal value is the direction the solid extends
-  // least in. Eigen's self-adjoint solver sorts its values ascending and is deterministic.
+// The unit axis the solid extends least along: the second moment of volume's smallest principal
+// direction (Eigen's self-adjoint solver sorts its values ascending), snapped onto a coordinate
+// axis within 1e-12 so that an axis-aligned part is stretched and taken back exactly. None when
+// the two smallest principal values are within a factor 2 (a cube, a ball, a bar, a vase).
+std::optional<Eigen::Vector3d> thinAxis(const TriangleMesh& surface) {
   const Eigen::Matrix3d second = computeSurfaceMassProperties(surface, 1.0).secondMomentM5;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(second);
-  return eigen.eigenvectors().col(0);
+  const Eigen::Vector3d values = eigen.eigenvalues();
+  if (!(values(0) > 0.0) || values(0) > 0.5 * values(1)) return std::nullopt;
+  Eigen::Vector3d n = eigen.eigenvectors().col(0).normalized();
+  for (int a = 0; a < 3; ++a) {
+    if (std::abs(n(a)) > 1.0 - 1e-12) n = Eigen::Vector3d::Unit(a);
+  }
+  return n;
 }
 
 }  // namespace
@@ -379,38 +410,23 @@ Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshS
   if (!(s.thinStretch >= 1.0 && s.thinStretch <= 16.0)) {
     return makeError(ErrorCode::InvalidArgument, "tet meshing needs a thin-axis stretch in [1, 16]");
   }
-  if (s.thinStretch == 1.0) return meshSurface(surface, s, progress);
+  if (s.thinStretch == 1.0) return meshSurface(surface, s, Stretch{}, progress);
   // Mesh_3 makes near-regular tets, so a thin part gets as many elements as its thickness
-  // demands. Stretched by k across its thinnest axis n (x' = c + A(x − c), A = I + (k − 1) n nᵀ),
-  // the part is meshed with tets k times wider than thick once A⁻¹ takes the nodes back. The
-  // cell size and the target count are those of the stretched solid.
-  const Eigen::Vector3d n = thinAxis(surface);
-  const Eigen::Vector3d c = surface.vertices.colwise().mean().transpose();
-  const double k = s.thinStretch;
-  auto apply = [&](Points& points, double factor) {
-    for (Eigen::Index i = 0; i < points.rows(); ++i) {
-      const Eigen::Vector3d d = points.row(i).transpose() - c;
-      points.row(i) = (c + d + (factor - 1.0) * n.dot(d) * n).transpose();
-    }
-  };
-  TriangleMesh stretched = surface;
-  apply(stretched.vertices, k);
-  auto out = meshSurface(stretched, s, progress);
-  if (!out) return out;
-  TetMeshResult& r = out.value();
-  apply(r.mesh.nodes, 1.0 / k);
-  // Volumes shrink by k and the threshold with the extent, so the check is made again.
-  const double threshold = degenerateTetVolumeM3(r.mesh.nodes);
-  for (Eigen::Index t = 0; t < r.mesh.tets.rows(); ++t) {
-    const double v = signedTetVolume(r.mesh.nodes.row(r.mesh.tets(t, 0)).transpose(), r.mesh.nodes.row(r.mesh.tets(t, 1)).transpose(),
-                                     r.mesh.nodes.row(r.mesh.tets(t, 2)).transpose(), r.mesh.nodes.row(r.mesh.tets(t, 3)).transpose());
-    if (!(v > threshold)) {
-      return makeError(ErrorCode::DegenerateElement, "tet " + std::to_string(t) + " is degenerate (" + fmt(v) +
-                                                         " m^3) once the thin-axis stretch " + fmt(k) + " is undone");
-    }
+  // demands. Stretched by k across its thinnest axis n, the part is meshed with tets k times
+  // wider than thick once the nodes are taken back. The cell size, the target count and the
+  // optimisers' sliver bound are those of the stretched solid.
+  const auto n = thinAxis(surface);
+  if (!n) {
+    return makeError(ErrorCode::InvalidArgument, "a thin-axis stretch needs a flat part: the surface's two smallest "
+                                                 "second moments are within a factor 2, so it has no one thin axis");
   }
-  r.quality = computeMeshQuality(r.mesh);
-  return out;
+  Stretch stretch;
+  stretch.n = *n;
+  stretch.c = surface.vertices.colwise().mean().transpose();
+  stretch.k = s.thinStretch;
+  TriangleMesh stretched = surface;
+  stretch.apply(stretched.vertices, stretch.k);
+  return meshSurface(stretched, s, stretch, progress);
 }
 
 }  // namespace brittle

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
+#include <cmath>
 #include <cstdio>
 #include <numbers>
 #include <set>
@@ -35,6 +38,78 @@ TEST(TetMesher, BoxKeepsItsExactVolumeAndHitsTheTarget) {
   EXPECT_TRUE(m.sharpFeatures);
   EXPECT_EQ(m.meshingRuns, 1);
   EXPECT_TRUE(m.adjustments.empty());
+}
+
+TEST(TetMesher, AStretchedTiltedPlateIsTakenBackOntoItsOwnFaces) {
+  // A 0.2 × 0.16 × 0.02 m box, turned off every axis and moved: stretched 2.5 times across its
+  // thickness for meshing, its nodes must come back inside the box, its surface nodes onto the box's
+  // faces, its volume whole and its tets positive; and its tets are wider than thick.
+  const Eigen::Vector3d size(0.2, 0.16, 0.02);
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Vector3d shift(0.3, -0.2, 0.1);
+  TriangleMesh box = testing::makeBoxSurface(size.x(), size.y(), size.z());
+  for (Eigen::Index i = 0; i < box.vertices.rows(); ++i) {
+    box.vertices.row(i) = (rotation * (box.vertices.row(i).transpose() - size / 2) + shift).transpose();
+  }
+  TetMeshSettings s;
+  s.targetTets = 1500;
+  auto regular = tetrahedralize(box, s);
+  s.thinStretch = 2.5;
+  auto stretched = tetrahedralize(box, s);
+  ASSERT_TRUE(regular.ok()) << regular.error().message;
+  ASSERT_TRUE(stretched.ok()) << stretched.error().message;
+  const TetMesh& m = stretched.value().mesh;
+  EXPECT_NEAR(computeTetMassProperties(m, 1.0).volumeM3, size.prod(), 1e-9 * size.prod());
+  EXPECT_GT(stretched.value().quality.minTetVolumeM3, 0.0);
+  // In the box's own frame: every node inside, every surface node on a face.
+  auto local = [&](Eigen::Index node) -> Eigen::Vector3d {
+    return rotation.transpose() * (m.nodes.row(node).transpose() - shift);
+  };
+  for (Eigen::Index i = 0; i < m.nodes.rows(); ++i) {
+    EXPECT_TRUE((local(i).cwiseAbs() - size / 2).maxCoeff() < 1e-12) << "node " << i;
+  }
+  const Triangles& faces = stretched.value().surfaceFaces;
+  for (Eigen::Index i = 0; i < faces.size(); ++i) {
+    const Eigen::Vector3d q = local(faces.data()[i]);
+    EXPECT_LT((q.cwiseAbs() - size / 2).cwiseAbs().minCoeff(), 1e-12) << "surface node " << faces.data()[i];
+  }
+  // Edge reach along the plate over reach across it, against the near-regular mesh: ~2.5 times.
+  auto aspect = [&](const TetMesh& mesh) {
+    const Eigen::Vector3d n = rotation.col(2);
+    double along = 0.0, across = 0.0;
+    for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+      for (int a = 0; a < 4; ++a) {
+        for (int b = a + 1; b < 4; ++b) {
+          const Eigen::Vector3d e = mesh.nodes.row(mesh.tets(t, a)) - mesh.nodes.row(mesh.tets(t, b));
+          across += std::abs(e.dot(n));
+          along += (e - e.dot(n) * n).norm();
+        }
+      }
+    }
+    return along / across;
+  };
+  const double ratio = aspect(m) / aspect(regular.value().mesh);
+  std::printf("tilted plate: %lld tets stretched 2.5, %lld near-regular; edge aspect ratio %.2f times\n",
+              static_cast<long long>(m.tets.rows()), static_cast<long long>(regular.value().mesh.tets.rows()), ratio);
+  EXPECT_GT(ratio, 1.8);
+}
+
+TEST(TetMesher, AStretchNeedsAFlatPartAndARangeOfOneToSixteen) {
+  TetMeshSettings s;
+  s.targetTets = 500;
+  s.thinStretch = 2.0;
+  for (const auto& solid : {testing::makeBoxSurface(0.1, 0.1, 0.1), testing::makeBoxSurface(0.3, 0.05, 0.05),
+                            testing::makeIcosphere(0.1, 2)}) {
+    auto r = tetrahedralize(solid, s);  // no one thin axis: a cube, a square bar, a ball
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.error().code, ErrorCode::InvalidArgument);
+  }
+  for (const double bad : {0.5, 17.0, std::nan("")}) {
+    s.thinStretch = bad;
+    auto r = tetrahedralize(testing::makeBoxSurface(0.2, 0.2, 0.01), s);
+    ASSERT_FALSE(r.ok()) << bad;
+    EXPECT_EQ(r.error().code, ErrorCode::InvalidArgument);
+  }
 }
 
 TEST(TetMesher, BoundaryIsClosedOutwardAndBoundsTheTets) {

@@ -1,3 +1,4 @@
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -67,7 +68,14 @@ Runner addBakeCommand(CLI::App& app) {
   cmd->add_option("--stretch", o->stretch,
                   "Elements this many times wider than thick across the solid's thinnest axis (flat parts in p2: "
                   "bending needs one element through the thickness, not one as wide as it is thick); 1 = near-regular tets")
-      ->capture_default_str()->check(CLI::Range(1.0, 16.0));
+      ->capture_default_str()
+      ->check(CLI::Validator(  // CLI::Range lets "nan" through
+          [](std::string& v) -> std::string {
+            char* end = nullptr;
+            const double k = std::strtod(v.c_str(), &end);
+            return end != v.c_str() && *end == '\0' && k >= 1.0 && k <= 16.0 ? "" : "must be a number in [1, 16]";
+          },
+          "[1 - 16]"));
   cmd->add_option("--element", o->element,
                   "Finite element: p1 (4-node tets) or p2 (10-node tets; thin parts, which lock in bending with p1)")
       ->check(CLI::IsMember({"p1", "p2"}))->capture_default_str();

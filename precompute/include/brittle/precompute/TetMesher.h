@@ -64,7 +64,9 @@ struct TetMeshSettings {
   /// [1, 16]: the surface is stretched by it along that axis, meshed, and the nodes taken back
   /// (targetTets and cellSizeM are those of the stretched solid). 1 keeps Mesh_3's near-regular
   /// tets. For flat parts in quadratic tets, whose bending needs one element through the thickness
-  /// but not one as wide as it is thick.
+  /// but not one as wide as it is thick. sliverBoundDeg applies to the stretched tets. A part whose
+  /// two smallest second moments of volume lie within a factor 2 has no one thin axis, and a
+  /// stretch > 1 on it is an InvalidArgument.
   double thinStretch = 1.0;
 };
 
@@ -86,7 +88,8 @@ struct TetMeshResult {
 };
 
 /// Tetrahedralises the solid bounded by surface (which must pass validateSurfaceMesh).
-/// Errors: InvalidArgument (no target and no cell size, meshingRuns < 1), MeshingFailed (Mesh_3
+/// Errors: InvalidArgument (no target and no cell size, meshingRuns < 1, a stretch outside [1, 16]
+/// or on a part with no one thin axis), MeshingFailed (Mesh_3
 /// produced no cells, or a mesh that is not one solid after meshingRuns runs), DegenerateElement
 /// (a degenerate tet after meshingRuns runs), Cancelled. Their messages list the adjustments made.
 Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshSettings& settings,
