@@ -200,6 +200,9 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
   const auto sourceMesh = r.strings(prefix + "/bake/source_mesh", o);
   const auto targetTets = r.i64(prefix + "/bake/target_tets", {o}).values;
   const auto cellSize = r.f64(prefix + "/bake/cell_size_m", {o}).values;
+  // Optional, without a version bump (PACK_SCHEMA.md): packs baked before it were not stretched.
+  const auto thinStretch = r.exists(prefix + "/bake/thin_stretch") ? r.f64(prefix + "/bake/thin_stretch", {o}).values
+                                                                    : std::vector<double>(static_cast<size_t>(o), 1.0);
   const auto requestedModes = r.i64(prefix + "/bake/requested_modes", {o}).values;
   const auto lumpedMass = r.u8(prefix + "/bake/lumped_mass", {o}).values;
   const auto repaired = r.u8(prefix + "/bake/repaired", {o}).values;
@@ -297,6 +300,11 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
     b.sourceMesh = sourceMesh[i];
     b.targetTets = targetTets[i];
     b.cellSizeM = cellSize[i];
+    b.thinStretch = thinStretch[i];
+    if (!(b.thinStretch >= 1.0 && b.thinStretch <= 16.0)) {
+      fail(ErrorCode::PackCorrupt, "dataset '" + prefix + "/bake/thin_stretch' [" + std::to_string(i) + "] is " +
+                                       std::to_string(b.thinStretch) + ", outside [1, 16]");
+    }
     b.requestedModes = requestedModes[i];
     b.lumpedMass = flag(lumpedMass, i, prefix + "/bake/lumped_mass");
     b.repaired = flag(repaired, i, prefix + "/bake/repaired");

@@ -136,6 +136,7 @@ Status validateObject(const ObjectAsset& o, const std::string& label, const std:
       {"quality.meanRadiusEdgeRatio", &q.meanRadiusEdgeRatio, 1},
       {"quality.minTetVolumeM3", &q.minTetVolumeM3, 1},
       {"bake.cellSizeM", &b.cellSizeM, 1},
+      {"bake.thinStretch", &b.thinStretch, 1},
       {"bake.repairVolumeChange", &b.repairVolumeChange, 1},
       {"bake.shift", &b.shift, 1},
       {"bake.meshingS", &b.meshingS, 1},
@@ -146,6 +147,9 @@ Status validateObject(const ObjectAsset& o, const std::string& label, const std:
   };
   for (const auto& a : arrays) {
     if (Status st = checkFinite(label + " " + a.field, a.values, a.count); !st) return st;
+  }
+  if (!(b.thinStretch >= 1.0 && b.thinStretch <= 16.0)) {
+    return invalidArgument(label + ": bake.thinStretch is " + std::to_string(b.thinStretch) + ", outside [1, 16]");
   }
   return Ok{};
 }
@@ -359,6 +363,8 @@ void writeObjects(FileWriter& w, const std::string& prefix, const ObjectList& ob
     w.i64(prefix + "/bake/target_tets", gather<int64_t>(objects, [](const O& o) { return o.bake.targetTets; }), {count});
     w.f64(prefix + "/bake/cell_size_m", gather<double>(objects, [](const O& o) { return o.bake.cellSizeM; }), {count},
           "m");
+    w.f64(prefix + "/bake/thin_stretch", gather<double>(objects, [](const O& o) { return o.bake.thinStretch; }), {count},
+          "1");
     w.i64(prefix + "/bake/requested_modes", gather<int64_t>(objects, [](const O& o) { return o.bake.requestedModes; }),
           {count});
     w.u8(prefix + "/bake/lumped_mass", gather<uint8_t>(objects, [](const O& o) { return o.bake.lumpedMass ? 1 : 0; }));

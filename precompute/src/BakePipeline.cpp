@@ -77,6 +77,7 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
   BakeRecord& rec = asset.bake;
   rec.sourceMesh = s.sourceName.empty() ? s.meshPath.filename().string() : s.sourceName;
   rec.targetTets = s.tetMesh.targetTets;
+  rec.thinStretch = s.tetMesh.thinStretch;
   rec.requestedModes = s.modal.modeCount;
   rec.lumpedMass = s.fem.lumpedMass;
   rec.repaired = s.repair;

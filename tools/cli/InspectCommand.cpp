@@ -113,6 +113,7 @@ nlohmann::json inspectJson(const Pack& pack) {
     j["bake"] = {{"source_mesh", b.sourceMesh},
                  {"target_tets", b.targetTets},
                  {"cell_size_m", b.cellSizeM},
+                 {"thin_stretch", b.thinStretch},
                  {"requested_modes", b.requestedModes},
                  {"lumped_mass", b.lumpedMass},
                  {"repaired", b.repaired},
@@ -165,7 +166,9 @@ void printInspection(const Pack& pack, std::ostream& out) {
           << m.frequenciesHz(i) << " Hz   residual " << std::scientific << std::setprecision(2) << m.residuals(i)
           << std::defaultfloat << std::setprecision(4) << "\n";
     }
-    out << "  bake          target " << b.targetTets << " tets, cell size " << b.cellSizeM << " m, "
+    out << "  bake          target " << b.targetTets << " tets, ";
+    if (b.thinStretch != 1.0) out << b.thinStretch << "x wider than thick, ";
+    out << "cell size " << b.cellSizeM << " m, "
         << b.requestedModes << " modes, " << (b.lumpedMass ? "lumped" : "consistent") << " mass, "
         << b.factorization << ", shift " << b.shift << ", seed " << b.seed
         << (b.repaired ? ", repaired (volume change " + std::to_string(100.0 * b.repairVolumeChange) + "%)" : "")

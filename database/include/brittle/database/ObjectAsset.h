@@ -69,7 +69,8 @@ struct ModalBasis {
 struct BakeRecord {
   std::string sourceMesh;             ///< file name the object came from (no directories)
   int64_t targetTets = 0;             ///< requested element count (0 = size-driven)
-  double cellSizeM = 0.0;             ///< Mesh_3 cell size actually used
+  double cellSizeM = 0.0;             ///< Mesh_3 cell size actually used (of the stretched solid, below)
+  double thinStretch = 1.0;           ///< tets this many times wider than thick (TetMeshSettings::thinStretch)
   int64_t requestedModes = 0;
   bool lumpedMass = false;
   bool repaired = false;
