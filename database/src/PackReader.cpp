@@ -301,7 +301,7 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
     b.targetTets = targetTets[i];
     b.cellSizeM = cellSize[i];
     b.thinStretch = thinStretch[i];
-    if (!(b.thinStretch >= 1.0 && b.thinStretch <= 16.0)) {
+    if (!isThinStretch(b.thinStretch)) {
       fail(ErrorCode::PackCorrupt, "dataset '" + prefix + "/bake/thin_stretch' [" + std::to_string(i) + "] is " +
                                        std::to_string(b.thinStretch) + ", outside [1, 16]");
     }

@@ -148,7 +148,7 @@ Status validateObject(const ObjectAsset& o, const std::string& label, const std:
   for (const auto& a : arrays) {
     if (Status st = checkFinite(label + " " + a.field, a.values, a.count); !st) return st;
   }
-  if (!(b.thinStretch >= 1.0 && b.thinStretch <= 16.0)) {
+  if (!isThinStretch(b.thinStretch)) {
     return invalidArgument(label + ": bake.thinStretch is " + std::to_string(b.thinStretch) + ", outside [1, 16]");
   }
   return Ok{};

@@ -57,7 +57,7 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
       };
       for (const Range& r : {Range{"tets", 0.0, 5e6, true}, Range{"modes", 1.0, 2000.0, true},
                              Range{"seed", 0.0, 9.007199254740992e15, true}, Range{"sliver_bound", 0.0, 30.0, false},
-                             Range{"meshing_runs", 1.0, 8.0, true}, Range{"stretch", 1.0, 16.0, false}}) {
+                             Range{"meshing_runs", 1.0, 8.0, true}, Range{"stretch", 1.0, kMaxThinStretch, false}}) {
         if (!o.contains(r.key)) continue;
         const double v = o[r.key].is_number() ? o[r.key].get<double>() : std::nan("");
         if (!(v >= r.lo && v <= r.hi) || (r.integer && v != std::floor(v))) {

@@ -407,7 +407,7 @@ std::optional<Eigen::Vector3d> thinAxis(const TriangleMesh& surface) {
 }  // namespace
 
 Result<TetMeshResult> tetrahedralize(const TriangleMesh& surface, const TetMeshSettings& s, ProgressSink* progress) {
-  if (!(s.thinStretch >= 1.0 && s.thinStretch <= 16.0)) {
+  if (!isThinStretch(s.thinStretch)) {
     return makeError(ErrorCode::InvalidArgument, "tet meshing needs a thin-axis stretch in [1, 16]");
   }
   if (s.thinStretch == 1.0) return meshSurface(surface, s, Stretch{}, progress);

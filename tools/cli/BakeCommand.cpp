@@ -73,7 +73,7 @@ Runner addBakeCommand(CLI::App& app) {
           [](std::string& v) -> std::string {
             char* end = nullptr;
             const double k = std::strtod(v.c_str(), &end);
-            return end != v.c_str() && *end == '\0' && k >= 1.0 && k <= 16.0 ? "" : "must be a number in [1, 16]";
+            return end != v.c_str() && *end == '\0' && isThinStretch(k) ? "" : "must be a number in [1, 16]";
           },
           "[1 - 16]"));
   cmd->add_option("--element", o->element,

@@ -65,6 +65,11 @@ struct ModalBasis {
   MatrixXdRow modes;
 };
 
+/// The thin-axis stretch's range (BakeRecord::thinStretch, TetMeshSettings::thinStretch): from 1
+/// (near-regular tets) to kMaxThinStretch; NaN is outside it. Every reader of it checks this one.
+inline constexpr double kMaxThinStretch = 16.0;
+inline bool isThinStretch(double k) { return k >= 1.0 && k <= kMaxThinStretch; }
+
 /// Settings and timings of the bake that produced an asset; stored for reproducibility.
 struct BakeRecord {
   std::string sourceMesh;             ///< file name the object came from (no directories)
