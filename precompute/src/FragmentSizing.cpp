@@ -31,6 +31,7 @@ Result<std::vector<FragmentRecord>> sceneFragments(const ObjectAsset& asset, con
   ws.fracture.debrisVolumeFraction = 0.0;                 // every fragment is studied
   ws.fracture.exactModesMaxTets = std::numeric_limits<int>::max();  // each gets its own modes: no database needed
   ws.fracture.exactModesMaxDof = 0;
+  ws.fracture.exactModesBudgetDof = 0;
   Pack pack;
   pack.materials.push_back(material);
   pack.objects.push_back(asset);

@@ -61,6 +61,8 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
       if (Status st = integer(key, s.exactModesMaxTets); !st) return st.error();
     } else if (key == "exact_modes_max_dof") {
       if (Status st = integer(key, s.exactModesMaxDof); !st) return st.error();
+    } else if (key == "exact_modes_budget_dof") {
+      if (Status st = integer(key, s.exactModesBudgetDof); !st) return st.error();
     } else if (key == "exact_mode_count") {
       if (Status st = integer(key, s.exactModeCount); !st) return st.error();
       if (s.exactModeCount < 1) return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"exact_mode_count\" must be ≥ 1");
@@ -93,6 +95,7 @@ std::string runtimeSettingsJson(const FractureSettings& s) {
                               {"contact_spread_fraction", s.contactSpreadFraction},
                               {"exact_modes_max_tets", s.exactModesMaxTets},
                               {"exact_modes_max_dof", s.exactModesMaxDof},
+                              {"exact_modes_budget_dof", s.exactModesBudgetDof},
                               {"exact_mode_count", s.exactModeCount},
                               {"match_error_target", s.matchErrorTarget},
                               {"modes", s.modeCount}};

@@ -258,19 +258,11 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const doub
 // The exact path: the fragment's own solid now (cheap, and where it fails, e.g. a fragment that
 // hangs by an edge, the match is taken instead); its modal analysis later (BodySource). Should
 // the analysis fail, the object takes the fragment's database match when there is a database.
+// The caller has checked its size against exactModesMaxDof and the impact's budget.
 std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::shared_ptr<const BrokenParent>& parent,
                                               const FragmentResult& fr, size_t i, std::string& reason) {
   const FractureSettings& fs = *job.settings;
   const ElementOrder order = parent->body->asset.elementOrder;
-  // The size before the cut: the sub-mesh below has exactly this many degrees of freedom, or fewer
-  // where a part of it is dropped (fragmentCutDof).
-  if (const int64_t dof = fragmentCutDof(parent->body->asset.tetMesh, parent->body->topology, parent->nodeLabels,
-                                         static_cast<int>(i), order);
-      fs.exactModesMaxDof > 0 && dof > fs.exactModesMaxDof) {
-    reason = "exact path: its " + std::string(elementOrderName(order)) + " model has " + std::to_string(dof) +
-             " degrees of freedom, over exactModesMaxDof = " + std::to_string(fs.exactModesMaxDof);
-    return nullptr;
-  }
   auto sub = fragmentSubMesh(parent->body->asset.tetMesh, parent->body->topology, parent->nodeLabels, parent->edgeCuts,
                              static_cast<int>(i));
   if (!sub) {
@@ -305,11 +297,39 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   });
 }
 
+// Which exact-path candidates get it within the impact's budget (exactModesBudgetDof): the
+// largest first (a match's error grows with the fragment's size, chart 5, and a larger piece
+// carries more of the mass and is likelier to be struck again), ties by fragment index, each
+// taken while the running total stays within the budget. A fixed order of values computed from
+// the impact alone, so the choice is the same on every machine, thread count and run.
+void grantExactBudget(const FractureSettings& fs, const std::vector<int64_t>& dof, std::vector<uint8_t>& granted,
+                      ImpactResult& result) {
+  std::vector<size_t> order;
+  for (size_t i = 0; i < dof.size(); ++i)
+    if (granted[i]) order.push_back(i);
+  if (fs.exactModesBudgetDof <= 0) return;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return dof[a] > dof[b]; });
+  int64_t used = 0;
+  for (size_t i : order) {
+    if (used + dof[i] <= fs.exactModesBudgetDof) {
+      used += dof[i];
+      continue;
+    }
+    granted[i] = 0;
+    std::string& reason = result.fragments[i].reason;
+    reason += std::string(reason.empty() ? "" : "; ") + "exact path: its " + std::to_string(dof[i]) + " degrees of freedom would take this impact's " +
+                                 "exact-path total past exactModesBudgetDof = " + std::to_string(fs.exactModesBudgetDof) +
+                                 " (" + std::to_string(used) + " given to larger pieces)";
+  }
+}
+
 // New objects for the fragments that are not debris: the exact path for small ones (at most
-// exactModesMaxTets of the parent's tets), else, or when their solid cannot be cut out, the
-// match. The heavy part of each (a modal analysis, an entry rescaled) is deferred into a
-// BodySource, which the World makes on its workers once the impact is applied; what stays here
-// is cheap. Fragments are independent and done in parallel; each writes only its own entries.
+// exactModesMaxTets of the parent's tets and exactModesMaxDof degrees of freedom, together within
+// exactModesBudgetDof), else, or when their solid cannot be cut out, the match. The heavy part of
+// each (a modal analysis, an entry rescaled) is deferred into a BodySource, which the World makes
+// on its workers once the impact is applied; what stays here is cheap. Fragments are independent
+// and done in parallel, each writing only its own entries, but for the budget, which is shared
+// and so decided between the two parallel passes.
 void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResult& result,
                     std::vector<std::shared_ptr<const BodySource>>& born) {
   const FractureSettings& fs = *job.settings;
@@ -328,26 +348,43 @@ void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResul
   }
   const double* moments = ws.fragmentMoments.data();
   const double target = fs.matchErrorTarget;
+  const ElementOrder order = job.body->asset.elementOrder;
   auto percent = [](double x) { return std::to_string(static_cast<int>(std::lround(100.0 * x))) + " %"; };
+  // The exact path's candidates: small enough, and not better served by a match predicted within
+  // the target; their size in degrees of freedom, counted before anything is cut (fragmentCutDof).
+  std::vector<int64_t> dof(result.fragments.size(), 0);
+  std::vector<uint8_t> exact(result.fragments.size(), 0);
+  auto weigh = [&](size_t i) {
+    FragmentResult& fr = result.fragments[i];
+    if (fr.debris || !parent || sizes[i] > fs.exactModesMaxTets) return;
+    // With a target, a match predicted within it is taken instead of the exact path.
+    if (target > 0.0 && job.matcher) {
+      born[i] = matchedSource(job, moments + i * kFragmentMomentCount, fr);
+      if (born[i] && fr.predictedMatchErrorP90 <= target) {
+        fr.path = FragmentPath::Matched;
+        return;
+      }
+      born[i] = nullptr;
+      fr.matchedEntry = -1;
+      fr.matchDistance = 0.0;
+      if (!std::isnan(fr.predictedMatchErrorP90)) {
+        fr.reason = "match predicted at " + percent(fr.predictedMatchErrorP90) + " (p90), over the target " +
+                    percent(target) + ": the exact path";
+      }
+    }
+    dof[i] = fragmentCutDof(job.body->asset.tetMesh, job.body->topology, result.fracture.nodeLabels,
+                            static_cast<int>(i), order);
+    if (fs.exactModesMaxDof > 0 && dof[i] > fs.exactModesMaxDof) {
+      fr.reason = "exact path: its " + std::string(elementOrderName(order)) + " model has " + std::to_string(dof[i]) +
+                  " degrees of freedom, over exactModesMaxDof = " + std::to_string(fs.exactModesMaxDof);
+      return;
+    }
+    exact[i] = 1;
+  };
   auto make = [&](size_t i) {
     FragmentResult& fr = result.fragments[i];
-    if (fr.debris) return;
-    if (parent && sizes[i] <= fs.exactModesMaxTets) {
-      // With a target, a match predicted within it is taken instead of the exact path.
-      if (target > 0.0 && job.matcher) {
-        born[i] = matchedSource(job, moments + i * kFragmentMomentCount, fr);
-        if (born[i] && fr.predictedMatchErrorP90 <= target) {
-          fr.path = FragmentPath::Matched;
-          return;
-        }
-        born[i] = nullptr;
-        fr.matchedEntry = -1;
-        fr.matchDistance = 0.0;
-        if (!std::isnan(fr.predictedMatchErrorP90)) {
-          fr.reason = "match predicted at " + percent(fr.predictedMatchErrorP90) + " (p90), over the target " +
-                      percent(target) + ": the exact path";
-        }
-      }
+    if (fr.debris || fr.path == FragmentPath::Matched) return;
+    if (exact[i]) {
       born[i] = exactSource(job, parent, fr, i, fr.reason);
       if (born[i]) {
         fr.exactModes = true;
@@ -366,12 +403,14 @@ void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResul
                    " (p90), over the target " + percent(target) + ", and the fragment over the exact path's budget";
     }
   };
-  auto all = [&] {
+  auto each = [&](auto&& f) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, result.fragments.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i != r.end(); ++i) make(i);
+      for (size_t i = r.begin(); i != r.end(); ++i) f(i);
     });
   };
-  inArena(job, all);
+  inArena(job, [&] { each(weigh); });
+  grantExactBudget(fs, dof, exact, result);
+  inArena(job, [&] { each(make); });
 }
 
 }  // namespace

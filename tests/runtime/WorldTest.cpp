@@ -216,6 +216,7 @@ TEST(WorldP2Test, AQuadraticPlateBreaksIntoClosedFragmentsThatKeepTheirElement) 
   WorldSettings settings;
   settings.fracture.exactModesMaxTets = 1000000;  // every fragment that is not debris
   settings.fracture.exactModesMaxDof = 0;
+  settings.fracture.exactModesBudgetDof = 0;
   settings.fracture.exactModeCount = 4;           // a few modes: the element is the point here
   const Pack source = pack.value();
   auto world = World::create(Pack(source), settings);
@@ -386,6 +387,7 @@ TEST_F(WorldTest, AMatchErrorTargetTakesTheMatchWhereItIsPredictedGoodEnough) {
     WorldSettings settings;
     settings.fracture.exactModesMaxTets = 1000000;  // every fragment that is not debris may take the exact path
     settings.fracture.exactModesMaxDof = 0;
+    settings.fracture.exactModesBudgetDof = 0;
     settings.fracture.exactModeCount = 4;
     settings.fracture.matchErrorTarget = target;
     World world = makeWorld(settings);
@@ -418,9 +420,64 @@ TEST_F(WorldTest, AMatchErrorTargetTakesTheMatchWhereItIsPredictedGoodEnough) {
   EXPECT_EQ(World::create(Pack(*sPack), bad).error().code, ErrorCode::InvalidArgument);
 }
 
+// The exact path's budget per impact: the largest candidates first, each while the total stays
+// within it; the others are matched and say why. The same choice on every run.
+TEST_F(WorldTest, TheExactPathsBudgetGoesToTheLargestPiecesFirst) {
+  auto run = [&](int budget) {
+    WorldSettings settings;
+    settings.fracture.exactModesMaxTets = 1000000;  // every fragment that is not debris is a candidate
+    settings.fracture.exactModesMaxDof = 0;
+    settings.fracture.exactModesBudgetDof = budget;
+    settings.fracture.exactModeCount = 4;
+    World world = makeWorld(settings);
+    auto hit = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
+    EXPECT_TRUE(hit && hit.value().broken);
+    std::vector<int64_t> dof;  // per fragment: its own model's size, 0 where it is not exact
+    for (const FragmentResult& f : hit.value().fragments) {
+      dof.push_back(f.exactModes ? world.objectAsset(f.object).value()->modal.modes.rows() : 0);
+    }
+    return std::make_pair(std::move(hit).value(), dof);
+  };
+  const auto [all, allDof] = run(0);
+  std::vector<size_t> exact;
+  for (size_t i = 0; i < all.fragments.size(); ++i)
+    if (all.fragments[i].exactModes) exact.push_back(i);
+  ASSERT_GE(exact.size(), 2u);
+  const size_t largest = *std::max_element(exact.begin(), exact.end(), [&](size_t a, size_t b) { return allDof[a] < allDof[b]; });
+  // A budget of the largest piece alone: it, and nothing else, takes the exact path.
+  const auto [one, oneDof] = run(static_cast<int>(allDof[largest]));
+  ASSERT_EQ(one.fragments.size(), all.fragments.size());  // the same fracture: only the new objects differ
+  for (size_t i : exact) {
+    const FragmentResult& f = one.fragments[i];
+    if (i == largest) {
+      EXPECT_TRUE(f.exactModes);
+      EXPECT_EQ(oneDof[i], allDof[i]);
+      EXPECT_TRUE(f.reason.empty()) << f.reason;
+      continue;
+    }
+    EXPECT_FALSE(f.exactModes);
+    EXPECT_EQ(f.path, FragmentPath::Matched);
+    EXPECT_NE(f.reason.find("exactModesBudgetDof = " + std::to_string(allDof[largest]) + " (" +
+                            std::to_string(allDof[largest]) + " given to larger pieces)"),
+              std::string::npos)
+        << f.reason;
+  }
+  // A budget under every piece: all matched; and the same choice on a second run.
+  const auto [none, noneDof] = run(1);
+  for (size_t i : exact) {
+    EXPECT_EQ(none.fragments[i].path, FragmentPath::Matched);
+    EXPECT_NE(none.fragments[i].reason.find("past exactModesBudgetDof = 1 (0 given"), std::string::npos) << none.fragments[i].reason;
+  }
+  EXPECT_EQ(run(static_cast<int>(allDof[largest])).second, oneDof);
+  WorldSettings bad;
+  bad.fracture.exactModesBudgetDof = -1;
+  EXPECT_EQ(World::create(Pack(*sPack), bad).error().code, ErrorCode::InvalidArgument);
+}
+
 TEST_F(WorldTest, ExactPathFragmentsHaveTheirOwnModesAndBreakAgainWithoutADatabase) {
   WorldSettings settings;
   settings.fracture.exactModesMaxTets = 1000000;  // every fragment that is not debris
+  settings.fracture.exactModesBudgetDof = 0;
   World world = makeWorld(settings, false);
   auto first = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
   ASSERT_TRUE(first && first.value().broken);

@@ -6,6 +6,7 @@
 //     "contact_spread_fraction": 0.05,   // the contact load's least radius, per bounding-box diagonal
 //     "exact_modes_max_tets": 150,       // the exact path's size limit (0: never)
 //     "exact_modes_max_dof": 2000,       // and its model's limit in degrees of freedom (0: none)
+//     "exact_modes_budget_dof": 2000,    // and the exact-path pieces' total per impact (0: none)
 //     "exact_mode_count": 20,
 //     "match_error_target": 0,           // a small fragment's match within this predicted error is
 //                                        // taken instead of the exact path (0: size alone decides)

@@ -110,6 +110,14 @@ struct FractureSettings {
   /// 6–7k DOF and took 220–480 ms on the pane, where the match and a database entry's
   /// factorisation take ~10 ms; over the limit the fragment is matched. 0: no limit.
   int exactModesMaxDof = 2000;
+  /// ... and, per impact, whose models together have at most this many degrees of freedom: the
+  /// largest such fragments first, ties by fragment index (the others are matched, their reason
+  /// says so). What one impact queues for the workers: an exact-path build costs about 15 µs per
+  /// DOF (a P1 piece of 855 DOF 14 ms, of 1 600 DOF 18–20 ms), while a matched piece's body takes a
+  /// few ms, so a break into many small pieces otherwise keeps a 2-core host's one worker busy for
+  /// 50–80 ms, and a piece struck again meanwhile waits for it (docs/realtime.md, "A budget for the
+  /// exact path"). 0: no budget.
+  int exactModesBudgetDof = 2000;
   /// Modes of an exact-path fragment (at most modeCount when that is set). Fragments are smaller
   /// than their parent, so fewer of their modes fall in an impact's band; the static correction
   /// covers the rest. 40 modes cost ~1.5× what 20 do (chart 5).
