@@ -30,6 +30,10 @@ const MonomialTables& monomialTables();
 /// did; the caller does the rest. Wide needs widestLanes() == Lanes::Wide.
 Eigen::Index surfaceMomentsOrder4(const TriangleMesh& surface, const Eigen::Vector3d& originM, double* sum, Lanes lanes);
 
+/// addTetVolumeMomentsOrder4 with the given lanes (the same bits with either): fours with Wide, then
+/// pairs, then a last tet by the scalar kernel. Wide needs widestLanes() == Lanes::Wide.
+void tetMomentsOrder4(const std::array<Eigen::Vector3d, 4>* tets, int count, double* values, Lanes lanes);
+
 /// VolumeMoments::directional over count directions with the given lanes (the same bits with
 /// either). Wide needs widestLanes() == Lanes::Wide.
 void directional(const VolumeMoments& moments, const Eigen::Vector3d* u, size_t count, int order, double* out, Lanes lanes);

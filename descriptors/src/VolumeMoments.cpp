@@ -338,15 +338,82 @@ BRITTLE_TARGET_AVX Eigen::Index momentsOrder4Wide(const TriangleMesh& surface, c
   return momentsOrder4InLanes<4>(surface, originM, sum);
 }
 
+// addTetVolumeMoments at order 4 for tets [0, L⌊count/L⌋), L at a time: lane l holds tet i + l,
+// and every lane takes the scalar kernel's operations in its order (the determinant by the same
+// Eigen expression, sums from 0.0, (det × scale) × h, no fused multiply-add), so each tet's terms
+// are the same bits, added to values[m] in tet order as successive calls add them. Returns the
+// number of tets done.
+template <int L>
+[[gnu::always_inline]] inline int tetMomentsOrder4InLanes(const std::array<Eigen::Vector3d, 4>* tets, int count,
+                                                          double* values) {
+  using Pack = VectorOf<double, L>;
+  constexpr int n = Order4Tables::kCount;
+  const int packs = count / L;
+  Pack h[4][n];  // h(A), h(A,B), h(A,B,C), h(A,B,C,D), as tetMonomial's
+  Pack one;
+  for (int l = 0; l < L; ++l) one[l] = 1.0;
+  h[0][0] = h[1][0] = h[2][0] = h[3][0] = one;
+  for (int i = 0; i < packs; ++i) {
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+    Pack p[4][3], dets;
+    for (int l = 0; l < L; ++l) {
+      const std::array<Eigen::Vector3d, 4>& t = tets[L * i + l];
+      dets[l] = (t[1] - t[0]).dot((t[2] - t[0]).cross(t[3] - t[0]));
+      for (int v = 0; v < 4; ++v)
+        for (int j = 0; j < 3; ++j) p[v][j][l] = t[static_cast<size_t>(v)][j];
+    }
+#pragma GCC diagnostic pop
+    for (int l = 0; l < L; ++l) values[0] += dets[l] * kOrder4.scale[0];
+#pragma GCC unroll 40
+    for (int m = 1; m < n; ++m) {
+      Pack sum[4] = {};
+      for (int j = 0; j < 3; ++j) {
+        const int src = kOrder4.lower[m][j];
+        if (src < 0) continue;
+        for (int v = 0; v < 4; ++v) sum[v] += p[v][j] * h[v][src];
+      }
+      h[0][m] = sum[0];
+      h[1][m] = h[0][m] + sum[1];
+      h[2][m] = h[1][m] + sum[2];
+      h[3][m] = h[2][m] + sum[3];
+      const Pack term = (dets * kOrder4.scale[m]) * h[3][m];
+      for (int l = 0; l < L; ++l) values[m] += term[l];
+    }
+  }
+  return L * packs;
+}
+
+int tetMomentsOrder4Narrow(const std::array<Eigen::Vector3d, 4>* tets, int count, double* values) {
+  return tetMomentsOrder4InLanes<2>(tets, count, values);
+}
+
+BRITTLE_TARGET_AVX int tetMomentsOrder4Wide(const std::array<Eigen::Vector3d, 4>* tets, int count, double* values) {
+  return tetMomentsOrder4InLanes<4>(tets, count, values);
+}
+
 }  // namespace
 
 namespace detail {
+
+void tetMomentsOrder4(const std::array<Eigen::Vector3d, 4>* tets, int count, double* values, Lanes lanes) {
+  int done = lanes == Lanes::Wide ? tetMomentsOrder4Wide(tets, count, values) : 0;
+  done += tetMomentsOrder4Narrow(tets + done, count - done, values);  // a pair left after fours, or pairs
+  for (; done < count; ++done) {
+    const std::array<Eigen::Vector3d, 4>& t = tets[done];
+    addTetVolumeMoments(t[0], t[1], t[2], t[3], 4, values);
+  }
+}
 
 Eigen::Index surfaceMomentsOrder4(const TriangleMesh& surface, const Eigen::Vector3d& originM, double* sum, Lanes lanes) {
   return lanes == Lanes::Wide ? momentsOrder4Wide(surface, originM, sum) : momentsOrder4Narrow(surface, originM, sum);
 }
 
 }  // namespace detail
+
+void addTetVolumeMomentsOrder4(const std::array<Eigen::Vector3d, 4>* tets, int count, double* values) {
+  detail::tetMomentsOrder4(tets, count, values, widestLanes());
+}
 
 void addTetVolumeMoments(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                          const Eigen::Vector3d& d, int maxOrder, double* values) {

@@ -272,19 +272,22 @@ void addRangeMoments(const TetMesh& mesh, const TetTopology& topology, const Tet
       if (label[i] == label[rest]) continue;
       // Node i's corner cell: the sub-tets (x_i, e_ij, f_ijk, c) of the flags i ⊂ ij ⊂ ijk, each
       // oriented as the permutation (i, j, k, l) orients the tet.
-      std::fill(cell, cell + count, 0.0);
+      // The six sub-tets in this order, their moments added in it (addTetVolumeMomentsOrder4 takes
+      // several at a time in wide registers, with the bits of one at a time).
+      static_assert(kFragmentMomentOrder == 4);
+      std::array<Eigen::Vector3d, 4> sub[6];
+      int subs = 0;
       for (int j = 0; j < 4; ++j) {
         if (j == i) continue;
         for (int k = 0; k < 4; ++k) {
           if (k == i || k == j) continue;
           const int l = 6 - i - j - k;
-          if (oddPermutation(i, j, k, l)) {
-            addTetVolumeMoments(x[i], edgePoint[i][j], centre, facePoint[l], kFragmentMomentOrder, cell);
-          } else {
-            addTetVolumeMoments(x[i], edgePoint[i][j], facePoint[l], centre, kFragmentMomentOrder, cell);
-          }
+          const bool odd = oddPermutation(i, j, k, l);
+          sub[subs++] = {x[i], edgePoint[i][j], odd ? centre : facePoint[l], odd ? facePoint[l] : centre};
         }
       }
+      std::fill(cell, cell + count, 0.0);
+      addTetVolumeMomentsOrder4(sub, subs, cell);
       if (label[i] != body) {
         double* into = sums + static_cast<size_t>(label[i]) * count;
         for (int m = 0; m < count; ++m) into[m] += cell[m];

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <utility>
@@ -233,6 +234,38 @@ TEST(VolumeMoments, TypedErrors) {
   auto badIndex = box;
   badIndex.faces(2, 0) = 8;
   EXPECT_EQ(computeVolumeMoments(badIndex, 4, o).error().code, ErrorCode::InvalidArgument);
+}
+
+TEST(VolumeMoments, TetsInLanesAreOneAtATimeBitForBit) {
+  // The runtime's corner cells add six sub-tets at a time: in either lanes, and for counts that are
+  // not whole registers, the sums are the bits of one addTetVolumeMoments call after another
+  // (both signs of orientation, a flat tet, and a coordinate of −0.0 among them).
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> normal(0.0, 0.3);
+  std::vector<std::array<Eigen::Vector3d, 4>> tets(23);
+  for (auto& t : tets)
+    for (auto& p : t) p = Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+  tets[5][3] = tets[5][0] + 0.5 * (tets[5][1] - tets[5][0]);  // flat: det 0 within rounding
+  tets[7][2] = Eigen::Vector3d(-0.0, 0.1, -0.0);
+  for (Lanes lanes : runnableLanes()) {
+    for (int count : {0, 1, 2, 3, 5, 6, 23}) {
+      std::vector<double> one(monomialCount(4), 0.25), batch(monomialCount(4), 0.25);  // onto nonzero sums
+      for (int i = 0; i < count; ++i) {
+        const auto& t = tets[static_cast<size_t>(i)];
+        addTetVolumeMoments(t[0], t[1], t[2], t[3], 4, one.data());
+      }
+      detail::tetMomentsOrder4(tets.data(), count, batch.data(), lanes);
+      EXPECT_EQ(std::memcmp(one.data(), batch.data(), sizeof(double) * one.size()), 0)
+          << count << " tets, " << (lanes == Lanes::Wide ? "AVX" : "SSE2");
+      if (count == 23) {
+        EXPECT_NE(batch[monomialIndex(2, 1, 1)], 0.25);
+      }
+    }
+  }
+  std::vector<double> viaPublic(monomialCount(4), 0.0), narrow(monomialCount(4), 0.0);
+  addTetVolumeMomentsOrder4(tets.data(), 23, viaPublic.data());
+  detail::tetMomentsOrder4(tets.data(), 23, narrow.data(), Lanes::Narrow);
+  EXPECT_EQ(std::memcmp(viaPublic.data(), narrow.data(), sizeof(double) * narrow.size()), 0);
 }
 
 }  // namespace
