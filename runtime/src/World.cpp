@@ -234,8 +234,8 @@ std::string_view fragmentPathName(FragmentPath path) {
 Status validateWorldSettings(const WorldSettings& s) {
   const FractureSettings& f = s.fracture;
   if (s.maxObjects < 1) return invalidArgument("WorldSettings: maxObjects must be ≥ 1");
-  if (s.maxPendingImpacts < 1 || s.workerThreads < 0 || s.maxFragmentsPerImpact < 2) {
-    return invalidArgument("WorldSettings: maxPendingImpacts must be ≥ 1, workerThreads ≥ 0 and maxFragmentsPerImpact ≥ 2");
+  if (s.maxPendingImpacts < 1 || s.workerThreads < 0 || s.maxFragmentsPerImpact < 2 || s.prepareEntryCorrections < 0) {
+    return invalidArgument("WorldSettings: maxPendingImpacts must be ≥ 1, workerThreads ≥ 0, maxFragmentsPerImpact ≥ 2 and prepareEntryCorrections ≥ 0");
   }
   if (f.modeCount < 0 || f.pulseSteps < 2 || f.ringDownSteps < 0 || !(f.ringDownPeriods >= 0.0) ||
       !std::isfinite(f.ringDownPeriods) || !(f.debrisVolumeFraction >= 0.0 && f.debrisVolumeFraction < 1.0) ||
@@ -313,6 +313,18 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
             (void)made->tetMoments();
             if (correct) (void)made->staticCorrection();
           });
+          if (correct && w.entryCorrections) {  // the database's first entries, in entry order
+            const auto entries = std::min(w.pack.database.entries.size(),
+                                          static_cast<size_t>(w.settings.prepareEntryCorrections));
+            const int modeCount = w.settings.fracture.modeCount;
+            for (size_t e = 0; e < entries; ++e) {
+              const auto stored = static_cast<int>(w.pack.database.entries[e].asset.modal.modes.cols());
+              const int modes = modeCount > 0 ? std::min(modeCount, stored) : stored;  // as makeBody keeps them
+              w.background.run([ec = w.entryCorrections.get(), e, material = *mat, modes] {
+                (void)ec->get(static_cast<int32_t>(e), material, modes);
+              });
+            }
+          }
         });
       } else {
         (void)made->stressBounds();

@@ -1,5 +1,6 @@
 // The runtime end to end on baked objects: thresholds, conservation, determinism, pruning,
 // recursive fracture through the database, and typed errors.
+#include "brittle/runtime/Fingerprint.h"
 #include "brittle/runtime/World.h"
 
 #include <gtest/gtest.h>
@@ -577,6 +578,36 @@ TEST_F(WorldTest, AMatchedFragmentsSharedEntryCorrectionEqualsItsOwnFactorisatio
   // Two factorisations whose L the corrections keep rounded to float (CorrectionStorage::Float):
   // rounding apart: 5.3e-9 measured, the same on every machine (1e-9 before float storage).
   EXPECT_NEAR(peaks[0] / peaks[1], 1.0, 2e-8);
+}
+
+// Entries' corrections factorised at placement (prepareEntryCorrections) are the ones a matched
+// fragment would otherwise factorise on first use: the break, and a hit on its largest matched
+// piece, are the same bits either way.
+TEST_F(WorldTest, EntryCorrectionsFactorisedAtPlacementChangeNoBits) {
+  std::vector<uint64_t> prints;
+  for (const int prepare : {0, 1000}) {
+    SCOPED_TRACE(prepare ? "every entry factorised at placement" : "each entry on first use");
+    WorldSettings settings;
+    settings.prepareEntryCorrections = prepare;
+    World world = makeWorld(settings);
+    const ObjectId plate = world.addObject({.asset = "plate"}).value();
+    ASSERT_TRUE(world.waitUntilPrepared());
+    auto broken = world.impact(ball(plate, 60.0));
+    ASSERT_TRUE(broken && broken.value().broken);
+    ImpactDesc soft = softHitOnTheLargestMatched(world, broken.value());
+    ASSERT_TRUE(soft.object.valid());
+    soft.fast = true;  // the correction is used only where it was scheduled: it is, both ways
+    auto hit = world.impact(soft);
+    ASSERT_TRUE(hit) << hit.error().message;
+    EXPECT_TRUE(hit.value().staticCorrectionUsed);
+    prints.push_back(fingerprint(broken.value()));
+    prints.push_back(fingerprint(hit.value()));
+  }
+  EXPECT_EQ(prints[0], prints[2]);
+  EXPECT_EQ(prints[1], prints[3]);
+  WorldSettings bad;
+  bad.prepareEntryCorrections = -1;
+  EXPECT_EQ(World::create(Pack(*sPack), bad).error().code, ErrorCode::InvalidArgument);
 }
 
 TEST_F(WorldTest, BadInputsGiveTypedErrorsNeverCrashes) {

@@ -93,7 +93,14 @@ struct PlayerSettings {
   /// gives them between an impact and its application. Frame times exclude the sleep. Results do
   /// not change; only how long the play takes.
   bool realTime = false;
-  WorldSettings world;              ///< world.seed is replaced by the scene's seed
+  /// world.seed is replaced by the scene's seed. The player factorises up to 256 database entries'
+  /// corrections when an object is placed (WorldSettings::prepareEntryCorrections), so that a
+  /// shattering break does not queue an entry factorisation per matched piece.
+  WorldSettings world = [] {
+    WorldSettings w;
+    w.prepareEntryCorrections = 256;
+    return w;
+  }();
 };
 
 /// Range checks: threshold > 0, cooldown ≥ 0, maxImpactsPerStep ≥ 1, fractureBudgetS ≥ 0,
