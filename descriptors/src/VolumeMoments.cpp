@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "MonomialTables.h"
@@ -227,10 +228,13 @@ Result<VolumeMoments> computeVolumeMoments(const TriangleMesh& surface, int maxO
 namespace {
 
 // The gather step of the recurrences for four vertices, monomial m from its lower monomials.
-// h[0..3] are the coefficient arrays of h(A), h(A,B), h(A,B,C), h(A,B,C,D).
-template <class Lower>
-inline double tetMonomial(const Lower& lower, int m, const Eigen::Vector3d* p, double* const* h) {
-  double s[4] = {0.0, 0.0, 0.0, 0.0};
+// h[0..3] are the coefficient arrays of h(A), h(A,B), h(A,B,C), h(A,B,C,D); p[v][j] is vertex v's
+// coordinate j. The value is a double or a register of tets in lanes, with the same operations.
+// The monomial's integral over the tet, up to det × scale, is then h[3][m].
+template <class Lower, class Points, class Coefficients>
+[[gnu::always_inline]] inline void tetMonomial(const Lower& lower, int m, const Points& p, Coefficients& h) {
+  using Value = std::remove_cvref_t<decltype(h[0][0])>;
+  Value s[4] = {};
   for (int j = 0; j < 3; ++j) {
     const int src = lower[j];
     if (src < 0) continue;
@@ -240,7 +244,6 @@ inline double tetMonomial(const Lower& lower, int m, const Eigen::Vector3d* p, d
   h[1][m] = h[0][m] + s[1];
   h[2][m] = h[1][m] + s[2];
   h[3][m] = h[2][m] + s[3];
-  return h[3][m];
 }
 
 // Order 4 with tables known at compile time, so that the loop unrolls into straight-line code.
@@ -367,16 +370,7 @@ template <int L>
     for (int l = 0; l < L; ++l) values[0] += dets[l] * kOrder4.scale[0];
 #pragma GCC unroll 40
     for (int m = 1; m < n; ++m) {
-      Pack sum[4] = {};
-      for (int j = 0; j < 3; ++j) {
-        const int src = kOrder4.lower[m][j];
-        if (src < 0) continue;
-        for (int v = 0; v < 4; ++v) sum[v] += p[v][j] * h[v][src];
-      }
-      h[0][m] = sum[0];
-      h[1][m] = h[0][m] + sum[1];
-      h[2][m] = h[1][m] + sum[2];
-      h[3][m] = h[2][m] + sum[3];
+      tetMonomial(kOrder4.lower[m], m, p, h);
       const Pack term = (dets * kOrder4.scale[m]) * h[3][m];
       for (int l = 0; l < L; ++l) values[m] += term[l];
     }
@@ -427,7 +421,10 @@ void addTetVolumeMoments(const Eigen::Vector3d& a, const Eigen::Vector3d& b, con
     ha[0] = hab[0] = habc[0] = habcd[0] = 1.0;
     values[0] += det * kOrder4.scale[0];
 #pragma GCC unroll 40
-    for (int m = 1; m < count; ++m) values[m] += det * kOrder4.scale[m] * tetMonomial(kOrder4.lower[m], m, p, h);
+    for (int m = 1; m < count; ++m) {
+      tetMonomial(kOrder4.lower[m], m, p, h);
+      values[m] += det * kOrder4.scale[m] * habcd[m];
+    }
     return;
   }
   const auto& t = detail::monomialTables();
@@ -441,7 +438,10 @@ void addTetVolumeMoments(const Eigen::Vector3d& a, const Eigen::Vector3d& b, con
     return t.factorial[m] / denominator;
   };
   values[0] += det * scale(0);
-  for (int m = 1; m < count; ++m) values[m] += det * scale(m) * tetMonomial(t.lower[m], m, p, h);
+  for (int m = 1; m < count; ++m) {
+    tetMonomial(t.lower[m], m, p, h);
+    values[m] += det * scale(m) * habcd[m];
+  }
 }
 
 VolumeMoments transformVolumeMoments(const VolumeMoments& moments, const Eigen::Matrix3d& linearMap,

@@ -13,6 +13,10 @@ const Result<StaticCorrection>& EntryCorrections::get(int32_t entry, const Mater
     slot = held.get();  // map nodes do not move: the pointer stays valid
   }
   std::call_once(slot->once, [&] {
+    struct Count {
+      std::atomic<int32_t>& built;
+      ~Count() { built.fetch_add(1, std::memory_order_release); }
+    } count{mBuilt};
     if (entry < 0 || static_cast<size_t>(entry) >= mDatabase.entries.size()) {
       slot->correction.emplace(makeError(ErrorCode::InvalidArgument, "entry " + std::to_string(entry) + " out of range"));
       return;

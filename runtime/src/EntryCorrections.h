@@ -9,6 +9,8 @@
 // what the fragment's own factorisation would give, within rounding.
 #pragma once
 
+#include <atomic>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -33,6 +35,8 @@ class EntryCorrections {
   /// use. Errors: those of instantiateEntry and StaticCorrection::build, InvalidArgument (an entry
   /// out of range).
   const Result<StaticCorrection>& get(int32_t entry, const Material& material, int modes) const;
+  /// How many (entry, material) corrections are built so far, failed ones included.
+  int32_t built() const { return mBuilt.load(std::memory_order_acquire); }
 
  private:
   struct Slot {
@@ -42,6 +46,7 @@ class EntryCorrections {
   const FragmentDatabase& mDatabase;
   mutable std::mutex mMutex;  // guards mSlots' structure; each slot is built under its own once_flag
   mutable std::map<std::pair<int32_t, std::string>, std::unique_ptr<Slot>> mSlots;
+  mutable std::atomic<int32_t> mBuilt{0};
 };
 
 }  // namespace brittle::detail

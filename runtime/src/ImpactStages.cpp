@@ -304,10 +304,10 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
 // the impact alone, so the choice is the same on every machine, thread count and run.
 void grantExactBudget(const FractureSettings& fs, const std::vector<int64_t>& dof, std::vector<uint8_t>& granted,
                       ImpactResult& result) {
+  if (fs.exactModesBudgetDof <= 0) return;
   std::vector<size_t> order;
   for (size_t i = 0; i < dof.size(); ++i)
     if (granted[i]) order.push_back(i);
-  if (fs.exactModesBudgetDof <= 0) return;
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return dof[a] > dof[b]; });
   int64_t used = 0;
   for (size_t i : order) {

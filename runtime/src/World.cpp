@@ -9,6 +9,8 @@
 #include <exception>
 #include <map>
 #include <optional>
+#include <set>
+#include <string>
 
 #include "Body.h"
 #include "ImpactStages.h"
@@ -63,6 +65,7 @@ struct World::Impl {
   WorldSettings settings;
   std::optional<FragmentMatcher> matcher;
   std::unique_ptr<detail::EntryCorrections> entryCorrections;  // with a matcher and shareEntryCorrections
+  std::set<std::string> entryCorrectionsScheduled;  // materials whose entries placement has scheduled
   std::vector<std::shared_ptr<const BodySource>> packBodies;  // per pack object, built on first use
   std::vector<Slot> slots;
   std::vector<uint32_t> freeSlots;
@@ -313,7 +316,8 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
             (void)made->tetMoments();
             if (correct) (void)made->staticCorrection();
           });
-          if (correct && w.entryCorrections) {  // the database's first entries, in entry order
+          if (correct && w.entryCorrections && w.entryCorrectionsScheduled.insert(mat->name).second) {
+            // the database's first entries, in entry order, once per material
             const auto entries = std::min(w.pack.database.entries.size(),
                                           static_cast<size_t>(w.settings.prepareEntryCorrections));
             const int modeCount = w.settings.fracture.modeCount;
@@ -457,6 +461,10 @@ Status World::collectImpact(ImpactTicket ticket, ImpactResult& result) {
 }
 
 int32_t World::pendingImpacts() const { return static_cast<int32_t>(mImpl->pending.size()); }
+
+int32_t World::entryCorrectionsBuilt() const {
+  return mImpl->entryCorrections ? mImpl->entryCorrections->built() : 0;
+}
 
 Status World::waitUntilPrepared() {
   try {

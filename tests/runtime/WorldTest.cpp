@@ -592,6 +592,10 @@ TEST_F(WorldTest, EntryCorrectionsFactorisedAtPlacementChangeNoBits) {
     World world = makeWorld(settings);
     const ObjectId plate = world.addObject({.asset = "plate"}).value();
     ASSERT_TRUE(world.waitUntilPrepared());
+    // Placement did the work, or none of it (one material: one correction per entry).
+    const auto entries = static_cast<int32_t>(sPack->database.entries.size());
+    ASSERT_GT(entries, 0);
+    EXPECT_EQ(world.entryCorrectionsBuilt(), prepare ? entries : 0);
     auto broken = world.impact(ball(plate, 60.0));
     ASSERT_TRUE(broken && broken.value().broken);
     ImpactDesc soft = softHitOnTheLargestMatched(world, broken.value());
@@ -602,6 +606,9 @@ TEST_F(WorldTest, EntryCorrectionsFactorisedAtPlacementChangeNoBits) {
     EXPECT_TRUE(hit.value().staticCorrectionUsed);
     prints.push_back(fingerprint(broken.value()));
     prints.push_back(fingerprint(hit.value()));
+    if (!prepare) {
+      EXPECT_GT(world.entryCorrectionsBuilt(), 0);  // the hit on a matched piece built its entry's
+    }
   }
   EXPECT_EQ(prints[0], prints[2]);
   EXPECT_EQ(prints[1], prints[3]);

@@ -358,6 +358,10 @@ class World {
   /// preparation, in pack order (as StaticCorrection::build); the objects stay placed and their
   /// impacts return the same error.
   Status waitUntilPrepared();
+  /// How many database entries' static corrections are factorised so far (each shared by the
+  /// fragments matched to its entry: WorldSettings::prepareEntryCorrections at placement, or a
+  /// matched fragment's first impact). 0 without a database or shareEntryCorrections.
+  int32_t entryCorrectionsBuilt() const;
 
  private:
   struct Impl;
