@@ -12,10 +12,12 @@
 #include <limits>
 #include <memory>
 #include <queue>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 // hnswlib 0.6.2's SSE path prefetches through the entry one past a full link list, a heap
 // over-read that AddressSanitizer reports. Without it (no manual vectorisation) the graph code is
 // clean, and the distance below is vectorised by Eigen instead.
@@ -263,22 +265,33 @@ class HnswBackend final : public Backend {
   hnswlib::HierarchicalNSW<float> mGraph;
 };
 
-// HnswPooled: the graph over a short key per row, the grid's block sums (a cubic grid of R³ values
-// summed over 8 × 8 × 8 blocks of (R/8)³ cells, 512 values, scaled by 1/√cells). By Cauchy–Schwarz
-// the keys' squared distance is a lower bound of the rows' own, so a near row has a near key. The
-// ef rows whose keys are nearest are then ranked by their exact squared distance (as brute force
-// computes it; for rows of 0/1 values, the Hamming distance of their bit codes, the same number),
-// and the k best returned. A query touches the graph's 2 KiB keys and ef full rows only. Blocks
-// of 4³ (64 values) were tried first: on 10⁴ fragments' grids their recall stopped at 0.70
-// (occupancy) and 0.96 (clamped distance) at ef 64 (docs/results/fragment-database.md).
+// HnswPooled and HnswPrincipal: the graph over a short key per row, with the ef rows whose keys
+// are nearest then ranked by their exact squared distance (as brute force computes it; for rows of
+// 0/1 values, the Hamming distance of their bit codes, the same number), and the k best returned.
+// Both keys start from the grid's block sums (a cubic grid of R³ values summed over 8 × 8 × 8 blocks
+// of (R/8)³ cells, 512 values, scaled by 1/√cells):
+//   - HnswPooled keys a row by those 512 sums;
+//   - HnswPrincipal by their projection on the first kPrincipalDims principal directions of the
+//     indexed rows' sums (a PCA of a sample of them, made when the index is built): 64 values, so a
+//     step of the walk reads 256 bytes instead of 2 KiB.
+// Each key is an orthonormal projection of the row (the blocks' indicators over √cells, then the
+// principal directions), so by Cauchy–Schwarz the keys' squared distance is a lower bound of the
+// rows' own: a near row has a near key. Blocks of 4³ (64 values) were tried first: on 10⁴
+// fragments' grids their recall stopped at 0.70 (occupancy) and 0.96 (clamped distance) at ef 64
+// (docs/results/fragment-database.md); the principal key keeps 64 numbers made from all 512. A skip
+// of the candidates whose key alone proves them out of the k best was tried with it and dropped:
+// on those grids it skipped none (31 of 32 measured), since 64 of 512 directions leave the bound
+// loose.
 class PooledHnswBackend final : public Backend {
  public:
-  static constexpr int kBlocksPerAxis = 8, kKeyDims = kBlocksPerAxis * kBlocksPerAxis * kBlocksPerAxis;
+  static constexpr int kBlocksPerAxis = 8, kBlocks = kBlocksPerAxis * kBlocksPerAxis * kBlocksPerAxis;
+  static constexpr int kPrincipalDims = 64;
+  static constexpr int64_t kPrincipalSample = 4096;  // rows the PCA is made from, evenly spaced
 
-  PooledHnswBackend(const float* data, int64_t rows, int64_t dims, int64_t side, bool binary,
+  PooledHnswBackend(const float* data, int64_t rows, int64_t dims, int64_t side, bool binary, bool principal,
                     const DescriptorIndexSettings& settings)
       : mData(data), mDims(dims), mSide(side), mBinary(binary), mWordsPerCode(static_cast<size_t>(codeBytes(dims, 8) / 8)),
-        mKeySpace(kKeyDims), mCodeSpace(mWordsPerCode),
+        mKeyDims(principal ? kPrincipalDims : kBlocks), mKeySpace(mKeyDims), mCodeSpace(mWordsPerCode),
         mGraph(&mKeySpace, static_cast<size_t>(rows), static_cast<size_t>(settings.trees), size_t{200},
                static_cast<size_t>(settings.seed)) {
     mHamming = mCodeSpace.get_dist_func();
@@ -286,9 +299,10 @@ class PooledHnswBackend final : public Backend {
       mCodes.resize(static_cast<size_t>(rows) * mWordsPerCode * 8);
       packBits(data, rows, dims, 8, mCodes.data());
     }
-    std::array<float, kKeyDims> key;
+    if (principal) principalDirections(rows);
+    std::vector<float> key(mKeyDims);
     for (int64_t r = 0; r < rows; ++r) {  // in order, with a seeded level draw: the same graph in any process
-      pool(data + r * dims, key.data());
+      makeKey(data + r * dims, key.data());
       mGraph.addPoint(key.data(), static_cast<hnswlib::labeltype>(r));
     }
     mGraph.setEf(static_cast<size_t>(settings.checks));
@@ -309,10 +323,10 @@ class PooledHnswBackend final : public Backend {
   Status querySet(const float* descriptors, int64_t count, int k, int64_t* ids, float* squaredDistances,
                   int32_t* rows) const override {
     try {
-      std::vector<float> keys(static_cast<size_t>(count) * kKeyDims);
-      for (int64_t q = 0; q < count; ++q) pool(descriptors + q * mDims, keys.data() + q * kKeyDims);
+      std::vector<float> keys(static_cast<size_t>(count) * mKeyDims);
+      for (int64_t q = 0; q < count; ++q) makeKey(descriptors + q * mDims, keys.data() + q * mKeyDims);
       const std::vector<Scored> candidates =
-          walkSet(mGraph, reinterpret_cast<const unsigned char*>(keys.data()), count, kKeyDims * sizeof(float),
+          walkSet(mGraph, reinterpret_cast<const unsigned char*>(keys.data()), count, mKeyDims * sizeof(float),
                   std::max(mGraph.ef_, static_cast<size_t>(k)));
       if (static_cast<int>(candidates.size()) < k) return tooFewNeighbours(candidates.size(), k);
       rank(descriptors, count, candidates, k, ids, squaredDistances, rows);
@@ -322,18 +336,20 @@ class PooledHnswBackend final : public Backend {
     return Ok{};
   }
 
-  int64_t memoryBytes() const override { return graphBytes(mGraph) + static_cast<int64_t>(mCodes.size()); }
+  int64_t memoryBytes() const override {
+    return graphBytes(mGraph) + static_cast<int64_t>(mCodes.size() + (mBasis.size() + mMean.size()) * sizeof(float));
+  }
 
  private:
   // The block sums of one row, each over √cells: a block's cells are b consecutive values of a
   // line, summed line by line into the block's slot (no division per value).
-  void pool(const float* row, float* key) const {
+  void pool(const float* row, float* sums) const {
     const int64_t b = mSide / kBlocksPerAxis;
-    std::fill(key, key + kKeyDims, 0.0f);
+    std::fill(sums, sums + kBlocks, 0.0f);
     for (int64_t z = 0; z < mSide; ++z) {
       for (int64_t y = 0; y < mSide; ++y) {
         const float* line = row + (z * mSide + y) * mSide;
-        float* out = key + ((z / b) * kBlocksPerAxis + y / b) * kBlocksPerAxis;
+        float* out = sums + ((z / b) * kBlocksPerAxis + y / b) * kBlocksPerAxis;
         for (int64_t xb = 0; xb < kBlocksPerAxis; ++xb, line += b) {
           float sum = 0.0f;
           for (int64_t x = 0; x < b; ++x) sum += line[x];
@@ -342,7 +358,55 @@ class PooledHnswBackend final : public Backend {
       }
     }
     const float scale = 1.0f / std::sqrt(static_cast<float>(b * b * b));
-    for (int i = 0; i < kKeyDims; ++i) key[i] *= scale;
+    for (int i = 0; i < kBlocks; ++i) sums[i] *= scale;
+  }
+
+  // A row's key into `key`. The projection adds the directions' columns one block at a time, each
+  // key value summed in block order: the same bits wherever the buffers lie, as the graph's build
+  // needs, and 64 independent sums that the compiler keeps in registers.
+  void makeKey(const float* row, float* key) const {
+    std::array<float, kBlocks> sums;
+    pool(row, sums.data());
+    if (mBasis.empty()) {
+      std::copy(sums.begin(), sums.end(), key);
+      return;
+    }
+    std::array<float, kPrincipalDims> out{};
+    for (int j = 0; j < kBlocks; ++j) {
+      const float c = sums[static_cast<size_t>(j)] - mMean[static_cast<size_t>(j)];
+      const float* direction = mBasis.data() + static_cast<size_t>(j) * kPrincipalDims;  // column j
+      for (int i = 0; i < kPrincipalDims; ++i) out[static_cast<size_t>(i)] += direction[i] * c;
+    }
+    std::copy(out.begin(), out.end(), key);
+  }
+
+  // The first kPrincipalDims eigenvectors of the block sums' covariance over an evenly spaced
+  // sample of the rows (all of them up to kPrincipalSample), in double, summed in row order and
+  // solved by Eigen's symmetric solver: the same directions in any process.
+  void principalDirections(int64_t rows) {
+    const int64_t sample = std::min(rows, kPrincipalSample);
+    Eigen::MatrixXd sums(kBlocks, sample);
+    std::array<float, kBlocks> one;
+    for (int64_t i = 0; i < sample; ++i) {
+      pool(mData + (i * rows / sample) * mDims, one.data());
+      for (int j = 0; j < kBlocks; ++j) sums(j, i) = one[static_cast<size_t>(j)];
+    }
+    const Eigen::VectorXd mean = sums.rowwise().sum() / static_cast<double>(sample);
+    Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(kBlocks, kBlocks);
+    for (int64_t i = 0; i < sample; ++i) {
+      const Eigen::VectorXd c = sums.col(i) - mean;
+      for (int j = 0; j < kBlocks; ++j) covariance.col(j) += c[j] * c;  // element by element, in row order
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(covariance);
+    if (solver.info() != Eigen::Success) throw std::runtime_error("the principal directions did not converge");
+    // Eigenvalues ascending: the last columns, largest first, stored transposed (a column per block).
+    mBasis.resize(static_cast<size_t>(kBlocks) * kPrincipalDims);
+    for (int i = 0; i < kPrincipalDims; ++i) {
+      const auto v = solver.eigenvectors().col(kBlocks - 1 - i);
+      for (int j = 0; j < kBlocks; ++j) mBasis[static_cast<size_t>(j) * kPrincipalDims + i] = static_cast<float>(v[j]);
+    }
+    mMean.resize(kBlocks);
+    for (int j = 0; j < kBlocks; ++j) mMean[j] = static_cast<float>(mean[j]);
   }
 
   // The candidates by their exact distance to the set (the smallest over its rows; the lowest row
@@ -407,8 +471,11 @@ class PooledHnswBackend final : public Backend {
   int64_t mDims, mSide;
   bool mBinary;
   size_t mWordsPerCode;
-  std::vector<uint8_t> mCodes;  // rows of 0/1 values: their bit codes, for the ranking
-  EigenL2Space mKeySpace;       // declared before the graph, which keeps a pointer to it
+  int mKeyDims;
+  std::vector<uint8_t> mCodes;   // rows of 0/1 values: their bit codes, for the ranking
+  std::vector<float> mBasis;     // principal key: kBlocks columns of kPrincipalDims (the directions, transposed)
+  std::vector<float> mMean;      // principal key: the sample's mean block sums
+  EigenL2Space mKeySpace;        // declared before the graph, which keeps a pointer to it
   HammingSpace mCodeSpace;
   hnswlib::DISTFUNC<float> mHamming;  // mCodeSpace's distance, chosen once
   hnswlib::HierarchicalNSW<float> mGraph;
@@ -425,13 +492,14 @@ Result<std::unique_ptr<Backend>> buildHnsw(const float* data, int64_t rows, int6
   if (rows > static_cast<int64_t>(std::numeric_limits<uint32_t>::max()))
     return invalidArgument("DescriptorIndex: HNSW needs rows <= UINT32_MAX");
   try {
-    if (settings.kind == DescriptorIndexSettings::Kind::HnswPooled) {
+    if (settings.kind == DescriptorIndexSettings::Kind::HnswPooled || settings.kind == DescriptorIndexSettings::Kind::HnswPrincipal) {
       const auto side = static_cast<int64_t>(std::llround(std::cbrt(static_cast<double>(dims))));
       if (side * side * side != dims || side % PooledHnswBackend::kBlocksPerAxis != 0)
-        return invalidArgument("DescriptorIndex: hnsw-pooled needs a cubic grid whose side is a multiple of 8 (R^3 values), got " +
+        return invalidArgument(std::string("DescriptorIndex: ") + descriptorIndexKindName(settings.kind) + " needs a cubic grid whose side is a multiple of 8 (R^3 values), got " +
                                std::to_string(dims) + " values");
       const bool binary = checkZeroOne(data, rows, dims, false).ok();
-      return std::unique_ptr<Backend>(std::make_unique<PooledHnswBackend>(data, rows, dims, side, binary, settings));
+      const bool principal = settings.kind == DescriptorIndexSettings::Kind::HnswPrincipal;
+      return std::unique_ptr<Backend>(std::make_unique<PooledHnswBackend>(data, rows, dims, side, binary, principal, settings));
     }
     if (indexTakesBits(settings.kind)) {
       if (Status st = checkZeroOne(data, rows, dims, false); !st) return st.error();

@@ -368,15 +368,18 @@ std::vector<float> smoothGrids(int64_t rows, uint32_t seed, bool occupancy) {
 // The pooled graph answers with exact distances (brute force's, or the bit codes' for 0/1 rows),
 // finds the nearest entry of near-duplicate queries, answers sets like the other graphs, and
 // refuses grids it cannot pool and, over 0/1 rows, queries that are not 0/1.
+// The principal key (HnswPrincipal) is tested the same way.
 TEST(DescriptorIndex, PooledGraphRanksItsCandidatesExactly) {
   const int64_t rows = 1000, dims = 4096, queries = 60;
+  for (const Kind kind : {Kind::HnswPooled, Kind::HnswPrincipal})
   for (bool occupancy : {false, true}) {
+    SCOPED_TRACE(descriptorIndexKindName(kind));
     const auto data = smoothGrids(rows, 3, occupancy);
     const DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
-    DescriptorIndexSettings pooledSettings = settingsFor(Kind::HnswPooled, 32);
+    DescriptorIndexSettings pooledSettings = settingsFor(kind, 32);
     pooledSettings.trees = 16;
     const DescriptorIndex pooled = buildOrDie(data, dims, pooledSettings);
-    EXPECT_EQ(pooled.settings().kind, Kind::HnswPooled);
+    EXPECT_EQ(pooled.settings().kind, kind);
     std::mt19937 rng(4);
     int hits = 0;
     for (int64_t i = 0; i < queries; ++i) {
@@ -414,7 +417,8 @@ TEST(DescriptorIndex, PooledGraphRanksItsCandidatesExactly) {
       EXPECT_EQ(d[0], float(own.distances[0]));
       EXPECT_EQ(r[0], own.rows[0]);
     }
-    RecordProperty(occupancy ? "pooled_recall_occupancy" : "pooled_recall_field", std::to_string(double(hits) / queries));
+    RecordProperty(std::string(descriptorIndexKindName(kind)) + (occupancy ? "_recall_occupancy" : "_recall_field"),
+                   std::to_string(double(hits) / queries));
     EXPECT_GE(double(hits) / double(queries), 0.98) << (occupancy ? "occupancy" : "field");
     if (occupancy) {
       std::vector<float> half(dims, 0.5f);
@@ -424,11 +428,45 @@ TEST(DescriptorIndex, PooledGraphRanksItsCandidatesExactly) {
     }
   }
   // 28 values are no cubic grid; 12³ is one, but not of a side divisible by 8.
-  const auto flat = randomMatrix(10, 28, 1);
-  EXPECT_EQ(DescriptorIndex::build(flat.data(), 10, 28, settingsFor(Kind::HnswPooled)).error().code, ErrorCode::InvalidArgument);
-  const auto cube = randomMatrix(10, 12 * 12 * 12, 1);
-  EXPECT_EQ(DescriptorIndex::build(cube.data(), 10, 12 * 12 * 12, settingsFor(Kind::HnswPooled)).error().code,
-            ErrorCode::InvalidArgument);
+  for (const Kind kind : {Kind::HnswPooled, Kind::HnswPrincipal}) {
+    const auto flat = randomMatrix(10, 28, 1);
+    EXPECT_EQ(DescriptorIndex::build(flat.data(), 10, 28, settingsFor(kind)).error().code, ErrorCode::InvalidArgument);
+    const auto cube = randomMatrix(10, 12 * 12 * 12, 1);
+    EXPECT_EQ(DescriptorIndex::build(cube.data(), 10, 12 * 12 * 12, settingsFor(kind)).error().code,
+              ErrorCode::InvalidArgument);
+  }
+}
+
+// With a beam as wide as the data every row is a candidate, so the keyed graphs' answers must be
+// brute force's, ids and distances, on queries that are no near copy of any row (many rows at
+// similar distances: where a ranking error would show). The build is the same in a second index.
+TEST(DescriptorIndex, KeyedGraphsWithAWideBeamAreExact) {
+  const int64_t rows = 400, dims = 4096;
+  for (bool occupancy : {false, true}) {
+    SCOPED_TRACE(occupancy ? "occupancy" : "field");
+    const auto data = smoothGrids(rows, 5, occupancy);
+    const auto queries = smoothGrids(12, 6, occupancy);
+    const DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+    for (const Kind kind : {Kind::HnswPooled, Kind::HnswPrincipal}) {
+      SCOPED_TRACE(descriptorIndexKindName(kind));
+      DescriptorIndexSettings wide = settingsFor(kind, int(rows));
+      wide.trees = 16;
+      const DescriptorIndex index = buildOrDie(data, dims, wide), again = buildOrDie(data, dims, wide);
+      for (int64_t q = 0; q < 12; ++q) {
+        int64_t ids[5], exactIds[5], againIds[5];
+        float d[5], exactD[5], againD[5];
+        ASSERT_TRUE(index.query(queries.data() + q * dims, 5, ids, d).ok());
+        ASSERT_TRUE(again.query(queries.data() + q * dims, 5, againIds, againD).ok());
+        ASSERT_TRUE(exact.query(queries.data() + q * dims, 5, exactIds, exactD).ok());
+        for (int j = 0; j < 5; ++j) {
+          EXPECT_EQ(ids[j], exactIds[j]) << "query " << q << " rank " << j;
+          EXPECT_EQ(d[j], exactD[j]) << "query " << q << " rank " << j;
+          EXPECT_EQ(ids[j], againIds[j]);
+          EXPECT_EQ(d[j], againD[j]);
+        }
+      }
+    }
+  }
 }
 
 TEST(DescriptorIndex, SetQueryErrors) {

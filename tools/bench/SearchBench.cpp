@@ -65,7 +65,7 @@ Result<IndexChoice> parseIndexChoice(const std::string& text) {
   auto kind = parseDescriptorIndexKind(name);
   const auto bad = [&] {
     return makeError(ErrorCode::InvalidArgument,
-                     "index '" + text + "': expected kd-forest:TREES:CHECKS, hnsw:M:EF[:set], hnsw-binary:M:EF[:set], hnsw-pooled:M:EF[:set], faiss-hnsw:M:EF, "
+                     "index '" + text + "': expected kd-forest:TREES:CHECKS, hnsw:M:EF[:set], hnsw-binary:M:EF[:set], hnsw-pooled:M:EF[:set], hnsw-principal:M:EF[:set], faiss-hnsw:M:EF, "
                      "faiss-ivf:LISTS:PROBES, faiss-binary-hnsw:M:EF, autotuned:PRECISION, brute-force or "
                      "faiss-binary-flat");
   };
@@ -88,7 +88,8 @@ Result<IndexChoice> parseIndexChoice(const std::string& text) {
   std::string rest = text.substr(name.size());
   // The graphs' ":set": a fragment's candidate frames in one walk (FragmentMatcherSettings::framesAsOneSet).
   constexpr std::string_view kSet = ":set";
-  const bool graph = kind.value() == Kind::Hnsw || kind.value() == Kind::HnswBinary || kind.value() == Kind::HnswPooled;
+  const bool graph = kind.value() == Kind::Hnsw || kind.value() == Kind::HnswBinary || kind.value() == Kind::HnswPooled ||
+                     kind.value() == Kind::HnswPrincipal;
   if (graph && rest.size() > kSet.size() && rest.compare(rest.size() - kSet.size(), kSet.size(), kSet) == 0) {
     rest.resize(rest.size() - kSet.size());
     c.framesAsOneSet = true;
@@ -285,7 +286,8 @@ Status runSearchBench(const SearchBenchSettings& s) {
       double bruteMedian = 0.0;
       for (const IndexChoice& choice : choices) {
         if (indexTakesBits(choice.settings.kind) && kind != DescriptorKind::Voxel) continue;  // 0/1 codes only
-        if (choice.settings.kind == DescriptorIndexSettings::Kind::HnswPooled && kind == DescriptorKind::Moment) continue;  // grids only
+        if ((choice.settings.kind == DescriptorIndexSettings::Kind::HnswPooled ||
+             choice.settings.kind == DescriptorIndexSettings::Kind::HnswPrincipal) && kind == DescriptorKind::Moment) continue;  // grids only
         FragmentMatcherSettings ms;
         ms.enabled = {false, false, false};
         ms.enabled[static_cast<size_t>(kind)] = true;

@@ -29,7 +29,7 @@ struct IndexChoice {
   bool framesAsOneSet = false;  ///< true: ":set", a fragment's candidate frames in one walk of a graph
 };
 
-/// "kd-forest:TREES:CHECKS", "hnsw:M:EF[:set]", "hnsw-binary:M:EF[:set]", "hnsw-pooled:M:EF[:set]", "faiss-hnsw:M:EF", "faiss-ivf:LISTS:PROBES",
+/// "kd-forest:TREES:CHECKS", "hnsw:M:EF[:set]", "hnsw-binary:M:EF[:set]", "hnsw-pooled:M:EF[:set]", "hnsw-principal:M:EF[:set]", "faiss-hnsw:M:EF", "faiss-ivf:LISTS:PROBES",
 /// "faiss-binary-hnsw:M:EF", "autotuned:PRECISION", "brute-force" or "faiss-binary-flat".
 Result<IndexChoice> parseIndexChoice(const std::string& text);
 

@@ -48,7 +48,7 @@ Runner addQueryCommand(CLI::App& app) {
   std::vector<std::string> backends;
   for (auto kind : kAllDescriptorIndexKinds) backends.push_back(descriptorIndexKindName(kind));
   cmd->add_option("--index", o->index,
-                  "Override the stored index: brute-force (exact), kd-forest, autotuned, hnsw, hnsw-binary, hnsw-pooled, faiss-hnsw, "
+                  "Override the stored index: brute-force (exact), kd-forest, autotuned, hnsw, hnsw-binary, hnsw-pooled, hnsw-principal, faiss-hnsw, "
                   "faiss-ivf, faiss-binary-flat or faiss-binary-hnsw (graphs: M 16, ef 64; faiss-ivf: √n lists, a "
                   "quarter probed; the binary kinds: voxel only)")
       ->check(CLI::IsMember(backends));
@@ -80,7 +80,7 @@ Runner addQueryCommand(CLI::App& app) {
         if (index.kind == Kind::FaissIvf) {
           index.trees = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(db.entries.size()))));
           index.checks = std::max(1, index.trees / 4);
-        } else if (index.kind == Kind::Hnsw || index.kind == Kind::HnswBinary || index.kind == Kind::HnswPooled || index.kind == Kind::FaissHnsw ||
+        } else if (index.kind == Kind::Hnsw || index.kind == Kind::HnswBinary || index.kind == Kind::HnswPooled || index.kind == Kind::HnswPrincipal || index.kind == Kind::FaissHnsw ||
                    index.kind == Kind::FaissBinaryHnsw) {
           index.trees = 16;  // M and ef: hnswlib's and FAISS's usual defaults
           index.checks = 64;

@@ -24,9 +24,10 @@ TEXT = {"descriptor", "index", "query_source", "frames"}
 # Index families: the project's own (solid) and FAISS's (dashed).
 FAMILIES = {"brute-force": ("black", ""), "kd-forest": ("tab:blue", "-"), "autotuned": ("tab:cyan", "-"),
             "hnsw": ("tab:orange", "-"), "hnsw-binary": ("tab:red", "-"),
-            "hnsw-pooled": ("tab:brown", "-"),
+            "hnsw-pooled": ("tab:brown", "-"), "hnsw-principal": ("tab:gray", "-"),
             "hnsw, frames as one set": ("navajowhite", "-"), "hnsw-binary, frames as one set": ("lightcoral", "-"),
             "hnsw-pooled, frames as one set": ("rosybrown", "-"),
+            "hnsw-principal, frames as one set": ("silver", "-"),
             "faiss-hnsw": ("tab:green", "--"),
             "faiss-ivf": ("tab:olive", "--"), "faiss-binary-flat": ("tab:purple", "--"),
             "faiss-binary-hnsw": ("tab:pink", "--")}

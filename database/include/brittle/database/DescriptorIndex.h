@@ -23,6 +23,10 @@
 //     distance is a lower bound of the rows' own; the ef rows with the nearest keys are ranked by
 //     their exact distance (brute force's; rows of 0/1 values by their bit codes, so their queries
 //     must be 0/1 too). `trees` and `checks` as Hnsw; ef is also the number ranked.
+//   - HnswPrincipal: HnswPooled with a 64-value key, the block sums' projection on their first 64
+//     principal directions (a PCA of up to 4 096 evenly spaced rows, made by the build), still a
+//     lower bound of the rows' distance; candidates are measured nearest key first and skipped once
+//     their key proves them out of the k best. Its keys are 8× shorter, so its walk is cheaper.
 //   - FAISS (Debian's libfaiss-dev), the standard baselines for descriptor research:
 //     FaissHnsw (IndexHNSWFlat: `trees` is M, `checks` efSearch, efConstruction 200), FaissIvf
 //     (IndexIVFFlat: `trees` inverted lists from k-means, `checks` lists probed), and on binary
@@ -68,9 +72,9 @@ class Backend;
 }
 
 struct DescriptorIndexSettings {
-  enum class Kind { BruteForce, KdForest, Autotuned, Hnsw, HnswBinary, FaissHnsw, FaissIvf, FaissBinaryFlat, FaissBinaryHnsw, HnswPooled };
+  enum class Kind { BruteForce, KdForest, Autotuned, Hnsw, HnswBinary, FaissHnsw, FaissIvf, FaissBinaryFlat, FaissBinaryHnsw, HnswPooled, HnswPrincipal };
   Kind kind = Kind::KdForest;
-  /// KdForest: number of randomized kd-trees, ≥ 1. Hnsw, HnswBinary, HnswPooled and the FAISS graphs: M, in
+  /// KdForest: number of randomized kd-trees, ≥ 1. Hnsw, HnswBinary, HnswPooled, HnswPrincipal and the FAISS graphs: M, in
   /// [2, 1024]. FaissIvf: inverted lists, in [1, rows].
   int trees = 4;
   /// KdForest: leaves visited per query, ≥ 1 (more: slower, better). Hnsw and the FAISS graphs:
@@ -84,6 +88,7 @@ inline constexpr DescriptorIndexSettings::Kind kAllDescriptorIndexKinds[] = {
     DescriptorIndexSettings::Kind::BruteForce,      DescriptorIndexSettings::Kind::KdForest,
     DescriptorIndexSettings::Kind::Autotuned,       DescriptorIndexSettings::Kind::Hnsw,
     DescriptorIndexSettings::Kind::HnswBinary,      DescriptorIndexSettings::Kind::HnswPooled,
+    DescriptorIndexSettings::Kind::HnswPrincipal,
     DescriptorIndexSettings::Kind::FaissHnsw,       DescriptorIndexSettings::Kind::FaissIvf,
     DescriptorIndexSettings::Kind::FaissBinaryFlat, DescriptorIndexSettings::Kind::FaissBinaryHnsw};
 
@@ -93,7 +98,7 @@ constexpr bool indexTakesBits(DescriptorIndexSettings::Kind kind) {
          kind == DescriptorIndexSettings::Kind::FaissBinaryHnsw;
 }
 
-/// "brute-force", "kd-forest", "autotuned", "hnsw", "hnsw-binary", "hnsw-pooled", "faiss-hnsw", "faiss-ivf",
+/// "brute-force", "kd-forest", "autotuned", "hnsw", "hnsw-binary", "hnsw-pooled", "hnsw-principal", "faiss-hnsw", "faiss-ivf",
 /// "faiss-binary-flat" or "faiss-binary-hnsw" (the CLI and pack spelling).
 const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind);
 /// Inverse of descriptorIndexKindName. Error: InvalidArgument listing the valid names.
