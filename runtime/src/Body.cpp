@@ -88,7 +88,7 @@ Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& 
   body->topology = std::move(topo).value();
   body->material = material;
   const auto available = static_cast<int>(asset.modal.modes.cols());
-  body->modes = modeCount > 0 ? std::min(modeCount, available) : available;
+  body->modes = keptModeCount(modeCount, available);
   body->omega = asset.modal.eigenvaluesRad2PerS2.head(body->modes).cwiseMax(0.0).cwiseSqrt();
   if (!(body->omega.minCoeff() > 0.0)) {
     return makeError(ErrorCode::InvalidArgument, "object '" + asset.name + "' has a zero-frequency elastic mode");

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <atomic>
 #include <functional>
 #include <memory>
@@ -94,7 +95,10 @@ class BodySource {
   mutable std::optional<Result<std::shared_ptr<const Body>>> mBody;
 };
 
-/// Builds a body with the first `modeCount` stored modes (0: all). With `factor` (the exact
+/// The modes a body keeps of `available`: the first `requested`, or all of them when requested ≤ 0.
+inline int keptModeCount(int requested, int available) { return requested > 0 ? std::min(requested, available) : available; }
+
+/// Builds a body with the first `modeCount` stored modes (0: all, keptModeCount). With `factor` (the exact
 /// path's, holding a factorisation), its static correction is built at once from that factor
 /// (μ = −σ) instead of a second factorisation on its first impact. Errors: InvalidArgument (no
 /// modal data, stress modes of the wrong size, a zero-frequency elastic mode), those of

@@ -270,7 +270,7 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
     return nullptr;
   }
   ExactModesSettings es;
-  es.modeCount = fs.modeCount > 0 ? std::min(fs.modeCount, fs.exactModeCount) : fs.exactModeCount;
+  es.modeCount = keptModeCount(fs.modeCount, fs.exactModeCount);
   es.elementOrder = order;  // a fragment keeps its parent's element
   const int modeCount = fs.modeCount;
   const DescriptorKind kind = fs.descriptor;

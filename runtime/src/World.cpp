@@ -323,7 +323,7 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
             const int modeCount = w.settings.fracture.modeCount;
             for (size_t e = 0; e < entries; ++e) {
               const auto stored = static_cast<int>(w.pack.database.entries[e].asset.modal.modes.cols());
-              const int modes = modeCount > 0 ? std::min(modeCount, stored) : stored;  // as makeBody keeps them
+              const int modes = detail::keptModeCount(modeCount, stored);  // the matched body's, as makeBody keeps them
               w.background.run([ec = w.entryCorrections.get(), e, material = *mat, modes] {
                 (void)ec->get(static_cast<int32_t>(e), material, modes);
               });

@@ -25,8 +25,8 @@
 //     must be 0/1 too). `trees` and `checks` as Hnsw; ef is also the number ranked.
 //   - HnswPrincipal: HnswPooled with a 64-value key, the block sums' projection on their first 64
 //     principal directions (a PCA of up to 4 096 evenly spaced rows, made by the build), still a
-//     lower bound of the rows' distance; candidates are measured nearest key first and skipped once
-//     their key proves them out of the k best. Its keys are 8× shorter, so its walk is cheaper.
+//     lower bound of the rows' distance; the ef nearest keys are ranked exactly, as HnswPooled's.
+//     Its keys are 8× shorter, so its walk is cheaper.
 //   - FAISS (Debian's libfaiss-dev), the standard baselines for descriptor research:
 //     FaissHnsw (IndexHNSWFlat: `trees` is M, `checks` efSearch, efConstruction 200), FaissIvf
 //     (IndexIVFFlat: `trees` inverted lists from k-means, `checks` lists probed), and on binary
