@@ -103,6 +103,15 @@ void setElement(FuzzedDataProvider& in, hid_t file) {
   const hssize_t points = H5Sget_simple_extent_npoints(space.id);
   const int rank = H5Sget_simple_extent_ndims(space.id);
   if (points <= 0 || rank < 1 || rank > 3) return;
+  // One element written into a contiguous dataset allocates all of its storage. A recreated
+  // dataset that claims 2^60 elements would then end beyond any file offset, and HDF5 could no
+  // longer flush or close the file. Such datasets stay unwritten: the reader must refuse them
+  // from their claimed size alone (kMaxWrittenElements).
+  const Id dcpl{H5Dget_create_plist(dset.id), H5Pclose};
+  if (H5Pget_layout(dcpl.id) == H5D_CONTIGUOUS && H5Dget_storage_size(dset.id) == 0 &&
+      static_cast<hsize_t>(points) > kMaxWrittenElements) {
+    return;
+  }
   hsize_t dims[3] = {1, 1, 1}, coords[3] = {0, 0, 0};
   H5Sget_simple_extent_dims(space.id, dims, nullptr);
   auto flat = in.ConsumeIntegralInRange<hsize_t>(0, static_cast<hsize_t>(points) - 1);
