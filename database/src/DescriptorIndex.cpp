@@ -73,6 +73,7 @@ const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind) {
     case DescriptorIndexSettings::Kind::HnswBinary: return "hnsw-binary";
     case DescriptorIndexSettings::Kind::HnswPooled: return "hnsw-pooled";
     case DescriptorIndexSettings::Kind::HnswPrincipal: return "hnsw-principal";
+    case DescriptorIndexSettings::Kind::Ivf: return "ivf";
     case DescriptorIndexSettings::Kind::FaissHnsw: return "faiss-hnsw";
     case DescriptorIndexSettings::Kind::FaissIvf: return "faiss-ivf";
     case DescriptorIndexSettings::Kind::FaissBinaryFlat: return "faiss-binary-flat";
@@ -128,6 +129,7 @@ Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, 
     case Kind::HnswBinary:
     case Kind::HnswPooled:
     case Kind::HnswPrincipal: backend = search::buildHnsw(result.mData.data(), rows, dims, settings); break;
+    case Kind::Ivf: backend = search::buildIvf(result.mData.data(), rows, dims, settings); break;
     case Kind::FaissHnsw:
     case Kind::FaissIvf:
     case Kind::FaissBinaryFlat:

@@ -2,7 +2,8 @@
 //
 // DescriptorIndex validates the data, the settings it shares between backends and every query,
 // keeps the row-major float copy of the data and runs brute force itself. Everything else is a
-// Backend: FLANN (FlannBackend.cpp), hnswlib (HnswBackend.cpp) and FAISS (FaissBackend.cpp). A
+// Backend: FLANN (FlannBackend.cpp), hnswlib (HnswBackend.cpp), the inverted file (IvfBackend.cpp) and
+// FAISS (FaissBackend.cpp). A
 // backend answers the k nearest rows of one query, nearest first, ties by lower id, with squared L2
 // distances, and never runs threads of its own (queries are called from the World's workers).
 #pragma once
@@ -11,6 +12,7 @@
 #include <memory>
 
 #include "brittle/core/Result.h"
+#include "brittle/core/Simd.h"
 #include "brittle/database/DescriptorIndex.h"
 
 namespace brittle::search {
@@ -41,6 +43,8 @@ Result<std::unique_ptr<Backend>> buildFlann(const float* data, int64_t rows, int
                                             const DescriptorIndexSettings& settings);
 Result<std::unique_ptr<Backend>> buildHnsw(const float* data, int64_t rows, int64_t dims,
                                            const DescriptorIndexSettings& settings);
+Result<std::unique_ptr<Backend>> buildIvf(const float* data, int64_t rows, int64_t dims,
+                                          const DescriptorIndexSettings& settings);
 Result<std::unique_ptr<Backend>> buildFaiss(const float* data, int64_t rows, int64_t dims,
                                             const DescriptorIndexSettings& settings);
 
@@ -54,6 +58,11 @@ inline float exactSquaredL2(const float* a, const float* b, int64_t dims) {
   }
   return static_cast<float>(sum);
 }
+
+/// The inverted file's float distances (IvfBackend.cpp): out[i] ← the squared distance of `query` to
+/// each of `count` consecutive rows of `stride` floats, stride a multiple of 8 (rows padded with
+/// zeros). The same bits with either lanes: eight lanes, added in one fixed order.
+void ivfSquaredDistances(Lanes lanes, const float* query, const float* rows, int64_t count, int64_t stride, float* out);
 
 /// Orders the k results by (distance, id), whatever order a backend found them in.
 void sortByDistanceThenId(int k, int64_t* ids, float* distances);

@@ -5,7 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include "IndexBackends.h"
+
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -144,10 +147,10 @@ TEST(DescriptorIndex, HnswRecallDeterminismAndTies) {
 TEST(DescriptorIndex, SelfRetrievalEveryBackend) {
   const int64_t rows = 1000, dims = 28;
   const auto data = randomMatrix(rows, dims, 7);
-  for (Kind kind : {Kind::BruteForce, Kind::KdForest, Kind::Hnsw, Kind::FaissHnsw, Kind::FaissIvf}) {
+  for (Kind kind : {Kind::BruteForce, Kind::KdForest, Kind::Hnsw, Kind::Ivf, Kind::FaissHnsw, Kind::FaissIvf}) {
     DescriptorIndexSettings s = settingsFor(kind);
     if (kind == Kind::Hnsw || kind == Kind::FaissHnsw) s.trees = 16;
-    if (kind == Kind::FaissIvf) s.trees = 16, s.checks = 2;
+    if (kind == Kind::FaissIvf || kind == Kind::Ivf) s.trees = 16, s.checks = 2;
     DescriptorIndex index = buildOrDie(data, dims, s);
     std::vector<int64_t> ids(rows);
     std::vector<float> d(rows);
@@ -469,6 +472,106 @@ TEST(DescriptorIndex, KeyedGraphsWithAWideBeamAreExact) {
   }
 }
 
+// The inverted file ranks what it scans exactly: with every list probed it is brute force, in ids
+// and distances, for any k; with one list probed, each answer is its row's exact distance.
+TEST(DescriptorIndex, InvertedFileWithEveryListProbedIsBruteForce) {
+  const int64_t rows = 3000, queries = 60;
+  for (int64_t dims : {28, 13}) {  // the moment descriptor's width, and one that pads to 16
+    const auto data = randomMatrix(rows, dims, 31);
+    const auto q = randomMatrix(queries, dims, 32);
+    DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+    DescriptorIndexSettings all = settingsFor(Kind::Ivf, 40);
+    all.trees = 40;
+    DescriptorIndex ivf = buildOrDie(data, dims, all);
+    DescriptorIndexSettings one = all;
+    one.checks = 1;
+    DescriptorIndex narrow = buildOrDie(data, dims, one);
+    for (int k : {1, 7}) {
+      std::vector<int64_t> want(static_cast<size_t>(queries * k)), got(want.size()), few(want.size());
+      std::vector<float> wantD(want.size()), gotD(want.size()), fewD(want.size());
+      ASSERT_TRUE(exact.queryBatch(q.data(), queries, k, want.data(), wantD.data()).ok());
+      ASSERT_TRUE(ivf.queryBatch(q.data(), queries, k, got.data(), gotD.data()).ok());
+      ASSERT_TRUE(narrow.queryBatch(q.data(), queries, k, few.data(), fewD.data()).ok());
+      int hits = 0;
+      for (size_t i = 0; i < want.size(); ++i) {
+        ASSERT_EQ(got[i], want[i]) << "dims " << dims << " k " << k << " result " << i;
+        ASSERT_EQ(gotD[i], wantD[i]) << "dims " << dims << " k " << k << " result " << i;
+        const int64_t query = static_cast<int64_t>(i) / k;
+        double sum = 0.0;
+        for (int64_t c = 0; c < dims; ++c) {
+          const double diff = double(q[static_cast<size_t>(query * dims + c)]) - double(data[static_cast<size_t>(few[i] * dims + c)]);
+          sum += diff * diff;
+        }
+        EXPECT_EQ(fewD[i], static_cast<float>(sum)) << "one list: an answer's distance is its exact distance";
+        if (i % static_cast<size_t>(k) > 0) {
+          EXPECT_LE(fewD[i - 1], fewD[i]) << "nearest first";
+        }
+        hits += few[i] == want[i];
+      }
+      EXPECT_GT(hits, 0);
+    }
+  }
+}
+
+// Fewer rows in the probed lists than k: more lists are scanned, in centroid order, until there are.
+TEST(DescriptorIndex, InvertedFileProbesOnUntilItHoldsK) {
+  const int64_t rows = 200, dims = 5;
+  const auto data = randomMatrix(rows, dims, 41);
+  DescriptorIndexSettings s = settingsFor(Kind::Ivf, 1);
+  s.trees = 100;  // about two rows a list
+  DescriptorIndex ivf = buildOrDie(data, dims, s);
+  DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+  const auto q = randomMatrix(1, dims, 42);
+  std::vector<int64_t> ids(rows), want(rows);
+  std::vector<float> d(rows), wantD(rows);
+  ASSERT_TRUE(ivf.query(q.data(), static_cast<int>(rows), ids.data(), d.data()).ok());
+  ASSERT_TRUE(exact.query(q.data(), static_cast<int>(rows), want.data(), wantD.data()).ok());
+  EXPECT_EQ(ids, want) << "k = rows: every list is scanned, so the answer is brute force's";
+  ASSERT_TRUE(ivf.query(q.data(), 9, ids.data(), d.data()).ok());
+  std::vector<int64_t> first(ids.begin(), ids.begin() + 9);
+  std::sort(first.begin(), first.end());
+  EXPECT_EQ(std::unique(first.begin(), first.end()), first.end()) << "nine distinct rows";
+}
+
+// The float kernel gives the same bits in 128-bit and 256-bit lanes (so the lists probed do not
+// depend on the CPU), and is within float rounding of the exact distance.
+TEST(DescriptorIndex, InvertedFileDistancesSameBitsInEitherLanes) {
+  for (int64_t stride : {8, 32, 64}) {
+    const int64_t count = 23;  // five blocks of four rows and three left over
+    const auto rows = randomMatrix(count, stride, 51);
+    const auto q = randomMatrix(1, stride, 52);
+    std::vector<float> narrow(count), wide(count);
+    search::ivfSquaredDistances(Lanes::Narrow, q.data(), rows.data(), count, stride, narrow.data());
+    if (widestLanes() == Lanes::Wide) {
+      search::ivfSquaredDistances(Lanes::Wide, q.data(), rows.data(), count, stride, wide.data());
+      for (int64_t i = 0; i < count; ++i) EXPECT_EQ(std::bit_cast<uint32_t>(narrow[i]), std::bit_cast<uint32_t>(wide[i])) << i;
+    }
+    for (int64_t i = 0; i < count; ++i) {
+      const float exact = search::exactSquaredL2(q.data(), rows.data() + i * stride, stride);
+      EXPECT_NEAR(narrow[i], exact, 1e-5 * exact) << "stride " << stride << " row " << i;
+    }
+  }
+}
+
+// The build draws nothing: two builds answer alike.
+TEST(DescriptorIndex, InvertedFileBuildsAlike) {
+  const int64_t rows = 2000, dims = 28, queries = 100;
+  const auto data = randomMatrix(rows, dims, 61);
+  const auto q = randomMatrix(queries, dims, 62);
+  DescriptorIndexSettings s = settingsFor(Kind::Ivf, 3);
+  s.trees = 45;
+  DescriptorIndex a = buildOrDie(data, dims, s);
+  s.seed = 99;  // not used: nothing is drawn
+  DescriptorIndex b = buildOrDie(data, dims, s);
+  std::vector<int64_t> ia(queries * 3), ib(ia.size());
+  std::vector<float> da(ia.size()), db(ia.size());
+  ASSERT_TRUE(a.queryBatch(q.data(), queries, 3, ia.data(), da.data()).ok());
+  ASSERT_TRUE(b.queryBatch(q.data(), queries, 3, ib.data(), db.data()).ok());
+  EXPECT_EQ(ia, ib);
+  EXPECT_EQ(da, db);
+  EXPECT_EQ(a.memoryBytes(), b.memoryBytes());
+}
+
 TEST(DescriptorIndex, SetQueryErrors) {
   const auto data = randomMatrix(50, 4, 3);
   const DescriptorIndex graph = buildOrDie(data, 4, settingsFor(Kind::Hnsw, 16));
@@ -679,12 +782,18 @@ TEST(DescriptorIndex, BuildErrors) {
   auto badChecks = kd;
   badChecks.checks = 0;
   expectInvalid(DescriptorIndex::build(data.data(), 10, 3, badChecks), "checks");
-  auto ivf = settingsFor(Kind::FaissIvf, 2);
-  ivf.trees = 11;
-  expectInvalid(DescriptorIndex::build(data.data(), 10, 3, ivf), "IVF lists");
-  ivf.trees = 4;
-  ivf.checks = 5;
-  expectInvalid(DescriptorIndex::build(data.data(), 10, 3, ivf), "lists probed");
+  for (Kind kind : {Kind::FaissIvf, Kind::Ivf}) {
+    auto ivf = settingsFor(kind, 2);
+    ivf.trees = 11;
+    expectInvalid(DescriptorIndex::build(data.data(), 10, 3, ivf), "IVF lists");
+    ivf.trees = 0;
+    expectInvalid(DescriptorIndex::build(data.data(), 10, 3, ivf), "IVF lists");
+    ivf.trees = 4;
+    ivf.checks = 5;
+    expectInvalid(DescriptorIndex::build(data.data(), 10, 3, ivf), "lists probed");
+    ivf.checks = 0;
+    expectInvalid(DescriptorIndex::build(data.data(), 10, 3, ivf), "lists probed");
+  }
   auto graph = settingsFor(Kind::FaissHnsw);
   graph.trees = 1;
   expectInvalid(DescriptorIndex::build(data.data(), 10, 3, graph), "M");

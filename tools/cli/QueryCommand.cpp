@@ -77,7 +77,7 @@ Runner addQueryCommand(CLI::App& app) {
       index.kind = parseDescriptorIndexKind(o->index).value();
       using Kind = DescriptorIndexSettings::Kind;
       if (index.kind != db.indexSettings[static_cast<size_t>(kind)].kind) {  // the stored numbers are another kind's
-        if (index.kind == Kind::FaissIvf) {
+        if (index.kind == Kind::FaissIvf || index.kind == Kind::Ivf) {
           index.trees = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(db.entries.size()))));
           index.checks = std::max(1, index.trees / 4);
         } else if (index.kind == Kind::Hnsw || index.kind == Kind::HnswBinary || index.kind == Kind::HnswPooled || index.kind == Kind::HnswPrincipal || index.kind == Kind::FaissHnsw ||

@@ -24,12 +24,12 @@ TEXT = {"descriptor", "index", "query_source", "frames"}
 # Index families: the project's own (solid) and FAISS's (dashed).
 FAMILIES = {"brute-force": ("black", ""), "kd-forest": ("tab:blue", "-"), "autotuned": ("tab:cyan", "-"),
             "hnsw": ("tab:orange", "-"), "hnsw-binary": ("tab:red", "-"),
-            "hnsw-pooled": ("tab:brown", "-"), "hnsw-principal": ("tab:gray", "-"),
+            "hnsw-pooled": ("tab:brown", "-"), "hnsw-principal": ("tab:gray", "-"), "ivf": ("tab:purple", "-"),
             "hnsw, frames as one set": ("navajowhite", "-"), "hnsw-binary, frames as one set": ("lightcoral", "-"),
             "hnsw-pooled, frames as one set": ("rosybrown", "-"),
             "hnsw-principal, frames as one set": ("silver", "-"),
             "faiss-hnsw": ("tab:green", "--"),
-            "faiss-ivf": ("tab:olive", "--"), "faiss-binary-flat": ("tab:purple", "--"),
+            "faiss-ivf": ("tab:olive", "--"), "faiss-binary-flat": ("darkviolet", "--"),
             "faiss-binary-hnsw": ("tab:pink", "--")}
 COLORS = {"moment": "tab:blue", "voxel": "tab:orange", "voxel-improved": "tab:green"}
 TARGET_US = 10.0  # the query target at recall@1 >= 0.99
@@ -54,8 +54,8 @@ def label(r):
         return f"kd {int(r['trees'])}x{int(r['checks'])}"
     if r["index"].split(",")[0] in ("hnsw", "hnsw-binary", "hnsw-pooled", "faiss-hnsw", "faiss-binary-hnsw"):
         return f"{r['index']} M{int(r['trees'])} ef{int(r['checks'])}"
-    if r["index"] == "faiss-ivf":
-        return f"faiss-ivf {int(r['trees'])}/{int(r['checks'])}"
+    if r["index"] in ("ivf", "faiss-ivf"):
+        return f"{r['index']} {int(r['trees'])}/{int(r['checks'])}"
     return r["index"]
 
 

@@ -1,6 +1,6 @@
 // DescriptorIndex.h — k-nearest-neighbour search over a row-major float32 descriptor matrix.
 //
-// One API, nine backends:
+// One API, twelve backends:
 //   - BruteForce: exact search, the reference. Squared L2 accumulated in double, reported as
 //     float; ties (equal reported float distance) break by lower entry id.
 //   - KdForest:   FLANN randomized kd-tree forest (flann::KDTreeIndexParams(trees)), searched with
@@ -27,6 +27,12 @@
 //     principal directions (a PCA of up to 4 096 evenly spaced rows, made by the build), still a
 //     lower bound of the rows' distance; the ef nearest keys are ranked exactly, as HnswPooled's.
 //     Its keys are 8× shorter, so its walk is cheaper.
+//   - Ivf: an inverted file over float rows (IvfBackend.cpp): `trees` k-means lists, of which the
+//     `checks` with the nearest centroids are scanned in SIMD registers, and their nearest rows
+//     ranked by brute force's exact distance. k-means starts from evenly spaced rows and draws
+//     nothing, so a build is the same in any process; `seed` is not used. Approximate: the lists
+//     probed decide the recall. For the moment kind at 10⁵ entries, where a graph's walk waits on
+//     memory.
 //   - FAISS (Debian's libfaiss-dev), the standard baselines for descriptor research:
 //     FaissHnsw (IndexHNSWFlat: `trees` is M, `checks` efSearch, efConstruction 200), FaissIvf
 //     (IndexIVFFlat: `trees` inverted lists from k-means, `checks` lists probed), and on binary
@@ -72,13 +78,13 @@ class Backend;
 }
 
 struct DescriptorIndexSettings {
-  enum class Kind { BruteForce, KdForest, Autotuned, Hnsw, HnswBinary, FaissHnsw, FaissIvf, FaissBinaryFlat, FaissBinaryHnsw, HnswPooled, HnswPrincipal };
+  enum class Kind { BruteForce, KdForest, Autotuned, Hnsw, HnswBinary, FaissHnsw, FaissIvf, FaissBinaryFlat, FaissBinaryHnsw, HnswPooled, HnswPrincipal, Ivf };
   Kind kind = Kind::KdForest;
   /// KdForest: number of randomized kd-trees, ≥ 1. Hnsw, HnswBinary, HnswPooled, HnswPrincipal and the FAISS graphs: M, in
-  /// [2, 1024]. FaissIvf: inverted lists, in [1, rows].
+  /// [2, 1024]. Ivf and FaissIvf: inverted lists, in [1, rows].
   int trees = 4;
   /// KdForest: leaves visited per query, ≥ 1 (more: slower, better). Hnsw and the FAISS graphs:
-  /// ef, ≥ 1. FaissIvf: lists probed, in [1, trees].
+  /// ef, ≥ 1. Ivf and FaissIvf: lists probed, in [1, trees].
   int checks = 64;
   float targetPrecision = 0.95f;  ///< Autotuned: wanted fraction of exact neighbours, in (0, 1].
   uint64_t seed = 1;              ///< seed of every randomised build (FLANN uses the low 32 bits).
@@ -88,7 +94,7 @@ inline constexpr DescriptorIndexSettings::Kind kAllDescriptorIndexKinds[] = {
     DescriptorIndexSettings::Kind::BruteForce,      DescriptorIndexSettings::Kind::KdForest,
     DescriptorIndexSettings::Kind::Autotuned,       DescriptorIndexSettings::Kind::Hnsw,
     DescriptorIndexSettings::Kind::HnswBinary,      DescriptorIndexSettings::Kind::HnswPooled,
-    DescriptorIndexSettings::Kind::HnswPrincipal,
+    DescriptorIndexSettings::Kind::HnswPrincipal,   DescriptorIndexSettings::Kind::Ivf,
     DescriptorIndexSettings::Kind::FaissHnsw,       DescriptorIndexSettings::Kind::FaissIvf,
     DescriptorIndexSettings::Kind::FaissBinaryFlat, DescriptorIndexSettings::Kind::FaissBinaryHnsw};
 
@@ -98,7 +104,7 @@ constexpr bool indexTakesBits(DescriptorIndexSettings::Kind kind) {
          kind == DescriptorIndexSettings::Kind::FaissBinaryHnsw;
 }
 
-/// "brute-force", "kd-forest", "autotuned", "hnsw", "hnsw-binary", "hnsw-pooled", "hnsw-principal", "faiss-hnsw", "faiss-ivf",
+/// "brute-force", "kd-forest", "autotuned", "hnsw", "hnsw-binary", "hnsw-pooled", "hnsw-principal", "ivf", "faiss-hnsw", "faiss-ivf",
 /// "faiss-binary-flat" or "faiss-binary-hnsw" (the CLI and pack spelling).
 const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind);
 /// Inverse of descriptorIndexKindName. Error: InvalidArgument listing the valid names.
