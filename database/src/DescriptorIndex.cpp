@@ -9,6 +9,10 @@
 #include <memory>
 #include <string>
 
+#include <stdexcept>
+
+#include <Eigen/Eigenvalues>
+
 #include "IndexBackends.h"
 
 namespace brittle {
@@ -56,6 +60,21 @@ void packBits(const float* values, int64_t rows, int64_t dims, int64_t wordBytes
       if (values[r * dims + c] != 0.0f) codes[r * bytes + c / 8] |= static_cast<uint8_t>(1u << (c % 8));
     }
   }
+}
+
+PrincipalAxes principalAxes(const Eigen::MatrixXd& points) {
+  const Eigen::Index n = points.rows(), samples = points.cols();
+  PrincipalAxes out;
+  out.mean = points.rowwise().sum() / static_cast<double>(samples);
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(n, n);
+  for (Eigen::Index i = 0; i < samples; ++i) {
+    const Eigen::VectorXd c = points.col(i) - out.mean;
+    for (Eigen::Index j = 0; j < n; ++j) covariance.col(j) += c[j] * c;  // element by element, in sample order
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(covariance);
+  if (solver.info() != Eigen::Success) throw std::runtime_error("the principal directions did not converge");
+  out.axes = solver.eigenvectors().rowwise().reverse();  // eigenvalues ascending: reversed, largest first
+  return out;
 }
 
 }  // namespace search

@@ -17,7 +17,6 @@
 #include <utility>
 
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 // hnswlib 0.6.2's SSE path prefetches through the entry one past a full link list, a heap
 // over-read that AddressSanitizer reports. Without it (no manual vectorisation) the graph code is
 // clean, and the distance below is vectorised by Eigen instead.
@@ -391,20 +390,13 @@ class PooledHnswBackend final : public Backend {
       pool(mData + (i * rows / sample) * mDims, one.data());
       for (int j = 0; j < kBlocks; ++j) sums(j, i) = one[static_cast<size_t>(j)];
     }
-    const Eigen::VectorXd mean = sums.rowwise().sum() / static_cast<double>(sample);
-    Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(kBlocks, kBlocks);
-    for (int64_t i = 0; i < sample; ++i) {
-      const Eigen::VectorXd c = sums.col(i) - mean;
-      for (int j = 0; j < kBlocks; ++j) covariance.col(j) += c[j] * c;  // element by element, in row order
-    }
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(covariance);
-    if (solver.info() != Eigen::Success) throw std::runtime_error("the principal directions did not converge");
-    // Eigenvalues ascending: the last columns, largest first, stored transposed (a column per block).
+    const PrincipalAxes principal = principalAxes(sums);
+    // The first kPrincipalDims axes, stored transposed (a column per block).
     mBasis.resize(static_cast<size_t>(kBlocks) * kPrincipalDims);
     for (int i = 0; i < kPrincipalDims; ++i) {
-      const auto v = solver.eigenvectors().col(kBlocks - 1 - i);
-      for (int j = 0; j < kBlocks; ++j) mBasis[static_cast<size_t>(j) * kPrincipalDims + i] = static_cast<float>(v[j]);
+      for (int j = 0; j < kBlocks; ++j) mBasis[static_cast<size_t>(j) * kPrincipalDims + i] = static_cast<float>(principal.axes(j, i));
     }
+    const Eigen::VectorXd& mean = principal.mean;
     mMean.resize(kBlocks);
     for (int j = 0; j < kBlocks; ++j) mMean[j] = static_cast<float>(mean[j]);
   }

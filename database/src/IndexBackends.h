@@ -11,6 +11,8 @@
 #include <cstdint>
 #include <memory>
 
+#include <Eigen/Core>
+
 #include "brittle/core/Result.h"
 #include "brittle/core/Simd.h"
 #include "brittle/database/DescriptorIndex.h"
@@ -63,6 +65,16 @@ inline float exactSquaredL2(const float* a, const float* b, int64_t dims) {
 /// each of `count` consecutive rows of `stride` floats, stride a multiple of 8 (rows padded with
 /// zeros). The same bits with either lanes: eight lanes, added in one fixed order.
 void ivfSquaredDistances(Lanes lanes, const float* query, const float* rows, int64_t count, int64_t stride, float* out);
+
+/// The principal axes of `points` (a column per sample): their mean, and the covariance's
+/// eigenvectors as columns, the largest eigenvalue's first. In double, the covariance summed in
+/// column order, solved by Eigen's symmetric solver: the same in any process (hnsw-principal's and
+/// ivf's keys). Throws std::runtime_error when the solver fails.
+struct PrincipalAxes {
+  Eigen::VectorXd mean;
+  Eigen::MatrixXd axes;
+};
+PrincipalAxes principalAxes(const Eigen::MatrixXd& points);
 
 /// Orders the k results by (distance, id), whatever order a backend found them in.
 void sortByDistanceThenId(int k, int64_t* ids, float* distances);

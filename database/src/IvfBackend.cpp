@@ -6,26 +6,36 @@
 // query visits hundreds of them. An inverted file instead reads a few lists of rows that lie next to
 // each other, which the hardware prefetcher streams, and compares them in SIMD registers.
 //
+// Keys. A row of more than kKeyDims values (up to kMaxProjectedDims: the moment descriptors) is
+// filed by its key, its coordinates along the first kKeyDims principal directions of the centred
+// data (a PCA of up to kPrincipalSample evenly spaced rows, in double), plus two numbers: the norm
+// of what the key leaves out (its residual r) and the centred row's norm. The moment descriptors
+// keep 99.99 % of their variance in 16 directions, so a list holds half the bytes. Other rows are
+// filed whole (their key is the row, r = 0).
+//
 // Build (deterministic: no random draw, every sum in a fixed order):
-//   - Lloyd's k-means with `trees` centroids, on up to kSamplePerList·trees rows spaced evenly
-//     through the data, started from evenly spaced sample rows, for kIterations rounds. A row goes
-//     to its nearest centroid, ties to the lower index. A centroid becomes its rows' mean, summed
-//     in double in row order; a centroid without rows keeps its place.
-//   - Every row is then filed under its nearest centroid. The lists hold copies of the rows, each
-//     padded with zeros to a multiple of 8 floats, so that one AVX register (two SSE2 ones) takes 8
-//     values at a time.
+//   - Lloyd's k-means over the keys with `trees` centroids, on up to kSamplePerList·trees rows
+//     spaced evenly through the data, started from evenly spaced sample rows, for kIterations
+//     rounds. A row goes to its nearest centroid, ties to the lower index. A centroid becomes its
+//     rows' mean, summed in double in row order; a centroid without rows keeps its place.
+//   - Every row's key is then filed under its nearest centroid, padded with zeros to a multiple of
+//     8 floats, so that one AVX register (two SSE2 ones) takes 8 values at a time.
 // Query: the `checks` lists with the nearest centroids (ties by lower index) are scanned, or more
-// lists, in centroid order, when those hold fewer than k rows. Each row's distance is first taken in
-// float. Over n values the float sum of squares is within δ = 1e-3 of the exact one (n·ε ≈ 2e-6
-// here), so with T the k-th smallest float distance, every member of the exact k best has a float
-// distance of at most T(1 + δ)². Those rows, and only those, get brute force's own distance
-// (exactSquaredL2), and the k best are returned by (distance, id). So within the probed lists the
-// answer is exact; the lists probed decide the recall.
+// lists, in centroid order, when those hold fewer than k rows. A row's distance is its key
+// distance d̂ plus its residual part, which lies between (r_q − r_x)² and (r_q + r_x)². With the
+// float sums' rounding (δ) and the keys' (η) added, that gives each row a lower and an upper bound.
+// Rows whose lower bound is within the k-th smallest upper bound, and only those, get brute
+// force's own distance (exactSquaredL2), and the k best are returned by (distance, id). So within
+// the probed lists the answer is exact; the lists probed decide the recall.
 //
 // Same bits with SSE2 and AVX: both forms keep eight float lanes, lane l summing (a − b)² over the
 // values l, l + 8, ..., and add the lanes in one fixed order at the end (Simd.h). So the probed
 // lists, and so the answer, do not depend on the CPU.
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <cstring>
@@ -44,6 +54,12 @@ namespace {
 constexpr int kLanes = 8;
 constexpr int64_t kSamplePerList = 32;  // k-means rows per centroid (FAISS trains on up to 256)
 constexpr int kIterations = 12;
+// Rows wider than kKeyDims values are compared by their first kKeyDims principal components and the
+// norm of the rest, up to kMaxProjectedDims values (the moment descriptors); wider rows (the voxel
+// grids, whose covariance would be 4096²) are compared whole.
+constexpr int64_t kKeyDims = 16;
+constexpr int64_t kMaxProjectedDims = 128;
+constexpr int64_t kPrincipalSample = 8192;  // rows the principal directions are made from, evenly spaced
 
 int64_t paddedDims(int64_t dims) { return (dims + kLanes - 1) / kLanes * kLanes; }
 
@@ -148,9 +164,14 @@ int64_t nearest(const float* d, int64_t count) {
 class IvfBackend final : public Backend {
  public:
   IvfBackend(const float* data, int64_t rows, int64_t dims, int lists, int probes)
-      : mData(data), mDims(dims), mStride(paddedDims(dims)), mLists(lists), mProbes(probes) {
-    train(rows);
-    file(rows);
+      : mData(data), mDims(dims), mKeyDims(dims > kKeyDims && dims <= kMaxProjectedDims ? kKeyDims : dims),
+        mStride(paddedDims(mKeyDims)), mLists(lists), mProbes(probes) {
+    if (mKeyDims < mDims) principalDirections(rows);
+    std::vector<float> keys(static_cast<size_t>(rows * mStride));
+    std::vector<KeyRest> rests(static_cast<size_t>(rows));
+    for (int64_t r = 0; r < rows; ++r) rests[static_cast<size_t>(r)] = makeKey(mData + r * mDims, keys.data() + r * mStride);
+    train(keys, rows);
+    file(keys, rests, rows);
   }
 
   Status query(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const override {
@@ -159,12 +180,20 @@ class IvfBackend final : public Backend {
       // (Its address is taken once: in a shared library each thread_local access is a call.)
       Scratch& w = scratch();
       w.query.resize(static_cast<size_t>(mStride));
-      pad(descriptor, mDims, mStride, w.query.data());
+      const KeyRest q = makeKey(descriptor, w.query.data());
+      const float qr = q.residual;
       w.toCentroids.resize(static_cast<size_t>(mLists));
       distances(w.query.data(), mCentroids.data(), mLists, mStride, w.toCentroids.data());
       const int64_t rows = probe(w.toCentroids, k, w.probed);
 
-      // Float distances of every probed row, list after list, and the k-th smallest (a max-heap of k).
+      // Each probed row's key distance d̂, list after list, and the k-th smallest upper bound of the
+      // rows' distances (a max-heap of k). A row's distance is d̂ plus its residual part, which lies
+      // between (qr − xr)² and (qr + xr)² (the triangle inequality in the discarded directions).
+      // Float rounding of the sums is covered by a relative δ. The keys' own rounding moves a key
+      // distance's root by at most 2⁻²⁴(‖q‖ + ‖x‖) (the centred norms), so its square by less than
+      // η = 1e-6(‖q‖ + ‖x‖)², eight times that. Without a projection, xr = qr = η = 0.
+      constexpr float kDelta = 1e-3f;
+      const float etaScale = mKeyDims < mDims ? 1e-6f : 0.0f;
       w.approx.resize(static_cast<size_t>(rows));
       float* const approx = w.approx.data();
       std::vector<float>& heap = w.heap;
@@ -173,28 +202,32 @@ class IvfBackend final : public Backend {
       for (int32_t list : w.probed) {
         const int64_t begin = mOffsets[static_cast<size_t>(list)], count = listSize(list);
         distances(w.query.data(), mRows.data() + begin * mStride, count, mStride, approx + n);
-        for (const int64_t end = n + count; n < end; ++n) {
-          const float d = approx[n];
+        const float* xr = mResiduals.data() + begin;
+        const float* xn = mNorms.data() + begin;
+        for (int64_t i = 0; i < count; ++i, ++n) {
+          const float sum = qr + xr[i], norms = q.norm + xn[i];
+          const float upper = (approx[n] + sum * sum) * (1.0f + kDelta) + etaScale * norms * norms;
           if (static_cast<int>(heap.size()) < k) {
-            heap.push_back(d);
+            heap.push_back(upper);
             std::push_heap(heap.begin(), heap.end());
-          } else if (d < heap.front()) {
+          } else if (upper < heap.front()) {
             std::pop_heap(heap.begin(), heap.end());
-            heap.back() = d;
+            heap.back() = upper;
             std::push_heap(heap.begin(), heap.end());
           }
         }
       }
-      constexpr double kDelta = 1e-3;
-      const float admit = static_cast<float>(static_cast<double>(heap.front()) * (1.0 + kDelta) * (1.0 + kDelta)) +
-                          std::numeric_limits<float>::min();
+      // Rows whose lower bound is within the k-th upper bound can be among the k nearest: those,
+      // and only those, get their exact distance.
+      const float admit = heap.front();
       std::vector<Ranked>& ranked = w.ranked;
       ranked.clear();
       n = 0;
       for (int32_t list : w.probed) {
         const int64_t begin = mOffsets[static_cast<size_t>(list)], end = mOffsets[static_cast<size_t>(list) + 1];
         for (int64_t at = begin; at < end; ++at, ++n) {
-          if (approx[n] > admit) continue;
+          const float gap = qr - mResiduals[static_cast<size_t>(at)], norms = q.norm + mNorms[static_cast<size_t>(at)];
+          if ((approx[n] + gap * gap) * (1.0f - kDelta) - etaScale * norms * norms > admit) continue;
           const int64_t id = mIds[static_cast<size_t>(at)];
           ranked.push_back({exactSquaredL2(descriptor, mData + id * mDims, mDims), id});
         }
@@ -213,8 +246,9 @@ class IvfBackend final : public Backend {
   }
 
   int64_t memoryBytes() const override {
-    return static_cast<int64_t>((mCentroids.size() + mRows.size()) * sizeof(float) + mIds.size() * sizeof(int32_t) +
-                                mOffsets.size() * sizeof(int64_t));
+    return static_cast<int64_t>((mCentroids.size() + mRows.size() + mResiduals.size() + mNorms.size()) * sizeof(float) +
+                                (mBasis.size() + mMean.size()) * sizeof(double) +
+                                mIds.size() * sizeof(int32_t) + mOffsets.size() * sizeof(int64_t));
   }
 
  private:
@@ -232,9 +266,58 @@ class IvfBackend final : public Backend {
     return perThread;
   }
 
+  struct KeyRest {
+    float residual = 0.0f;  // the norm of what the key leaves out
+    float norm = 0.0f;      // the centred row's norm
+  };
+
+  // A row's key into `key` (mStride floats, zero padded): with a projection, its coordinates along
+  // the first mKeyDims principal directions of the centred data, in double, with the norms of the
+  // rest and of the whole; without, the row itself.
+  KeyRest makeKey(const float* row, float* key) const {
+    if (mBasis.empty()) {
+      pad(row, mDims, mStride, key);
+      return {};
+    }
+    thread_local std::vector<double> centred;
+    centred.resize(static_cast<size_t>(mDims));
+    double whole = 0.0;
+    for (int64_t c = 0; c < mDims; ++c) {
+      centred[static_cast<size_t>(c)] = static_cast<double>(row[c]) - mMean[static_cast<size_t>(c)];
+      whole += centred[static_cast<size_t>(c)] * centred[static_cast<size_t>(c)];
+    }
+    std::fill(key, key + mStride, 0.0f);
+    for (int64_t i = 0; i < mKeyDims; ++i) {
+      const double* direction = mBasis.data() + i * mDims;
+      double coordinate = 0.0;
+      for (int64_t c = 0; c < mDims; ++c) coordinate += direction[c] * centred[static_cast<size_t>(c)];
+      key[i] = static_cast<float>(coordinate);
+      for (int64_t c = 0; c < mDims; ++c) centred[static_cast<size_t>(c)] -= coordinate * direction[c];
+    }
+    double rest = 0.0;
+    for (double v : centred) rest += v * v;
+    return {static_cast<float>(std::sqrt(rest)), static_cast<float>(std::sqrt(whole))};
+  }
+
+  // The first mKeyDims principal axes of an evenly spaced sample of the rows (principalAxes).
+  void principalDirections(int64_t rows) {
+    const int64_t sample = std::min(rows, kPrincipalSample);
+    Eigen::MatrixXd points(mDims, sample);
+    for (int64_t i = 0; i < sample; ++i) {
+      const float* row = mData + (i * rows / sample) * mDims;
+      for (int64_t c = 0; c < mDims; ++c) points(c, i) = row[c];
+    }
+    const PrincipalAxes principal = principalAxes(points);
+    mBasis.resize(static_cast<size_t>(mKeyDims * mDims));
+    for (int64_t i = 0; i < mKeyDims; ++i) {
+      for (int64_t c = 0; c < mDims; ++c) mBasis[static_cast<size_t>(i * mDims + c)] = principal.axes(c, i);
+    }
+    const Eigen::VectorXd& mean = principal.mean;
+    mMean.assign(mean.data(), mean.data() + mDims);
+  }
+
   // The lists to scan: the mProbes nearest centroids, ties by lower index, and more in centroid
-  // order while they hold fewer than k rows.
-  // Returns the rows they hold.
+  // order while they hold fewer than k rows. Returns the rows they hold.
   int64_t probe(const std::vector<float>& toCentroids, int k, std::vector<int32_t>& best) const {
     best.clear();  // sorted by (distance, index), at most mProbes
     const auto before = [&](int32_t a, int32_t b) {
@@ -266,15 +349,12 @@ class IvfBackend final : public Backend {
     return mOffsets[static_cast<size_t>(list) + 1] - mOffsets[static_cast<size_t>(list)];
   }
 
-  // Lloyd's k-means on an evenly spaced sample (see the file comment).
-  void train(int64_t rows) {
+  // Lloyd's k-means over the keys of an evenly spaced sample (see the file comment).
+  void train(const std::vector<float>& keys, int64_t rows) {
     const int64_t sample = std::min(rows, kSamplePerList * mLists);
-    std::vector<float> points(static_cast<size_t>(sample * mStride));
-    for (int64_t i = 0; i < sample; ++i) pad(mData + (i * rows / sample) * mDims, mDims, mStride, points.data() + i * mStride);
+    const auto point = [&](int64_t i) { return keys.data() + (i * rows / sample) * mStride; };
     mCentroids.resize(static_cast<size_t>(mLists) * static_cast<size_t>(mStride));
-    for (int64_t c = 0; c < mLists; ++c) {
-      std::copy_n(points.data() + (c * sample / mLists) * mStride, mStride, mCentroids.data() + c * mStride);
-    }
+    for (int64_t c = 0; c < mLists; ++c) std::copy_n(point(c * sample / mLists), mStride, mCentroids.data() + c * mStride);
     std::vector<float> d(static_cast<size_t>(mLists));
     std::vector<double> sums(mCentroids.size());
     std::vector<int64_t> counts(static_cast<size_t>(mLists));
@@ -282,15 +362,15 @@ class IvfBackend final : public Backend {
       std::fill(sums.begin(), sums.end(), 0.0);
       std::fill(counts.begin(), counts.end(), 0);
       for (int64_t i = 0; i < sample; ++i) {
-        const float* p = points.data() + i * mStride;
+        const float* p = point(i);
         distances(p, mCentroids.data(), mLists, mStride, d.data());
         const int64_t c = nearest(d.data(), mLists);
         ++counts[static_cast<size_t>(c)];
-        for (int64_t v = 0; v < mDims; ++v) sums[static_cast<size_t>(c * mStride + v)] += p[v];
+        for (int64_t v = 0; v < mStride; ++v) sums[static_cast<size_t>(c * mStride + v)] += p[v];
       }
       for (int64_t c = 0; c < mLists; ++c) {
         if (counts[static_cast<size_t>(c)] == 0) continue;
-        for (int64_t v = 0; v < mDims; ++v) {
+        for (int64_t v = 0; v < mStride; ++v) {
           mCentroids[static_cast<size_t>(c * mStride + v)] =
               static_cast<float>(sums[static_cast<size_t>(c * mStride + v)] / static_cast<double>(counts[static_cast<size_t>(c)]));
         }
@@ -298,35 +378,42 @@ class IvfBackend final : public Backend {
     }
   }
 
-  // Every row under its nearest centroid, lists in centroid order, rows in id order within each.
-  void file(int64_t rows) {
+  // Every row's key under its nearest centroid, lists in centroid order, rows in id order within each.
+  void file(const std::vector<float>& keys, const std::vector<KeyRest>& rests, int64_t rows) {
     std::vector<int32_t> listOf(static_cast<size_t>(rows));
-    std::vector<float> padded(static_cast<size_t>(mStride)), d(static_cast<size_t>(mLists));
+    std::vector<float> d(static_cast<size_t>(mLists));
     mOffsets.assign(static_cast<size_t>(mLists) + 1, 0);
     for (int64_t r = 0; r < rows; ++r) {
-      pad(mData + r * mDims, mDims, mStride, padded.data());
-      distances(padded.data(), mCentroids.data(), mLists, mStride, d.data());
+      distances(keys.data() + r * mStride, mCentroids.data(), mLists, mStride, d.data());
       listOf[static_cast<size_t>(r)] = static_cast<int32_t>(nearest(d.data(), mLists));
       ++mOffsets[static_cast<size_t>(listOf[static_cast<size_t>(r)]) + 1];
     }
     for (int64_t c = 0; c < mLists; ++c) mOffsets[static_cast<size_t>(c) + 1] += mOffsets[static_cast<size_t>(c)];
     std::vector<int64_t> next(mOffsets.begin(), mOffsets.end() - 1);
     mIds.resize(static_cast<size_t>(rows));
+    mResiduals.resize(static_cast<size_t>(rows));
+    mNorms.resize(static_cast<size_t>(rows));
     mRows.resize(static_cast<size_t>(rows * mStride));
     for (int64_t r = 0; r < rows; ++r) {
       const int64_t at = next[static_cast<size_t>(listOf[static_cast<size_t>(r)])]++;
       mIds[static_cast<size_t>(at)] = static_cast<int32_t>(r);
-      pad(mData + r * mDims, mDims, mStride, mRows.data() + at * mStride);
+      mResiduals[static_cast<size_t>(at)] = rests[static_cast<size_t>(r)].residual;
+      mNorms[static_cast<size_t>(at)] = rests[static_cast<size_t>(r)].norm;
+      std::copy_n(keys.data() + r * mStride, mStride, mRows.data() + at * mStride);
     }
   }
 
   const float* mData;  // DescriptorIndex's copy, for the exact distances
-  int64_t mDims, mStride;
+  int64_t mDims, mKeyDims, mStride;
   int mLists, mProbes;
-  std::vector<float> mCentroids;  // mLists × mStride
-  std::vector<float> mRows;       // the rows, padded, list after list
-  std::vector<int32_t> mIds;      // each filed row's id
-  std::vector<int64_t> mOffsets;  // list c is filed rows [mOffsets[c], mOffsets[c + 1])
+  std::vector<double> mBasis;      // with a projection: mKeyDims directions of mDims values
+  std::vector<double> mMean;       // with a projection: the sample's mean row
+  std::vector<float> mCentroids;   // mLists × mStride keys
+  std::vector<float> mRows;        // the rows' keys, padded, list after list
+  std::vector<float> mResiduals;   // each filed row's norm outside its key (0 without a projection)
+  std::vector<float> mNorms;       // each filed row's centred norm (0 without a projection)
+  std::vector<int32_t> mIds;       // each filed row's id
+  std::vector<int64_t> mOffsets;   // list c is filed rows [mOffsets[c], mOffsets[c + 1])
 };
 
 }  // namespace

@@ -476,8 +476,9 @@ TEST(DescriptorIndex, KeyedGraphsWithAWideBeamAreExact) {
 // and distances, for any k; with one list probed, each answer is its row's exact distance.
 TEST(DescriptorIndex, InvertedFileWithEveryListProbedIsBruteForce) {
   const int64_t rows = 3000, queries = 60;
-  for (int64_t dims : {28, 13}) {  // the moment descriptor's width, and one that pads to 16
-    const auto data = randomMatrix(rows, dims, 31);
+  for (int64_t dims : {28, 13}) {  // the moment descriptor's width (filed by a 16-value key), and one filed whole
+    auto data = randomMatrix(rows, dims, 31);
+    for (int64_t c = 0; c < dims; ++c) data[static_cast<size_t>(dims + c)] *= 1e3f;  // one far row, as real descriptors have
     const auto q = randomMatrix(queries, dims, 32);
     DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
     DescriptorIndexSettings all = settingsFor(Kind::Ivf, 40);

@@ -42,7 +42,7 @@ Runner addBenchCommand(CLI::App& app) {
   auto kinds = std::make_shared<std::vector<std::string>>(std::vector<std::string>{"moment", "voxel", "voxel-improved"});
   auto indices = std::make_shared<std::vector<std::string>>(
       std::vector<std::string>{"kd-forest:1:8", "kd-forest:4:32", "kd-forest:4:128", "kd-forest:8:512", "hnsw:16:16",
-                               "hnsw:16:16:set", "hnsw:16:64", "hnsw-binary:16:16", "hnsw-binary:16:64", "hnsw-binary:16:64:set", "hnsw-pooled:16:32", "hnsw-pooled:16:64", "hnsw-principal:16:32", "hnsw-principal:16:64", "faiss-hnsw:16:16", "faiss-hnsw:16:64", "faiss-ivf:256:8", "faiss-ivf:256:32",
+                               "hnsw:16:16:set", "hnsw:16:64", "hnsw-binary:16:16", "hnsw-binary:16:64", "hnsw-binary:16:64:set", "hnsw-pooled:16:32", "hnsw-pooled:16:64", "hnsw-principal:16:32", "hnsw-principal:16:64", "faiss-hnsw:16:16", "faiss-hnsw:16:64", "ivf:256:4", "ivf:1024:8", "faiss-ivf:256:8", "faiss-ivf:256:32",
                                "faiss-binary-flat", "faiss-binary-hnsw:16:64"});
   search->add_option("--shapes", *shapes, "Base shape definitions (JSON)")->capture_default_str();
   search->add_option("--sizes", s->sizes, "Database sizes")->delimiter(',')->capture_default_str();
