@@ -111,7 +111,7 @@ template <class Row>
 }
 
 void distancesNarrow(const float* query, const float* rows, int64_t count, int64_t stride, float* out) {
-  if (stride == 4 * kLanes) {  // the moment descriptor's 28 values: the loop unrolled
+  if (stride == 4 * kLanes) {  // rows of 25 to 32 values filed whole: the loop unrolled
     distancesBy4(query, rows, count, stride, out, [](const float* q, const float* row, int64_t) {
       return pairSumsNarrow(q, row, 4 * kLanes);
     });
@@ -134,7 +134,7 @@ BRITTLE_TARGET_AVX void distancesWide(const float* query, const float* rows, int
     }
     return V4(__builtin_shufflevector(acc, acc, 0, 1, 2, 3) + __builtin_shufflevector(acc, acc, 4, 5, 6, 7));
   };
-  if (stride == 4 * kLanes) {  // the moment descriptor's 28 values: the loop unrolled
+  if (stride == 4 * kLanes) {  // rows of 25 to 32 values filed whole: the loop unrolled
     distancesBy4(query, rows, count, stride, out,
                  [&](const float* q, const float* row, int64_t) BRITTLE_TARGET_AVX { return pairSums(q, row, 4 * kLanes); });
   } else {

@@ -28,11 +28,12 @@
 //     lower bound of the rows' distance; the ef nearest keys are ranked exactly, as HnswPooled's.
 //     Its keys are 8× shorter, so its walk is cheaper.
 //   - Ivf: an inverted file over float rows (IvfBackend.cpp): `trees` k-means lists, of which the
-//     `checks` with the nearest centroids are scanned in SIMD registers, and their nearest rows
-//     ranked by brute force's exact distance. k-means starts from evenly spaced rows and draws
-//     nothing, so a build is the same in any process; `seed` is not used. Approximate: the lists
-//     probed decide the recall. For the moment kind at 10⁵ entries, where a graph's walk waits on
-//     memory.
+//     `checks` with the nearest centroids are scanned in SIMD registers; rows of 17–128 values (the
+//     moment kind) are filed by their first 16 principal components and the norm of the rest, whose
+//     bounds decide which rows get brute force's exact distance. Within the probed lists the answer
+//     is exact; the lists probed decide the recall. k-means starts from evenly spaced rows and draws
+//     nothing, so a build is the same in any process; `seed` is not used. For the moment kind at
+//     10⁵ entries, where a graph's walk waits on memory.
 //   - FAISS (Debian's libfaiss-dev), the standard baselines for descriptor research:
 //     FaissHnsw (IndexHNSWFlat: `trees` is M, `checks` efSearch, efConstruction 200), FaissIvf
 //     (IndexIVFFlat: `trees` inverted lists from k-means, `checks` lists probed), and on binary
