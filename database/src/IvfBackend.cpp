@@ -169,7 +169,10 @@ class IvfBackend final : public Backend {
     if (mKeyDims < mDims) principalDirections(rows);
     std::vector<float> keys(static_cast<size_t>(rows * mStride));
     std::vector<KeyRest> rests(static_cast<size_t>(rows));
-    for (int64_t r = 0; r < rows; ++r) rests[static_cast<size_t>(r)] = makeKey(mData + r * mDims, keys.data() + r * mStride);
+    std::vector<double> centred;
+    for (int64_t r = 0; r < rows; ++r) {
+      rests[static_cast<size_t>(r)] = makeKey(mData + r * mDims, keys.data() + r * mStride, centred);
+    }
     train(keys, rows);
     file(keys, rests, rows);
   }
@@ -180,7 +183,7 @@ class IvfBackend final : public Backend {
       // (Its address is taken once: in a shared library each thread_local access is a call.)
       Scratch& w = scratch();
       w.query.resize(static_cast<size_t>(mStride));
-      const KeyRest q = makeKey(descriptor, w.query.data());
+      const KeyRest q = makeKey(descriptor, w.query.data(), w.centred);
       const float qr = q.residual;
       w.toCentroids.resize(static_cast<size_t>(mLists));
       distances(w.query.data(), mCentroids.data(), mLists, mStride, w.toCentroids.data());
@@ -258,6 +261,7 @@ class IvfBackend final : public Backend {
   };
   struct Scratch {
     std::vector<float> query, toCentroids, approx, heap;
+    std::vector<double> centred;
     std::vector<int32_t> probed;
     std::vector<Ranked> ranked;
   };
@@ -274,12 +278,12 @@ class IvfBackend final : public Backend {
   // A row's key into `key` (mStride floats, zero padded): with a projection, its coordinates along
   // the first mKeyDims principal directions of the centred data, in double, with the norms of the
   // rest and of the whole; without, the row itself.
-  KeyRest makeKey(const float* row, float* key) const {
+  // `centred` is scratch (the query's own, so that a query touches one thread_local).
+  KeyRest makeKey(const float* row, float* key, std::vector<double>& centred) const {
     if (mBasis.empty()) {
       pad(row, mDims, mStride, key);
       return {};
     }
-    thread_local std::vector<double> centred;
     centred.resize(static_cast<size_t>(mDims));
     double whole = 0.0;
     for (int64_t c = 0; c < mDims; ++c) {
