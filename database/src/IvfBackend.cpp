@@ -25,7 +25,10 @@
 // distance d̂ plus its residual part, which lies between (r_q − r_x)² and (r_q + r_x)². With the
 // float sums' rounding (δ) and the keys' (η) added, that gives each row a lower and an upper bound.
 // Rows whose lower bound is within the k-th smallest upper bound, and only those, get brute
-// force's own distance (exactSquaredL2), and the k best are returned by (distance, id). So within
+// force's own distance (exactSquaredL2), and the k best are returned by (distance, id). The
+// bounds are made in one pass, four rows to a register, beside each list's smallest upper bound,
+// so that most lists and rows cost one compare in the k-th bound's pass and a quarter of one in
+// the admission's. So within
 // the probed lists the answer is exact; the lists probed decide the recall.
 //
 // Same bits with SSE2 and AVX: both forms keep eight float lanes, lane l summing (a − b)² over the
@@ -111,7 +114,11 @@ template <class Row>
 }
 
 void distancesNarrow(const float* query, const float* rows, int64_t count, int64_t stride, float* out) {
-  if (stride == 4 * kLanes) {  // rows of 25 to 32 values filed whole: the loop unrolled
+  if (stride == 2 * kLanes) {  // the keys of moment rows (and rows of 9 to 16 values): the loop unrolled
+    distancesBy4(query, rows, count, stride, out, [](const float* q, const float* row, int64_t) {
+      return pairSumsNarrow(q, row, 2 * kLanes);
+    });
+  } else if (stride == 4 * kLanes) {  // rows of 25 to 32 values filed whole
     distancesBy4(query, rows, count, stride, out, [](const float* q, const float* row, int64_t) {
       return pairSumsNarrow(q, row, 4 * kLanes);
     });
@@ -134,7 +141,10 @@ BRITTLE_TARGET_AVX void distancesWide(const float* query, const float* rows, int
     }
     return V4(__builtin_shufflevector(acc, acc, 0, 1, 2, 3) + __builtin_shufflevector(acc, acc, 4, 5, 6, 7));
   };
-  if (stride == 4 * kLanes) {  // rows of 25 to 32 values filed whole: the loop unrolled
+  if (stride == 2 * kLanes) {  // the same unrolled loops as distancesNarrow's
+    distancesBy4(query, rows, count, stride, out,
+                 [&](const float* q, const float* row, int64_t) BRITTLE_TARGET_AVX { return pairSums(q, row, 2 * kLanes); });
+  } else if (stride == 4 * kLanes) {
     distancesBy4(query, rows, count, stride, out,
                  [&](const float* q, const float* row, int64_t) BRITTLE_TARGET_AVX { return pairSums(q, row, 4 * kLanes); });
   } else {
@@ -161,6 +171,69 @@ int64_t nearest(const float* d, int64_t count) {
   return best;
 }
 
+// Each scanned row's bounds on its squared distance, from its key distance d̂ (in `lower` on entry):
+// d̂ plus its residual part, which lies between (r_q − r_x)² and (r_q + r_x)², widened by a
+// relative `delta` for the float sums and by eta = etaScale(‖q‖ + ‖x‖)² for the keys' rounding.
+// Four rows to a register, each lane doing the scalar tail's operations, so every row's bounds
+// are the same bits either way. Returns the smallest upper bound (+inf for none, NaNs left out).
+struct KeyRest {
+  float residual = 0.0f;  // the norm of what the key leaves out
+  float norm = 0.0f;      // the centred row's norm
+};
+float bounds(KeyRest q, const float* residuals, const float* norms, int64_t count, float delta, float etaScale,
+             float* lower, float* upper) {
+  const auto one = [&](float d, float xr, float xn, float& low, float& up) {
+    const float sum = q.residual + xr, gap = q.residual - xr, both = q.norm + xn;
+    const float eta = etaScale * both * both;
+    up = (d + sum * sum) * (1.0f + delta) + eta;
+    low = (d + gap * gap) * (1.0f - delta) - eta;
+  };
+  constexpr float kNone = std::numeric_limits<float>::infinity();
+  V4 least{kNone, kNone, kNone, kNone};
+  int64_t i = 0;
+  for (; i + 4 <= count; i += 4) {
+    V4 d, xr, xn, low, up;
+    loadLanes<4>(lower + i, d);
+    loadLanes<4>(residuals + i, xr);
+    loadLanes<4>(norms + i, xn);
+    const V4 qr = V4{} + q.residual, sum = qr + xr, gap = qr - xr, both = (V4{} + q.norm) + xn;
+    const V4 eta = etaScale * both * both;
+    up = (d + sum * sum) * (1.0f + delta) + eta;
+    low = (d + gap * gap) * (1.0f - delta) - eta;
+    std::memcpy(upper + i, &up, sizeof up);
+    std::memcpy(lower + i, &low, sizeof low);
+    least = up < least ? up : least;
+  }
+  float smallest = std::min(std::min(least[0], least[1]), std::min(least[2], least[3]));
+  for (; i < count; ++i) {
+    one(lower[i], residuals[i], norms[i], lower[i], upper[i]);
+    if (upper[i] < smallest) smallest = upper[i];
+  }
+  return smallest;
+}
+
+// Calls visit(i) for each i < count with values[i] ≤ limit (or NaN), in order; four values to a
+// compare, since few pass.
+template <class Visit>
+void forEachWithin(const float* values, int64_t count, float limit, Visit visit) {
+  int64_t i = 0;
+  for (; i + 4 <= count; i += 4) {
+    V4 v;
+    loadLanes<4>(values + i, v);
+    const auto over = v > limit;
+    uint64_t low = 0, high = 0;
+    std::memcpy(&low, &over, sizeof low);
+    std::memcpy(&high, reinterpret_cast<const char*>(&over) + sizeof low, sizeof high);
+    if ((low & high) == ~uint64_t{0}) continue;  // all four over the limit
+    for (int64_t j = i; j < i + 4; ++j) {
+      if (!(values[j] > limit)) visit(j);
+    }
+  }
+  for (; i < count; ++i) {
+    if (!(values[i] > limit)) visit(i);
+  }
+}
+
 class IvfBackend final : public Backend {
  public:
   IvfBackend(const float* data, int64_t rows, int64_t dims, int lists, int probes)
@@ -184,7 +257,6 @@ class IvfBackend final : public Backend {
       Scratch& w = scratch();
       w.query.resize(static_cast<size_t>(mStride));
       const KeyRest q = makeKey(descriptor, w.query.data(), w.centred);
-      const float qr = q.residual;
       w.toCentroids.resize(static_cast<size_t>(mLists));
       distances(w.query.data(), mCentroids.data(), mLists, mStride, w.toCentroids.data());
       const int64_t rows = probe(w.toCentroids, k, w.probed);
@@ -197,28 +269,31 @@ class IvfBackend final : public Backend {
       // η = 1e-6(‖q‖ + ‖x‖)², eight times that. Without a projection, xr = qr = η = 0.
       constexpr float kDelta = 1e-3f;
       const float etaScale = mKeyDims < mDims ? 1e-6f : 0.0f;
-      w.approx.resize(static_cast<size_t>(rows));
-      float* const approx = w.approx.data();
+      w.lower.resize(static_cast<size_t>(rows));
+      w.upper.resize(static_cast<size_t>(rows));
+      float* const lower = w.lower.data();
+      float* const upper = w.upper.data();
       std::vector<float>& heap = w.heap;
       heap.clear();
+      float kth = std::numeric_limits<float>::infinity();  // the heap's top once it holds k
       int64_t n = 0;
       for (int32_t list : w.probed) {
         const int64_t begin = mOffsets[static_cast<size_t>(list)], count = listSize(list);
-        distances(w.query.data(), mRows.data() + begin * mStride, count, mStride, approx + n);
-        const float* xr = mResiduals.data() + begin;
-        const float* xn = mNorms.data() + begin;
-        for (int64_t i = 0; i < count; ++i, ++n) {
-          const float sum = qr + xr[i], norms = q.norm + xn[i];
-          const float upper = (approx[n] + sum * sum) * (1.0f + kDelta) + etaScale * norms * norms;
-          if (static_cast<int>(heap.size()) < k) {
-            heap.push_back(upper);
-            std::push_heap(heap.begin(), heap.end());
-          } else if (upper < heap.front()) {
+        distances(w.query.data(), mRows.data() + begin * mStride, count, mStride, lower + n);
+        const float least =
+            bounds(q, mResiduals.data() + begin, mNorms.data() + begin, count, kDelta, etaScale, lower + n, upper + n);
+        for (int64_t i = n; i < n + count && (static_cast<int>(heap.size()) < k || least < kth); ++i) {
+          const bool full = static_cast<int>(heap.size()) == k;
+          if (full && !(upper[i] < kth)) continue;  // most rows: one compare, kept in a register
+          if (full) {
             std::pop_heap(heap.begin(), heap.end());
-            heap.back() = upper;
-            std::push_heap(heap.begin(), heap.end());
+            heap.pop_back();
           }
-        }
+          heap.push_back(upper[i]);
+          std::push_heap(heap.begin(), heap.end());
+          kth = heap.front();
+        }  // (a list none of whose rows can enter, by its smallest upper bound, is not walked)
+        n += count;
       }
       // Rows whose lower bound is within the k-th upper bound can be among the k nearest: those,
       // and only those, get their exact distance.
@@ -227,13 +302,12 @@ class IvfBackend final : public Backend {
       ranked.clear();
       n = 0;
       for (int32_t list : w.probed) {
-        const int64_t begin = mOffsets[static_cast<size_t>(list)], end = mOffsets[static_cast<size_t>(list) + 1];
-        for (int64_t at = begin; at < end; ++at, ++n) {
-          const float gap = qr - mResiduals[static_cast<size_t>(at)], norms = q.norm + mNorms[static_cast<size_t>(at)];
-          if ((approx[n] + gap * gap) * (1.0f - kDelta) - etaScale * norms * norms > admit) continue;
-          const int64_t id = mIds[static_cast<size_t>(at)];
+        const int64_t begin = mOffsets[static_cast<size_t>(list)], count = listSize(list);
+        forEachWithin(lower + n, count, admit, [&](int64_t i) {
+          const int64_t id = mIds[static_cast<size_t>(begin + i)];
           ranked.push_back({exactSquaredL2(descriptor, mData + id * mDims, mDims), id});
-        }
+        });
+        n += count;
       }
       std::partial_sort(ranked.begin(), ranked.begin() + k, ranked.end(), [](const Ranked& a, const Ranked& b) {
         return a.distance != b.distance ? a.distance < b.distance : a.id < b.id;
@@ -250,7 +324,7 @@ class IvfBackend final : public Backend {
 
   int64_t memoryBytes() const override {
     return static_cast<int64_t>((mCentroids.size() + mRows.size() + mResiduals.size() + mNorms.size()) * sizeof(float) +
-                                (mBasis.size() + mMean.size()) * sizeof(double) +
+                                (mBasis.size() + mBasisAcross.size() + mMean.size()) * sizeof(double) +
                                 mIds.size() * sizeof(int32_t) + mOffsets.size() * sizeof(int64_t));
   }
 
@@ -260,7 +334,7 @@ class IvfBackend final : public Backend {
     int64_t id;
   };
   struct Scratch {
-    std::vector<float> query, toCentroids, approx, heap;
+    std::vector<float> query, toCentroids, lower, upper, heap;
     std::vector<double> centred;
     std::vector<int32_t> probed;
     std::vector<Ranked> ranked;
@@ -269,11 +343,6 @@ class IvfBackend final : public Backend {
     thread_local Scratch perThread;
     return perThread;
   }
-
-  struct KeyRest {
-    float residual = 0.0f;  // the norm of what the key leaves out
-    float norm = 0.0f;      // the centred row's norm
-  };
 
   // A row's key into `key` (mStride floats, zero padded): with a projection, its coordinates along
   // the first mKeyDims principal directions of the centred data, in double, with the norms of the
@@ -290,12 +359,19 @@ class IvfBackend final : public Backend {
       centred[static_cast<size_t>(c)] = static_cast<double>(row[c]) - mMean[static_cast<size_t>(c)];
       whole += centred[static_cast<size_t>(c)] * centred[static_cast<size_t>(c)];
     }
+    // The coordinates c = B·x, summed over the values in order, kKeyDims independent sums (each in
+    // its own lane, so any vector width gives the same bits); then the rest x − Bᵀc, value by value.
+    std::array<double, kKeyDims> coordinates{};
+    for (int64_t c = 0; c < mDims; ++c) {
+      const double* across = mBasisAcross.data() + c * kKeyDims;
+      const double value = centred[static_cast<size_t>(c)];
+      for (int64_t i = 0; i < kKeyDims; ++i) coordinates[static_cast<size_t>(i)] += across[i] * value;
+    }
     std::fill(key, key + mStride, 0.0f);
-    for (int64_t i = 0; i < mKeyDims; ++i) {
-      const double* direction = mBasis.data() + i * mDims;
-      double coordinate = 0.0;
-      for (int64_t c = 0; c < mDims; ++c) coordinate += direction[c] * centred[static_cast<size_t>(c)];
+    for (int64_t i = 0; i < kKeyDims; ++i) {
+      const double coordinate = coordinates[static_cast<size_t>(i)];
       key[i] = static_cast<float>(coordinate);
+      const double* direction = mBasis.data() + i * mDims;
       for (int64_t c = 0; c < mDims; ++c) centred[static_cast<size_t>(c)] -= coordinate * direction[c];
     }
     double rest = 0.0;
@@ -315,6 +391,10 @@ class IvfBackend final : public Backend {
     mBasis.resize(static_cast<size_t>(mKeyDims * mDims));
     for (int64_t i = 0; i < mKeyDims; ++i) {
       for (int64_t c = 0; c < mDims; ++c) mBasis[static_cast<size_t>(i * mDims + c)] = principal.axes(c, i);
+    }
+    mBasisAcross.resize(static_cast<size_t>(mDims * kKeyDims));
+    for (int64_t c = 0; c < mDims; ++c) {
+      for (int64_t i = 0; i < kKeyDims; ++i) mBasisAcross[static_cast<size_t>(c * kKeyDims + i)] = principal.axes(c, i);
     }
     const Eigen::VectorXd& mean = principal.mean;
     mMean.assign(mean.data(), mean.data() + mDims);
@@ -411,6 +491,7 @@ class IvfBackend final : public Backend {
   int64_t mDims, mKeyDims, mStride;
   int mLists, mProbes;
   std::vector<double> mBasis;      // with a projection: mKeyDims directions of mDims values
+  std::vector<double> mBasisAcross;  // the same, value by value: mDims rows of the mKeyDims directions' values
   std::vector<double> mMean;       // with a projection: the sample's mean row
   std::vector<float> mCentroids;   // mLists × mStride keys
   std::vector<float> mRows;        // the rows' keys, padded, list after list
