@@ -1,5 +1,6 @@
 #include "brittle/database/FragmentDatabase.h"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <string>
@@ -11,6 +12,17 @@ bool FragmentDatabase::hasPhysics() const {
     if (e.asset.tetMesh.tets.rows() == 0 || e.asset.modal.eigenvaluesRad2PerS2.size() == 0) return false;
   }
   return !entries.empty();
+}
+
+DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entries) {
+  DescriptorIndexSettings s;
+  if (kind != DescriptorKind::Moment) return s;
+  constexpr int64_t kMaxLists = 1024;  // PackReader's bound on trees
+  constexpr int kProbes = 4;
+  s.kind = DescriptorIndexSettings::Kind::Ivf;
+  s.trees = static_cast<int>(std::clamp<int64_t>(entries / kIvfRowsPerList, 1, kMaxLists));
+  s.checks = std::min(s.trees, kProbes);
+  return s;
 }
 
 Status validateFragmentDatabase(const FragmentDatabase& db) {

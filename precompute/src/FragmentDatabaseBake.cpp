@@ -271,8 +271,11 @@ FragmentDatabase databaseOf(const DatabaseBakeSettings& settings, std::vector<Fr
   db.referenceMaterial = settings.referenceMaterial;
   db.descriptorSettings = settings.descriptors;
   db.seed = settings.seed;
-  db.indexSettings = settings.index;
   const auto count = static_cast<Eigen::Index>(entries.size());
+  for (DescriptorKind kind : kAllDescriptorKinds) {
+    const auto k = static_cast<size_t>(kind);
+    db.indexSettings[k] = settings.index[k].value_or(defaultIndexSettings(kind, count));
+  }
   db.entries = std::move(entries);
   for (DescriptorKind kind : kAllDescriptorKinds) {
     const auto k = static_cast<size_t>(kind);
@@ -374,8 +377,12 @@ std::string describeDatabaseBake(const DatabaseBakeSettings& s) {
   const TetMeshSettings& t = s.tetMesh;
   const ShapeDescriptorSettings& d = s.descriptors;
   nlohmann::json index = nlohmann::json::array();
-  for (const DescriptorIndexSettings& x : s.index) {
-    index.push_back({static_cast<int>(x.kind), x.trees, x.checks, x.targetPrecision, x.seed});
+  for (const std::optional<DescriptorIndexSettings>& x : s.index) {
+    if (!x) {
+      index.push_back("sized to the entries");  // defaultIndexSettings
+      continue;
+    }
+    index.push_back({static_cast<int>(x->kind), x->trees, x->checks, x->targetPrecision, x->seed});
   }
   const nlohmann::json doc = {
       {"generator", std::string("brittle ") + BRITTLE_VERSION},

@@ -62,10 +62,41 @@ TEST_F(FragmentMatcherTest, SelfRetrievalUnderSimilarityTransforms) {
   EXPECT_GE(voxel, 0.8);  // reported; occupancy flips voxels under sub-voxel misalignment
 }
 
-TEST_F(FragmentMatcherTest, StoredKdForestFindsTheExactAnswerOnSelfQueries) {
+// The bake stores its default indexes (defaultIndexSettings): the moments' inverted file, one
+// list at 70 entries, which is exact, and the voxel kinds' kd-forest.
+TEST_F(FragmentMatcherTest, StoredDefaultIndexFindsTheExactAnswerOnSelfQueries) {
+  const DescriptorIndexSettings& moment = database->indexSettings[static_cast<size_t>(DescriptorKind::Moment)];
+  EXPECT_EQ(moment.kind, DescriptorIndexSettings::Kind::Ivf);
+  EXPECT_EQ(moment.trees, 1);
+  EXPECT_EQ(moment.checks, 1);
+  EXPECT_EQ(database->indexSettings[static_cast<size_t>(DescriptorKind::Voxel)].kind,
+            DescriptorIndexSettings::Kind::KdForest);
   auto matcher = FragmentMatcher::build(*database);
   ASSERT_TRUE(matcher);
   EXPECT_EQ(selfRetrievalRate(matcher.value(), DescriptorKind::Moment), 1.0);
+  EXPECT_EQ(selfRetrievalRate(matcher.value(), DescriptorKind::VoxelImproved), 1.0);
+}
+
+// The moments' default index is sized to the database: about kIvfRowsPerList rows a list, four
+// probed, one list below 2 · kIvfRowsPerList entries, at most 1 024 lists (the pack's bound).
+TEST(DefaultIndexSettings, InvertedFileSizedToTheEntriesForMomentsKdForestForVoxels) {
+  struct Case {
+    int64_t entries;
+    int lists, probes;
+  };
+  for (const Case c : {Case{0, 1, 1}, Case{70, 1, 1}, Case{779, 1, 1}, Case{780, 2, 2}, Case{1200, 3, 3},
+                       Case{10000, 25, 4}, Case{100000, 256, 4}, Case{10000000, 1024, 4}}) {
+    const DescriptorIndexSettings s = defaultIndexSettings(DescriptorKind::Moment, c.entries);
+    EXPECT_EQ(s.kind, DescriptorIndexSettings::Kind::Ivf) << c.entries;
+    EXPECT_EQ(s.trees, c.lists) << c.entries;
+    EXPECT_EQ(s.checks, c.probes) << c.entries;
+  }
+  for (DescriptorKind kind : {DescriptorKind::Voxel, DescriptorKind::VoxelImproved}) {
+    const DescriptorIndexSettings s = defaultIndexSettings(kind, 100000);
+    EXPECT_EQ(s.kind, DescriptorIndexSettings::Kind::KdForest);
+    EXPECT_EQ(s.trees, DescriptorIndexSettings{}.trees);
+    EXPECT_EQ(s.checks, DescriptorIndexSettings{}.checks);
+  }
 }
 
 TEST_F(FragmentMatcherTest, MatchPlacesTheEntryOntoTheQuery) {

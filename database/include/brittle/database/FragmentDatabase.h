@@ -59,6 +59,17 @@ struct FragmentDatabase {
   }
 };
 
+/// The index a baked database stores for `kind` when its bake names none.
+/// - The moments: the inverted file (`ivf`), about kIvfRowsPerList rows a list and 4 lists probed,
+///   so a query compares about 1 600 rows at any size. At 10⁵ entries that is 256 / 4, recall@1
+///   0.995 at 8.9 µs in `bench search` (docs/results/fragment-database.md). Below 780 entries it is
+///   one list, which is every row ranked by the key's bounds, so exact. Lists are capped at 1 024
+///   (the pack's limit on trees), so past ~4·10⁵ entries a query compares more rows.
+/// - The voxel kinds: the kd-forest, 4 trees and 64 checks (DescriptorIndexSettings' default).
+/// Both builds are deterministic (the same data give the same index in any process).
+DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entries);
+inline constexpr int64_t kIvfRowsPerList = 390;
+
 /// Checks sizes and values: descriptor matrices have one finite row per entry and the width of
 /// their settings, unique entry names, every entry's material is the reference material, and
 /// valid surfaces and settings. Error: InvalidArgument naming the entry or field.
