@@ -582,10 +582,14 @@ TEST_F(CliTest, BakeDbThenQueryFindsTheEntryInAnotherPose) {
   const Eigen::Matrix3d r = Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   query.vertices = ((query.vertices * r.transpose()) * 0.3).rowwise() + Eigen::RowVector3d(1, 2, 3);
   testing::writeOff(query, dir / "query.off");
-  for (const char* descriptor : {"moment", "voxel-improved"}) {
-    SCOPED_TRACE(descriptor);
+  // The bake's default indexes: the moments' inverted file (one list at 6 entries), the voxel kinds' kd-forest.
+  EXPECT_EQ(db.indexSettings[static_cast<size_t>(DescriptorKind::Moment)].kind, DescriptorIndexSettings::Kind::Ivf);
+  EXPECT_EQ(db.indexSettings[static_cast<size_t>(DescriptorKind::VoxelImproved)].kind, DescriptorIndexSettings::Kind::KdForest);
+  // Every index, stored or given in place of the stored one (with its own defaults), finds it.
+  for (const char* descriptor : {"moment", "voxel-improved"}) for (const char* index : {"brute-force", "kd-forest", "ivf"}) {
+    SCOPED_TRACE(std::string(descriptor) + " " + index);
     const CliRun q = run("query " + path("db.h5") + " --mesh " + path("query.off") + " --descriptor " + descriptor +
-                         " --index brute-force --k 3 --json");
+                         " --index " + index + " --k 3 --json");
     ASSERT_EQ(q.exitCode, 0) << q.out;
     const auto doc = nlohmann::json::parse(q.out);
     ASSERT_EQ(doc["matches"].size(), 3u);

@@ -48,9 +48,9 @@ Runner addQueryCommand(CLI::App& app) {
   std::vector<std::string> backends;
   for (auto kind : kAllDescriptorIndexKinds) backends.push_back(descriptorIndexKindName(kind));
   cmd->add_option("--index", o->index,
-                  "Override the stored index: brute-force (exact), kd-forest, autotuned, hnsw, hnsw-binary, hnsw-pooled, hnsw-principal, faiss-hnsw, "
-                  "faiss-ivf, faiss-binary-flat or faiss-binary-hnsw (graphs: M 16, ef 64; faiss-ivf: √n lists, a "
-                  "quarter probed; the binary kinds: voxel only)")
+                  "Override the stored index: brute-force (exact), kd-forest, autotuned, hnsw, hnsw-binary, hnsw-pooled, hnsw-principal, ivf, faiss-hnsw, "
+                  "faiss-ivf, faiss-binary-flat or faiss-binary-hnsw (kd-forest: 4 trees, 64 checks; graphs: M 16, ef 64; ivf: "
+                  "n/390 lists, 4 probed, as a bake sizes it; faiss-ivf: √n lists, a quarter probed; the binary kinds: voxel only)")
       ->check(CLI::IsMember(backends));
   cmd->add_option("--material", o->material,
                   "Material of the query (preset or JSON file) to rescale the physics to; default: the reference");
@@ -74,11 +74,20 @@ Runner addQueryCommand(CLI::App& app) {
     for (DescriptorKind other : kAllDescriptorKinds) settings.enabled[static_cast<size_t>(other)] = other == kind;
     if (!o->index.empty()) {
       DescriptorIndexSettings index = db.indexSettings[static_cast<size_t>(kind)];
-      index.kind = parseDescriptorIndexKind(o->index).value();
       using Kind = DescriptorIndexSettings::Kind;
-      if (index.kind != db.indexSettings[static_cast<size_t>(kind)].kind) {  // the stored numbers are another kind's
-        if (index.kind == Kind::FaissIvf || index.kind == Kind::Ivf) {
-          index.trees = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(db.entries.size()))));
+      if (const Kind wanted = parseDescriptorIndexKind(o->index).value(); wanted != index.kind) {
+        // The stored numbers are another kind's: this kind's own defaults instead (the seed kept).
+        const uint64_t seed = index.seed;
+        index = DescriptorIndexSettings{};
+        index.kind = wanted;
+        index.seed = seed;
+        const auto entries = static_cast<int64_t>(db.entries.size());
+        if (index.kind == Kind::Ivf) {
+          const DescriptorIndexSettings sized = defaultIndexSettings(DescriptorKind::Moment, entries);
+          index.trees = sized.trees;
+          index.checks = sized.checks;
+        } else if (index.kind == Kind::FaissIvf) {
+          index.trees = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(entries))));
           index.checks = std::max(1, index.trees / 4);
         } else if (index.kind == Kind::Hnsw || index.kind == Kind::HnswBinary || index.kind == Kind::HnswPooled || index.kind == Kind::HnswPrincipal || index.kind == Kind::FaissHnsw ||
                    index.kind == Kind::FaissBinaryHnsw) {
