@@ -158,6 +158,9 @@ Result<SearchSizing> chooseSearch(const FragmentDatabase& database, const std::v
       SearchTrial t;
       t.kind = kind;
       t.checks = checks;
+      const auto entries = static_cast<double>(database.entries.size());
+      t.valuesCompared = (checks > 0 ? std::min<double>(checks, entries) : entries) *
+                         static_cast<double>(database.descriptorsOf(kind).cols());
       std::vector<double> errors, times;
       for (size_t i = 0; i < fragments.size(); ++i) {
         const auto start = SteadyClock::now();
@@ -177,10 +180,12 @@ Result<SearchSizing> chooseSearch(const FragmentDatabase& database, const std::v
     }
   }
   if (out.trials.empty()) return makeError(ErrorCode::InvalidArgument, "search sizing: the database has no descriptors");
-  // The fastest that meets the target; else the most accurate.
+  // The cheapest that meets the target (fewest values compared, the first tried on ties); else
+  // the most accurate. Measured times are not weighed: they would make the sized pack differ from
+  // run to run.
   const SearchTrial* best = nullptr;
   for (const SearchTrial& t : out.trials)
-    if (t.medianFrequencyError <= targetError && (!best || t.medianMatchMs < best->medianMatchMs)) best = &t;
+    if (t.medianFrequencyError <= targetError && (!best || t.valuesCompared < best->valuesCompared)) best = &t;
   out.targetMet = best != nullptr;
   if (!best)
     for (const SearchTrial& t : out.trials)

@@ -55,7 +55,7 @@ nlohmann::json reportJson(const SceneSizingReport& r) {
     for (const auto& t : r.search->trials) {
       trials.push_back({{"descriptor", descriptorKindName(t.kind)}, {"checks", t.checks}, {"matched", t.matched},
                         {"median_frequency_error", std::isfinite(t.medianFrequencyError) ? nlohmann::json(t.medianFrequencyError) : nlohmann::json()},
-                        {"median_match_ms", t.medianMatchMs}});
+                        {"values_compared", t.valuesCompared}, {"median_match_ms", t.medianMatchMs}});
     }
     search = {{"descriptor", descriptorKindName(r.search->kind)}, {"checks", r.search->checks},
               {"target_met", r.search->targetMet}, {"median_frequency_error", r.search->medianFrequencyError},
@@ -109,8 +109,9 @@ void printReport(const SceneSizingReport& r) {
                 100.0 * r.search->medianFrequencyError, 100.0 * r.matchTargetError,
                 r.search->targetMet ? "" : ": NOT met, the most accurate kept", r.search->medianMatchMs, r.search->fragments);
     for (const auto& t : r.search->trials) {
-      std::printf("      %-15s %4s: %6.1f %%  %6.2f ms  (%d matched)\n", descriptorKindName(t.kind),
-                  t.checks > 0 ? std::to_string(t.checks).c_str() : "all", 100.0 * t.medianFrequencyError, t.medianMatchMs, t.matched);
+      std::printf("      %-15s %4s: %6.1f %%  %8.0f values compared  %6.2f ms  (%d matched)\n", descriptorKindName(t.kind),
+                  t.checks > 0 ? std::to_string(t.checks).c_str() : "all", 100.0 * t.medianFrequencyError, t.valuesCompared,
+                  t.medianMatchMs, t.matched);
     }
   }
   std::printf("database: %s\n", r.refracture ? "kept (fragments break again)" : "dropped (the scene does not refracture)");

@@ -59,7 +59,11 @@ struct SearchTrial {
   int checks = 0;                     ///< kd-forest checks; 0: the exact search
   int matched = 0;                    ///< fragments matched (a frame can be undefined)
   double medianFrequencyError = std::numeric_limits<double>::quiet_NaN();
-  double medianMatchMs = 0.0;
+  /// Descriptor values compared per frame's query: rows compared (the kd-forest's checks, at
+  /// most the entries; every entry for the exact search) × the descriptor's width. What the
+  /// choice weighs, since it is the same in every run (a measured time is not).
+  double valuesCompared = 0.0;
+  double medianMatchMs = 0.0;  ///< measured and reported, not weighed
   /// Per matched fragment: the match's descriptor distance and its error against the fragment's
   /// own first three frequencies (what MatchErrors.h's models are fitted to).
   std::vector<std::pair<double, double>> distanceErrors;
