@@ -14,15 +14,18 @@ bool FragmentDatabase::hasPhysics() const {
   return !entries.empty();
 }
 
-DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entries) {
-  DescriptorIndexSettings s;
-  if (kind != DescriptorKind::Moment) return s;
+DescriptorIndexSettings sizedInvertedFile(int64_t entries) {
   constexpr int64_t kMaxLists = 1024;  // PackReader's bound on trees
   constexpr int kProbes = 4;
+  DescriptorIndexSettings s;
   s.kind = DescriptorIndexSettings::Kind::Ivf;
   s.trees = static_cast<int>(std::clamp<int64_t>(entries / kIvfRowsPerList, 1, kMaxLists));
   s.checks = std::min(s.trees, kProbes);
   return s;
+}
+
+DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entries) {
+  return kind == DescriptorKind::Moment ? sizedInvertedFile(entries) : DescriptorIndexSettings{};
 }
 
 Status validateFragmentDatabase(const FragmentDatabase& db) {

@@ -28,8 +28,8 @@
 // force's own distance (exactSquaredL2), and the k best are returned by (distance, id). The
 // bounds are made in one pass, four rows to a register, beside each list's smallest upper bound,
 // so that most lists and rows cost one compare in the k-th bound's pass and a quarter of one in
-// the admission's. So within
-// the probed lists the answer is exact; the lists probed decide the recall.
+// the admission's. So within the probed lists the answer is exact; the lists probed decide the
+// recall.
 //
 // Same bits with SSE2 and AVX: both forms keep eight float lanes, lane l summing (a − b)² over the
 // values l, l + 8, ..., and add the lanes in one fixed order at the end (Simd.h). So the probed
@@ -182,9 +182,10 @@ struct KeyRest {
 };
 float bounds(KeyRest q, const float* residuals, const float* norms, int64_t count, float delta, float etaScale,
              float* lower, float* upper) {
-  const auto one = [&](float d, float xr, float xn, float& low, float& up) {
-    const float sum = q.residual + xr, gap = q.residual - xr, both = q.norm + xn;
-    const float eta = etaScale * both * both;
+  // One formula for a float and for four in a register (a scalar operand is broadcast).
+  const auto both = [&](auto d, auto xr, auto xn, auto& low, auto& up) {
+    const auto sum = q.residual + xr, gap = q.residual - xr, wholes = q.norm + xn;
+    const auto eta = etaScale * wholes * wholes;
     up = (d + sum * sum) * (1.0f + delta) + eta;
     low = (d + gap * gap) * (1.0f - delta) - eta;
   };
@@ -196,17 +197,14 @@ float bounds(KeyRest q, const float* residuals, const float* norms, int64_t coun
     loadLanes<4>(lower + i, d);
     loadLanes<4>(residuals + i, xr);
     loadLanes<4>(norms + i, xn);
-    const V4 qr = V4{} + q.residual, sum = qr + xr, gap = qr - xr, both = (V4{} + q.norm) + xn;
-    const V4 eta = etaScale * both * both;
-    up = (d + sum * sum) * (1.0f + delta) + eta;
-    low = (d + gap * gap) * (1.0f - delta) - eta;
+    both(d, xr, xn, low, up);
     std::memcpy(upper + i, &up, sizeof up);
     std::memcpy(lower + i, &low, sizeof low);
     least = up < least ? up : least;
   }
   float smallest = std::min(std::min(least[0], least[1]), std::min(least[2], least[3]));
   for (; i < count; ++i) {
-    one(lower[i], residuals[i], norms[i], lower[i], upper[i]);
+    both(lower[i], residuals[i], norms[i], lower[i], upper[i]);
     if (upper[i] < smallest) smallest = upper[i];
   }
   return smallest;

@@ -236,9 +236,10 @@ TEST_F(ModelSizingTest, FragmentsGiveTheDebrisThresholdAndTheSearch) {
   for (const SearchTrial& t : loose.value().trials) {
     EXPECT_GT(t.matched, 0);
     EXPECT_GT(t.medianMatchMs, 0.0);
-    const auto entries = static_cast<double>(database.value().entries.size());
-    const auto width = static_cast<double>(database.value().descriptorsOf(t.kind).cols());
-    EXPECT_EQ(t.valuesCompared, (t.checks > 0 ? std::min<double>(t.checks, entries) : entries) * width);
+    // Rows compared: the checks (2), else all 12 entries (32 checks on 12 entries, or the exact search).
+    ASSERT_EQ(database.value().entries.size(), 12u);
+    const double rows = t.checks == 2 ? 2.0 : 12.0;
+    EXPECT_EQ(t.valuesCompared, rows * static_cast<double>(descriptorSize(t.kind, database.value().descriptorSettings)));
     // One (distance, error) pair per matched fragment, the error that the trial's median is of.
     ASSERT_EQ(t.distanceErrors.size(), static_cast<size_t>(t.matched));
     std::vector<double> errors;

@@ -586,24 +586,26 @@ TEST_F(CliTest, BakeDbThenQueryFindsTheEntryInAnotherPose) {
   EXPECT_EQ(db.indexSettings[static_cast<size_t>(DescriptorKind::Moment)].kind, DescriptorIndexSettings::Kind::Ivf);
   EXPECT_EQ(db.indexSettings[static_cast<size_t>(DescriptorKind::VoxelImproved)].kind, DescriptorIndexSettings::Kind::KdForest);
   // Every index, stored or given in place of the stored one (with its own defaults), finds it.
-  for (const char* descriptor : {"moment", "voxel-improved"}) for (const char* index : {"brute-force", "kd-forest", "ivf"}) {
-    SCOPED_TRACE(std::string(descriptor) + " " + index);
-    const CliRun q = run("query " + path("db.h5") + " --mesh " + path("query.off") + " --descriptor " + descriptor +
-                         " --index " + index + " --k 3 --json");
-    ASSERT_EQ(q.exitCode, 0) << q.out;
-    const auto doc = nlohmann::json::parse(q.out);
-    ASSERT_EQ(doc["matches"].size(), 3u);
-    const auto& best = doc["matches"][0];
-    EXPECT_EQ(best["entry"], 4);
-    EXPECT_LT(best["distance"].get<double>(), 1e-3);
-    EXPECT_LE(best["distance"].get<double>(), doc["matches"][1]["distance"].get<double>());
-    EXPECT_NEAR(best["entry_to_query"]["scale_m"].get<double>(), 0.3, 1e-9);
-    const double entryMass = db.entries[4].asset.massProperties.massKg;  // ≈ ρ · 1 m³
-    EXPECT_NEAR(entryMass, db.referenceMaterial.densityKgPerM3, 0.01 * entryMass);
-    EXPECT_NEAR(best["physics"]["mass_kg"].get<double>(), 0.027 * entryMass, 1e-9 * entryMass);
-    // Frequencies scale as 1/size: f(0.3 m) = f(1 m) / 0.3.
-    EXPECT_NEAR(best["physics"]["frequencies_hz"][0].get<double>() * 0.3,
-                db.entries[4].asset.modal.frequenciesHz[0], 1e-6 * db.entries[4].asset.modal.frequenciesHz[0]);
+  for (const char* descriptor : {"moment", "voxel-improved"}) {
+    for (const char* index : {"brute-force", "kd-forest", "ivf"}) {
+      SCOPED_TRACE(std::string(descriptor) + " " + index);
+      const CliRun q = run("query " + path("db.h5") + " --mesh " + path("query.off") + " --descriptor " + descriptor +
+                           " --index " + index + " --k 3 --json");
+      ASSERT_EQ(q.exitCode, 0) << q.out;
+      const auto doc = nlohmann::json::parse(q.out);
+      ASSERT_EQ(doc["matches"].size(), 3u);
+      const auto& best = doc["matches"][0];
+      EXPECT_EQ(best["entry"], 4);
+      EXPECT_LT(best["distance"].get<double>(), 1e-3);
+      EXPECT_LE(best["distance"].get<double>(), doc["matches"][1]["distance"].get<double>());
+      EXPECT_NEAR(best["entry_to_query"]["scale_m"].get<double>(), 0.3, 1e-9);
+      const double entryMass = db.entries[4].asset.massProperties.massKg;  // ≈ ρ · 1 m³
+      EXPECT_NEAR(entryMass, db.referenceMaterial.densityKgPerM3, 0.01 * entryMass);
+      EXPECT_NEAR(best["physics"]["mass_kg"].get<double>(), 0.027 * entryMass, 1e-9 * entryMass);
+      // Frequencies scale as 1/size: f(0.3 m) = f(1 m) / 0.3.
+      EXPECT_NEAR(best["physics"]["frequencies_hz"][0].get<double>() * 0.3,
+                  db.entries[4].asset.modal.frequenciesHz[0], 1e-6 * db.entries[4].asset.modal.frequenciesHz[0]);
+    }
   }
   const CliRun text = run("query " + path("db.h5") + " --mesh " + path("query.off"));
   EXPECT_EQ(text.exitCode, 0) << text.out;

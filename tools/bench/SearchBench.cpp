@@ -210,6 +210,18 @@ Status runSearchBench(const SearchBenchSettings& s) {
     queries.push_back(std::move(query));
   }
   triangles /= static_cast<double>(queries.size());
+  {
+    // How many frames a query is searched in (one to four): a fragment's search costs about that many searches.
+    std::array<int, 5> perCount{};
+    double frames = 0.0;
+    for (const Query& q : queries) {
+      const size_t n = q.frames.candidates.size();
+      ++perCount[std::min<size_t>(n, perCount.size() - 1)];
+      frames += static_cast<double>(n);
+    }
+    log(s.quiet, "query frames: mean %.2f; 1: %d, 2: %d, 3: %d, 4+: %d queries\n", frames / static_cast<double>(queries.size()),
+        perCount[1], perCount[2], perCount[3], perCount[4]);
+  }
   costCsv << "stage,fragments,mean_triangles,median_us,p99_us,median_us_per_1k_triangles\n";
   auto costRow = [&](const std::string& stage, const std::vector<double>& us) {
     costCsv << stage << "," << us.size() << "," << triangles << "," << percentile(us, 0.5) << "," << percentile(us, 0.99)

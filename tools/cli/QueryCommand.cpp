@@ -83,7 +83,7 @@ Runner addQueryCommand(CLI::App& app) {
         index.seed = seed;
         const auto entries = static_cast<int64_t>(db.entries.size());
         if (index.kind == Kind::Ivf) {
-          const DescriptorIndexSettings sized = defaultIndexSettings(DescriptorKind::Moment, entries);
+          const DescriptorIndexSettings sized = sizedInvertedFile(entries);
           index.trees = sized.trees;
           index.checks = sized.checks;
         } else if (index.kind == Kind::FaissIvf) {

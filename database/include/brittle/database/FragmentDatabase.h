@@ -68,6 +68,9 @@ struct FragmentDatabase {
 /// - The voxel kinds: the kd-forest, 4 trees and 64 checks (DescriptorIndexSettings' default).
 /// Both builds are deterministic (the same data give the same index in any process).
 DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entries);
+/// The inverted file sized to `entries` rows, as defaultIndexSettings gives it to the moments
+/// (also what `query --index ivf` builds for any kind).
+DescriptorIndexSettings sizedInvertedFile(int64_t entries);
 inline constexpr int64_t kIvfRowsPerList = 390;
 
 /// Checks sizes and values: descriptor matrices have one finite row per entry and the width of
