@@ -197,5 +197,47 @@ TEST_F(HotPathAllocationTest, BreakingImpactsAllocateOnlyWhatTheyHandOver) {
   EXPECT_GT(elements, fragments) << "more elements are cut than fragments made: the bound is not trivial";
 }
 
+// With the exact path on, the pieces it takes are handed over as BodySources, and everything the
+// path does (cutting the piece's solid out of its parent, its modal analysis) runs on the workers
+// when the World makes the body. So the impact itself still allocates per fragment, a few blocks
+// each, not per element of the pieces it cuts out.
+TEST_F(HotPathAllocationTest, TheExactPathCutsNothingInTheImpact) {
+  if (!BRITTLE_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";
+  WorldSettings settings;
+  settings.prepareInBackground = false;  // the bodies are made when first needed, not meanwhile
+  settings.fracture.exactModesMaxTets = 400;
+  settings.fracture.exactModesMaxDof = 0;
+  settings.fracture.exactModesBudgetDof = 0;
+  auto world = World::create(*sPack, settings);
+  ASSERT_TRUE(world) << world.error().message;
+  ImpactDesc hit;
+  hit.pointWorld = Eigen::Vector3d(0.16, 0.13, 0.01);
+  hit.impactorMassKg = 0.1;
+  hit.impactorRadiusM = 0.02;
+  ImpactResult result;
+  int exact = 0;
+  for (int round = 0; round < 3; ++round) {
+    hit.speedMps = round == 0 ? 120.0 : 60.0;
+    auto id = world.value().addObject({.asset = "plate"});
+    ASSERT_TRUE(id) << id.error().message;
+    hit.object = id.value();
+    ASSERT_TRUE(world.value().waitUntilPrepared());  // the last round's bodies made, off the count
+    const long before = gAllocations.load();
+    const Status st = world.value().impact(hit, result);
+    const long made = gAllocations.load() - before;
+    ASSERT_TRUE(st) << st.error().message;
+    ASSERT_TRUE(result.broken);
+    if (round == 0) continue;
+    int taken = 0;
+    for (const FragmentResult& f : result.fragments) taken += f.path == FragmentPath::ExactModes;
+    exact += taken;
+    // What a surface hands over (as above), and per exact piece its BodySource (the source, its
+    // task and the piece's name); the parent's labels and cuts, shared by the pieces, once.
+    EXPECT_LE(made, 2 + 3 * static_cast<long>(result.fragments.size()) + 4 * taken + 3)
+        << result.fragments.size() << " fragments, " << taken << " on the exact path";
+  }
+  EXPECT_GT(exact, 0) << "some pieces take the exact path";
+}
+
 }  // namespace
 }  // namespace brittle

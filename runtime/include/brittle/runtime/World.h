@@ -332,9 +332,10 @@ class World {
   /// correction, stress scan), and one that breaks it computes its cracks, labels and surfaces in
   /// those buffers and allocates only what it hands over: the fracture state's two arrays, and per
   /// fragment its surface's two arrays, its reason text when it has one, and for a new object
-  /// the source of its body (the fragment's own solid or its match; the body itself is made after
-  /// the impact, on the workers). So the allocations are bounded by the fragments made, not by
-  /// the body's size (tested: HotPathAllocationTest). A body's first impact may factorise its K
+  /// the source of its body (a task: the exact path cuts the fragment's own solid out and solves
+  /// its modes, a match places its entry, both after the impact, on the workers). So the
+  /// allocations are bounded by the fragments made, not by the body's size (tested:
+  /// HotPathAllocationTest, with and without the exact path). A body's first impact may factorise its K
   /// (StaticCorrection.h).
   Status impact(const ImpactDesc& desc, ImpactResult& result);
 
