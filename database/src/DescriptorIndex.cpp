@@ -38,19 +38,34 @@ void sortByDistanceThenId(int k, int64_t* ids, float* distances) {
   }
 }
 
+namespace {
+
+// Where a per-value check must start: the first block of four values (an SSE2 register) not all
+// of which pass `test`, or the last values short of a block. The checks of a 4096-value voxel
+// query then cost a compare per block instead of a branch per value; the scalar check from there
+// finds and names the value. Without SSE2, 0: every value is checked one by one.
+enum class BlockTest { Finite, ZeroOrOne };
+int64_t leadingBlocksPassing([[maybe_unused]] const float* values, [[maybe_unused]] int64_t count,
+                             [[maybe_unused]] BlockTest test) {
+  int64_t c = 0;
+#if defined(__SSE2__)
+  const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+  const auto passes = [&](__m128 v) {
+    const __m128 lanes = test == BlockTest::Finite ? _mm_cmpeq_ps(_mm_mul_ps(v, zero), zero)  // v · 0 = 0: finite
+                                                   : _mm_or_ps(_mm_cmpeq_ps(v, zero), _mm_cmpeq_ps(v, one));
+    return _mm_movemask_ps(lanes) == 0xF;
+  };
+  while (c + 4 <= count && passes(_mm_loadu_ps(values + c))) c += 4;
+#endif
+  return c;
+}
+
+}  // namespace
+
 Status checkZeroOne(const float* values, int64_t rows, int64_t dims, bool isQuery) {
   for (int64_t r = 0; r < rows; ++r) {
     const float* row = values + r * dims;
-    int64_t c = 0;
-#if defined(__SSE2__)
-    // Four values a compare (a 16³ query is 4096): equal to 0 or to 1, lane by lane.
-    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
-    for (; c + 4 <= dims; c += 4) {
-      const __m128 v = _mm_loadu_ps(row + c);
-      if (_mm_movemask_ps(_mm_or_ps(_mm_cmpeq_ps(v, zero), _mm_cmpeq_ps(v, one))) != 0xF) break;
-    }
-#endif
-    for (; c < dims; ++c) {
+    for (int64_t c = leadingBlocksPassing(row, dims, BlockTest::ZeroOrOne); c < dims; ++c) {
       const float v = row[c];
       if (v != 0.0f && v != 1.0f) {
         return invalidArgument(std::string("DescriptorIndex") + (isQuery ? " query" : "") +
@@ -195,15 +210,7 @@ Status DescriptorIndex::validateQuery(const float* descriptor, int k, int64_t qu
   if (k > mRows)
     return invalidArgument("DescriptorIndex query: k = " + std::to_string(k) + " exceeds the " +
                    std::to_string(mRows) + " entries");
-  int64_t c = 0;
-#if defined(__SSE2__)
-  // Four values a compare (a voxel query is 4096): v · 0 = 0 exactly when v is finite.
-  const __m128 zero = _mm_setzero_ps();
-  for (; c + 4 <= mDims; c += 4) {
-    if (_mm_movemask_ps(_mm_cmpeq_ps(_mm_mul_ps(_mm_loadu_ps(descriptor + c), zero), zero)) != 0xF) break;
-  }
-#endif
-  for (; c < mDims; ++c) {
+  for (int64_t c = search::leadingBlocksPassing(descriptor, mDims, search::BlockTest::Finite); c < mDims; ++c) {
     if (!std::isfinite(descriptor[c]))
       return invalidArgument("DescriptorIndex query: non-finite value " +
                      (batch ? "at query row " + std::to_string(queryRow) + ", " : std::string("at ")) +

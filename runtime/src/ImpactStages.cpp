@@ -258,9 +258,10 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const doub
 // The exact path, all of it on the workers (BodySource): the fragment's own solid cut out of its
 // parent, then its modal analysis. The cut was once made in the impact, and it was most of the
 // matching stage: 15–17 thousand allocations an impact on a 1.5k-tet plate, and 0.45 of the
-// 922-tet slab's 0.47 ms (docs/realtime.md, "The exact path's cut on the workers"). Should either fail (the cut only on inconsistent data: its checks), the object
-// takes the fragment's database match when there is a database, as it always did when the analysis
-// failed. The caller has checked its size against exactModesMaxDof and the impact's budget.
+// 922-tet slab's 0.47 ms (docs/realtime.md, "The exact path's cut on the workers"). Should either
+// fail (the cut only on inconsistent data: its checks), the object takes the fragment's database
+// match when there is a database, as it did when the analysis failed. The caller has checked its
+// size against exactModesMaxDof and the impact's budget.
 std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::shared_ptr<const BrokenParent>& parent,
                                               const FragmentResult& fr, size_t i) {
   const FractureSettings& fs = *job.settings;
@@ -328,8 +329,8 @@ void grantExactBudget(const FractureSettings& fs, const std::vector<int64_t>& do
 // exactModesMaxTets of the parent's tets and exactModesMaxDof degrees of freedom, together within
 // exactModesBudgetDof), else the match (which the exact path also falls back to, on the workers,
 // should it fail). The heavy part of each (a solid cut out and its modal analysis, an entry
-// rescaled) is deferred into a BodySource, which the World makes
-// on its workers once the impact is applied; what stays here is cheap. Fragments are independent
+// rescaled) is deferred into a BodySource, which the World makes on its workers once the impact is
+// applied; what stays here is cheap. Fragments are independent
 // and done in parallel, each writing only its own entries, but for the budget, which is shared
 // and so decided between the two parallel passes.
 void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResult& result,

@@ -204,7 +204,7 @@ TEST_F(HotPathAllocationTest, BreakingImpactsAllocateOnlyWhatTheyHandOver) {
 TEST_F(HotPathAllocationTest, TheExactPathCutsNothingInTheImpact) {
   if (!BRITTLE_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";
   WorldSettings settings;
-  settings.prepareInBackground = false;  // the bodies are made when first needed, not meanwhile
+  settings.prepareInBackground = false;  // no factorisations queued behind the new bodies
   settings.fracture.exactModesMaxTets = 400;
   settings.fracture.exactModesMaxDof = 0;
   settings.fracture.exactModesBudgetDof = 0;
@@ -221,7 +221,7 @@ TEST_F(HotPathAllocationTest, TheExactPathCutsNothingInTheImpact) {
     auto id = world.value().addObject({.asset = "plate"});
     ASSERT_TRUE(id) << id.error().message;
     hit.object = id.value();
-    ASSERT_TRUE(world.value().waitUntilPrepared());  // the last round's bodies made, off the count
+    ASSERT_TRUE(world.value().waitUntilPrepared());  // the last round's bodies made on the workers, off the count
     const long before = gAllocations.load();
     const Status st = world.value().impact(hit, result);
     const long made = gAllocations.load() - before;
