@@ -14,6 +14,7 @@
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/runtime/FragmentModes.h"
+#include "brittle/runtime/PolynomialModes.h"
 #include "brittle/runtime/World.h"
 
 namespace brittle::bench {
@@ -111,7 +112,7 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
   if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.csv.string());
   csv << "object,speed_mps,seed,fragment,volume_fraction,parent_tets,sub_tets,dropped_volume_fraction,modes,match_s,exact_s,"
          "reference_s,match_distance,match_freq_err,exact_freq_err,reference_f1_hz,exact_f1_hz,match_f1_hz,"
-         "predicted_err_median,predicted_err_p90,predicted_beyond_range,database_entries\n";
+         "predicted_err_median,predicted_err_p90,predicted_beyond_range,database_entries,polynomial3_freq_err,polynomial4_freq_err,polynomial5_freq_err,polynomial5_f1_hz,polynomial3_s,polynomial4_s,polynomial5_s\n";
   csv.precision(9);
   for (const std::string& name : objects) {
     const ObjectAsset& asset = *std::find_if(p.objects.begin(), p.objects.end(), [&](const ObjectAsset& a) { return a.name == name; });
@@ -178,6 +179,15 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
           const Eigen::VectorXd& refHz = reference ? reference.value().modal.frequenciesHz : none;
           const Eigen::VectorXd& exactHz = exact ? exact.value().modal.frequenciesHz : none;
           double matchS = nan;
+          // The fragment's own frequencies from its moments (PolynomialModes.h), at degrees 3–5.
+          Eigen::VectorXd polynomial[3];
+          double polynomialS[3];
+          for (int q = 0; q < 3; ++q) {
+            polynomialS[q] = medianSeconds(s.repeats, [&] {
+              auto modes = polynomialModes(fr.surface, material, q + 3);
+              polynomial[q] = modes ? modes.value().frequenciesHz : none;
+            });
+          }
           for (size_t m = 0; m < matchers.size(); ++m) {
             // Database path, against the first entryCounts[m] entries.
             Result<ObjectAsset> matched = makeError(ErrorCode::InvalidArgument, "no match");
@@ -192,6 +202,9 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
                                          p.database.referenceMaterial, material, found.value().front().queryFrame);
             });
             const Eigen::VectorXd& matchHz = matched ? matched.value().modal.frequenciesHz : none;
+            auto polynomialError = [&](int q) {
+              return reference && polynomial[q].size() >= 3 ? matchFrequencyError(polynomial[q], refHz) : nan;
+            };
             csv << name << "," << speed << "," << seed << "," << i << ","
                 << fr.massProperties.volumeM3 / asset.massProperties.volumeM3 << ","
                 << (sub ? sub.value().wholeTets + sub.value().splitTets : 0) << "," << (sub ? sub.value().mesh.tets.rows() : 0) << ","
@@ -200,7 +213,9 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
                 << referenceS << "," << distance << "," << (reference && matched ? matchFrequencyError(matchHz, refHz) : nan) << ","
                 << (reference && exact ? matchFrequencyError(exactHz, refHz) : nan) << "," << (reference ? refHz[0] : nan) << ","
                 << (exact ? exactHz[0] : nan) << "," << (matched ? matchHz[0] : nan) << "," << predicted.median << ","
-                << predicted.p90 << "," << (predicted.beyondRange ? 1 : 0) << "," << entryCounts[m] << "\n";
+                << predicted.p90 << "," << (predicted.beyondRange ? 1 : 0) << "," << entryCounts[m] << ","
+                << polynomialError(0) << "," << polynomialError(1) << "," << polynomialError(2) << ","
+                << (polynomial[2].size() ? polynomial[2][0] : nan) << "," << polynomialS[0] << "," << polynomialS[1] << "," << polynomialS[2] << "\n";
           }
           if (!s.quiet) {
             std::fprintf(stderr, "%s v=%g seed=%d fragment %zu: %ld tets, match %.2f ms, exact %.2f ms%s%s\n", name.c_str(), speed,

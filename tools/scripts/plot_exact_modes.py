@@ -59,10 +59,16 @@ def main():
     exact_ms = [1e3 * number(r["exact_s"]) for r in rows]
     match_err = [100 * number(r["match_freq_err"]) for r in rows]
     exact_err = [100 * number(r["exact_freq_err"]) for r in rows]
+    # The fragment's own frequencies from its moments (polynomial Ritz, degree 5), when measured.
+    has_poly = "polynomial5_freq_err" in rows[0]
+    poly_ms = [1e3 * number(r["polynomial5_s"]) for r in rows] if has_poly else []
+    poly_err = [100 * number(r["polynomial5_freq_err"]) for r in rows] if has_poly else []
+    poly = [(poly_ms, poly_err, "polynomial Ritz, degree 5 (own moments)", "tab:green")] if has_poly else []
     edges = np.geomspace(max(1, min(tets)) * 0.999, max(tets) * 1.001, 9)
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.5))
-    for values, label, colour in ((match_ms, "database match", "tab:blue"), (exact_ms, "exact path (own modes)", "tab:red")):
+    for values, label, colour in [(match_ms, "database match", "tab:blue"), (exact_ms, "exact path (own modes)", "tab:red")] + \
+            [(t, label, colour) for t, _, label, colour in poly]:
         left.scatter(tets, values, s=10, alpha=0.35, color=colour)
         left.plot(*binned(tets, values, edges), "o-", color=colour, label=label)
     left.axhline(args.budget_ms, color="grey", ls="--", lw=1, label=f"budget {args.budget_ms:g} ms")
@@ -71,7 +77,8 @@ def main():
     left.set_xlabel("fragment size (tets of the broken body it holds a part of)")
     left.set_ylabel("time per fragment (ms)")
     left.legend(fontsize=8)
-    for values, label, colour in ((match_err, "database match", "tab:blue"), (exact_err, "exact path (own modes)", "tab:red")):
+    for values, label, colour in [(match_err, "database match", "tab:blue"), (exact_err, "exact path (own modes)", "tab:red")] + \
+            [(e, label, colour) for _, e, label, colour in poly]:
         left_ok = [(t, v) for t, v in zip(tets, values) if math.isfinite(v)]
         right.scatter([t for t, _ in left_ok], [max(v, 1e-3) for _, v in left_ok], s=10, alpha=0.35, color=colour)
         right.plot(*binned(tets, values, edges), "o-", color=colour, label=label)
@@ -95,6 +102,10 @@ def main():
     print(f"fragments: {len(rows)}, tets {min(tets)}..{max(tets)}")
     print(f"median time: match {med(match_ms):.2f} ms, exact {med(exact_ms):.2f} ms")
     print(f"median frequency error: match {med(match_err):.1f} %, exact {med(exact_err):.1f} %")
+    if has_poly:
+        finite = sorted(v for v in poly_err if math.isfinite(v))
+        p90 = finite[int(0.9 * (len(finite) - 1))] if finite else math.nan
+        print(f"polynomial Ritz (degree 5): median error {med(poly_err):.1f} % (p90 {p90:.1f} %), median time {med(poly_ms):.2f} ms")
     centres, medians = binned(tets, exact_ms, edges)
     for c, m, me in zip(centres, medians, binned(tets, match_ms, edges)[1]):
         print(f"  ~{c:7.0f} tets: exact {m:8.2f} ms, match {me:6.2f} ms")

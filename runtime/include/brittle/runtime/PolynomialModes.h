@@ -1,0 +1,61 @@
+// PolynomialModes.h — a solid's lowest elastic frequencies from its volume moments alone:
+// Rayleigh–Ritz over polynomial displacement fields (Visscher et al. 1991, "On the normal modes
+// of free vibration of inhomogeneous and anisotropic elastic objects", the xyz algorithm).
+//
+// The trial space holds every displacement whose components are polynomials of degree ≤ p in
+// y = (x − c)/s (c the centroid, s the RMS radius about it): 3 × monomialCount(p) functions
+// e_i y^α. For two of them, u = e_i y^α and v = e_j y^β, the isotropic strain energy and the
+// kinetic energy are sums of the solid's moments m_γ = ∫ y^γ dV:
+//
+//   K = λ α_i β_j m[α+β−e_i−e_j] + μ α_j β_i m[α+β−e_i−e_j] + μ δ_ij Σ_k α_k β_k m[α+β−2e_k]
+//   M = ρ δ_ij m[α+β]
+//
+// (over s² for K in physical units), so moments of order ≤ 2p are all the solid contributes, and
+// they are exact from its closed surface or its tets (VolumeMoments.h). The space contains the
+// six rigid motions (their Ritz values are zero and are dropped) and no mesh, so nothing locks:
+// a thin plate's twisting mode w = xy is in it from p = 2. Ritz values bound the solid's own
+// frequencies from above and fall as p grows.
+//
+// What it is for: a fragment's frequencies at runtime, where a database match can be far off
+// (runtime fragments are faceted and lean), at a cost that depends on p, not on the fragment's
+// size. What it misses: modes localised in a part of the solid (a piece hanging by a thin neck
+// swings as a hinge that no low-degree polynomial follows), and every mode above the space's
+// reach. Measured against fragments' own P2 modes: docs/results/speed-accuracy.md.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "brittle/core/MeshTypes.h"
+#include "brittle/core/Result.h"
+#include "brittle/database/Material.h"
+#include "brittle/descriptors/VolumeMoments.h"
+
+namespace brittle {
+
+/// The highest polynomial degree: the moments it needs (order 2p) are those VolumeMoments knows.
+inline constexpr int kMaxPolynomialModeDegree = kMaxMomentOrder / 2;
+
+struct PolynomialModes {
+  int degree = 0;
+  /// The elastic Ritz frequencies (Hz), ascending, the six rigid motions removed: at most
+  /// 3 × monomialCount(degree) − 6 of them (fewer when rounding makes directions of the space
+  /// indistinguishable; see keptDirections).
+  Eigen::VectorXd frequenciesHz;
+  Eigen::Index basisSize = 0;       ///< 3 × monomialCount(degree)
+  Eigen::Index keptDirections = 0;  ///< directions whose mass is above 1e-13 of the largest (all, in double, up to p = 5)
+};
+
+/// The lowest frequencies of the solid with these moments and material, from degree-p polynomial
+/// fields. Inputs: moments in metres (∫ x^α dV, m^(3+|α|)) about any point near the solid (its
+/// centre keeps the sums free of cancellation), of order ≥ 2·degree; degree in
+/// [1, kMaxPolynomialModeDegree]. Errors: InvalidArgument (degree out of range, moments of too low
+/// an order), NonFiniteValue (a moment is not finite), EmptyMesh (volume ≤ 0: an empty or inward
+/// solid), InvalidMaterial, EigenNotConverged.
+Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Material& material, int degree);
+
+/// The same from a closed, outward surface (#V by 3 vertices in metres, #F by 3 faces): its
+/// moments about its vertices' mean, then the above. Errors: those of computeVolumeMoments and
+/// the above.
+Result<PolynomialModes> polynomialModes(const TriangleMesh& surface, const Material& material, int degree);
+
+}  // namespace brittle

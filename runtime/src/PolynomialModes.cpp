@@ -1,0 +1,103 @@
+#include "brittle/runtime/PolynomialModes.h"
+
+#include <Eigen/Eigenvalues>
+#include <array>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace brittle {
+
+Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Material& material, int degree) {
+  if (degree < 1 || degree > kMaxPolynomialModeDegree) {
+    return makeError(ErrorCode::InvalidArgument, "polynomialModes: degree " + std::to_string(degree) + " is outside [1, " +
+                                                     std::to_string(kMaxPolynomialModeDegree) + "]");
+  }
+  if (moments.maxOrder < 2 * degree || moments.values.size() < monomialCount(2 * degree)) {
+    return makeError(ErrorCode::InvalidArgument, "polynomialModes: degree " + std::to_string(degree) + " needs moments of order " +
+                                                     std::to_string(2 * degree) + ", given " + std::to_string(moments.maxOrder));
+  }
+  if (!moments.values.head(monomialCount(2 * degree)).allFinite()) {
+    return makeError(ErrorCode::NonFiniteValue, "polynomialModes: a volume moment is not finite");
+  }
+  if (Status st = validateMaterial(material); !st) return st.error();
+  const double volume = moments(0, 0, 0);
+  if (!(volume > 0.0)) {
+    return makeError(ErrorCode::EmptyMesh, "polynomialModes: the solid's volume is " + std::to_string(volume) + " m³ (empty or inward)");
+  }
+  // Centred on the centroid and scaled by the RMS radius: y = (x − c)/s, moments of order ≤ 2p in y.
+  const Eigen::Vector3d centre = Eigen::Vector3d(moments(1, 0, 0), moments(0, 1, 0), moments(0, 0, 1)) / volume;
+  const double meanSquare = (moments(2, 0, 0) + moments(0, 2, 0) + moments(0, 0, 2)) / volume - centre.squaredNorm();
+  if (!(meanSquare > 0.0)) return makeError(ErrorCode::EmptyMesh, "polynomialModes: the solid has no extent");
+  const double s = std::sqrt(meanSquare);
+  VolumeMoments order2p;
+  order2p.maxOrder = 2 * degree;
+  order2p.values = moments.values.head(monomialCount(2 * degree));
+  const VolumeMoments y = transformVolumeMoments(order2p, Eigen::Matrix3d::Identity() / s, centre);
+  auto m = [&](int a, int b, int c) { return (a < 0 || b < 0 || c < 0) ? 0.0 : y(a, b, c); };
+
+  const int monomials = monomialCount(degree), n = 3 * monomials;
+  const double nu = material.poissonRatio, e = material.youngsModulusPa;
+  const double lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu = e / (2.0 * (1.0 + nu));
+  Eigen::MatrixXd k = Eigen::MatrixXd::Zero(n, n), mass = Eigen::MatrixXd::Zero(n, n);
+  for (int A = 0; A < monomials; ++A) {
+    const std::array<int, 3> al = monomialExponents(A);
+    for (int B = 0; B < monomials; ++B) {
+      const std::array<int, 3> be = monomialExponents(B);
+      const std::array<int, 3> sum = {al[0] + be[0], al[1] + be[1], al[2] + be[2]};
+      auto less = [&](int i, int j) {  // m[α + β − e_i − e_j]
+        std::array<int, 3> g = sum;
+        --g[static_cast<size_t>(i)];
+        --g[static_cast<size_t>(j)];
+        return m(g[0], g[1], g[2]);
+      };
+      double gradients = 0.0;  // ∫ ∇y^α · ∇y^β
+      for (int q = 0; q < 3; ++q) gradients += al[static_cast<size_t>(q)] * be[static_cast<size_t>(q)] * less(q, q);
+      const double kinetic = material.densityKgPerM3 * m(sum[0], sum[1], sum[2]);
+      for (int i = 0; i < 3; ++i) {
+        mass(3 * A + i, 3 * B + i) = kinetic;
+        for (int j = 0; j < 3; ++j) {
+          const double cross = less(i, j);
+          double v = (lambda * al[static_cast<size_t>(i)] * be[static_cast<size_t>(j)] +
+                      mu * al[static_cast<size_t>(j)] * be[static_cast<size_t>(i)]) * cross;
+          if (i == j) v += mu * gradients;
+          k(3 * A + i, 3 * B + j) = v / (s * s);
+        }
+      }
+    }
+  }
+  // M = V D Vᵀ; the Ritz problem in the M-orthonormal directions W = V D^(−1/2) whose mass is
+  // above rounding. Dense and small (n = 168 at p = 5).
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(mass);
+  if (gram.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomialModes: the mass matrix's eigen solve failed");
+  const double largest = gram.eigenvalues().maxCoeff();
+  std::vector<Eigen::Index> kept;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (gram.eigenvalues()[i] > 1e-13 * largest) kept.push_back(i);
+  Eigen::MatrixXd w(n, static_cast<Eigen::Index>(kept.size()));
+  for (size_t i = 0; i < kept.size(); ++i) {
+    w.col(static_cast<Eigen::Index>(i)) = gram.eigenvectors().col(kept[i]) / std::sqrt(gram.eigenvalues()[kept[i]]);
+  }
+  const Eigen::MatrixXd reduced = w.transpose() * k * w;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(0.5 * (reduced + reduced.transpose()), Eigen::EigenvaluesOnly);
+  if (ritz.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomialModes: the Ritz eigen solve failed");
+  PolynomialModes out;
+  out.degree = degree;
+  out.basisSize = n;
+  out.keptDirections = static_cast<Eigen::Index>(kept.size());
+  const Eigen::VectorXd& values = ritz.eigenvalues();  // ascending; the first six are the rigid motions
+  out.frequenciesHz.resize(std::max<Eigen::Index>(values.size() - 6, 0));
+  for (Eigen::Index i = 6; i < values.size(); ++i) out.frequenciesHz[i - 6] = std::sqrt(std::max(values[i], 0.0)) / (2.0 * M_PI);
+  return out;
+}
+
+Result<PolynomialModes> polynomialModes(const TriangleMesh& surface, const Material& material, int degree) {
+  if (degree < 1 || degree > kMaxPolynomialModeDegree) return polynomialModes(VolumeMoments{}, material, degree);
+  if (surface.vertices.rows() == 0) return makeError(ErrorCode::EmptyMesh, "polynomialModes: the surface has no vertex");
+  const Eigen::Vector3d origin = surface.vertices.colwise().mean().transpose();
+  auto moments = computeVolumeMoments(surface, 2 * degree, origin);
+  if (!moments) return moments.error();
+  return polynomialModes(moments.value(), material, degree);
+}
+
+}  // namespace brittle
