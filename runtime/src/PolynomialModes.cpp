@@ -37,25 +37,24 @@ Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Mate
   auto m = [&](int a, int b, int c) { return (a < 0 || b < 0 || c < 0) ? 0.0 : y(a, b, c); };
 
   const int monomials = monomialCount(degree), n = 3 * monomials;
-  const double nu = material.poissonRatio, e = material.youngsModulusPa;
-  const double lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu = e / (2.0 * (1.0 + nu));
-  Eigen::MatrixXd k = Eigen::MatrixXd::Zero(n, n), mass = Eigen::MatrixXd::Zero(n, n);
+  const double nu = material.poissonRatio, young = material.youngsModulusPa;
+  const double lambda = young * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu = young / (2.0 * (1.0 + nu));
+  Eigen::MatrixXd k = Eigen::MatrixXd::Zero(n, n), g(monomials, monomials);
   for (int A = 0; A < monomials; ++A) {
     const std::array<int, 3> al = monomialExponents(A);
     for (int B = 0; B < monomials; ++B) {
       const std::array<int, 3> be = monomialExponents(B);
       const std::array<int, 3> sum = {al[0] + be[0], al[1] + be[1], al[2] + be[2]};
       auto less = [&](int i, int j) {  // m[α + β − e_i − e_j]
-        std::array<int, 3> g = sum;
-        --g[static_cast<size_t>(i)];
-        --g[static_cast<size_t>(j)];
-        return m(g[0], g[1], g[2]);
+        std::array<int, 3> e = sum;
+        --e[static_cast<size_t>(i)];
+        --e[static_cast<size_t>(j)];
+        return m(e[0], e[1], e[2]);
       };
       double gradients = 0.0;  // ∫ ∇y^α · ∇y^β
       for (int q = 0; q < 3; ++q) gradients += al[static_cast<size_t>(q)] * be[static_cast<size_t>(q)] * less(q, q);
-      const double kinetic = material.densityKgPerM3 * m(sum[0], sum[1], sum[2]);
+      g(A, B) = m(sum[0], sum[1], sum[2]);
       for (int i = 0; i < 3; ++i) {
-        mass(3 * A + i, 3 * B + i) = kinetic;
         for (int j = 0; j < 3; ++j) {
           const double cross = less(i, j);
           double v = (lambda * al[static_cast<size_t>(i)] * be[static_cast<size_t>(j)] +
@@ -66,17 +65,20 @@ Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Mate
       }
     }
   }
-  // M = V D Vᵀ; the Ritz problem in the M-orthonormal directions W = V D^(−1/2) whose mass is
-  // above rounding. Dense and small (n = 168 at p = 5).
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(mass);
-  if (gram.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomialModes: the mass matrix's eigen solve failed");
+  // M = ρ G ⊗ I₃ with G the monomials' Gram matrix (m[α+β]); G = V D Vᵀ, and the Ritz problem is
+  // solved in the M-orthonormal directions W = V D^(−1/2) ⊗ I₃ / √ρ whose mass is above rounding.
+  // Dense and small (G is 56 by 56, K 168 by 168 at p = 5).
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(g);
+  if (gram.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomialModes: the Gram matrix's eigen solve failed");
   const double largest = gram.eigenvalues().maxCoeff();
   std::vector<Eigen::Index> kept;
-  for (Eigen::Index i = 0; i < n; ++i)
+  for (Eigen::Index i = 0; i < monomials; ++i)
     if (gram.eigenvalues()[i] > 1e-13 * largest) kept.push_back(i);
-  Eigen::MatrixXd w(n, static_cast<Eigen::Index>(kept.size()));
-  for (size_t i = 0; i < kept.size(); ++i) {
-    w.col(static_cast<Eigen::Index>(i)) = gram.eigenvectors().col(kept[i]) / std::sqrt(gram.eigenvalues()[kept[i]]);
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(n, 3 * static_cast<Eigen::Index>(kept.size()));
+  for (size_t c = 0; c < kept.size(); ++c) {
+    const Eigen::VectorXd column = gram.eigenvectors().col(kept[c]) / std::sqrt(material.densityKgPerM3 * gram.eigenvalues()[kept[c]]);
+    for (int A = 0; A < monomials; ++A)
+      for (int i = 0; i < 3; ++i) w(3 * A + i, 3 * static_cast<Eigen::Index>(c) + i) = column[A];
   }
   const Eigen::MatrixXd reduced = w.transpose() * k * w;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(0.5 * (reduced + reduced.transpose()), Eigen::EigenvaluesOnly);
@@ -84,7 +86,7 @@ Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Mate
   PolynomialModes out;
   out.degree = degree;
   out.basisSize = n;
-  out.keptDirections = static_cast<Eigen::Index>(kept.size());
+  out.keptDirections = 3 * static_cast<Eigen::Index>(kept.size());
   const Eigen::VectorXd& values = ritz.eigenvalues();  // ascending; the first six are the rigid motions
   out.frequenciesHz.resize(std::max<Eigen::Index>(values.size() - 6, 0));
   for (Eigen::Index i = 6; i < values.size(); ++i) out.frequenciesHz[i - 6] = std::sqrt(std::max(values[i], 0.0)) / (2.0 * M_PI);
