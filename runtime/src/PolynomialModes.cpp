@@ -81,15 +81,41 @@ Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Mate
       for (int i = 0; i < 3; ++i) w(3 * A + i, 3 * static_cast<Eigen::Index>(c) + i) = column[A];
   }
   const Eigen::MatrixXd reduced = w.transpose() * k * w;
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(0.5 * (reduced + reduced.transpose()), Eigen::EigenvaluesOnly);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(0.5 * (reduced + reduced.transpose()));
   if (ritz.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomialModes: the Ritz eigen solve failed");
   PolynomialModes out;
   out.degree = degree;
   out.basisSize = n;
   out.keptDirections = 3 * static_cast<Eigen::Index>(kept.size());
+  out.centreM = centre;
+  out.scaleM = s;
   const Eigen::VectorXd& values = ritz.eigenvalues();  // ascending; the first six are the rigid motions
-  out.frequenciesHz.resize(std::max<Eigen::Index>(values.size() - 6, 0));
+  const Eigen::Index elastic = std::max<Eigen::Index>(values.size() - 6, 0);
+  out.frequenciesHz.resize(elastic);
   for (Eigen::Index i = 6; i < values.size(); ++i) out.frequenciesHz[i - 6] = std::sqrt(std::max(values[i], 0.0)) / (2.0 * M_PI);
+  // W is M-orthonormal over the solid in y (dV_y = dV / s³): over x, the columns scale by s^(−3/2).
+  out.coefficients = (w * ritz.eigenvectors().rightCols(elastic)) / std::pow(s, 1.5);
+  return out;
+}
+
+MatrixXdRow PolynomialModes::displacements(const Points& points, Eigen::Index count) const {
+  const int monomials = monomialCount(degree);
+  MatrixXdRow out(3 * points.rows(), count);
+  Eigen::VectorXd powers(monomials);
+  for (Eigen::Index p = 0; p < points.rows(); ++p) {
+    const Eigen::Vector3d y = (points.row(p).transpose() - centreM) / scaleM;
+    for (int a = 0; a < monomials; ++a) {
+      const std::array<int, 3> e = monomialExponents(a);
+      powers[a] = std::pow(y.x(), e[0]) * std::pow(y.y(), e[1]) * std::pow(y.z(), e[2]);
+    }
+    for (int i = 0; i < 3; ++i) {
+      for (Eigen::Index k = 0; k < count; ++k) {
+        double sum = 0.0;
+        for (int a = 0; a < monomials; ++a) sum += coefficients(3 * a + i, k) * powers[a];
+        out(3 * p + i, k) = sum;
+      }
+    }
+  }
   return out;
 }
 
@@ -99,7 +125,9 @@ Result<PolynomialModes> polynomialModes(const TriangleMesh& surface, const Mater
   const Eigen::Vector3d origin = surface.vertices.colwise().mean().transpose();
   auto moments = computeVolumeMoments(surface, 2 * degree, origin);
   if (!moments) return moments.error();
-  return polynomialModes(moments.value(), material, degree);
+  auto modes = polynomialModes(moments.value(), material, degree);
+  if (modes) modes.value().centreM += origin;  // the moments were about the origin
+  return modes;
 }
 
 }  // namespace brittle

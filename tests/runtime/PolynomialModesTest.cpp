@@ -9,7 +9,9 @@
 #include <Eigen/Geometry>
 
 #include "brittle/database/Material.h"
+#include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/PolynomialModes.h"
+#include "brittle/testing/Fixtures.h"
 
 namespace brittle {
 namespace {
@@ -74,6 +76,28 @@ TEST(PolynomialModes, FrequenciesFollowTheSizeAndIgnoreThePose) {
   ASSERT_TRUE(twice);
   ASSERT_EQ(twice.value().frequenciesHz.size(), base.value().frequenciesHz.size());
   for (Eigen::Index i = 0; i < 12; ++i) EXPECT_NEAR(2.0 * twice.value().frequenciesHz[i] / base.value().frequenciesHz[i], 1.0, 1e-8) << i;
+}
+
+// Degree-2 fields lie in the P2 space of any straight-sided mesh of a box, where the consistent M
+// and K integrate them exactly: on such a mesh the mode shapes must be M-orthonormal and diagonalise
+// K with the Ritz eigenvalues, to rounding. A coefficient, a scale or a frame wrong fails it.
+TEST(PolynomialModes, ModeShapesAreMassOrthonormalAndDiagonaliseKOnAMeshThatHoldsThem) {
+  const TetMesh mesh = testing::makeBoxTetMesh(0.2, 0.1, 0.08, 4, 2, 2);  // [0, 0.2] × [0, 0.1] × [0, 0.08]
+  TriangleMesh surface = box(0.2, 0.1, 0.08);
+  surface.vertices.rowwise() += Eigen::RowVector3d(0.1, 0.05, 0.04);
+  auto modes = polynomialModes(surface, glass(), 2);
+  ASSERT_TRUE(modes) << modes.error().message;
+  const FemMesh fem = makeFemMesh(mesh, ElementOrder::P2).value();
+  const FemSystem system = assembleFem(fem, glass(), {}).value();
+  const Eigen::Index r = modes.value().frequenciesHz.size();
+  ASSERT_EQ(r, 3 * monomialCount(2) - 6);
+  const Eigen::MatrixXd phi = modes.value().displacements(fem.nodes(), r);
+  const Eigen::MatrixXd mm = phi.transpose() * (system.mass * phi);
+  const Eigen::MatrixXd kk = phi.transpose() * (system.stiffness * phi);
+  EXPECT_LT((mm - Eigen::MatrixXd::Identity(r, r)).cwiseAbs().maxCoeff(), 1e-9);
+  const Eigen::VectorXd lambda = (2.0 * M_PI * modes.value().frequenciesHz).array().square();
+  const Eigen::MatrixXd expected = lambda.asDiagonal();
+  EXPECT_LT((kk - expected).cwiseAbs().maxCoeff(), 1e-9 * lambda.maxCoeff());
 }
 
 TEST(PolynomialModes, BadInputGetsTypedErrors) {

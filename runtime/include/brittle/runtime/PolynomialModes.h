@@ -29,6 +29,7 @@
 #include "brittle/core/Result.h"
 #include "brittle/database/Material.h"
 #include "brittle/descriptors/VolumeMoments.h"
+#include "brittle/runtime/FemAssembly.h"
 
 namespace brittle {
 
@@ -43,6 +44,19 @@ struct PolynomialModes {
   Eigen::VectorXd frequenciesHz;
   Eigen::Index basisSize = 0;       ///< 3 × monomialCount(degree)
   Eigen::Index keptDirections = 0;  ///< directions whose mass is above 1e-13 of the largest (all, in double, up to p = 5)
+  /// c: the solid's centroid (m), relative to the moments' origin (the overload from a surface:
+  /// in the surface's own coordinates)
+  Eigen::Vector3d centreM = Eigen::Vector3d::Zero();
+  double scaleM = 0.0;                                ///< s: its RMS radius about c (m)
+  /// basisSize by frequenciesHz.size(): mode k's displacement is Σ_b coefficients(b, k) e_i y^α for
+  /// basis function b = 3·(graded index of α) + i, y = (x − c)/s; mass-normalised over the solid
+  /// (∫ ρ u_k·u_l dV = δ_kl, u in m per √kg·m as ModalBasis::modes).
+  Eigen::MatrixXd coefficients;
+
+  /// The first `count` modes' displacements at `points` (#P by 3, m, in centreM's frame):
+  /// 3P by count, row 3p + i the i-th component at point p (ModalBasis::modes' layout).
+  /// Precondition: count ≤ frequenciesHz.size().
+  MatrixXdRow displacements(const Points& points, Eigen::Index count) const;
 };
 
 /// The lowest frequencies of the solid with these moments and material, from degree-p polynomial
