@@ -9,6 +9,7 @@
 
 #include "brittle/core/JsonChecks.h"
 #include "brittle/descriptors/ShapeDescriptors.h"
+#include "brittle/runtime/PolynomialModes.h"
 
 namespace brittle {
 namespace {
@@ -72,6 +73,12 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
       if (!(s.matchErrorTarget >= 0.0)) {
         return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"match_error_target\" must be ≥ 0");
       }
+    } else if (key == "polynomial_mode_degree") {
+      if (Status st = integer(key, s.polynomialModeDegree); !st) return st.error();
+      if (s.polynomialModeDegree > kMaxPolynomialModeDegree) {
+        return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"polynomial_mode_degree\" must be in [0, " +
+                                                         std::to_string(kMaxPolynomialModeDegree) + "]");
+      }
     } else if (key == "modes") {
       if (Status st = integer(key, s.modeCount); !st) return st.error();
     } else {
@@ -98,6 +105,7 @@ std::string runtimeSettingsJson(const FractureSettings& s) {
                               {"exact_modes_budget_dof", s.exactModesBudgetDof},
                               {"exact_mode_count", s.exactModeCount},
                               {"match_error_target", s.matchErrorTarget},
+                              {"polynomial_mode_degree", s.polynomialModeDegree},
                               {"modes", s.modeCount}};
   return doc.dump(2) + "\n";
 }

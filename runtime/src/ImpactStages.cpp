@@ -10,6 +10,7 @@
 #include "brittle/core/Timing.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/runtime/FragmentModes.h"
+#include "brittle/runtime/PolynomialModes.h"
 #include "brittle/runtime/FragmentSurfaces.h"
 #include "brittle/runtime/ModalResponse.h"
 
@@ -217,6 +218,21 @@ Result<std::shared_ptr<const Body>> withCorrectionScheduled(Result<std::shared_p
   return made;
 }
 
+// A matched entry placed on its fragment (ScalingLaws.h) and, with degree > 0, ringing at the
+// fragment's own frequencies (PolynomialModes.h: the fragment's surface in the entry's placed
+// frame). Should that analysis fail (only on a surface an impact would not make), the body keeps
+// the entry's modes. The matched body's static correction stays the entry's either way: the
+// flexibility that the entry's kept modes leave out.
+Result<ObjectAsset> placeEntry(const FragmentDatabase& db, const FragmentMatch& m, const Material& material,
+                               const TriangleMesh& surface, int degree) {
+  auto placed = instantiateEntry(db.entries[static_cast<size_t>(m.entry)], db.referenceMaterial, material, m.queryFrame);
+  if (placed && degree > 0) {
+    auto own = polynomialModes(surface, material, degree);
+    if (own) (void)adoptPolynomialModes(placed.value(), own.value(), material);
+  }
+  return placed;
+}
+
 // The database: the nearest entry and its placement (searched now, so that the result reports
 // it); the entry rescaled to the fragment is made later (BodySource).
 std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const double* moments, FragmentResult& fr) {
@@ -239,8 +255,11 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const doub
   const FragmentDatabase* db = job.database;
   const EntryCorrections* shared = job.entryCorrections;
   const bool correct = job.settings->staticCorrection && job.prepareFragments;
-  return BodySource::deferred([db, shared, m, material, modeCount, correct]() -> Result<std::shared_ptr<const Body>> {
-    auto placed = instantiateEntry(db->entries[static_cast<size_t>(m.entry)], db->referenceMaterial, material, m.queryFrame);
+  const int degree = job.settings->polynomialModeDegree;
+  TriangleMesh surface = degree > 0 ? fr.surface : TriangleMesh{};  // for the worker: two allocations
+  return BodySource::deferred([db, shared, m, material, modeCount, correct, degree,
+                               surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
+    auto placed = placeEntry(*db, m, material, surface, degree);
     if (!placed) return Error{placed.error().code, "entry " + std::to_string(m.entry) + ": " + placed.error().message};
     auto made = makeBody(std::move(placed).value(), material, modeCount);
     if (made && correct && shared) {
@@ -276,7 +295,8 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   TriangleMesh surface = matcher ? fr.surface : TriangleMesh{};
   const bool correct = fs.staticCorrection;  // the exact path's body adopts its analysis's factor
   const bool scheduleMatch = correct && job.prepareFragments;
-  return BodySource::deferred([parent, label = static_cast<int>(i), es, modeCount, correct, scheduleMatch, kind, matcher, db,
+  const int degree = fs.polynomialModeDegree;
+  return BodySource::deferred([parent, label = static_cast<int>(i), es, modeCount, correct, scheduleMatch, kind, matcher, db, degree,
                                name = std::move(name), surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
     const Material& material = parent->body->material;
     const Body& body = *parent->body;
@@ -293,7 +313,7 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
     auto match = matcher->match(surface, kind, 1);
     if (!match) return made.error();
     const FragmentMatch& m = match.value().front();
-    auto placed = instantiateEntry(db->entries[static_cast<size_t>(m.entry)], db->referenceMaterial, material, m.queryFrame);
+    auto placed = placeEntry(*db, m, material, surface, degree);
     if (!placed) return made.error();
     return withCorrectionScheduled(makeBody(std::move(placed).value(), material, modeCount), scheduleMatch);
   });

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -128,6 +129,24 @@ Result<PolynomialModes> polynomialModes(const TriangleMesh& surface, const Mater
   auto modes = polynomialModes(moments.value(), material, degree);
   if (modes) modes.value().centreM += origin;  // the moments were about the origin
   return modes;
+}
+
+Status adoptPolynomialModes(ObjectAsset& asset, const PolynomialModes& modes, const Material& material) {
+  const Eigen::Index r = asset.modal.modes.cols();
+  if (modes.frequenciesHz.size() < r) {
+    return makeError(ErrorCode::InvalidArgument, "adoptPolynomialModes: " + std::to_string(modes.frequenciesHz.size()) +
+                                                     " polynomial modes for an asset of " + std::to_string(r));
+  }
+  auto fem = makeFemMesh(asset.tetMesh, asset.elementOrder);
+  if (!fem) return fem.error();
+  ModalBasis& basis = asset.modal;
+  basis.frequenciesHz = modes.frequenciesHz.head(r);
+  basis.eigenvaluesRad2PerS2 = (2.0 * M_PI * basis.frequenciesHz).array().square();
+  basis.modes = modes.displacements(fem.value().nodes(), r);
+  basis.residuals = Eigen::VectorXd::Constant(r, std::numeric_limits<double>::quiet_NaN());
+  basis.orthonormalityError = std::numeric_limits<double>::quiet_NaN();
+  asset.stressModes = computeStressModes(fem.value(), material, basis.modes);
+  return Ok{};
 }
 
 }  // namespace brittle

@@ -15,6 +15,7 @@
 #include "Body.h"
 #include "ImpactStages.h"
 #include "brittle/core/Random.h"
+#include "brittle/runtime/PolynomialModes.h"
 
 namespace brittle {
 namespace {
@@ -244,9 +245,10 @@ Status validateWorldSettings(const WorldSettings& s) {
       !std::isfinite(f.ringDownPeriods) || !(f.debrisVolumeFraction >= 0.0 && f.debrisVolumeFraction < 1.0) ||
       !(f.contactSpreadFraction >= 0.0 && f.contactSpreadFraction < 1.0) ||
       f.exactModesMaxTets < 0 || f.exactModesMaxDof < 0 || f.exactModesBudgetDof < 0 || f.exactModeCount < 1 ||
-      !(f.matchErrorTarget >= 0.0 && std::isfinite(f.matchErrorTarget))) {
+      !(f.matchErrorTarget >= 0.0 && std::isfinite(f.matchErrorTarget)) || f.polynomialModeDegree < 0 ||
+      f.polynomialModeDegree > kMaxPolynomialModeDegree) {
     return invalidArgument("FractureSettings: modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0, ringDownPeriods ≥ 0 and finite, "
-               "debrisVolumeFraction and contactSpreadFraction in [0, 1), exactModesMaxTets ≥ 0, exactModesMaxDof ≥ 0, exactModesBudgetDof ≥ 0, exactModeCount ≥ 1, matchErrorTarget finite and ≥ 0");
+               "debrisVolumeFraction and contactSpreadFraction in [0, 1), exactModesMaxTets ≥ 0, exactModesMaxDof ≥ 0, exactModesBudgetDof ≥ 0, exactModeCount ≥ 1, matchErrorTarget finite and ≥ 0, polynomialModeDegree in [0, 5]");
   }
   if (f.crack.maxCracks < 0 || std::isnan(f.crack.propagationStressRatio) || !(f.crack.directionBlend >= 0.0) ||
       !(f.crack.directionBlend <= 1.0) || !(f.crack.noiseRad >= 0.0) || !std::isfinite(f.crack.noiseRad)) {

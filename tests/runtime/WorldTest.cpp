@@ -17,6 +17,8 @@
 #include "brittle/precompute/BaseShapes.h"
 #include "brittle/precompute/FragmentDatabaseBake.h"
 #include "brittle/precompute/MeshValidation.h"
+#include "brittle/runtime/FemAssembly.h"
+#include "brittle/runtime/PolynomialModes.h"
 #include "brittle/testing/BakeFixtures.h"
 #include "brittle/testing/DatabaseFixtures.h"
 #include "brittle/testing/Fixtures.h"
@@ -379,6 +381,55 @@ TEST_F(WorldTest, MatchedFragmentsBreakAgain) {
   EXPECT_GE(second.value().fragments.size(), 2u);
 }
 
+// A matched fragment's body rings at the fragment's own frequencies (PolynomialModes.h, degree 5
+// by default) on the entry's mesh: its frequencies are the fragment's polynomial Ritz values, its
+// stress modes its own elements' for those shapes, and it breaks again. Degree 0 keeps the entry's.
+TEST_F(WorldTest, MatchedBodiesRingAtTheirFragmentsOwnFrequencies) {
+  World world = makeWorld();
+  auto broken = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
+  ASSERT_TRUE(broken && broken.value().broken);
+  const Material glass = sPack->materials.front();
+  int matched = 0;
+  for (const FragmentResult& f : broken.value().fragments) {
+    if (f.path != FragmentPath::Matched) continue;
+    ++matched;
+    auto asset = world.objectAsset(f.object);
+    ASSERT_TRUE(asset) << asset.error().message;
+    const ModalBasis& basis = asset.value()->modal;
+    auto own = polynomialModes(f.surface, glass, 5);
+    ASSERT_TRUE(own) << own.error().message;
+    const Eigen::Index r = basis.frequenciesHz.size();
+    ASSERT_GT(r, 0);
+    EXPECT_EQ(basis.frequenciesHz, own.value().frequenciesHz.head(r));
+    EXPECT_EQ(basis.modes.rows(), 3 * asset.value()->tetMesh.nodes.rows());
+    const FemMesh fem = makeFemMesh(asset.value()->tetMesh, asset.value()->elementOrder).value();
+    EXPECT_EQ(asset.value()->stressModes, computeStressModes(fem, glass, basis.modes));
+  }
+  EXPECT_GE(matched, 2);
+
+  WorldSettings entries;
+  entries.fracture.polynomialModeDegree = 0;
+  World other = makeWorld(entries);
+  auto same = other.impact(ball(other.addObject({.asset = "plate"}).value(), 60.0));
+  ASSERT_TRUE(same && same.value().broken);
+  ASSERT_EQ(hashFragments(same.value()), hashFragments(broken.value()));  // the break itself is the same
+  int differ = 0;
+  for (size_t i = 0; i < same.value().fragments.size(); ++i) {
+    const FragmentResult& f = same.value().fragments[i];
+    if (f.path != FragmentPath::Matched) continue;
+    const double entryHz = other.objectAsset(f.object).value()->modal.frequenciesHz[0];
+    const double ownHz = world.objectAsset(broken.value().fragments[i].object).value()->modal.frequenciesHz[0];
+    differ += entryHz != ownHz ? 1 : 0;
+  }
+  EXPECT_EQ(differ, matched);
+  const ImpactDesc soft = softHitOnTheLargestMatched(world, broken.value());
+  ImpactDesc hard = soft;
+  hard.speedMps = 200.0;
+  auto again = world.impact(hard);
+  ASSERT_TRUE(again) << again.error().message;
+  EXPECT_TRUE(again.value().broken);
+}
+
 // The scene's match-error target weighs each small fragment's match against the exact path: a
 // match predicted within the target is taken, one predicted over it gives way to the exact path
 // (and says so). The suite's database was calibrated when it was baked (MatchErrors.h).
@@ -561,6 +612,9 @@ TEST_F(WorldTest, AMatchedFragmentsSharedEntryCorrectionEqualsItsOwnFactorisatio
     SCOPED_TRACE(share ? "the entry's correction placed" : "the fragment's own factorisation");
     WorldSettings settings;
     settings.shareEntryCorrections = share;
+    // The entry's own modes: a body's own correction takes its modes out of the load, and the
+    // shared one the entry's, which are the same only when the body keeps the entry's.
+    settings.fracture.polynomialModeDegree = 0;
     World world = makeWorld(settings);
     auto broken = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
     ASSERT_TRUE(broken && broken.value().broken);

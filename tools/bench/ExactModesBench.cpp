@@ -112,7 +112,8 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
   if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.csv.string());
   csv << "object,speed_mps,seed,fragment,volume_fraction,parent_tets,sub_tets,dropped_volume_fraction,modes,match_s,exact_s,"
          "reference_s,match_distance,match_freq_err,exact_freq_err,reference_f1_hz,exact_f1_hz,match_f1_hz,"
-         "predicted_err_median,predicted_err_p90,predicted_beyond_range,database_entries,polynomial3_freq_err,polynomial4_freq_err,polynomial5_freq_err,polynomial5_f1_hz,polynomial3_s,polynomial4_s,polynomial5_s\n";
+         "predicted_err_median,predicted_err_p90,predicted_beyond_range,polynomial3_freq_err,polynomial4_freq_err,polynomial5_freq_err,"
+         "polynomial5_f1_hz,polynomial3_s,polynomial4_s,polynomial5_s,database_entries\n";
   csv.precision(9);
   for (const std::string& name : objects) {
     const ObjectAsset& asset = *std::find_if(p.objects.begin(), p.objects.end(), [&](const ObjectAsset& a) { return a.name == name; });
@@ -213,9 +214,9 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
                 << referenceS << "," << distance << "," << (reference && matched ? matchFrequencyError(matchHz, refHz) : nan) << ","
                 << (reference && exact ? matchFrequencyError(exactHz, refHz) : nan) << "," << (reference ? refHz[0] : nan) << ","
                 << (exact ? exactHz[0] : nan) << "," << (matched ? matchHz[0] : nan) << "," << predicted.median << ","
-                << predicted.p90 << "," << (predicted.beyondRange ? 1 : 0) << "," << entryCounts[m] << ","
-                << polynomialError(0) << "," << polynomialError(1) << "," << polynomialError(2) << ","
-                << (polynomial[2].size() ? polynomial[2][0] : nan) << "," << polynomialS[0] << "," << polynomialS[1] << "," << polynomialS[2] << "\n";
+                << predicted.p90 << "," << (predicted.beyondRange ? 1 : 0) << "," << polynomialError(0) << "," << polynomialError(1)
+                << "," << polynomialError(2) << "," << (polynomial[2].size() ? polynomial[2][0] : nan) << "," << polynomialS[0] << ","
+                << polynomialS[1] << "," << polynomialS[2] << "," << entryCounts[m] << "\n";
           }
           if (!s.quiet) {
             std::fprintf(stderr, "%s v=%g seed=%d fragment %zu: %ld tets, match %.2f ms, exact %.2f ms%s%s\n", name.c_str(), speed,

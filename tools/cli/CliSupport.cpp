@@ -84,6 +84,7 @@ Status applyRuntimeSettingsFile(const std::string& path, const CLI::App& cmd, Fr
   if (given("--exact-max-tets")) merged.exactModesMaxTets = fracture.exactModesMaxTets;
   if (given("--exact-max-dof")) merged.exactModesMaxDof = fracture.exactModesMaxDof;
   if (given("--match-error-target")) merged.matchErrorTarget = fracture.matchErrorTarget;
+  if (given("--polynomial-degree")) merged.polynomialModeDegree = fracture.polynomialModeDegree;
   fracture = merged;
   return Ok{};
 }

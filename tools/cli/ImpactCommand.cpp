@@ -28,6 +28,7 @@ struct ImpactOptions {
   int exactMaxTets = FractureSettings{}.exactModesMaxTets;
   int exactMaxDof = FractureSettings{}.exactModesMaxDof;
   double matchErrorTarget = FractureSettings{}.matchErrorTarget;
+  int polynomialDegree = FractureSettings{}.polynomialModeDegree;
   std::string runtimeSettings;
   double crackBlend = CrackSettings{}.directionBlend, crackNoise = CrackSettings{}.noiseRad;
   double contactSpread = FractureSettings{}.contactSpreadFraction;
@@ -67,6 +68,10 @@ Runner addImpactCommand(CLI::App& app) {
                   "A fragment small enough for the exact path takes its database match instead when the match's "
                   "predicted frequency error (90th percentile) is within this (0: size alone decides)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--polynomial-degree", o->polynomialDegree,
+                  "A matched fragment's body rings at the fragment's own frequencies, by Rayleigh–Ritz over polynomial "
+                  "fields of this degree from its volume moments (0: the database entry's own modes)")
+      ->capture_default_str()->check(CLI::Range(0, 5));
   cmd->add_option("--contact-spread", o->contactSpread,
                   "Spread the contact load over at least this fraction of the object's bounding-box diagonal "
                   "(0: the mesh's nearest ring only; see docs/realtime.md, \"Contact loads\")")
@@ -116,6 +121,7 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.exactModesMaxTets = o->exactMaxTets;
     settings.fracture.exactModesMaxDof = o->exactMaxDof;
     settings.fracture.matchErrorTarget = o->matchErrorTarget;
+    settings.fracture.polynomialModeDegree = o->polynomialDegree;
     if (!o->runtimeSettings.empty()) {
       if (Status st = applyRuntimeSettingsFile(o->runtimeSettings, *cmd, settings.fracture); !st) return reportError(st.error());
     }

@@ -10,6 +10,8 @@
 //     "exact_mode_count": 20,
 //     "match_error_target": 0,           // a small fragment's match within this predicted error is
 //                                        // taken instead of the exact path (0: size alone decides)
+//     "polynomial_mode_degree": 5,       // matched bodies ring at their fragment's own frequencies
+//                                        // (PolynomialModes.h; 0: the entry's own modes)
 //     "modes": 0 }                       // modes per impact (0: all the pack stores)
 //
 // Every key is optional (a missing one keeps the value it replaces); unknown keys are refused, so

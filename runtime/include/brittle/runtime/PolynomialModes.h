@@ -28,6 +28,7 @@
 #include "brittle/core/MeshTypes.h"
 #include "brittle/core/Result.h"
 #include "brittle/database/Material.h"
+#include "brittle/database/ObjectAsset.h"
 #include "brittle/descriptors/VolumeMoments.h"
 #include "brittle/runtime/FemAssembly.h"
 
@@ -71,5 +72,15 @@ Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Mate
 /// moments about its vertices' mean, then the above. Errors: those of computeVolumeMoments and
 /// the above.
 Result<PolynomialModes> polynomialModes(const TriangleMesh& surface, const Material& material, int degree);
+
+/// A matched fragment's body with the fragment's own frequencies: the asset's modal basis (an
+/// entry placed on the fragment, ScalingLaws.h) replaced by the first r of `modes` (r: the asset's
+/// own mode count), computed from the fragment's solid in the asset's frame and sampled at the
+/// asset's FEM nodes; its stress modes follow from its own elements (computeStressModes). The
+/// geometry, the mass properties and everything else stay the entry's. The shapes are mass-
+/// normalised over the fragment's solid, not the entry's mesh, and are not eigenvectors of the
+/// entry's K: residuals and orthonormalityError become NaN. Errors: InvalidArgument (fewer modes
+/// than r), those of makeFemMesh and computeStressModes' checks.
+Status adoptPolynomialModes(ObjectAsset& asset, const PolynomialModes& modes, const Material& material);
 
 }  // namespace brittle
