@@ -12,7 +12,11 @@ namespace brittle::detail {
 const Result<StaticCorrection>& Body::staticCorrection() const {
   scheduleStaticCorrection();
   std::call_once(mCorrectionOnce, [this] {
-    auto built = StaticCorrection::build(asset, material, modes);
+    auto built = correctionBasis.modes.size() == 0 ? StaticCorrection::build(asset, material, modes) : [&] {
+      ObjectAsset entry = asset;  // the same body with the modes its correction is for
+      entry.modal = correctionBasis;
+      return StaticCorrection::build(entry, material, modes);
+    }();
     if (!built) built = Error{built.error().code, "object '" + asset.name + "': " + built.error().message};
     mCorrection.emplace(std::move(built));
     mCorrectionReady.store(true, std::memory_order_release);
@@ -68,7 +72,7 @@ const Result<std::shared_ptr<const Body>>& BodySource::get() const {
 }
 
 Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount,
-                                             const ExactModesFactor* factor) {
+                                             const ExactModesFactor* factor, ModalBasis correctionBasis) {
   const int points = stressPointsPerElement(asset.elementOrder);
   if (asset.modal.modes.cols() == 0 || asset.stressModes.rows() != 6 * points * asset.tetMesh.tets.rows()) {
     return makeError(ErrorCode::InvalidArgument,
@@ -123,6 +127,7 @@ Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& 
   body->sizeM = (hi - lo).norm();
   body->centreM = 0.5 * (lo + hi);
   body->asset = std::move(asset);
+  body->correctionBasis = std::move(correctionBasis);
   if (factor && factor->factor) {
     auto built = StaticCorrection::build(body->asset, material, body->modes, factor->fem, factor->factor,
                                          -factor->shiftRad2PerS2);

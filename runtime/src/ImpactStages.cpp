@@ -220,15 +220,18 @@ Result<std::shared_ptr<const Body>> withCorrectionScheduled(Result<std::shared_p
 
 // A matched entry placed on its fragment (ScalingLaws.h) and, with degree > 0, ringing at the
 // fragment's own frequencies (PolynomialModes.h: the fragment's surface in the entry's placed
-// frame). Should that analysis fail (only on a surface an impact would not make), the body keeps
-// the entry's modes. The matched body's static correction stays the entry's either way: the
-// flexibility that the entry's kept modes leave out.
+// frame); `entryBasis` then keeps the entry's own modes for the body's static correction, which
+// stays the entry's either way: the flexibility its kept modes leave out, shared or not. Should the
+// analysis fail (only on a surface an impact would not make), the body keeps the entry's modes.
 Result<ObjectAsset> placeEntry(const FragmentDatabase& db, const FragmentMatch& m, const Material& material,
-                               const TriangleMesh& surface, int degree) {
+                               const TriangleMesh& surface, int degree, ModalBasis& entryBasis) {
   auto placed = instantiateEntry(db.entries[static_cast<size_t>(m.entry)], db.referenceMaterial, material, m.queryFrame);
   if (placed && degree > 0) {
     auto own = polynomialModes(surface, material, degree);
-    if (own) (void)adoptPolynomialModes(placed.value(), own.value(), material);
+    if (own) {
+      ModalBasis entry = placed.value().modal;
+      if (adoptPolynomialModes(placed.value(), own.value(), material)) entryBasis = std::move(entry);
+    }
   }
   return placed;
 }
@@ -259,9 +262,10 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const doub
   TriangleMesh surface = degree > 0 ? fr.surface : TriangleMesh{};  // for the worker: two allocations
   return BodySource::deferred([db, shared, m, material, modeCount, correct, degree,
                                surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
-    auto placed = placeEntry(*db, m, material, surface, degree);
+    ModalBasis entryBasis;
+    auto placed = placeEntry(*db, m, material, surface, degree, entryBasis);
     if (!placed) return Error{placed.error().code, "entry " + std::to_string(m.entry) + ": " + placed.error().message};
-    auto made = makeBody(std::move(placed).value(), material, modeCount);
+    auto made = makeBody(std::move(placed).value(), material, modeCount, nullptr, std::move(entryBasis));
     if (made && correct && shared) {
       // The entry's correction placed as instantiateEntry placed the entry: x = L Rᵀ_frame x̂ + t.
       const Result<StaticCorrection>& entry = shared->get(m.entry, material, made.value()->modes);
@@ -313,9 +317,11 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
     auto match = matcher->match(surface, kind, 1);
     if (!match) return made.error();
     const FragmentMatch& m = match.value().front();
-    auto placed = placeEntry(*db, m, material, surface, degree);
+    ModalBasis entryBasis;
+    auto placed = placeEntry(*db, m, material, surface, degree, entryBasis);
     if (!placed) return made.error();
-    return withCorrectionScheduled(makeBody(std::move(placed).value(), material, modeCount), scheduleMatch);
+    return withCorrectionScheduled(makeBody(std::move(placed).value(), material, modeCount, nullptr, std::move(entryBasis)),
+                                   scheduleMatch);
   });
 }
 

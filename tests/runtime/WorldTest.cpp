@@ -578,6 +578,10 @@ TEST_F(WorldTest, FastImpactsSkipTheFactorisationButUseACorrectionThatIsSchedule
     WorldSettings settings;
     settings.prepareInBackground = background;
     settings.fracture.reportUncorrectedPeak = true;
+    // The entry's own modes: at its fragment's own, lower frequencies this soft hit peaks in the
+    // ring-down after the contact (270 against 189 µs), where the correction adds nothing, and a
+    // corrected peak could not be told from an uncorrected one.
+    settings.fracture.polynomialModeDegree = 0;
     World world = makeWorld(settings);
     auto broken = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
     ASSERT_TRUE(broken && broken.value().broken);
@@ -612,9 +616,6 @@ TEST_F(WorldTest, AMatchedFragmentsSharedEntryCorrectionEqualsItsOwnFactorisatio
     SCOPED_TRACE(share ? "the entry's correction placed" : "the fragment's own factorisation");
     WorldSettings settings;
     settings.shareEntryCorrections = share;
-    // The entry's own modes: a body's own correction takes its modes out of the load, and the
-    // shared one the entry's, which are the same only when the body keeps the entry's.
-    settings.fracture.polynomialModeDegree = 0;
     World world = makeWorld(settings);
     auto broken = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
     ASSERT_TRUE(broken && broken.value().broken);
