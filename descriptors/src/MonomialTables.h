@@ -29,6 +29,9 @@ const MonomialTables& monomialTables();
 /// the generic loop's operations, so the same bits with either lanes. Returns how many faces it
 /// did; the caller does the rest. Wide needs widestLanes() == Lanes::Wide.
 Eigen::Index surfaceMomentsOrder4(const TriangleMesh& surface, const Eigen::Vector3d& originM, double* sum, Lanes lanes);
+/// The same at any maxOrder: surfaceMomentsOrder4 at 4, a loop over the run-time tables above it
+/// (the same bits with either lanes, and the generic loop's), none below (returns 0).
+Eigen::Index surfaceMoments(const TriangleMesh& surface, const Eigen::Vector3d& originM, int maxOrder, double* sum, Lanes lanes);
 
 /// addTetVolumeMomentsOrder4 with the given lanes (the same bits with either): fours with Wide, then
 /// pairs, then a last tet by the scalar kernel. Wide needs widestLanes() == Lanes::Wide.

@@ -189,9 +189,10 @@ Result<VolumeMoments> computeVolumeMoments(const TriangleMesh& surface, int maxO
   // gather form: [u^α] (w·u) P = Σ_{j: α_j > 0} w_j [u^(α−e_j)] P.
   std::vector<double> ha(count), hab(count), habc(count), sum(count, 0.0);
   ha[0] = hab[0] = habc[0] = 1.0;
-  // Order 4 (the canonical frames' and the default descriptor's): two or four faces at a time, the
-  // same arithmetic lane by lane, so the sums are this loop's bit for bit (surfaceMomentsOrder4).
-  const Eigen::Index paired = maxOrder == 4 ? detail::surfaceMomentsOrder4(surface, originM, sum.data(), widestLanes()) : 0;
+  // Order 4 and above (the canonical frames' and the default descriptor's 4, the polynomial modes'
+  // 10): two or four faces at a time, the same arithmetic lane by lane, so the sums are this loop's
+  // bit for bit (surfaceMoments); this loop does the faces left over, and orders below 4.
+  const Eigen::Index paired = detail::surfaceMoments(surface, originM, maxOrder, sum.data(), widestLanes());
   for (Eigen::Index f = paired; f < surface.faces.rows(); ++f) {
     const Eigen::Vector3d a = surface.vertices.row(surface.faces(f, 0)).transpose() - originM;
     const Eigen::Vector3d b = surface.vertices.row(surface.faces(f, 1)).transpose() - originM;
@@ -332,6 +333,60 @@ template <int L>
   return L * packs;
 }
 
+// The same for any order above 4 (up to kMaxMomentOrder), its tables read at run time: the
+// polynomial modes' order 10 (PolynomialModes.h). Lane by lane the generic loop's operations, in
+// its order, so the same bits.
+template <int L>
+[[gnu::always_inline]] inline Eigen::Index momentsInLanes(const TriangleMesh& surface, const Eigen::Vector3d& originM, int maxOrder,
+                                                          double* sum) {
+  using Pack = VectorOf<double, L>;
+  const auto& t = detail::monomialTables();
+  const int count = monomialCount(maxOrder);
+  const Eigen::Index packs = surface.faces.rows() / L;
+  Pack ha[monomialCount(kMaxMomentOrder)], hab[monomialCount(kMaxMomentOrder)], habc[monomialCount(kMaxMomentOrder)];
+  Pack one;
+  for (int l = 0; l < L; ++l) one[l] = 1.0;
+  ha[0] = hab[0] = habc[0] = one;
+  for (Eigen::Index i = 0; i < packs; ++i) {
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+    Pack a[3], b[3], c[3], dets;
+    for (int l = 0; l < L; ++l) {
+      Eigen::Vector3d v[3];
+      for (int k = 0; k < 3; ++k) v[k] = surface.vertices.row(surface.faces(L * i + l, k)).transpose() - originM;
+      dets[l] = v[0].dot(v[1].cross(v[2]));
+      for (int j = 0; j < 3; ++j) a[j][l] = v[0][j], b[j][l] = v[1][j], c[j][l] = v[2][j];
+    }
+#pragma GCC diagnostic pop
+    for (int l = 0; l < L; ++l) sum[0] += dets[l];
+    for (int m = 1; m < count; ++m) {
+      const auto& src = t.lower[m];
+      Pack sa = {}, sb = {}, sc = {};
+      for (int j = 0; j < 3; ++j) {
+        if (src[j] < 0) continue;
+        sa += a[j] * ha[src[j]];
+        sb += b[j] * hab[src[j]];
+        sc += c[j] * habc[src[j]];
+      }
+      ha[m] = sa;
+      hab[m] = sa + sb;
+      habc[m] = sa + sb + sc;
+      const Pack term = dets * habc[m];
+      for (int l = 0; l < L; ++l) sum[m] += term[l];
+    }
+  }
+  return L * packs;
+}
+
+Eigen::Index momentsNarrow(const TriangleMesh& surface, const Eigen::Vector3d& originM, int maxOrder, double* sum) {
+  return momentsInLanes<2>(surface, originM, maxOrder, sum);
+}
+
+BRITTLE_TARGET_AVX Eigen::Index momentsWide(const TriangleMesh& surface, const Eigen::Vector3d& originM, int maxOrder,
+                                            double* sum) {
+  return momentsInLanes<4>(surface, originM, maxOrder, sum);
+}
+
 Eigen::Index momentsOrder4Narrow(const TriangleMesh& surface, const Eigen::Vector3d& originM, double* sum) {
   return momentsOrder4InLanes<2>(surface, originM, sum);
 }
@@ -401,6 +456,12 @@ void tetMomentsOrder4(const std::array<Eigen::Vector3d, 4>* tets, int count, dou
 
 Eigen::Index surfaceMomentsOrder4(const TriangleMesh& surface, const Eigen::Vector3d& originM, double* sum, Lanes lanes) {
   return lanes == Lanes::Wide ? momentsOrder4Wide(surface, originM, sum) : momentsOrder4Narrow(surface, originM, sum);
+}
+
+Eigen::Index surfaceMoments(const TriangleMesh& surface, const Eigen::Vector3d& originM, int maxOrder, double* sum, Lanes lanes) {
+  if (maxOrder == 4) return surfaceMomentsOrder4(surface, originM, sum, lanes);
+  if (maxOrder < 4) return 0;
+  return lanes == Lanes::Wide ? momentsWide(surface, originM, maxOrder, sum) : momentsNarrow(surface, originM, maxOrder, sum);
 }
 
 }  // namespace detail

@@ -219,18 +219,19 @@ Result<std::shared_ptr<const Body>> withCorrectionScheduled(Result<std::shared_p
 }
 
 // A matched entry placed on its fragment (ScalingLaws.h) and, with degree > 0, ringing at the
-// fragment's own frequencies (PolynomialModes.h: the fragment's surface in the entry's placed
-// frame); `entryBasis` then keeps the entry's own modes for the body's static correction, which
-// stays the entry's either way: the flexibility its kept modes leave out, shared or not. Should the
-// analysis fail (only on a surface an impact would not make), the body keeps the entry's modes.
+// fragment's own frequencies (PolynomialModes.h: from the fragment's surface; the entry keeps its
+// shapes and stress modes). `entryBasis` then keeps the entry's own eigenvalues for the body's
+// static correction, which stays the entry's, shared or not: the flexibility its kept modes leave
+// out. Should the analysis fail (only on a surface an impact would not make), the body keeps the
+// entry's frequencies.
 Result<ObjectAsset> placeEntry(const FragmentDatabase& db, const FragmentMatch& m, const Material& material,
                                const TriangleMesh& surface, int degree, ModalBasis& entryBasis) {
   auto placed = instantiateEntry(db.entries[static_cast<size_t>(m.entry)], db.referenceMaterial, material, m.queryFrame);
   if (placed && degree > 0) {
-    auto own = polynomialModes(surface, material, degree);
+    auto own = polynomialModes(surface, material, degree, /*withShapes=*/false);
     if (own) {
       ModalBasis entry = placed.value().modal;
-      if (adoptPolynomialModes(placed.value(), own.value(), material)) entryBasis = std::move(entry);
+      if (adoptPolynomialFrequencies(placed.value(), own.value())) entryBasis = std::move(entry);
     }
   }
   return placed;

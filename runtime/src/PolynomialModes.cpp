@@ -9,7 +9,7 @@
 
 namespace brittle {
 
-Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Material& material, int degree) {
+Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Material& material, int degree, bool withShapes) {
   if (degree < 1 || degree > kMaxPolynomialModeDegree) {
     return makeError(ErrorCode::InvalidArgument, "polynomialModes: degree " + std::to_string(degree) + " is outside [1, " +
                                                      std::to_string(kMaxPolynomialModeDegree) + "]");
@@ -40,7 +40,11 @@ Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Mate
   const int monomials = monomialCount(degree), n = 3 * monomials;
   const double nu = material.poissonRatio, young = material.youngsModulusPa;
   const double lambda = young * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu = young / (2.0 * (1.0 + nu));
-  Eigen::MatrixXd k = Eigen::MatrixXd::Zero(n, n), g(monomials, monomials);
+  // K by components: k[i][j](A, B) couples component i of monomial A with component j of B.
+  std::array<std::array<Eigen::MatrixXd, 3>, 3> k;
+  for (auto& row : k)
+    for (Eigen::MatrixXd& block : row) block.resize(monomials, monomials);
+  Eigen::MatrixXd g(monomials, monomials);
   for (int A = 0; A < monomials; ++A) {
     const std::array<int, 3> al = monomialExponents(A);
     for (int B = 0; B < monomials; ++B) {
@@ -61,7 +65,7 @@ Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Mate
           double v = (lambda * al[static_cast<size_t>(i)] * be[static_cast<size_t>(j)] +
                       mu * al[static_cast<size_t>(j)] * be[static_cast<size_t>(i)]) * cross;
           if (i == j) v += mu * gradients;
-          k(3 * A + i, 3 * B + j) = v / (s * s);
+          k[static_cast<size_t>(i)][static_cast<size_t>(j)](A, B) = v / (s * s);
         }
       }
     }
@@ -75,14 +79,24 @@ Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Mate
   std::vector<Eigen::Index> kept;
   for (Eigen::Index i = 0; i < monomials; ++i)
     if (gram.eigenvalues()[i] > 1e-13 * largest) kept.push_back(i);
-  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(n, 3 * static_cast<Eigen::Index>(kept.size()));
-  for (size_t c = 0; c < kept.size(); ++c) {
-    const Eigen::VectorXd column = gram.eigenvectors().col(kept[c]) / std::sqrt(material.densityKgPerM3 * gram.eigenvalues()[kept[c]]);
-    for (int A = 0; A < monomials; ++A)
-      for (int i = 0; i < 3; ++i) w(3 * A + i, 3 * static_cast<Eigen::Index>(c) + i) = column[A];
+  const auto directions = static_cast<Eigen::Index>(kept.size());
+  Eigen::MatrixXd wg(monomials, directions);  // W = wg ⊗ I₃
+  for (Eigen::Index c = 0; c < directions; ++c) {
+    wg.col(c) = gram.eigenvectors().col(kept[static_cast<size_t>(c)]) /
+                std::sqrt(material.densityKgPerM3 * gram.eigenvalues()[kept[static_cast<size_t>(c)]]);
   }
-  const Eigen::MatrixXd reduced = w.transpose() * k * w;
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(0.5 * (reduced + reduced.transpose()));
+  // Wᵀ K W block by block: entry (3c + i, 3d + j) is wgᵀ k[i][j] wg, a third of the work of the
+  // whole product.
+  Eigen::MatrixXd reduced(3 * directions, 3 * directions);
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const Eigen::MatrixXd block = wg.transpose() * k[static_cast<size_t>(i)][static_cast<size_t>(j)] * wg;
+      for (Eigen::Index c = 0; c < directions; ++c)
+        for (Eigen::Index d = 0; d < directions; ++d) reduced(3 * c + i, 3 * d + j) = block(c, d);
+    }
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(0.5 * (reduced + reduced.transpose()),
+                                                      withShapes ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
   if (ritz.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomialModes: the Ritz eigen solve failed");
   PolynomialModes out;
   out.degree = degree;
@@ -95,7 +109,16 @@ Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Mate
   out.frequenciesHz.resize(elastic);
   for (Eigen::Index i = 6; i < values.size(); ++i) out.frequenciesHz[i - 6] = std::sqrt(std::max(values[i], 0.0)) / (2.0 * M_PI);
   // W is M-orthonormal over the solid in y (dV_y = dV / s³): over x, the columns scale by s^(−3/2).
-  out.coefficients = (w * ritz.eigenvectors().rightCols(elastic)) / std::pow(s, 1.5);
+  if (withShapes) {
+    const Eigen::MatrixXd vectors = ritz.eigenvectors().rightCols(elastic) / std::pow(s, 1.5);
+    out.coefficients.resize(n, elastic);
+    Eigen::MatrixXd component(directions, elastic);
+    for (int i = 0; i < 3; ++i) {
+      for (Eigen::Index c = 0; c < directions; ++c) component.row(c) = vectors.row(3 * c + i);
+      const Eigen::MatrixXd perMonomial = wg * component;
+      for (int A = 0; A < monomials; ++A) out.coefficients.row(3 * A + i) = perMonomial.row(A);
+    }
+  }
   return out;
 }
 
@@ -120,32 +143,28 @@ MatrixXdRow PolynomialModes::displacements(const Points& points, Eigen::Index co
   return out;
 }
 
-Result<PolynomialModes> polynomialModes(const TriangleMesh& surface, const Material& material, int degree) {
-  if (degree < 1 || degree > kMaxPolynomialModeDegree) return polynomialModes(VolumeMoments{}, material, degree);
+Result<PolynomialModes> polynomialModes(const TriangleMesh& surface, const Material& material, int degree, bool withShapes) {
+  if (degree < 1 || degree > kMaxPolynomialModeDegree) return polynomialModes(VolumeMoments{}, material, degree, withShapes);
   if (surface.vertices.rows() == 0) return makeError(ErrorCode::EmptyMesh, "polynomialModes: the surface has no vertex");
   const Eigen::Vector3d origin = surface.vertices.colwise().mean().transpose();
   auto moments = computeVolumeMoments(surface, 2 * degree, origin);
   if (!moments) return moments.error();
-  auto modes = polynomialModes(moments.value(), material, degree);
+  auto modes = polynomialModes(moments.value(), material, degree, withShapes);
   if (modes) modes.value().centreM += origin;  // the moments were about the origin
   return modes;
 }
 
-Status adoptPolynomialModes(ObjectAsset& asset, const PolynomialModes& modes, const Material& material) {
-  const Eigen::Index r = asset.modal.modes.cols();
+Status adoptPolynomialFrequencies(ObjectAsset& asset, const PolynomialModes& modes) {
+  ModalBasis& basis = asset.modal;
+  const Eigen::Index r = basis.eigenvaluesRad2PerS2.size();
   if (modes.frequenciesHz.size() < r) {
-    return makeError(ErrorCode::InvalidArgument, "adoptPolynomialModes: " + std::to_string(modes.frequenciesHz.size()) +
+    return makeError(ErrorCode::InvalidArgument, "adoptPolynomialFrequencies: " + std::to_string(modes.frequenciesHz.size()) +
                                                      " polynomial modes for an asset of " + std::to_string(r));
   }
-  auto fem = makeFemMesh(asset.tetMesh, asset.elementOrder);
-  if (!fem) return fem.error();
-  ModalBasis& basis = asset.modal;
+  const Eigen::VectorXd entry = basis.eigenvaluesRad2PerS2;
   basis.frequenciesHz = modes.frequenciesHz.head(r);
   basis.eigenvaluesRad2PerS2 = (2.0 * M_PI * basis.frequenciesHz).array().square();
-  basis.modes = modes.displacements(fem.value().nodes(), r);
-  basis.residuals = Eigen::VectorXd::Constant(r, std::numeric_limits<double>::quiet_NaN());
-  basis.orthonormalityError = std::numeric_limits<double>::quiet_NaN();
-  asset.stressModes = computeStressModes(fem.value(), material, basis.modes);
+  basis.residuals = (1.0 - basis.eigenvaluesRad2PerS2.array() / entry.array()).abs();
   return Ok{};
 }
 

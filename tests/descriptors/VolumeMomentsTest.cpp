@@ -184,6 +184,35 @@ TEST(VolumeMoments, OrderFourPassIsTheSameBitsInEitherLanes) {
   EXPECT_EQ(std::memcmp(narrow.data(), wide.data(), sizeof(double) * narrow.size()), 0);
 }
 
+TEST(VolumeMoments, HighOrderPassIsTheGeneralLoopBitForBitInEitherLanes) {
+  // Order 10 (the polynomial modes') goes two or four faces at a time from run-time tables. Its
+  // low monomials are the general loop's bits (order 3 takes that loop alone), the two lanes agree
+  // bit for bit, and a box's moments are the analytic ∫x^p y^q z^r (to rounding).
+  const TriangleMesh solid = subdivideMidpoints(testing::makeIrregularSolid());
+  const Eigen::Vector3d origin(0.013, -0.021, 0.034);
+  const auto three = computeVolumeMoments(solid, 3, origin), ten = computeVolumeMoments(solid, 10, origin);
+  ASSERT_TRUE(three.ok() && ten.ok());
+  EXPECT_EQ(std::memcmp(three.value().values.data(), ten.value().values.data(), sizeof(double) * monomialCount(3)), 0);
+  TriangleMesh whole = solid;
+  whole.faces.conservativeResize(4 * (whole.faces.rows() / 4), 3);
+  std::vector<double> narrow(monomialCount(10), 0.0);
+  ASSERT_EQ(detail::surfaceMoments(whole, origin, 10, narrow.data(), Lanes::Narrow), whole.faces.rows());
+  if (widestLanes() == Lanes::Wide) {
+    std::vector<double> wide(monomialCount(10), 0.0);
+    ASSERT_EQ(detail::surfaceMoments(whole, origin, 10, wide.data(), Lanes::Wide), whole.faces.rows());
+    EXPECT_EQ(std::memcmp(narrow.data(), wide.data(), sizeof(double) * narrow.size()), 0);
+  }
+  const double a = 0.15, b = 0.1, c = 0.05;  // the box's half sides
+  const auto box = computeVolumeMoments(testing::makeBoxSurface(2 * a, 2 * b, 2 * c), 10, Eigen::Vector3d(a, b, c));  // about its centre
+  ASSERT_TRUE(box.ok());
+  auto even = [](double h, int k) { return k % 2 ? 0.0 : 2.0 * std::pow(h, k + 1) / (k + 1); };  // ∫_{−h}^{h} t^k dt
+  for (int m = 0; m < monomialCount(10); ++m) {
+    const auto [p, q, r] = monomialExponents(m);
+    const double expected = even(a, p) * even(b, q) * even(c, r);
+    EXPECT_NEAR(box.value().values[m], expected, 1e-13 * even(a, 0) * even(b, 0) * even(c, 0)) << p << " " << q << " " << r;
+  }
+}
+
 TEST(VolumeMoments, DirectionalInLanesIsTheScalarBitForBit) {
   // Directional moments of many directions at once (the canonical frames' samples) are the scalar
   // call's bits in either lanes, for every order, and for counts that are not whole registers.

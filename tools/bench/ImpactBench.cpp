@@ -55,6 +55,7 @@ Status runImpactBench(const ImpactBenchSettings& s) {
         // are timed apart (the first call that needs each waits for it).
         ws.fracture.matchFragments = !database.empty();
         ws.fracture.exactModesMaxTets = s.exactModesMaxTets;
+        ws.fracture.polynomialModeDegree = s.polynomialModeDegree;
         ws.workerThreads = s.threads;
         auto world = World::create(Pack(pack), ws);
         if (!world) return world.error();

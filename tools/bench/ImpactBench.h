@@ -20,6 +20,7 @@
 
 #include "brittle/core/Result.h"
 #include "brittle/database/ObjectAsset.h"
+#include "brittle/runtime/World.h"
 
 namespace brittle::bench {
 
@@ -32,6 +33,7 @@ struct ImpactBenchSettings {
   std::filesystem::path csv = "docs/results/data/impact_latency.csv";
   std::filesystem::path databasePack;  ///< empty: no database, fragments stay surfaces
   int exactModesMaxTets = 150;         ///< with a database: the World's default
+  int polynomialModeDegree = FractureSettings{}.polynomialModeDegree;  ///< matched bodies' own frequencies (0: the entries')
   ElementOrder elementOrder = ElementOrder::P1;  ///< the slab's element (P2: thin parts' accuracy)
   /// The World's worker threads (0: one per core). The impact's parallel stages (the seed scan,
   /// surfaces beside moments, new bodies) use them; with 1 an impact runs on this thread alone.

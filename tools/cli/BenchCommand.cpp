@@ -96,6 +96,9 @@ Runner addBenchCommand(CLI::App& app) {
   impact->add_option("--exact-max-tets", is->exactModesMaxTets,
                      "With a database: fragments of at most this many parent tets get their own modes (0: all matched)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  impact->add_option("--polynomial-degree", is->polynomialModeDegree,
+                     "With a database: matched bodies ring at their fragment's own frequencies from polynomial fields of this degree (0: the entries')")
+      ->capture_default_str()->check(CLI::Range(0, 5));
   impact->add_option("--threads", is->threads, "The World's worker threads (0: one per core; 1: each impact on one thread)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   impact->add_flag("--quiet", is->quiet, "No progress lines");
