@@ -282,20 +282,22 @@ constexpr Order4Tables makeOrder4Tables() {
 
 constexpr Order4Tables kOrder4 = makeOrder4Tables();
 
-// computeVolumeMoments' loop at order 4 for faces [0, L⌊F/L⌋), L faces at a time: lane l of each
-// register (two doubles to an SSE2 register, four to an AVX one) holds face f + l, and every lane
-// takes the generic loop's operations in its order (a sum from 0.0, a product then a sum, no fused
+// computeVolumeMoments' loop for faces [0, L⌊F/L⌋), L faces at a time: lane l of each register
+// (two doubles to an SSE2 register, four to an AVX one) holds face f + l, and every lane takes the
+// generic loop's operations in its order (a sum from 0.0, a product then a sum, no fused
 // multiply-add), so each face's h values are the same bits; sum[m] takes face f's term, then
-// f + 1's and so on, as the generic loop adds them. The tables are known at compile time, so the
-// loop unrolls into straight-line code: 71 → 37–41 ns a face with two lanes. Returns the number of
-// faces done.
-template <int L>
-[[gnu::always_inline]] inline Eigen::Index momentsOrder4InLanes(const TriangleMesh& surface, const Eigen::Vector3d& originM,
-                                                                double* sum) {
+// f + 1's and so on, as the generic loop adds them. Returns the number of faces done. Count > 0:
+// that many monomials with tables known at compile time (order 4: the loop unrolls into
+// straight-line code, 71 → 37–41 ns a face with two lanes); Count = 0: `count` monomials, the
+// tables read at run time (orders above 4: the polynomial modes' order 10).
+template <int L, int Count, class Lower>
+[[gnu::always_inline]] inline Eigen::Index momentsInLanes(const TriangleMesh& surface, const Eigen::Vector3d& originM, int count,
+                                                          const Lower& lower, double* sum) {
   using Pack = VectorOf<double, L>;
-  constexpr int count = Order4Tables::kCount;
+  constexpr int kSize = Count > 0 ? Count : monomialCount(kMaxMomentOrder);
+  const int monomials = Count > 0 ? Count : count;
   const Eigen::Index packs = surface.faces.rows() / L;
-  Pack ha[count], hab[count], habc[count];
+  Pack ha[kSize], hab[kSize], habc[kSize];
   Pack one;
   for (int l = 0; l < L; ++l) one[l] = 1.0;
   ha[0] = hab[0] = habc[0] = one;
@@ -314,10 +316,10 @@ template <int L>
 #pragma GCC diagnostic pop
     for (int l = 0; l < L; ++l) sum[0] += dets[l];
 #pragma GCC unroll 40
-    for (int m = 1; m < count; ++m) {
+    for (int m = 1; m < monomials; ++m) {
       Pack sa = {}, sb = {}, sc = {};
       for (int j = 0; j < 3; ++j) {
-        const int src = kOrder4.lower[m][j];
+        const int src = lower[m][j];
         if (src < 0) continue;
         sa += a[j] * ha[src];
         sb += b[j] * hab[src];
@@ -333,67 +335,22 @@ template <int L>
   return L * packs;
 }
 
-// The same for any order above 4 (up to kMaxMomentOrder), its tables read at run time: the
-// polynomial modes' order 10 (PolynomialModes.h). Lane by lane the generic loop's operations, in
-// its order, so the same bits.
-template <int L>
-[[gnu::always_inline]] inline Eigen::Index momentsInLanes(const TriangleMesh& surface, const Eigen::Vector3d& originM, int maxOrder,
-                                                          double* sum) {
-  using Pack = VectorOf<double, L>;
-  const auto& t = detail::monomialTables();
-  const int count = monomialCount(maxOrder);
-  const Eigen::Index packs = surface.faces.rows() / L;
-  Pack ha[monomialCount(kMaxMomentOrder)], hab[monomialCount(kMaxMomentOrder)], habc[monomialCount(kMaxMomentOrder)];
-  Pack one;
-  for (int l = 0; l < L; ++l) one[l] = 1.0;
-  ha[0] = hab[0] = habc[0] = one;
-  for (Eigen::Index i = 0; i < packs; ++i) {
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-    Pack a[3], b[3], c[3], dets;
-    for (int l = 0; l < L; ++l) {
-      Eigen::Vector3d v[3];
-      for (int k = 0; k < 3; ++k) v[k] = surface.vertices.row(surface.faces(L * i + l, k)).transpose() - originM;
-      dets[l] = v[0].dot(v[1].cross(v[2]));
-      for (int j = 0; j < 3; ++j) a[j][l] = v[0][j], b[j][l] = v[1][j], c[j][l] = v[2][j];
-    }
-#pragma GCC diagnostic pop
-    for (int l = 0; l < L; ++l) sum[0] += dets[l];
-    for (int m = 1; m < count; ++m) {
-      const auto& src = t.lower[m];
-      Pack sa = {}, sb = {}, sc = {};
-      for (int j = 0; j < 3; ++j) {
-        if (src[j] < 0) continue;
-        sa += a[j] * ha[src[j]];
-        sb += b[j] * hab[src[j]];
-        sc += c[j] * habc[src[j]];
-      }
-      ha[m] = sa;
-      hab[m] = sa + sb;
-      habc[m] = sa + sb + sc;
-      const Pack term = dets * habc[m];
-      for (int l = 0; l < L; ++l) sum[m] += term[l];
-    }
-  }
-  return L * packs;
-}
-
 Eigen::Index momentsNarrow(const TriangleMesh& surface, const Eigen::Vector3d& originM, int maxOrder, double* sum) {
-  return momentsInLanes<2>(surface, originM, maxOrder, sum);
+  return momentsInLanes<2, 0>(surface, originM, monomialCount(maxOrder), detail::monomialTables().lower, sum);
 }
 
 BRITTLE_TARGET_AVX Eigen::Index momentsWide(const TriangleMesh& surface, const Eigen::Vector3d& originM, int maxOrder,
                                             double* sum) {
-  return momentsInLanes<4>(surface, originM, maxOrder, sum);
+  return momentsInLanes<4, 0>(surface, originM, monomialCount(maxOrder), detail::monomialTables().lower, sum);
 }
 
 Eigen::Index momentsOrder4Narrow(const TriangleMesh& surface, const Eigen::Vector3d& originM, double* sum) {
-  return momentsOrder4InLanes<2>(surface, originM, sum);
+  return momentsInLanes<2, Order4Tables::kCount>(surface, originM, Order4Tables::kCount, kOrder4.lower, sum);
 }
 
 BRITTLE_TARGET_AVX Eigen::Index momentsOrder4Wide(const TriangleMesh& surface, const Eigen::Vector3d& originM,
                                                   double* sum) {
-  return momentsOrder4InLanes<4>(surface, originM, sum);
+  return momentsInLanes<4, Order4Tables::kCount>(surface, originM, Order4Tables::kCount, kOrder4.lower, sum);
 }
 
 // addTetVolumeMoments at order 4 for tets [0, L⌊count/L⌋), L at a time: lane l holds tet i + l,

@@ -130,12 +130,13 @@ struct FractureSettings {
   /// its match, and its reason says when the prediction is over the target. A database without a
   /// calibration (packs before version 4) predicts nothing, and fragments go by size.
   double matchErrorTarget = 0.0;
-  /// A matched fragment's body rings at the fragment's own frequencies: its modes are replaced by
-  /// those of a Rayleigh–Ritz analysis of the fragment's solid over polynomial fields of this degree
-  /// (PolynomialModes.h: from its volume moments, ~3 ms at degree 5, on the workers with the rest of
-  /// the body), sampled on the matched entry's mesh. On the default objects' fragments degree 5 is
-  /// 16 % off their own P2 frequencies (median) where the entries are 107 % off (chart 5). 0: the
-  /// entry's own modes; at most kMaxPolynomialModeDegree (5).
+  /// A matched fragment's body rings at the fragment's own frequencies: the entry's r eigenvalues
+  /// become the lowest r of a Rayleigh–Ritz analysis of the fragment's solid over polynomial fields
+  /// of this degree (PolynomialModes.h, from its volume moments), and the entry keeps its mode
+  /// shapes, stress modes and static correction. On the default objects' fragments degree 5 is 16 %
+  /// off their own P2 frequencies (median) where the entries are 107 % off (chart 5). It costs
+  /// ~3 ms a matched fragment (1 ms at degree 4), on the workers with the rest of the body, not in
+  /// the impact. 0: the entry's own frequencies; at most kMaxPolynomialModeDegree (5).
   int polynomialModeDegree = 5;
   DescriptorKind descriptor = DescriptorKind::Moment;
 };
