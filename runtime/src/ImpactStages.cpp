@@ -10,9 +10,9 @@
 #include "brittle/core/Timing.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/runtime/FragmentModes.h"
-#include "brittle/runtime/PolynomialModes.h"
 #include "brittle/runtime/FragmentSurfaces.h"
 #include "brittle/runtime/ModalResponse.h"
+#include "brittle/runtime/PolynomialModes.h"
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>

@@ -56,7 +56,7 @@ struct PolynomialModes {
 
   /// The first `count` modes' displacements at `points` (#P by 3, m, in centreM's frame):
   /// 3P by count, row 3p + i the i-th component at point p (ModalBasis::modes' layout).
-  /// Precondition: count ≤ frequenciesHz.size().
+  /// Preconditions: the modes were computed with shapes, count ≤ frequenciesHz.size().
   MatrixXdRow displacements(const Points& points, Eigen::Index count) const;
 };
 
