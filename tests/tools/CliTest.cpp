@@ -356,6 +356,24 @@ TEST_F(CliTest, ExactModesBenchComparesTheMatchWithTheFragmentsOwnModes) {
   EXPECT_LE(perSize["6"], 3);
   const CliRun negative = run("bench exact-modes " + path("p.h5") + " --entries -1 --quiet --csv " + path("y.csv"));
   EXPECT_NE(negative.exitCode, 0);
+  // An impact that breaks the tile: each fragment that became an object reports its first
+  // frequency (a matched one rings at its own, from its polynomial Ritz analysis), the others null.
+  const std::string hit = "impact " + path("p.h5") + " --object tile --point 0.05,0.05,0.012 --normal 0,0,1 --speed 60 --json";
+  for (const std::string degree : {"5", "0"}) {
+    const CliRun broken = run(hit + " --polynomial-degree " + degree);
+    ASSERT_EQ(broken.exitCode, 0) << broken.out;
+    const auto doc = nlohmann::json::parse(broken.out);
+    int objects = 0;
+    for (const auto& f : doc["fragments"]) {
+      const bool object = f["path"] == "matched" || f["path"] == "exact_modes";
+      objects += object ? 1 : 0;
+      EXPECT_EQ(f["frequency_hz"].is_number(), object) << f.dump();
+      if (object) {
+        EXPECT_GT(f["frequency_hz"].get<double>(), 0.0) << f.dump();
+      }
+    }
+    EXPECT_GE(objects, 2) << broken.out;
+  }
 }
 
 TEST_F(CliTest, FractureStatisticsBenchWritesOneRowPerSeedAndSpeed) {

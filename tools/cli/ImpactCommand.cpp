@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 
@@ -230,6 +231,15 @@ Runner addImpactCommand(CLI::App& app) {
                      {"area_m2", r.fracture.crackAreaM2}, {"energy_budget_j", r.fracture.energyBudgetJ},
                      {"energy_spent_j", r.fracture.energySpentJ}, {"arrested_by_energy", r.fracture.arrestedByEnergy}};
     doc["fragments"] = nlohmann::json::array();
+    // A new object's first frequency (Hz): the exact path's own, or a matched body's, which rings at
+    // the fragment's own frequencies with polynomialModeDegree > 0. Asking for it makes the body
+    // now (it is made on the workers otherwise), after the timed impact. NaN without an object.
+    auto firstHz = [&](const FragmentResult& f) {
+      if (!f.object.valid()) return std::numeric_limits<double>::quiet_NaN();
+      auto made = world.value().objectAsset(f.object);
+      return made && made.value()->modal.frequenciesHz.size() > 0 ? made.value()->modal.frequenciesHz[0]
+                                                                  : std::numeric_limits<double>::quiet_NaN();
+    };
     std::map<std::string, int> paths;
     for (FragmentPath p : {FragmentPath::Debris, FragmentPath::ExactModes, FragmentPath::Matched, FragmentPath::SurfaceOnly})
       paths[std::string(fragmentPathName(p))] = 0;
@@ -243,7 +253,7 @@ Runner addImpactCommand(CLI::App& app) {
                                   {"exact_modes", f.exactModes}, {"path", fragmentPathName(f.path)},
                                   {"predicted_match_error", orNull(f.predictedMatchError)},
                                   {"predicted_match_error_p90", orNull(f.predictedMatchErrorP90)},
-                                  {"reason", f.reason}});
+                                  {"frequency_hz", orNull(firstHz(f))}, {"reason", f.reason}});
     }
     doc["fragment_paths"] = paths;
     doc["fingerprint"] = fingerprintHex(fingerprint(r));  // every computed value; times aside
@@ -275,13 +285,14 @@ Runner addImpactCommand(CLI::App& app) {
         std::cout << "  fragment " << std::setw(2) << i << "  " << std::setw(10) << f.massProperties.volumeM3 * 1e6
                   << " cm3  " << std::setw(10) << f.massProperties.massKg * 1e3 << " g  ";
         if (f.debris) std::cout << "debris";
-        else if (f.exactModes) std::cout << "own modes (exact path)";
+        else if (f.exactModes) std::cout << "own modes (exact path), f1 " << firstHz(f) << " Hz";
         else if (f.matchedEntry >= 0) {
           std::cout << "entry " << f.matchedEntry << " (distance " << f.matchDistance;
           if (!std::isnan(f.predictedMatchErrorP90))
             std::cout << ", predicted frequency error " << std::lround(100 * f.predictedMatchError) << " %, p90 "
                       << std::lround(100 * f.predictedMatchErrorP90) << " %";
-          std::cout << ")";
+          std::cout << "), f1 " << firstHz(f) << " Hz";
+          if (settings.fracture.polynomialModeDegree > 0) std::cout << " (the fragment's own, polynomial Ritz)";
         }
         else std::cout << "unmatched: " << f.reason;
         std::cout << "\n";
