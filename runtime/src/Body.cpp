@@ -12,9 +12,9 @@ namespace brittle::detail {
 const Result<StaticCorrection>& Body::staticCorrection() const {
   scheduleStaticCorrection();
   std::call_once(mCorrectionOnce, [this] {
-    auto built = correctionBasis.modes.size() == 0 ? StaticCorrection::build(asset, material, modes) : [&] {
-      ObjectAsset entry = asset;  // the same body with the modes its correction is for
-      entry.modal = correctionBasis;
+    auto built = correctionEigenvalues.size() == 0 ? StaticCorrection::build(asset, material, modes) : [&] {
+      ObjectAsset entry = asset;  // the same body with the eigenvalues its correction is for
+      entry.modal.eigenvaluesRad2PerS2 = correctionEigenvalues;
       return StaticCorrection::build(entry, material, modes);
     }();
     if (!built) built = Error{built.error().code, "object '" + asset.name + "': " + built.error().message};
@@ -72,7 +72,7 @@ const Result<std::shared_ptr<const Body>>& BodySource::get() const {
 }
 
 Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount,
-                                             const ExactModesFactor* factor, ModalBasis correctionBasis) {
+                                             const ExactModesFactor* factor, Eigen::VectorXd correctionEigenvalues) {
   const int points = stressPointsPerElement(asset.elementOrder);
   if (asset.modal.modes.cols() == 0 || asset.stressModes.rows() != 6 * points * asset.tetMesh.tets.rows()) {
     return makeError(ErrorCode::InvalidArgument,
@@ -127,7 +127,7 @@ Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& 
   body->sizeM = (hi - lo).norm();
   body->centreM = 0.5 * (lo + hi);
   body->asset = std::move(asset);
-  body->correctionBasis = std::move(correctionBasis);
+  body->correctionEigenvalues = std::move(correctionEigenvalues);
   if (factor && factor->factor) {
     auto built = StaticCorrection::build(body->asset, material, body->modes, factor->fem, factor->factor,
                                          -factor->shiftRad2PerS2);

@@ -39,10 +39,11 @@ struct Body {
   std::vector<int32_t> boundaryNodes;
   double sizeM = 0.0;                      // bounding-box diagonal
   Eigen::Vector3d centreM = Eigen::Vector3d::Zero();  // bounding-box centre: the origin of the tet moments
-  /// The modal basis its static correction is built for when it is not its own (no rows: its own).
-  /// A matched body that rings at its fragment's own frequencies keeps its entry's here, so that
-  /// the correction it builds equals the entry's shared one (ImpactStages.cpp: placeEntry).
-  ModalBasis correctionBasis;
+  /// The eigenvalues its static correction is built for when they are not its own (empty: its
+  /// own; the correction's shift μ is 10⁻⁶ λ₁). A matched body that rings at its fragment's own
+  /// frequencies keeps its entry's here (its shapes are the entry's), so that the correction it
+  /// builds equals the entry's shared one (ImpactStages.cpp: placeEntry).
+  Eigen::VectorXd correctionEigenvalues;
 
   /// The stress scan's bounds per stress point over `modes` modes, weighted by 1/ω
   /// (CrackPropagation.h: stressModeBounds); made on first use, as the static correction (the
@@ -104,10 +105,11 @@ inline int keptModeCount(int requested, int available) { return requested > 0 ? 
 
 /// Builds a body with the first `modeCount` stored modes (0: all, keptModeCount). With `factor` (the exact
 /// path's, holding a factorisation), its static correction is built at once from that factor
-/// (μ = −σ) instead of a second factorisation on its first impact. `correctionBasis`: see Body.
+/// (μ = −σ) instead of a second factorisation on its first impact. `correctionEigenvalues`: see Body.
 /// Errors: InvalidArgument (no modal data, stress modes of the wrong size, a zero-frequency
 /// elastic mode), those of buildTetTopology.
 Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount,
-                                             const ExactModesFactor* factor = nullptr, ModalBasis correctionBasis = {});
+                                             const ExactModesFactor* factor = nullptr,
+                                             Eigen::VectorXd correctionEigenvalues = {});
 
 }  // namespace brittle::detail

@@ -220,18 +220,18 @@ Result<std::shared_ptr<const Body>> withCorrectionScheduled(Result<std::shared_p
 
 // A matched entry placed on its fragment (ScalingLaws.h) and, with degree > 0, ringing at the
 // fragment's own frequencies (PolynomialModes.h: from the fragment's surface; the entry keeps its
-// shapes and stress modes). `entryBasis` then keeps the entry's own eigenvalues for the body's
+// shapes and stress modes). `entryEigenvalues` then keeps the entry's own eigenvalues for the body's
 // static correction, which stays the entry's, shared or not: the flexibility its kept modes leave
 // out. Should the analysis fail (only on a surface an impact would not make), the body keeps the
 // entry's frequencies.
 Result<ObjectAsset> placeEntry(const FragmentDatabase& db, const FragmentMatch& m, const Material& material,
-                               const TriangleMesh& surface, int degree, ModalBasis& entryBasis) {
+                               const TriangleMesh& surface, int degree, Eigen::VectorXd& entryEigenvalues) {
   auto placed = instantiateEntry(db.entries[static_cast<size_t>(m.entry)], db.referenceMaterial, material, m.queryFrame);
   if (placed && degree > 0) {
     auto own = polynomialModes(surface, material, degree, /*withShapes=*/false);
     if (own) {
-      ModalBasis entry = placed.value().modal;
-      if (adoptPolynomialFrequencies(placed.value(), own.value())) entryBasis = std::move(entry);
+      Eigen::VectorXd entry = placed.value().modal.eigenvaluesRad2PerS2;
+      if (adoptPolynomialFrequencies(placed.value(), own.value())) entryEigenvalues = std::move(entry);
     }
   }
   return placed;
@@ -263,10 +263,10 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const doub
   TriangleMesh surface = degree > 0 ? fr.surface : TriangleMesh{};  // for the worker: two allocations
   return BodySource::deferred([db, shared, m, material, modeCount, correct, degree,
                                surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
-    ModalBasis entryBasis;
-    auto placed = placeEntry(*db, m, material, surface, degree, entryBasis);
+    Eigen::VectorXd entryEigenvalues;
+    auto placed = placeEntry(*db, m, material, surface, degree, entryEigenvalues);
     if (!placed) return Error{placed.error().code, "entry " + std::to_string(m.entry) + ": " + placed.error().message};
-    auto made = makeBody(std::move(placed).value(), material, modeCount, nullptr, std::move(entryBasis));
+    auto made = makeBody(std::move(placed).value(), material, modeCount, nullptr, std::move(entryEigenvalues));
     if (made && correct && shared) {
       // The entry's correction placed as instantiateEntry placed the entry: x = L Rᵀ_frame x̂ + t.
       const Result<StaticCorrection>& entry = shared->get(m.entry, material, made.value()->modes);
@@ -318,10 +318,10 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
     auto match = matcher->match(surface, kind, 1);
     if (!match) return made.error();
     const FragmentMatch& m = match.value().front();
-    ModalBasis entryBasis;
-    auto placed = placeEntry(*db, m, material, surface, degree, entryBasis);
+    Eigen::VectorXd entryEigenvalues;
+    auto placed = placeEntry(*db, m, material, surface, degree, entryEigenvalues);
     if (!placed) return made.error();
-    return withCorrectionScheduled(makeBody(std::move(placed).value(), material, modeCount, nullptr, std::move(entryBasis)),
+    return withCorrectionScheduled(makeBody(std::move(placed).value(), material, modeCount, nullptr, std::move(entryEigenvalues)),
                                    scheduleMatch);
   });
 }
