@@ -79,6 +79,8 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
         return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"polynomial_mode_degree\" must be in [0, " +
                                                          std::to_string(kMaxPolynomialModeDegree) + "]");
       }
+    } else if (key == "mesh_ratio_max_dof") {
+      if (Status st = integer(key, s.meshRatioMaxDof); !st) return st.error();
     } else if (key == "modes") {
       if (Status st = integer(key, s.modeCount); !st) return st.error();
     } else {
@@ -106,6 +108,7 @@ std::string runtimeSettingsJson(const FractureSettings& s) {
                               {"exact_mode_count", s.exactModeCount},
                               {"match_error_target", s.matchErrorTarget},
                               {"polynomial_mode_degree", s.polynomialModeDegree},
+                              {"mesh_ratio_max_dof", s.meshRatioMaxDof},
                               {"modes", s.modeCount}};
   return doc.dump(2) + "\n";
 }

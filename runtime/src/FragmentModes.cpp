@@ -11,6 +11,7 @@
 
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/runtime/FemAssembly.h"
+#include "brittle/runtime/PolynomialModes.h"
 #include "brittle/runtime/TetTopology.h"
 
 namespace brittle {
@@ -112,6 +113,62 @@ Status lowestEigenpairs(const FemSystem& fem, int count, double sigma, const Exa
   }
   factorOut = std::move(shifted);
   return Ok{};
+}
+
+// The sub-mesh's FEM system and its lowest modeCount + 6 eigenpairs, six of them rigid: what the
+// exact path and the frequency bound share.
+struct FragmentEigen {
+  FemMesh femMesh;
+  FemSystem fem;
+  Eigen::VectorXd values;
+  Eigen::MatrixXd vectors;
+  std::shared_ptr<const Eigen::SimplicialLDLT<SparseMatrixd>> factor;
+  double sigma = 0.0;
+  bool dense = false;
+};
+
+Status checkExactInput(const FragmentSubMesh& sub, const ExactModesSettings& settings, const std::string& name) {
+  if (settings.modeCount < 1 || settings.denseMaxDof < 0 || !(settings.tolerance > 0.0 && settings.tolerance < 1.0)) {
+    return invalidArgument("ExactModesSettings: modeCount ≥ 1, denseMaxDof ≥ 0, tolerance in (0, 1)");
+  }
+  if (sub.mesh.nodes.rows() < 4 || sub.mesh.tets.rows() < 1) return invalidArgument("fragment '" + name + "': fewer than 4 nodes");
+  return Ok{};
+}
+
+Result<FragmentEigen> fragmentEigen(const FragmentSubMesh& sub, const Material& material, const ExactModesSettings& settings,
+                                    const std::string& name) {
+  if (Status st = checkExactInput(sub, settings, name); !st) return st.error();
+  FragmentEigen out;
+  auto femMesh = makeFemMesh(sub.mesh, settings.elementOrder);
+  if (!femMesh) return femMesh.error();
+  out.femMesh = std::move(femMesh).value();
+  auto fem = assembleFem(out.femMesh, material, FemSettings{});
+  if (!fem) return fem.error();
+  out.fem = std::move(fem).value();
+
+  // Six rigid modes plus the elastic ones; a mesh too small for that keeps what it has.
+  const auto dof = static_cast<int>(out.fem.stiffness.rows());
+  const int wanted = std::min(settings.modeCount + 6, dof - 1);
+  if (wanted <= 6) return invalidArgument("fragment '" + name + "': too few degrees of freedom for an elastic mode");
+  ExactModesSettings s = settings;
+  if (wanted >= dof - 1 || dof <= 2 * wanted + 1) s.denseMaxDof = std::max(s.denseMaxDof, dof);  // Lanczos needs room
+  out.dense = dof <= s.denseMaxDof;
+  // σ = −10⁻³ (c/L)², as the bake's shift (ModalAnalysis.h): K − σM is positive definite, and σ
+  // lies well below the first elastic eigenvalue of any compact body.
+  const double length = (sub.mesh.nodes.colwise().maxCoeff() - sub.mesh.nodes.colwise().minCoeff()).norm();
+  out.sigma = -1e-3 * material.youngsModulusPa / material.densityKgPerM3 / (length * length);
+  if (Status st = lowestEigenpairs(out.fem, wanted, out.sigma, s, out.values, out.vectors, out.factor); !st) {
+    return Error{st.error().code, "fragment '" + name + "': " + st.error().message};
+  }
+  // Exactly six near-zero modes for one connected solid.
+  const double largest = out.values.cwiseAbs().maxCoeff();
+  int rigid = 0;
+  while (rigid < out.values.size() && std::abs(out.values[rigid]) < 1e-8 * largest) ++rigid;
+  if (rigid != 6) {
+    return makeError(ErrorCode::RigidModeMismatch,
+                     "fragment '" + name + "': " + std::to_string(rigid) + " near-zero modes instead of 6");
+  }
+  return out;
 }
 
 }  // namespace
@@ -342,46 +399,53 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
   return sub;
 }
 
+Result<MeshFrequencyRatios> meshFrequencyRatios(const FragmentSubMesh& sub, const Material& material, int degree, int count) {
+  if (degree < 1 || degree > kMaxPolynomialModeDegree || count < 1) {
+    return invalidArgument("meshFrequencyRatios: degree " + std::to_string(degree) + " (in [1, " + std::to_string(kMaxPolynomialModeDegree) +
+                           "]) and count " + std::to_string(count) + " (≥ 1)");
+  }
+  ExactModesSettings s;
+  s.modeCount = count;
+  s.elementOrder = ElementOrder::P1;
+  auto solved = fragmentEigen(sub, material, s, "mesh ratios");
+  if (!solved) return solved.error();
+  const FragmentEigen& e = solved.value();
+  const Eigen::Index elastic = e.values.size() - 6;
+  if (elastic < count) return invalidArgument("meshFrequencyRatios: the sub-mesh has " + std::to_string(elastic) + " elastic modes, not " + std::to_string(count));
+  auto polynomial = polynomialFrequenciesOnMesh(e.femMesh.nodes(), e.fem, degree);
+  if (!polynomial) return polynomial.error();
+  if (polynomial.value().size() < count) return invalidArgument("meshFrequencyRatios: too few polynomial modes for " + std::to_string(count));
+  MeshFrequencyRatios out;
+  out.meshHz = e.values.segment(6, count).cwiseMax(0.0).cwiseSqrt() / (2.0 * std::numbers::pi);
+  out.polynomialHz = polynomial.value().head(count);
+  // f_h ≤ f_p holds exactly (a subspace); the eigen solvers' tolerances can put a ratio a hair above.
+  out.ratios = out.meshHz.cwiseQuotient(out.polynomialHz).cwiseMin(1.0);
+  if (!out.ratios.allFinite() || !(out.ratios.minCoeff() > 0.0)) {
+    return makeError(ErrorCode::EigenNotConverged, "meshFrequencyRatios: a ratio is not in (0, 1]");
+  }
+  return out;
+}
+
+void applyMeshRatios(Eigen::VectorXd& frequenciesHz, const MeshFrequencyRatios& ratios) {
+  const Eigen::Index k = std::min(frequenciesHz.size(), ratios.ratios.size());
+  frequenciesHz.head(k) = frequenciesHz.head(k).cwiseProduct(ratios.ratios.head(k));
+  std::sort(frequenciesHz.data(), frequenciesHz.data() + k);
+}
+
 Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Material& material,
                                        const ExactModesSettings& settings, const std::string& name,
                                        ExactModesFactor* factorOut) {
   if (factorOut) *factorOut = ExactModesFactor{};
-  if (settings.modeCount < 1 || settings.denseMaxDof < 0 || !(settings.tolerance > 0.0 && settings.tolerance < 1.0)) {
-    return invalidArgument("ExactModesSettings: modeCount ≥ 1, denseMaxDof ≥ 0, tolerance in (0, 1)");
-  }
-  const Eigen::Index nodes = sub.mesh.nodes.rows();
-  if (nodes < 4 || sub.mesh.tets.rows() < 1) return invalidArgument("fragment '" + name + "': fewer than 4 nodes");
+  if (Status st = checkExactInput(sub, settings, name); !st) return st.error();
   auto topology = buildTetTopology(sub.mesh);
   if (!topology) return topology.error();
-  auto femMesh = makeFemMesh(sub.mesh, settings.elementOrder);
-  if (!femMesh) return femMesh.error();
-  auto fem = assembleFem(femMesh.value(), material, FemSettings{});
-  if (!fem) return fem.error();
-
-  // Six rigid modes plus the elastic ones; a mesh too small for that keeps what it has.
-  const auto dof = static_cast<int>(fem.value().stiffness.rows());
-  const int wanted = std::min(settings.modeCount + 6, dof - 1);
-  if (wanted <= 6) return invalidArgument("fragment '" + name + "': too few degrees of freedom for an elastic mode");
-  ExactModesSettings s = settings;
-  if (wanted >= dof - 1 || dof <= 2 * wanted + 1) s.denseMaxDof = std::max(s.denseMaxDof, dof);  // Lanczos needs room
-  // σ = −10⁻³ (c/L)², as the bake's shift (ModalAnalysis.h): K − σM is positive definite, and σ
-  // lies well below the first elastic eigenvalue of any compact body.
-  const double length = (sub.mesh.nodes.colwise().maxCoeff() - sub.mesh.nodes.colwise().minCoeff()).norm();
-  const double sigma = -1e-3 * material.youngsModulusPa / material.densityKgPerM3 / (length * length);
-  Eigen::VectorXd values;
-  Eigen::MatrixXd vectors;
-  std::shared_ptr<const Eigen::SimplicialLDLT<SparseMatrixd>> factor;
-  if (Status st = lowestEigenpairs(fem.value(), wanted, sigma, s, values, vectors, factor); !st) {
-    return Error{st.error().code, "fragment '" + name + "': " + st.error().message};
-  }
-  // Exactly six near-zero modes for one connected solid.
-  const double largest = values.cwiseAbs().maxCoeff();
-  int rigid = 0;
-  while (rigid < values.size() && std::abs(values[rigid]) < 1e-8 * largest) ++rigid;
-  if (rigid != 6) {
-    return makeError(ErrorCode::RigidModeMismatch,
-                     "fragment '" + name + "': " + std::to_string(rigid) + " near-zero modes instead of 6");
-  }
+  auto solved = fragmentEigen(sub, material, settings, name);
+  if (!solved) return solved.error();
+  FragmentEigen& e = solved.value();
+  const Eigen::VectorXd& values = e.values;
+  const Eigen::MatrixXd& vectors = e.vectors;
+  const Eigen::Index nodes = sub.mesh.nodes.rows();
+  const Eigen::Index dof = e.fem.stiffness.rows();
   const auto r = static_cast<Eigen::Index>(values.size() - 6);
   ObjectAsset a;
   a.name = name;
@@ -400,21 +464,21 @@ Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Materia
   m.residuals.resize(r);
   for (Eigen::Index j = 0; j < r; ++j) {
     Eigen::VectorXd phi = vectors.col(6 + j);
-    phi /= std::sqrt(phi.dot(fem.value().mass * phi));
+    phi /= std::sqrt(phi.dot(e.fem.mass * phi));
     m.modes.col(j) = phi;
-    const Eigen::VectorXd kphi = fem.value().stiffness * phi;
-    m.residuals[j] = (kphi - values[6 + j] * (fem.value().mass * phi)).norm() / kphi.norm();
+    const Eigen::VectorXd kphi = e.fem.stiffness * phi;
+    m.residuals[j] = (kphi - values[6 + j] * (e.fem.mass * phi)).norm() / kphi.norm();
   }
-  const Eigen::MatrixXd gram = Eigen::MatrixXd(m.modes).transpose() * (fem.value().mass * Eigen::MatrixXd(m.modes));
+  const Eigen::MatrixXd gram = Eigen::MatrixXd(m.modes).transpose() * (e.fem.mass * Eigen::MatrixXd(m.modes));
   m.orthonormalityError = (gram - Eigen::MatrixXd::Identity(r, r)).cwiseAbs().maxCoeff();
-  a.stressModes = computeStressModes(femMesh.value(), material, m.modes);
+  a.stressModes = computeStressModes(e.femMesh, material, m.modes);
   a.elementOrder = settings.elementOrder;
   a.bake.requestedModes = settings.modeCount;
-  a.bake.factorization = dof <= s.denseMaxDof ? "dense" : "eigen-ldlt";
-  if (factorOut && factor) {
-    factorOut->fem = std::move(fem).value();
-    factorOut->factor = std::move(factor);
-    factorOut->shiftRad2PerS2 = sigma;
+  a.bake.factorization = e.dense ? "dense" : "eigen-ldlt";
+  if (factorOut && e.factor) {
+    factorOut->fem = std::move(e.fem);
+    factorOut->factor = std::move(e.factor);
+    factorOut->shiftRad2PerS2 = e.sigma;
   }
   return a;
 }

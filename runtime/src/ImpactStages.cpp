@@ -218,18 +218,38 @@ Result<std::shared_ptr<const Body>> withCorrectionScheduled(Result<std::shared_p
   return made;
 }
 
+// What a matched fragment's own-frequency check needs (FractureSettings::meshRatioMaxDof): its
+// broken parent and label, and the largest linear-tet model it may cut out for it.
+struct MeshCheck {
+  std::shared_ptr<const BrokenParent> parent;  // null: no check
+  int label = -1;
+  int maxDof = 0;
+};
+
 // A matched entry placed on its fragment (ScalingLaws.h) and, with degree > 0, ringing at the
 // fragment's own frequencies (PolynomialModes.h: from the fragment's surface; the entry keeps its
-// shapes and stress modes). `entryEigenvalues` then keeps the entry's own eigenvalues for the body's
+// shapes and stress modes), the lowest kMeshRatioModes of them corrected by the fragment's own
+// mesh when `check` allows it (FragmentModes.h, meshFrequencyRatios: the fragment cut out of its
+// parent in linear tets). `entryEigenvalues` then keeps the entry's own eigenvalues for the body's
 // static correction, which stays the entry's, shared or not: the flexibility its kept modes leave
 // out. Should the analysis fail (only on a surface an impact would not make), the body keeps the
-// entry's frequencies.
+// entry's frequencies; should the check fail (a sub-mesh that hangs by an edge or a node, whose
+// linear tets have more than six rigid modes), the Ritz values stand.
 Result<ObjectAsset> placeEntry(const FragmentDatabase& db, const FragmentMatch& m, const Material& material,
-                               const TriangleMesh& surface, int degree, Eigen::VectorXd& entryEigenvalues) {
+                               const TriangleMesh& surface, int degree, const MeshCheck& check, Eigen::VectorXd& entryEigenvalues) {
   auto placed = instantiateEntry(db.entries[static_cast<size_t>(m.entry)], db.referenceMaterial, material, m.queryFrame);
   if (placed && degree > 0) {
     auto own = polynomialModes(surface, material, degree, /*withShapes=*/false);
     if (own) {
+      if (check.parent && check.maxDof > 0) {
+        const Body& body = *check.parent->body;
+        const int64_t dof = fragmentCutDof(body.asset.tetMesh, body.topology, check.parent->nodeLabels, check.label, ElementOrder::P1);
+        if (dof > 0 && dof <= check.maxDof) {
+          auto sub = fragmentSubMesh(body.asset.tetMesh, body.topology, check.parent->nodeLabels, check.parent->edgeCuts, check.label);
+          auto ratios = sub ? meshFrequencyRatios(sub.value(), material, degree, kMeshRatioModes) : Result<MeshFrequencyRatios>(sub.error());
+          if (ratios) applyMeshRatios(own.value().frequenciesHz, ratios.value());
+        }
+      }
       Eigen::VectorXd entry = placed.value().modal.eigenvaluesRad2PerS2;
       if (adoptPolynomialFrequencies(placed.value(), own.value())) entryEigenvalues = std::move(entry);
     }
@@ -239,7 +259,8 @@ Result<ObjectAsset> placeEntry(const FragmentDatabase& db, const FragmentMatch& 
 
 // The database: the nearest entry and its placement (searched now, so that the result reports
 // it); the entry rescaled to the fragment is made later (BodySource).
-std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const double* moments, FragmentResult& fr) {
+std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std::shared_ptr<const BrokenParent>& parent,
+                                                const double* moments, FragmentResult& fr, size_t i) {
   const Material material = job.body->material;
   const int modeCount = job.settings->modeCount;
   auto note = [&](const std::string& why) { fr.reason += (fr.reason.empty() ? "" : "; ") + why; };
@@ -261,10 +282,11 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const doub
   const bool correct = job.settings->staticCorrection && job.prepareFragments;
   const int degree = job.settings->polynomialModeDegree;
   TriangleMesh surface = degree > 0 ? fr.surface : TriangleMesh{};  // for the worker: two allocations
-  return BodySource::deferred([db, shared, m, material, modeCount, correct, degree,
+  const MeshCheck check{parent, static_cast<int>(i), job.settings->meshRatioMaxDof};
+  return BodySource::deferred([db, shared, m, material, modeCount, correct, degree, check,
                                surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
     Eigen::VectorXd entryEigenvalues;
-    auto placed = placeEntry(*db, m, material, surface, degree, entryEigenvalues);
+    auto placed = placeEntry(*db, m, material, surface, degree, check, entryEigenvalues);
     if (!placed) return Error{placed.error().code, "entry " + std::to_string(m.entry) + ": " + placed.error().message};
     auto made = makeBody(std::move(placed).value(), material, modeCount, nullptr, std::move(entryEigenvalues));
     if (made && correct && shared) {
@@ -301,7 +323,8 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   const bool correct = fs.staticCorrection;  // the exact path's body adopts its analysis's factor
   const bool scheduleMatch = correct && job.prepareFragments;
   const int degree = fs.polynomialModeDegree;
-  return BodySource::deferred([parent, label = static_cast<int>(i), es, modeCount, correct, scheduleMatch, kind, matcher, db, degree,
+  const int meshRatioMaxDof = fs.meshRatioMaxDof;
+  return BodySource::deferred([parent, label = static_cast<int>(i), es, modeCount, correct, scheduleMatch, kind, matcher, db, degree, meshRatioMaxDof,
                                name = std::move(name), surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
     const Material& material = parent->body->material;
     const Body& body = *parent->body;
@@ -319,7 +342,7 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
     if (!match) return made.error();
     const FragmentMatch& m = match.value().front();
     Eigen::VectorXd entryEigenvalues;
-    auto placed = placeEntry(*db, m, material, surface, degree, entryEigenvalues);
+    auto placed = placeEntry(*db, m, material, surface, degree, MeshCheck{parent, label, meshRatioMaxDof}, entryEigenvalues);
     if (!placed) return made.error();
     return withCorrectionScheduled(makeBody(std::move(placed).value(), material, modeCount, nullptr, std::move(entryEigenvalues)),
                                    scheduleMatch);
@@ -371,8 +394,8 @@ void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResul
   }
   const std::vector<int64_t> sizes = fragmentTetCounts(job.body->asset.tetMesh, result.fracture.nodeLabels,
                                                        static_cast<int>(result.fragments.size()));
-  std::shared_ptr<const BrokenParent> parent;
-  if (fs.exactModesMaxTets > 0) {
+  std::shared_ptr<const BrokenParent> parent;  // the exact path's, and matched fragments' mesh check
+  if (fs.exactModesMaxTets > 0 || (fs.polynomialModeDegree > 0 && fs.meshRatioMaxDof > 0)) {
     parent = std::make_shared<const BrokenParent>(
         BrokenParent{job.body, result.fracture.nodeLabels, result.fracture.edgeCuts});
   }
@@ -389,7 +412,7 @@ void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResul
     if (fr.debris || !parent || sizes[i] > fs.exactModesMaxTets) return;
     // With a target, a match predicted within it is taken instead of the exact path.
     if (target > 0.0 && job.matcher) {
-      born[i] = matchedSource(job, moments + i * kFragmentMomentCount, fr);
+      born[i] = matchedSource(job, parent, moments + i * kFragmentMomentCount, fr, i);
       if (born[i] && fr.predictedMatchErrorP90 <= target) {
         fr.path = FragmentPath::Matched;
         return;
@@ -424,7 +447,7 @@ void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResul
       fr.reason += (fr.reason.empty() ? "" : "; ") + std::string("no database to match against");
       return;
     }
-    born[i] = matchedSource(job, moments + i * kFragmentMomentCount, fr);
+    born[i] = matchedSource(job, parent, moments + i * kFragmentMomentCount, fr, i);
     if (born[i]) fr.path = FragmentPath::Matched;
     if (born[i] && target > 0.0 && fr.predictedMatchErrorP90 > target) {
       fr.reason += (fr.reason.empty() ? "" : "; ") + std::string("match predicted at ") + percent(fr.predictedMatchErrorP90) +

@@ -8,6 +8,61 @@
 #include <vector>
 
 namespace brittle {
+namespace {
+
+// The Ritz problem of the fields e_i y^α: k[i][j] the stiffness between component i of monomial
+// A and component j of monomial B (N m), massGram the mass between e_i y^α and e_i y^β (kg; the
+// same for every component, M = massGram ⊗ I₃). massGram = V D Vᵀ, and the problem is solved in
+// the M-orthonormal directions W = V D^(−1/2) ⊗ I₃ whose mass is above rounding. Dense and small
+// (56 by 56 blocks, 168 by 168 at p = 5).
+struct RitzSolution {
+  Eigen::VectorXd values;   ///< ascending (rad²/s²), the rigid motions' first
+  Eigen::MatrixXd vectors;  ///< in the directions W, with shapes only
+  Eigen::MatrixXd wg;       ///< W = wg ⊗ I₃
+};
+
+Result<RitzSolution> solveRitz(const std::array<std::array<Eigen::MatrixXd, 3>, 3>& k, const Eigen::MatrixXd& massGram,
+                               double density, bool withShapes) {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(massGram);
+  if (gram.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomialModes: the Gram matrix's eigen solve failed");
+  const Eigen::Index monomials = massGram.rows();
+  const double largest = gram.eigenvalues().maxCoeff();
+  std::vector<Eigen::Index> kept;
+  for (Eigen::Index i = 0; i < monomials; ++i)
+    if (gram.eigenvalues()[i] > 1e-13 * largest) kept.push_back(i);
+  const auto directions = static_cast<Eigen::Index>(kept.size());
+  RitzSolution out;
+  out.wg.resize(monomials, directions);
+  for (Eigen::Index c = 0; c < directions; ++c) {
+    out.wg.col(c) = gram.eigenvectors().col(kept[static_cast<size_t>(c)]) / std::sqrt(density * gram.eigenvalues()[kept[static_cast<size_t>(c)]]);
+  }
+  // Wᵀ K W block by block: entry (3c + i, 3d + j) is wgᵀ k[i][j] wg, a third of the work of the
+  // whole product.
+  Eigen::MatrixXd reduced(3 * directions, 3 * directions);
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const Eigen::MatrixXd block = out.wg.transpose() * k[static_cast<size_t>(i)][static_cast<size_t>(j)] * out.wg;
+      for (Eigen::Index c = 0; c < directions; ++c)
+        for (Eigen::Index d = 0; d < directions; ++d) reduced(3 * c + i, 3 * d + j) = block(c, d);
+    }
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(0.5 * (reduced + reduced.transpose()),
+                                                      withShapes ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
+  if (ritz.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomialModes: the Ritz eigen solve failed");
+  out.values = ritz.eigenvalues();
+  if (withShapes) out.vectors = ritz.eigenvectors();
+  return out;
+}
+
+// The elastic frequencies (Hz) of Ritz values, the six rigid motions dropped.
+Eigen::VectorXd elasticFrequencies(const Eigen::VectorXd& values) {
+  const Eigen::Index elastic = std::max<Eigen::Index>(values.size() - 6, 0);
+  Eigen::VectorXd hz(elastic);
+  for (Eigen::Index i = 6; i < values.size(); ++i) hz[i - 6] = std::sqrt(std::max(values[i], 0.0)) / (2.0 * M_PI);
+  return hz;
+}
+
+}  // namespace
 
 Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Material& material, int degree, bool withShapes) {
   if (degree < 1 || degree > kMaxPolynomialModeDegree) {
@@ -70,52 +125,27 @@ Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Mate
       }
     }
   }
-  // M = ρ G ⊗ I₃ with G the monomials' Gram matrix (m[α+β]); G = V D Vᵀ, and the Ritz problem is
-  // solved in the M-orthonormal directions W = V D^(−1/2) ⊗ I₃ / √ρ whose mass is above rounding.
-  // Dense and small (G is 56 by 56, K 168 by 168 at p = 5).
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(g);
-  if (gram.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomialModes: the Gram matrix's eigen solve failed");
-  const double largest = gram.eigenvalues().maxCoeff();
-  std::vector<Eigen::Index> kept;
-  for (Eigen::Index i = 0; i < monomials; ++i)
-    if (gram.eigenvalues()[i] > 1e-13 * largest) kept.push_back(i);
-  const auto directions = static_cast<Eigen::Index>(kept.size());
-  Eigen::MatrixXd wg(monomials, directions);  // W = wg ⊗ I₃
-  for (Eigen::Index c = 0; c < directions; ++c) {
-    wg.col(c) = gram.eigenvectors().col(kept[static_cast<size_t>(c)]) /
-                std::sqrt(material.densityKgPerM3 * gram.eigenvalues()[kept[static_cast<size_t>(c)]]);
-  }
-  // Wᵀ K W block by block: entry (3c + i, 3d + j) is wgᵀ k[i][j] wg, a third of the work of the
-  // whole product.
-  Eigen::MatrixXd reduced(3 * directions, 3 * directions);
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) {
-      const Eigen::MatrixXd block = wg.transpose() * k[static_cast<size_t>(i)][static_cast<size_t>(j)] * wg;
-      for (Eigen::Index c = 0; c < directions; ++c)
-        for (Eigen::Index d = 0; d < directions; ++d) reduced(3 * c + i, 3 * d + j) = block(c, d);
-    }
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(0.5 * (reduced + reduced.transpose()),
-                                                      withShapes ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
-  if (ritz.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomialModes: the Ritz eigen solve failed");
+  // M = ρ G ⊗ I₃ with G the monomials' Gram matrix (m[α+β]).
+  auto solved = solveRitz(k, g, material.densityKgPerM3, withShapes);
+  if (!solved) return solved.error();
+  const RitzSolution& ritz = solved.value();
+  const auto directions = ritz.wg.cols();
   PolynomialModes out;
   out.degree = degree;
   out.basisSize = n;
-  out.keptDirections = 3 * static_cast<Eigen::Index>(kept.size());
+  out.keptDirections = 3 * directions;
   out.centreM = centre;
   out.scaleM = s;
-  const Eigen::VectorXd& values = ritz.eigenvalues();  // ascending; the first six are the rigid motions
-  const Eigen::Index elastic = std::max<Eigen::Index>(values.size() - 6, 0);
-  out.frequenciesHz.resize(elastic);
-  for (Eigen::Index i = 6; i < values.size(); ++i) out.frequenciesHz[i - 6] = std::sqrt(std::max(values[i], 0.0)) / (2.0 * M_PI);
+  out.frequenciesHz = elasticFrequencies(ritz.values);  // ascending; the six rigid motions dropped
+  const Eigen::Index elastic = out.frequenciesHz.size();
   // W is M-orthonormal over the solid in y (dV_y = dV / s³): over x, the columns scale by s^(−3/2).
   if (withShapes) {
-    const Eigen::MatrixXd vectors = ritz.eigenvectors().rightCols(elastic) / std::pow(s, 1.5);
+    const Eigen::MatrixXd vectors = ritz.vectors.rightCols(elastic) / std::pow(s, 1.5);
     out.coefficients.resize(n, elastic);
     Eigen::MatrixXd component(directions, elastic);
     for (int i = 0; i < 3; ++i) {
       for (Eigen::Index c = 0; c < directions; ++c) component.row(c) = vectors.row(3 * c + i);
-      const Eigen::MatrixXd perMonomial = wg * component;
+      const Eigen::MatrixXd perMonomial = ritz.wg * component;
       for (int A = 0; A < monomials; ++A) out.coefficients.row(3 * A + i) = perMonomial.row(A);
     }
   }
@@ -152,6 +182,61 @@ Result<PolynomialModes> polynomialModes(const TriangleMesh& surface, const Mater
   auto modes = polynomialModes(moments.value(), material, degree, withShapes);
   if (modes) modes.value().centreM += origin;  // the moments were about the origin
   return modes;
+}
+
+Result<Eigen::VectorXd> polynomialFrequenciesOnMesh(const Points& nodes, const FemSystem& fem, int degree) {
+  if (degree < 1 || degree > kMaxPolynomialModeDegree) {
+    return makeError(ErrorCode::InvalidArgument, "polynomialFrequenciesOnMesh: degree " + std::to_string(degree) + " is outside [1, " +
+                                                     std::to_string(kMaxPolynomialModeDegree) + "]");
+  }
+  const Eigen::Index n = nodes.rows();
+  if (n < 4 || fem.stiffness.rows() != 3 * n || fem.stiffness.cols() != 3 * n || fem.mass.rows() != 3 * n || fem.mass.cols() != 3 * n) {
+    return makeError(ErrorCode::InvalidArgument, "polynomialFrequenciesOnMesh: " + std::to_string(n) + " nodes (at least 4) and a " +
+                                                     std::to_string(fem.stiffness.rows()) + "-DOF system (3 per node)");
+  }
+  if (!nodes.allFinite()) return makeError(ErrorCode::NonFiniteValue, "polynomialFrequenciesOnMesh: a node is not finite");
+  // y = (x − c)/s about the nodes' mean c, s their RMS radius: the monomials stay near 1.
+  const Eigen::RowVector3d c = nodes.colwise().mean();
+  const double s = std::sqrt((nodes.rowwise() - c).squaredNorm() / static_cast<double>(n));
+  if (!(s > 0.0)) return makeError(ErrorCode::EmptyMesh, "polynomialFrequenciesOnMesh: the nodes have no extent");
+  const int monomials = monomialCount(degree);
+  std::vector<std::array<int, 3>> exponents(static_cast<size_t>(monomials));
+  for (int a = 0; a < monomials; ++a) exponents[static_cast<size_t>(a)] = monomialExponents(a);
+  MatrixXdRow values(n, monomials);  // y^α at each node, a row per node
+  for (Eigen::Index v = 0; v < n; ++v) {
+    const Eigen::RowVector3d y = (nodes.row(v) - c) / s;
+    std::array<std::array<double, kMaxPolynomialModeDegree + 1>, 3> powers;
+    for (int q = 0; q < 3; ++q) {
+      powers[static_cast<size_t>(q)][0] = 1.0;
+      for (int d = 1; d <= degree; ++d) powers[static_cast<size_t>(q)][static_cast<size_t>(d)] = powers[static_cast<size_t>(q)][static_cast<size_t>(d - 1)] * y[q];
+    }
+    for (int a = 0; a < monomials; ++a) {
+      const std::array<int, 3>& e = exponents[static_cast<size_t>(a)];
+      values(v, a) = powers[0][static_cast<size_t>(e[0])] * powers[1][static_cast<size_t>(e[1])] * powers[2][static_cast<size_t>(e[2])];
+    }
+  }
+  // K between the interpolated fields, by component blocks: kz[i][j] = K_ij Y (K_ij the nodes'
+  // i–j couplings), then k[i][j] = Yᵀ kz[i][j]; one pass over K's entries, no 3N-row product.
+  // M couples equal components only, alike for each (FemAssembly's M), so its Gram is Yᵀ M₀₀ Y.
+  std::array<std::array<MatrixXdRow, 3>, 3> kz;
+  std::array<std::array<Eigen::MatrixXd, 3>, 3> k;
+  for (auto& row : kz)
+    for (MatrixXdRow& block : row) block = MatrixXdRow::Zero(n, monomials);
+  MatrixXdRow mz = MatrixXdRow::Zero(n, monomials);
+  for (Eigen::Index col = 0; col < fem.stiffness.outerSize(); ++col) {
+    const Eigen::Index w = col / 3, j = col % 3;
+    for (SparseMatrixd::InnerIterator it(fem.stiffness, col); it; ++it) {
+      kz[static_cast<size_t>(it.row() % 3)][static_cast<size_t>(j)].row(it.row() / 3) += it.value() * values.row(w);
+    }
+    if (j != 0) continue;
+    for (SparseMatrixd::InnerIterator it(fem.mass, col); it; ++it)
+      if (it.row() % 3 == 0) mz.row(it.row() / 3) += it.value() * values.row(w);
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) k[static_cast<size_t>(i)][static_cast<size_t>(j)] = values.transpose() * kz[static_cast<size_t>(i)][static_cast<size_t>(j)];
+  auto solved = solveRitz(k, values.transpose() * mz, 1.0, /*withShapes=*/false);
+  if (!solved) return solved.error();
+  return elasticFrequencies(solved.value().values);
 }
 
 Status adoptPolynomialFrequencies(ObjectAsset& asset, const PolynomialModes& modes) {

@@ -93,6 +93,27 @@ TEST(PolynomialModes, ModeShapesAreMassOrthonormalAndDiagonaliseKOnAMeshThatHold
   EXPECT_LT((kk - expected).cwiseAbs().maxCoeff(), 1e-9 * lambda.maxCoeff());
 }
 
+// Linear fields are exact in P1 tets and quadratic ones in P2, with K and the consistent M that
+// integrate them exactly: on such a mesh the fields' frequencies are those from the moments,
+// whatever the mesh. A wrong block, component or scale in the projection fails it.
+TEST(PolynomialModes, OnAMeshThatHoldsTheFieldsTheyAreTheMomentsOwn) {
+  const TetMesh mesh = testing::makeBoxTetMesh(0.2, 0.1, 0.08, 4, 2, 2);
+  const TriangleMesh surface = box(0.2, 0.1, 0.08);
+  for (const auto& [order, degree] : {std::pair{ElementOrder::P1, 1}, std::pair{ElementOrder::P2, 2}}) {
+    const FemMesh fem = makeFemMesh(mesh, order).value();
+    const FemSystem system = assembleFem(fem, glass(), {}).value();
+    auto onMesh = polynomialFrequenciesOnMesh(fem.nodes(), system, degree);
+    ASSERT_TRUE(onMesh) << onMesh.error().message;
+    auto exact = polynomialModes(surface, glass(), degree, /*withShapes=*/false);
+    ASSERT_TRUE(exact);
+    ASSERT_EQ(onMesh.value().size(), exact.value().frequenciesHz.size());
+    ASSERT_EQ(onMesh.value().size(), 3 * monomialCount(degree) - 6);
+    for (Eigen::Index k = 0; k < onMesh.value().size(); ++k) {
+      EXPECT_NEAR(onMesh.value()[k] / exact.value().frequenciesHz[k], 1.0, 1e-9) << "degree " << degree << ", mode " << k;
+    }
+  }
+}
+
 TEST(PolynomialModes, BadInputGetsTypedErrors) {
   const TriangleMesh beam = box(1.0, 0.1, 0.1);
   EXPECT_EQ(polynomialModes(beam, glass(), 0).error().code, ErrorCode::InvalidArgument);
@@ -112,6 +133,15 @@ TEST(PolynomialModes, BadInputGetsTypedErrors) {
   TriangleMesh open = beam;
   open.faces.conservativeResize(11, 3);
   EXPECT_EQ(polynomialModes(open, glass(), 2).error().code, ErrorCode::OpenMesh);
+
+  const TetMesh mesh = testing::makeBoxTetMesh(0.2, 0.1, 0.08, 2, 1, 1);
+  const FemSystem system = assembleFem(makeFemMesh(mesh, ElementOrder::P1).value(), glass(), {}).value();
+  EXPECT_EQ(polynomialFrequenciesOnMesh(mesh.nodes, system, 0).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(polynomialFrequenciesOnMesh(mesh.nodes, system, kMaxPolynomialModeDegree + 1).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(polynomialFrequenciesOnMesh(mesh.nodes.topRows(5), system, 2).error().code, ErrorCode::InvalidArgument);
+  Points nan = mesh.nodes;
+  nan(3, 1) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(polynomialFrequenciesOnMesh(nan, system, 2).error().code, ErrorCode::NonFiniteValue);
 }
 
 }  // namespace

@@ -17,7 +17,9 @@
 #include "brittle/precompute/BaseShapes.h"
 #include "brittle/precompute/FragmentDatabaseBake.h"
 #include "brittle/precompute/MeshValidation.h"
+#include "brittle/runtime/FragmentModes.h"
 #include "brittle/runtime/PolynomialModes.h"
+#include "brittle/runtime/TetTopology.h"
 #include "brittle/testing/BakeFixtures.h"
 #include "brittle/testing/DatabaseFixtures.h"
 #include "brittle/testing/Fixtures.h"
@@ -385,7 +387,9 @@ TEST_F(WorldTest, MatchedFragmentsBreakAgain) {
 // stress modes the entry's (those of the same break with degree 0, bit for bit), and it breaks
 // again.
 TEST_F(WorldTest, MatchedBodiesRingAtTheirFragmentsOwnFrequencies) {
-  World world = makeWorld();
+  WorldSettings settings;
+  settings.fracture.meshRatioMaxDof = 4000;  // the default, 1 500, is below every piece the exact path leaves here
+  World world = makeWorld(settings);
   auto broken = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
   ASSERT_TRUE(broken && broken.value().broken);
   WorldSettings entries;
@@ -395,7 +399,11 @@ TEST_F(WorldTest, MatchedBodiesRingAtTheirFragmentsOwnFrequencies) {
   ASSERT_TRUE(same && same.value().broken);
   ASSERT_EQ(hashFragments(same.value()), hashFragments(broken.value()));  // the break itself is the same
   const Material glass = sPack->materials.front();
-  int matched = 0;
+  const ObjectAsset& plate = sPack->objects.front();
+  ASSERT_EQ(plate.name, "plate");
+  const TetTopology topology = buildTetTopology(plate.tetMesh).value();
+  const FractureState& fracture = broken.value().fracture;
+  int matched = 0, checked = 0;
   for (size_t i = 0; i < broken.value().fragments.size(); ++i) {
     const FragmentResult& f = broken.value().fragments[i];
     if (f.path != FragmentPath::Matched) continue;
@@ -406,15 +414,32 @@ TEST_F(WorldTest, MatchedBodiesRingAtTheirFragmentsOwnFrequencies) {
     const ModalBasis& basis = asset.value()->modal;
     auto own = polynomialModes(f.surface, glass, 5);
     ASSERT_TRUE(own) << own.error().message;
+    // The lowest three corrected by the fragment's own mesh where its linear-tet model is within
+    // meshRatioMaxDof: the World's values, bit for bit.
+    Eigen::VectorXd expected = own.value().frequenciesHz;
+    const int label = static_cast<int>(i);
+    const int64_t dof = fragmentCutDof(plate.tetMesh, topology, fracture.nodeLabels, label, ElementOrder::P1);
+    if (dof <= settings.fracture.meshRatioMaxDof) {
+      ++checked;
+      auto sub = fragmentSubMesh(plate.tetMesh, topology, fracture.nodeLabels, fracture.edgeCuts, label);
+      ASSERT_TRUE(sub);
+      auto ratios = meshFrequencyRatios(sub.value(), glass, 5, kMeshRatioModes);
+      ASSERT_TRUE(ratios) << ratios.error().message;
+      EXPECT_LT(ratios.value().ratios.minCoeff(), 1.0);
+      applyMeshRatios(expected, ratios.value());
+    }
     const Eigen::Index r = basis.frequenciesHz.size();
     ASSERT_GT(r, 0);
-    EXPECT_EQ(basis.frequenciesHz, own.value().frequenciesHz.head(r));
+    EXPECT_EQ(basis.frequenciesHz, expected.head(r)) << "fragment " << i << ", " << dof << " DOF in linear tets";
     EXPECT_NE(basis.frequenciesHz, entry.value()->modal.frequenciesHz);
     EXPECT_EQ(basis.modes, entry.value()->modal.modes);
     EXPECT_EQ(asset.value()->stressModes, entry.value()->stressModes);
     const Eigen::VectorXd ratio = basis.eigenvaluesRad2PerS2.array() / entry.value()->modal.eigenvaluesRad2PerS2.array();
     EXPECT_EQ(basis.residuals, (1.0 - ratio.array()).abs().matrix());
   }
+  std::printf("%d matched fragments, %d checked on their own mesh\n", matched, checked);
+  EXPECT_GE(checked, 1);
+  EXPECT_LT(checked, matched);  // the larger ones are over the limit
   EXPECT_GE(matched, 2);
   const ImpactDesc soft = softHitOnTheLargestMatched(world, broken.value());
   ImpactDesc hard = soft;

@@ -113,7 +113,7 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
   csv << "object,speed_mps,seed,fragment,volume_fraction,parent_tets,sub_tets,dropped_volume_fraction,modes,match_s,exact_s,"
          "reference_s,match_distance,match_freq_err,exact_freq_err,reference_f1_hz,exact_f1_hz,match_f1_hz,"
          "predicted_err_median,predicted_err_p90,predicted_beyond_range,polynomial3_freq_err,polynomial4_freq_err,polynomial5_freq_err,"
-         "polynomial5_f1_hz,polynomial3_s,polynomial4_s,polynomial5_s,database_entries\n";
+         "polynomial5_f1_hz,polynomial3_s,polynomial4_s,polynomial5_s,mesh_ratio_freq_err,mesh_ratio_f1_hz,mesh_ratio_s,p1_dof,database_entries\n";
   csv.precision(9);
   for (const std::string& name : objects) {
     const ObjectAsset& asset = *std::find_if(p.objects.begin(), p.objects.end(), [&](const ObjectAsset& a) { return a.name == name; });
@@ -189,6 +189,15 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
               polynomial[q] = modes ? modes.value().frequenciesHz : none;
             });
           }
+          // The degree-5 values times the fragment's own mesh's ratios (meshFrequencyRatios), as the
+          // World takes them: the time is the ratios' (the cut is the exact path's, above).
+          Eigen::VectorXd meshRatioHz;
+          const int64_t p1Dof = fragmentCutDof(asset.tetMesh, topology.value(), r.fracture.nodeLabels, static_cast<int>(i), ElementOrder::P1);
+          const double meshRatioS = medianSeconds(s.repeats, [&] {
+            auto ratios = sub ? meshFrequencyRatios(sub.value(), material, 5, kMeshRatioModes) : Result<MeshFrequencyRatios>(sub.error());
+            meshRatioHz = polynomial[2];
+            if (ratios && meshRatioHz.size()) applyMeshRatios(meshRatioHz, ratios.value());
+          });
           for (size_t m = 0; m < matchers.size(); ++m) {
             // Database path, against the first entryCounts[m] entries.
             Result<ObjectAsset> matched = makeError(ErrorCode::InvalidArgument, "no match");
@@ -216,7 +225,9 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
                 << (exact ? exactHz[0] : nan) << "," << (matched ? matchHz[0] : nan) << "," << predicted.median << ","
                 << predicted.p90 << "," << (predicted.beyondRange ? 1 : 0) << "," << polynomialError(0) << "," << polynomialError(1)
                 << "," << polynomialError(2) << "," << (polynomial[2].size() ? polynomial[2][0] : nan) << "," << polynomialS[0] << ","
-                << polynomialS[1] << "," << polynomialS[2] << "," << entryCounts[m] << "\n";
+                << polynomialS[1] << "," << polynomialS[2] << ","
+                << (reference && meshRatioHz.size() >= 3 ? matchFrequencyError(meshRatioHz, refHz) : nan) << ","
+                << (meshRatioHz.size() ? meshRatioHz[0] : nan) << "," << meshRatioS << "," << p1Dof << "," << entryCounts[m] << "\n";
           }
           if (!s.quiet) {
             std::fprintf(stderr, "%s v=%g seed=%d fragment %zu: %ld tets, match %.2f ms, exact %.2f ms%s%s\n", name.c_str(), speed,

@@ -56,6 +56,7 @@ Status runImpactBench(const ImpactBenchSettings& s) {
         ws.fracture.matchFragments = !database.empty();
         ws.fracture.exactModesMaxTets = s.exactModesMaxTets;
         ws.fracture.polynomialModeDegree = s.polynomialModeDegree;
+        ws.fracture.meshRatioMaxDof = s.meshRatioMaxDof;
         ws.workerThreads = s.threads;
         auto world = World::create(Pack(pack), ws);
         if (!world) return world.error();

@@ -34,6 +34,7 @@ struct ImpactBenchSettings {
   std::filesystem::path databasePack;  ///< empty: no database, fragments stay surfaces
   int exactModesMaxTets = 150;         ///< with a database: the World's default
   int polynomialModeDegree = FractureSettings{}.polynomialModeDegree;  ///< matched bodies' own frequencies (0: the entries')
+  int meshRatioMaxDof = FractureSettings{}.meshRatioMaxDof;            ///< ... corrected by their own mesh up to this size (0: never)
   ElementOrder elementOrder = ElementOrder::P1;  ///< the slab's element (P2: thin parts' accuracy)
   /// The World's worker threads (0: one per core). The impact's parallel stages (the seed scan,
   /// surfaces beside moments, new bodies) use them; with 1 an impact runs on this thread alone.

@@ -99,6 +99,9 @@ Runner addBenchCommand(CLI::App& app) {
   impact->add_option("--polynomial-degree", is->polynomialModeDegree,
                      "With a database: matched bodies ring at their fragment's own frequencies from polynomial fields of this degree (0: the entries')")
       ->capture_default_str()->check(CLI::Range(0, 5));
+  impact->add_option("--mesh-ratio-max-dof", is->meshRatioMaxDof,
+                     "With a database: ... the lowest three corrected by the fragment's own linear-tet mesh up to this many degrees of freedom (0: never)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   impact->add_option("--threads", is->threads, "The World's worker threads (0: one per core; 1: each impact on one thread)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   impact->add_flag("--quiet", is->quiet, "No progress lines");

@@ -85,6 +85,7 @@ Status applyRuntimeSettingsFile(const std::string& path, const CLI::App& cmd, Fr
   if (given("--exact-max-dof")) merged.exactModesMaxDof = fracture.exactModesMaxDof;
   if (given("--match-error-target")) merged.matchErrorTarget = fracture.matchErrorTarget;
   if (given("--polynomial-degree")) merged.polynomialModeDegree = fracture.polynomialModeDegree;
+  if (given("--mesh-ratio-max-dof")) merged.meshRatioMaxDof = fracture.meshRatioMaxDof;
   fracture = merged;
   return Ok{};
 }

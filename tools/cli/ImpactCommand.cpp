@@ -30,6 +30,7 @@ struct ImpactOptions {
   int exactMaxDof = FractureSettings{}.exactModesMaxDof;
   double matchErrorTarget = FractureSettings{}.matchErrorTarget;
   int polynomialDegree = FractureSettings{}.polynomialModeDegree;
+  int meshRatioMaxDof = FractureSettings{}.meshRatioMaxDof;
   std::string runtimeSettings;
   double crackBlend = CrackSettings{}.directionBlend, crackNoise = CrackSettings{}.noiseRad;
   double contactSpread = FractureSettings{}.contactSpreadFraction;
@@ -73,6 +74,10 @@ Runner addImpactCommand(CLI::App& app) {
                   "A matched fragment's body rings at the fragment's own frequencies, by Rayleigh–Ritz over polynomial "
                   "fields of this degree from its volume moments (0: the database entry's own modes)")
       ->capture_default_str()->check(CLI::Range(0, 5));
+  cmd->add_option("--mesh-ratio-max-dof", o->meshRatioMaxDof,
+                  "... and the lowest three of those are corrected by the fragment's own linear-tet mesh when it has at most "
+                  "this many degrees of freedom: finds the hinges and flaps no polynomial follows, 5–25 ms a fragment on the workers (0: never)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--contact-spread", o->contactSpread,
                   "Spread the contact load over at least this fraction of the object's bounding-box diagonal "
                   "(0: the mesh's nearest ring only; see docs/realtime.md, \"Contact loads\")")
@@ -123,6 +128,7 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.exactModesMaxDof = o->exactMaxDof;
     settings.fracture.matchErrorTarget = o->matchErrorTarget;
     settings.fracture.polynomialModeDegree = o->polynomialDegree;
+    settings.fracture.meshRatioMaxDof = o->meshRatioMaxDof;
     if (!o->runtimeSettings.empty()) {
       if (Status st = applyRuntimeSettingsFile(o->runtimeSettings, *cmd, settings.fracture); !st) return reportError(st.error());
     }
@@ -292,7 +298,9 @@ Runner addImpactCommand(CLI::App& app) {
             std::cout << ", predicted frequency error " << std::lround(100 * f.predictedMatchError) << " %, p90 "
                       << std::lround(100 * f.predictedMatchErrorP90) << " %";
           std::cout << "), f1 " << firstHz(f) << " Hz";
-          if (settings.fracture.polynomialModeDegree > 0) std::cout << " (the fragment's own, polynomial Ritz)";
+          if (settings.fracture.polynomialModeDegree > 0) {
+            std::cout << " (the fragment's own, polynomial Ritz" << (settings.fracture.meshRatioMaxDof > 0 ? ", checked on its mesh" : "") << ")";
+          }
         }
         else std::cout << "unmatched: " << f.reason;
         std::cout << "\n";

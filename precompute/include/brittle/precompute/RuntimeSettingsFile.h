@@ -12,6 +12,8 @@
 //                                        // taken instead of the exact path (0: size alone decides)
 //     "polynomial_mode_degree": 5,       // matched bodies ring at their fragment's own frequencies
 //                                        // (PolynomialModes.h; 0: the entry's own modes)
+//     "mesh_ratio_max_dof": 3000,        // ... corrected by the fragment's own mesh up to this
+//                                        // size in linear-tet DOF (FragmentModes.h; 0: never)
 //     "modes": 0 }                       // modes per impact (0: all the pack stores)
 //
 // Every key is optional (a missing one keeps the value it replaces); unknown keys are refused, so

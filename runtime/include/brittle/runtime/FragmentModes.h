@@ -89,4 +89,37 @@ Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Materia
                                        const ExactModesSettings& settings, const std::string& name,
                                        ExactModesFactor* factor = nullptr);
 
+/// What a fragment's own mesh says of its polynomial Ritz frequencies (PolynomialModes.h). The
+/// polynomial fields miss what a runtime fragment does most often: a part that swings on a thin
+/// neck, or a thin flap, moves in a field no low-degree polynomial follows, and the Ritz values are
+/// then too high (up to 35 times on the measured pieces). The fragment's sub-mesh in linear tets
+/// holds such fields. On that one mesh, its own lowest frequencies f_h and the polynomial fields'
+/// f_p (interpolated at its nodes: a subspace of its fields, so f_h ≤ f_p mode by mode) differ only
+/// by what the mesh's fields gain over the polynomials, and the mesh's own error, linear tets'
+/// locking in bending, is in both and cancels in their ratio. So a polynomial Ritz frequency f
+/// (moments: exact geometry, no locking) is taken to f · f_h / f_p, mode by mode
+/// (applyMeshRatios). Measured against the pieces' own P2 modes: docs/results/speed-accuracy.md,
+/// "A fragment's own frequencies from its moments".
+/// How many of a matched fragment's lowest modes the World corrects by its mesh's ratios: the
+/// three that chart 5 measures (the fourth and above keep their Ritz values).
+inline constexpr int kMeshRatioModes = 3;
+
+struct MeshFrequencyRatios {
+  Eigen::VectorXd meshHz;        ///< the sub-mesh's own lowest elastic frequencies (linear tets, Hz)
+  Eigen::VectorXd polynomialHz;  ///< the polynomial fields' on the same mesh (Hz), as many
+  Eigen::VectorXd ratios;        ///< meshHz / polynomialHz, each in (0, 1]
+};
+
+/// The lowest `count` ratios at polynomial degree `degree`. Errors: InvalidArgument (degree
+/// outside [1, kMaxPolynomialModeDegree], count < 1, a sub-mesh too small for `count` modes),
+/// those of exactFragmentAsset's analysis (DegenerateElement, FactorizationFailed,
+/// EigenNotConverged, RigidModeMismatch: the sub-mesh hangs together by an edge or a node) and
+/// of polynomialFrequenciesOnMesh.
+Result<MeshFrequencyRatios> meshFrequencyRatios(const FragmentSubMesh& sub, const Material& material, int degree, int count);
+
+/// Polynomial Ritz frequencies (ascending, Hz) times the ratios, mode by mode, for as many modes as
+/// there are ratios, then in ascending order again. The modes above keep their values: each is at
+/// least the highest of those scaled, since the ratios are at most 1.
+void applyMeshRatios(Eigen::VectorXd& frequenciesHz, const MeshFrequencyRatios& ratios);
+
 }  // namespace brittle

@@ -76,6 +76,17 @@ Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Mate
 Result<PolynomialModes> polynomialModes(const TriangleMesh& surface, const Material& material, int degree,
                                         bool withShapes = true);
 
+/// The same fields on a finite-element model of the solid: interpolated at its nodes (`nodes`, #N
+/// by 3, m) and run through its own K and M (`fem`, 3N by 3N, node-interleaved, FemAssembly.h;
+/// at P2, N counts the edge nodes too). Since the interpolated fields are a subspace of the
+/// model's, their Ritz frequencies bound the model's own from above mode by mode, and the ratio of
+/// the two says what the model's fields gain over the polynomials on the same mesh: near 1 for a
+/// compact solid, far below it where a part swings on a thin neck (FragmentModes.h,
+/// meshFrequencyRatios). Returns the elastic frequencies (Hz, ascending, the six rigid motions
+/// dropped). Errors: InvalidArgument (degree, sizes), NonFiniteValue, EmptyMesh (no extent),
+/// EigenNotConverged.
+Result<Eigen::VectorXd> polynomialFrequenciesOnMesh(const Points& nodes, const FemSystem& fem, int degree);
+
 /// A matched fragment's body with the fragment's own frequencies: the asset (an entry placed on
 /// the fragment, ScalingLaws.h) keeps its mode shapes and stress modes, and its r eigenvalues
 /// become the first r of `modes` (r: its own mode count), computed from the fragment's solid.
