@@ -216,24 +216,29 @@ Result<Eigen::VectorXd> polynomialFrequenciesOnMesh(const Points& nodes, const F
     }
   }
   // K between the interpolated fields, by component blocks: kz[i][j] = K_ij Y (K_ij the nodes'
-  // i–j couplings), then k[i][j] = Yᵀ kz[i][j]; one pass over K's entries, no 3N-row product.
-  // M couples equal components only, alike for each (FemAssembly's M), so its Gram is Yᵀ M₀₀ Y.
+  // i–j couplings), then k[i][j] = Yᵀ kz[i][j]; one pass over K's entries, no 3N-row product. K is
+  // symmetric, so k[j][i] = k[i][j]ᵀ and only the blocks i ≤ j are summed. M couples equal
+  // components only, alike for each (FemAssembly's M), so its Gram is Yᵀ M₀₀ Y.
   std::array<std::array<MatrixXdRow, 3>, 3> kz;
   std::array<std::array<Eigen::MatrixXd, 3>, 3> k;
-  for (auto& row : kz)
-    for (MatrixXdRow& block : row) block = MatrixXdRow::Zero(n, monomials);
+  for (int i = 0; i < 3; ++i)
+    for (int j = i; j < 3; ++j) kz[static_cast<size_t>(i)][static_cast<size_t>(j)] = MatrixXdRow::Zero(n, monomials);
   MatrixXdRow mz = MatrixXdRow::Zero(n, monomials);
   for (Eigen::Index col = 0; col < fem.stiffness.outerSize(); ++col) {
     const Eigen::Index w = col / 3, j = col % 3;
     for (SparseMatrixd::InnerIterator it(fem.stiffness, col); it; ++it) {
-      kz[static_cast<size_t>(it.row() % 3)][static_cast<size_t>(j)].row(it.row() / 3) += it.value() * values.row(w);
+      const Eigen::Index i = it.row() % 3;
+      if (i <= j) kz[static_cast<size_t>(i)][static_cast<size_t>(j)].row(it.row() / 3) += it.value() * values.row(w);
     }
     if (j != 0) continue;
     for (SparseMatrixd::InnerIterator it(fem.mass, col); it; ++it)
       if (it.row() % 3 == 0) mz.row(it.row() / 3) += it.value() * values.row(w);
   }
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) k[static_cast<size_t>(i)][static_cast<size_t>(j)] = values.transpose() * kz[static_cast<size_t>(i)][static_cast<size_t>(j)];
+    for (int j = i; j < 3; ++j) {
+      k[static_cast<size_t>(i)][static_cast<size_t>(j)] = values.transpose() * kz[static_cast<size_t>(i)][static_cast<size_t>(j)];
+      if (j > i) k[static_cast<size_t>(j)][static_cast<size_t>(i)] = k[static_cast<size_t>(i)][static_cast<size_t>(j)].transpose();
+    }
   auto solved = solveRitz(k, values.transpose() * mz, 1.0, /*withShapes=*/false);
   if (!solved) return solved.error();
   return elasticFrequencies(solved.value().values);

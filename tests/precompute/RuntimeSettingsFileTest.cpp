@@ -17,6 +17,8 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   s.contactSpreadFraction = 0.12;
   s.exactModesMaxTets = 321;
   s.exactModeCount = 12;
+  s.polynomialModeDegree = 3;
+  s.meshRatioMaxDof = 2345;
   s.modeCount = 15;
   const auto dir = testing::makeTempDir("runtime-settings");
   std::ofstream(dir / "s.json") << runtimeSettingsJson(s);
@@ -27,6 +29,8 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   EXPECT_EQ(back.value().contactSpreadFraction, 0.12);
   EXPECT_EQ(back.value().exactModesMaxTets, 321);
   EXPECT_EQ(back.value().exactModeCount, 12);
+  EXPECT_EQ(back.value().polynomialModeDegree, 3);
+  EXPECT_EQ(back.value().meshRatioMaxDof, 2345);
   EXPECT_EQ(back.value().modeCount, 15);
 }
 
@@ -64,6 +68,11 @@ TEST(RuntimeSettingsFile, BadFilesGiveTypedErrors) {
   EXPECT_EQ(code(R"({ "contact_spread_fraction": 0 })"), "ok");
   EXPECT_EQ(code(R"({ "exact_mode_count": 0 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "exact_modes_max_tets": 0 })"), "ok");
+  EXPECT_EQ(code(R"({ "polynomial_mode_degree": 6 })"), "invalid_argument");
+  EXPECT_EQ(code(R"({ "polynomial_mode_degree": -1 })"), "invalid_argument");
+  EXPECT_EQ(code(R"({ "polynomial_mode_degree": 0 })"), "ok");
+  EXPECT_EQ(code(R"({ "mesh_ratio_max_dof": -1 })"), "invalid_argument");
+  EXPECT_EQ(code(R"({ "mesh_ratio_max_dof": 0 })"), "ok");
   auto missing = loadRuntimeSettings("no-such-settings.json");
   ASSERT_FALSE(missing);
   EXPECT_EQ(missing.error().code, ErrorCode::FileNotFound);

@@ -489,6 +489,14 @@ TEST_F(WorldTest, AMatchErrorTargetTakesTheMatchWhereItIsPredictedGoodEnough) {
   WorldSettings bad;
   bad.fracture.matchErrorTarget = -0.1;
   EXPECT_EQ(World::create(Pack(*sPack), bad).error().code, ErrorCode::InvalidArgument);
+  for (int degree : {-1, kMaxPolynomialModeDegree + 1}) {
+    WorldSettings wrong;
+    wrong.fracture.polynomialModeDegree = degree;
+    EXPECT_EQ(World::create(Pack(*sPack), wrong).error().code, ErrorCode::InvalidArgument) << degree;
+  }
+  WorldSettings negative;
+  negative.fracture.meshRatioMaxDof = -1;
+  EXPECT_EQ(World::create(Pack(*sPack), negative).error().code, ErrorCode::InvalidArgument);
 }
 
 // The exact path's budget per impact: the largest candidates first, each while the total stays

@@ -143,10 +143,11 @@ struct FractureSettings {
   /// most this many degrees of freedom: each Ritz value times the ratio of that mesh's own frequency
   /// to the polynomial fields' on it (meshFrequencyRatios). It finds the hinges and flaps no
   /// polynomial follows. On the default objects' pieces (chart 5, 169 fragments) the Ritz values are
-  /// 18 % off (median) and 160 % (p90); corrected at every size, 10 % and 37 %. It costs 5–25 ms a
-  /// fragment on the workers (the cut, a sparse eigen solve; ~15 µs per DOF), and the default keeps
-  /// it to the pieces it costs least (42 of the 169: 15 % and 158 %): at 3000 the pane's scene
-  /// waited 41 ms for bodies in a frame (docs/realtime.md). 0: never.
+  /// 18 % off (median) and 158 % (p90); corrected at every size, 10 % and 36 %. It costs ~6.7 µs
+  /// per DOF on the workers (the cut, a sparse eigen solve, the projection: 10 ms at 1 500), and
+  /// the default keeps it to the pieces it costs least (42 of the 169: 15 % and 144 %): at 2 000
+  /// the pane's scene waited 22–35 ms in a frame for bodies, at 3 000 38–58 ms
+  /// (docs/results/speed-accuracy.md, "The fragment's own mesh checks the polynomials"). 0: never.
   int meshRatioMaxDof = 1500;
   DescriptorKind descriptor = DescriptorKind::Moment;
 };
