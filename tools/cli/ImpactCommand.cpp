@@ -299,7 +299,9 @@ Runner addImpactCommand(CLI::App& app) {
                       << std::lround(100 * f.predictedMatchErrorP90) << " %";
           std::cout << "), f1 " << firstHz(f) << " Hz";
           if (settings.fracture.polynomialModeDegree > 0) {
-            std::cout << " (the fragment's own, polynomial Ritz" << (settings.fracture.meshRatioMaxDof > 0 ? ", checked on its mesh" : "") << ")";
+            std::cout << " (the fragment's own, polynomial Ritz";
+            if (settings.fracture.meshRatioMaxDof > 0) std::cout << "; checked on its mesh if ≤ " << settings.fracture.meshRatioMaxDof << " DOF";
+            std::cout << ")";
           }
         }
         else std::cout << "unmatched: " << f.reason;
