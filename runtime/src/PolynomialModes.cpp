@@ -11,10 +11,10 @@ namespace brittle {
 namespace {
 
 // The Ritz problem of the fields e_i y^α: k[i][j] the stiffness between component i of monomial
-// A and component j of monomial B (N m), massGram the mass between e_i y^α and e_i y^β (kg; the
-// same for every component, M = massGram ⊗ I₃). massGram = V D Vᵀ, and the problem is solved in
-// the M-orthonormal directions W = V D^(−1/2) ⊗ I₃ whose mass is above rounding. Dense and small
-// (56 by 56 blocks, 168 by 168 at p = 5).
+// A and component j of monomial B, massGram the monomials' Gram matrix, the same for every
+// component (M = density · massGram ⊗ I₃). massGram = V D Vᵀ, and the problem is solved in the
+// M-orthonormal directions W = V D^(−1/2) ⊗ I₃ / √density whose mass is above rounding. Dense and
+// small (56 by 56 blocks, 168 by 168 at p = 5). Used from the moments and from a mesh.
 struct RitzSolution {
   Eigen::VectorXd values;   ///< ascending (rad²/s²), the rigid motions' first
   Eigen::MatrixXd vectors;  ///< in the directions W, with shapes only
@@ -24,7 +24,7 @@ struct RitzSolution {
 Result<RitzSolution> solveRitz(const std::array<std::array<Eigen::MatrixXd, 3>, 3>& k, const Eigen::MatrixXd& massGram,
                                double density, bool withShapes) {
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(massGram);
-  if (gram.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomialModes: the Gram matrix's eigen solve failed");
+  if (gram.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomial Ritz: the Gram matrix's eigen solve failed");
   const Eigen::Index monomials = massGram.rows();
   const double largest = gram.eigenvalues().maxCoeff();
   std::vector<Eigen::Index> kept;
@@ -48,10 +48,25 @@ Result<RitzSolution> solveRitz(const std::array<std::array<Eigen::MatrixXd, 3>, 
   }
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(0.5 * (reduced + reduced.transpose()),
                                                       withShapes ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
-  if (ritz.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomialModes: the Ritz eigen solve failed");
+  if (ritz.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "polynomial Ritz: the eigen solve failed");
   out.values = ritz.eigenvalues();
   if (withShapes) out.vectors = ritz.eigenvectors();
   return out;
+}
+
+// y^α for every monomial of degree ≤ `degree` (graded order, monomialExponents) at y, into `out`:
+// the powers of each coordinate once, then a product of three per monomial.
+void monomialsAt(const Eigen::Vector3d& y, int degree, double* out) {
+  std::array<std::array<double, kMaxPolynomialModeDegree + 1>, 3> powers;
+  for (size_t q = 0; q < 3; ++q) {
+    powers[q][0] = 1.0;
+    for (size_t d = 1; d <= static_cast<size_t>(degree); ++d) powers[q][d] = powers[q][d - 1] * y[static_cast<Eigen::Index>(q)];
+  }
+  const int monomials = monomialCount(degree);
+  for (int a = 0; a < monomials; ++a) {
+    const std::array<int, 3> e = monomialExponents(a);
+    out[a] = powers[0][static_cast<size_t>(e[0])] * powers[1][static_cast<size_t>(e[1])] * powers[2][static_cast<size_t>(e[2])];
+  }
 }
 
 // The elastic frequencies (Hz) of Ritz values, the six rigid motions dropped.
@@ -157,11 +172,7 @@ MatrixXdRow PolynomialModes::displacements(const Points& points, Eigen::Index co
   MatrixXdRow out(3 * points.rows(), count);
   Eigen::VectorXd powers(monomials);
   for (Eigen::Index p = 0; p < points.rows(); ++p) {
-    const Eigen::Vector3d y = (points.row(p).transpose() - centreM) / scaleM;
-    for (int a = 0; a < monomials; ++a) {
-      const std::array<int, 3> e = monomialExponents(a);
-      powers[a] = std::pow(y.x(), e[0]) * std::pow(y.y(), e[1]) * std::pow(y.z(), e[2]);
-    }
+    monomialsAt((points.row(p).transpose() - centreM) / scaleM, degree, powers.data());
     for (int i = 0; i < 3; ++i) {
       for (Eigen::Index k = 0; k < count; ++k) {
         double sum = 0.0;
@@ -200,21 +211,8 @@ Result<Eigen::VectorXd> polynomialFrequenciesOnMesh(const Points& nodes, const F
   const double s = std::sqrt((nodes.rowwise() - c).squaredNorm() / static_cast<double>(n));
   if (!(s > 0.0)) return makeError(ErrorCode::EmptyMesh, "polynomialFrequenciesOnMesh: the nodes have no extent");
   const int monomials = monomialCount(degree);
-  std::vector<std::array<int, 3>> exponents(static_cast<size_t>(monomials));
-  for (int a = 0; a < monomials; ++a) exponents[static_cast<size_t>(a)] = monomialExponents(a);
   MatrixXdRow values(n, monomials);  // y^α at each node, a row per node
-  for (Eigen::Index v = 0; v < n; ++v) {
-    const Eigen::RowVector3d y = (nodes.row(v) - c) / s;
-    std::array<std::array<double, kMaxPolynomialModeDegree + 1>, 3> powers;
-    for (int q = 0; q < 3; ++q) {
-      powers[static_cast<size_t>(q)][0] = 1.0;
-      for (int d = 1; d <= degree; ++d) powers[static_cast<size_t>(q)][static_cast<size_t>(d)] = powers[static_cast<size_t>(q)][static_cast<size_t>(d - 1)] * y[q];
-    }
-    for (int a = 0; a < monomials; ++a) {
-      const std::array<int, 3>& e = exponents[static_cast<size_t>(a)];
-      values(v, a) = powers[0][static_cast<size_t>(e[0])] * powers[1][static_cast<size_t>(e[1])] * powers[2][static_cast<size_t>(e[2])];
-    }
-  }
+  for (Eigen::Index v = 0; v < n; ++v) monomialsAt(((nodes.row(v) - c) / s).transpose(), degree, &values(v, 0));
   // K between the interpolated fields, by component blocks: kz[i][j] = K_ij Y (K_ij the nodes'
   // i–j couplings), then k[i][j] = Yᵀ kz[i][j]; one pass over K's entries, no 3N-row product. K is
   // symmetric, so k[j][i] = k[i][j]ᵀ and only the blocks i ≤ j are summed. M couples equal
