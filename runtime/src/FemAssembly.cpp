@@ -14,16 +14,120 @@
 namespace brittle {
 namespace {
 
-// K and M (3n by 3n) from their element contributions; duplicates are summed.
-FemSystem systemFromTriplets(Eigen::Index n, const std::vector<Eigen::Triplet<double>>& k,
-                             const std::vector<Eigen::Triplet<double>>& m) {
-  FemSystem sys;
-  sys.stiffness.resize(3 * n, 3 * n);
-  sys.mass.resize(3 * n, 3 * n);
-  sys.stiffness.setFromTriplets(k.begin(), k.end());
-  sys.mass.setFromTriplets(m.begin(), m.end());
-  return sys;
-}
+// K and M (3n by 3n) assembled straight into compressed columns. The pattern comes first, as node
+// blocks: node b's column block holds every node that shares an element with it, ascending (K: a
+// 3 × 3 block per pair; a consistent M: the equal components only; a lumped M: the diagonal). Each
+// element then adds its entries into their slots, in element order. An entry is the sum that
+// setFromTriplets made from the same element loop (its first contribution, then the others in
+// element order), so K and M are the same bits, without the 144 (P1) or 900 (P2) triplets per
+// element it stored, sorted and transposed: a fifth of the mesh check's time on the runtime's
+// fragments (FragmentModes.h, meshFrequencyRatios).
+template <int P>
+class BlockAssembly {
+ public:
+  using Elements = Eigen::Matrix<int32_t, Eigen::Dynamic, P, Eigen::RowMajor>;
+
+  // `elements` is checked by the caller (every node in [0, n)).
+  BlockAssembly(Eigen::Index n, const Elements& elements, bool lumped) {
+    // Node → elements, then each node's sorted neighbours.
+    std::vector<int64_t> incidenceStart(static_cast<size_t>(n) + 1, 0);
+    for (Eigen::Index t = 0; t < elements.rows(); ++t)
+      for (int a = 0; a < P; ++a) ++incidenceStart[static_cast<size_t>(elements(t, a)) + 1];
+    for (size_t v = 0; v < static_cast<size_t>(n); ++v) incidenceStart[v + 1] += incidenceStart[v];
+    std::vector<int32_t> incidence(static_cast<size_t>(incidenceStart.back()));
+    {
+      std::vector<int64_t> fill(incidenceStart.begin(), incidenceStart.end() - 1);
+      for (Eigen::Index t = 0; t < elements.rows(); ++t)
+        for (int a = 0; a < P; ++a) incidence[static_cast<size_t>(fill[static_cast<size_t>(elements(t, a))]++)] = static_cast<int32_t>(t);
+    }
+    mStart.assign(static_cast<size_t>(n) + 1, 0);
+    std::vector<int32_t> buffer;
+    for (Eigen::Index b = 0; b < n; ++b) {
+      buffer.clear();
+      for (int64_t k = incidenceStart[static_cast<size_t>(b)]; k < incidenceStart[static_cast<size_t>(b) + 1]; ++k)
+        for (int a = 0; a < P; ++a) buffer.push_back(elements(incidence[static_cast<size_t>(k)], a));
+      std::sort(buffer.begin(), buffer.end());
+      buffer.erase(std::unique(buffer.begin(), buffer.end()), buffer.end());
+      mNeighbours.insert(mNeighbours.end(), buffer.begin(), buffer.end());
+      mStart[static_cast<size_t>(b) + 1] = static_cast<int64_t>(mNeighbours.size());
+    }
+    const auto blocks = static_cast<Eigen::Index>(mNeighbours.size());
+    mSys.stiffness.resize(3 * n, 3 * n);
+    mSys.mass.resize(3 * n, 3 * n);
+    mSys.stiffness.resizeNonZeros(9 * blocks);
+    mSys.mass.resizeNonZeros(lumped ? 3 * n : 3 * blocks);
+    int* kOuter = mSys.stiffness.outerIndexPtr();
+    int* kInner = mSys.stiffness.innerIndexPtr();
+    int* mOuter = mSys.mass.outerIndexPtr();
+    int* mInner = mSys.mass.innerIndexPtr();
+    for (Eigen::Index b = 0; b < n; ++b) {
+      const int64_t first = mStart[static_cast<size_t>(b)], degree = mStart[static_cast<size_t>(b) + 1] - first;
+      for (int j = 0; j < 3; ++j) {
+        const int64_t k0 = 9 * first + 3 * j * degree;
+        kOuter[3 * b + j] = static_cast<int>(k0);
+        for (int64_t q = 0; q < degree; ++q)
+          for (int i = 0; i < 3; ++i) kInner[k0 + 3 * q + i] = 3 * mNeighbours[static_cast<size_t>(first + q)] + i;
+        if (lumped) {
+          mOuter[3 * b + j] = static_cast<int>(3 * b + j);
+          mInner[3 * b + j] = static_cast<int>(3 * b + j);
+        } else {
+          const int64_t m0 = 3 * first + j * degree;
+          mOuter[3 * b + j] = static_cast<int>(m0);
+          for (int64_t q = 0; q < degree; ++q) mInner[m0 + q] = 3 * mNeighbours[static_cast<size_t>(first + q)] + j;
+        }
+      }
+    }
+    kOuter[3 * n] = static_cast<int>(9 * blocks);
+    mOuter[3 * n] = static_cast<int>(lumped ? 3 * n : 3 * blocks);
+    std::fill_n(mSys.stiffness.valuePtr(), mSys.stiffness.nonZeros(), 0.0);
+    std::fill_n(mSys.mass.valuePtr(), mSys.mass.nonZeros(), 0.0);
+    mKTouched.assign(static_cast<size_t>(9 * blocks), 0);
+    mMTouched.assign(static_cast<size_t>(mSys.mass.nonZeros()), 0);
+  }
+
+  // The element whose entries the next calls add: its nodes' positions in each other's blocks.
+  void element(const int32_t* v) {
+    for (int b = 0; b < P; ++b) {
+      const int32_t* first = mNeighbours.data() + mStart[static_cast<size_t>(v[b])];
+      const int32_t* last = mNeighbours.data() + mStart[static_cast<size_t>(v[b]) + 1];
+      const int64_t degree = last - first;
+      for (int a = 0; a < P; ++a) mPos[a][b] = std::lower_bound(first, last, v[a]) - first;
+      mColumn[b] = v[b];
+      mDegree[b] = degree;
+    }
+  }
+  // K(3 v_a + i, 3 v_b + j) += value.
+  void addStiffness(int a, int i, int b, int j, double value) {
+    const int64_t slot = 9 * mStart[static_cast<size_t>(mColumn[b])] + 3 * j * mDegree[b] + 3 * mPos[a][b] + i;
+    add(mSys.stiffness.valuePtr(), mKTouched, slot, value);
+  }
+  // M(3 v_a + i, 3 v_b + i) += value (consistent mass).
+  void addMass(int a, int b, int i, double value) {
+    const int64_t slot = 3 * mStart[static_cast<size_t>(mColumn[b])] + i * mDegree[b] + mPos[a][b];
+    add(mSys.mass.valuePtr(), mMTouched, slot, value);
+  }
+  // M(3 v_a + i, 3 v_a + i) += value (lumped mass).
+  void addLumpedMass(int a, int i, double value) { add(mSys.mass.valuePtr(), mMTouched, 3 * int64_t{mColumn[a]} + i, value); }
+
+  FemSystem finish() { return std::move(mSys); }
+
+ private:
+  static void add(double* values, std::vector<uint8_t>& touched, int64_t slot, double value) {
+    if (touched[static_cast<size_t>(slot)]) {
+      values[slot] += value;
+    } else {
+      values[slot] = value;
+      touched[static_cast<size_t>(slot)] = 1;
+    }
+  }
+  std::vector<int64_t> mStart;       // node b's neighbours: mNeighbours[mStart[b], mStart[b + 1])
+  std::vector<int32_t> mNeighbours;  // ascending within each node
+  std::vector<uint8_t> mKTouched, mMTouched;
+  FemSystem mSys;
+  std::array<std::array<int64_t, P>, P> mPos{};
+  std::array<int32_t, P> mColumn{};
+  std::array<int64_t, P> mDegree{};
+};
 
 /// Gradients of the barycentric coordinates (rows, 1/m) of the tet p0..p3, and its signed volume.
 Eigen::Matrix<double, 4, 3> barycentricGradients(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
@@ -85,16 +189,14 @@ Result<FemSystem> assembleFem(const TetMesh& mesh, const Material& material, con
   const auto c = isotropicElasticity(material.youngsModulusPa, material.poissonRatio);
   const double rho = material.densityKgPerM3;
 
-  std::vector<Eigen::Triplet<double>> kTriplets, mTriplets;
-  kTriplets.reserve(static_cast<size_t>(mesh.tets.rows()) * 144);
-  mTriplets.reserve(static_cast<size_t>(mesh.tets.rows()) * (settings.lumpedMass ? 12 : 48));
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      const int32_t i = mesh.tets(t, k);
+      if (i < 0 || i >= n) return makeError(ErrorCode::DegenerateElement, "tet " + std::to_string(t) + " refers to node " + std::to_string(i));
+    }
+  BlockAssembly<4> sys(n, mesh.tets, settings.lumpedMass);
   for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
     std::array<int32_t, 4> v = {mesh.tets(t, 0), mesh.tets(t, 1), mesh.tets(t, 2), mesh.tets(t, 3)};
-    for (int32_t i : v) {
-      if (i < 0 || i >= n) {
-        return makeError(ErrorCode::DegenerateElement, "tet " + std::to_string(t) + " refers to node " + std::to_string(i));
-      }
-    }
     double volume = 0.0;
     const auto b = tetStrainDisplacement(mesh.nodes.row(v[0]).transpose(), mesh.nodes.row(v[1]).transpose(),
                                          mesh.nodes.row(v[2]).transpose(), mesh.nodes.row(v[3]).transpose(), &volume);
@@ -103,22 +205,22 @@ Result<FemSystem> assembleFem(const TetMesh& mesh, const Material& material, con
                                                          std::to_string(volume) + " m^3 (degenerate or inverted)");
     }
     const Eigen::Matrix<double, 12, 12> ke = volume * b.transpose() * c * b;
+    sys.element(v.data());
     for (int a = 0; a < 4; ++a)
       for (int i = 0; i < 3; ++i)
         for (int bb = 0; bb < 4; ++bb)
-          for (int j = 0; j < 3; ++j) kTriplets.emplace_back(3 * v[a] + i, 3 * v[bb] + j, ke(3 * a + i, 3 * bb + j));
+          for (int j = 0; j < 3; ++j) sys.addStiffness(a, i, bb, j, ke(3 * a + i, 3 * bb + j));
     if (settings.lumpedMass) {
       for (int a = 0; a < 4; ++a)
-        for (int i = 0; i < 3; ++i) mTriplets.emplace_back(3 * v[a] + i, 3 * v[a] + i, rho * volume / 4.0);
+        for (int i = 0; i < 3; ++i) sys.addLumpedMass(a, i, rho * volume / 4.0);
     } else {
       // Consistent P1 mass: ∫ N_a N_b dV = V/20 (1 + δ_ab), per displacement component.
       for (int a = 0; a < 4; ++a)
         for (int bb = 0; bb < 4; ++bb)
-          for (int i = 0; i < 3; ++i)
-            mTriplets.emplace_back(3 * v[a] + i, 3 * v[bb] + i, rho * volume / 20.0 * (a == bb ? 2.0 : 1.0));
+          for (int i = 0; i < 3; ++i) sys.addMass(a, bb, i, rho * volume / 20.0 * (a == bb ? 2.0 : 1.0));
     }
   }
-  return systemFromTriplets(n, kTriplets, mTriplets);
+  return sys.finish();
 }
 
 MatrixXdRow computeStressModes(const TetMesh& mesh, const Material& material, const MatrixXdRow& modes) {
@@ -223,18 +325,15 @@ Result<FemSystem> assembleFem(const QuadraticTetMesh& mesh, const Material& mate
   const Eigen::Matrix<double, 10, 10>& unitMass = quadraticTetUnitMass();
   const Eigen::Matrix<double, 10, 1> lumped = unitMass.diagonal() / unitMass.diagonal().sum();
 
-  std::vector<Eigen::Triplet<double>> kTriplets, mTriplets;
-  kTriplets.reserve(static_cast<size_t>(mesh.tets.rows()) * 900);
-  mTriplets.reserve(static_cast<size_t>(mesh.tets.rows()) * (settings.lumpedMass ? 30 : 300));
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    for (int a = 0; a < 10; ++a) {
+      const int32_t i = mesh.tets(t, a);
+      if (i < 0 || i >= n) return makeError(ErrorCode::DegenerateElement, "tet " + std::to_string(t) + " refers to node " + std::to_string(i));
+    }
+  BlockAssembly<10> sys(n, mesh.tets, settings.lumpedMass);
   std::array<int32_t, 10> v{};
   for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
-    for (int a = 0; a < 10; ++a) {
-      v[static_cast<size_t>(a)] = mesh.tets(t, a);
-      if (v[static_cast<size_t>(a)] < 0 || v[static_cast<size_t>(a)] >= n) {
-        return makeError(ErrorCode::DegenerateElement,
-                         "tet " + std::to_string(t) + " refers to node " + std::to_string(v[static_cast<size_t>(a)]));
-      }
-    }
+    for (int a = 0; a < 10; ++a) v[static_cast<size_t>(a)] = mesh.tets(t, a);
     std::array<Eigen::Vector3d, 4> p;
     for (int a = 0; a < 4; ++a) p[static_cast<size_t>(a)] = mesh.nodes.row(v[static_cast<size_t>(a)]).transpose();
     double volume = 0.0;
@@ -258,23 +357,21 @@ Result<FemSystem> assembleFem(const QuadraticTetMesh& mesh, const Material& mate
       const Eigen::Matrix<double, 6, 30> b = quadraticB(g, l);
       ke.noalias() += (0.25 * volume) * (b.transpose() * (c * b));
     }
+    sys.element(v.data());
     for (int a = 0; a < 10; ++a)
       for (int i = 0; i < 3; ++i)
         for (int bb = 0; bb < 10; ++bb)
-          for (int j = 0; j < 3; ++j)
-            kTriplets.emplace_back(3 * v[static_cast<size_t>(a)] + i, 3 * v[static_cast<size_t>(bb)] + j, ke(3 * a + i, 3 * bb + j));
+          for (int j = 0; j < 3; ++j) sys.addStiffness(a, i, bb, j, ke(3 * a + i, 3 * bb + j));
     if (settings.lumpedMass) {
       for (int a = 0; a < 10; ++a)
-        for (int i = 0; i < 3; ++i)
-          mTriplets.emplace_back(3 * v[static_cast<size_t>(a)] + i, 3 * v[static_cast<size_t>(a)] + i, rho * volume * lumped(a));
+        for (int i = 0; i < 3; ++i) sys.addLumpedMass(a, i, rho * volume * lumped(a));
     } else {
       for (int a = 0; a < 10; ++a)
         for (int bb = 0; bb < 10; ++bb)
-          for (int i = 0; i < 3; ++i)
-            mTriplets.emplace_back(3 * v[static_cast<size_t>(a)] + i, 3 * v[static_cast<size_t>(bb)] + i, rho * volume * unitMass(a, bb));
+          for (int i = 0; i < 3; ++i) sys.addMass(a, bb, i, rho * volume * unitMass(a, bb));
     }
   }
-  return systemFromTriplets(n, kTriplets, mTriplets);
+  return sys.finish();
 }
 
 MatrixXdRow computeStressModes(const QuadraticTetMesh& mesh, const Material& material, const MatrixXdRow& modes) {

@@ -239,7 +239,7 @@ Result<ObjectAsset> placeEntry(const FragmentDatabase& db, const FragmentMatch& 
                                const TriangleMesh& surface, int degree, const MeshCheck& check, Eigen::VectorXd& entryEigenvalues) {
   auto placed = instantiateEntry(db.entries[static_cast<size_t>(m.entry)], db.referenceMaterial, material, m.queryFrame);
   if (placed && degree > 0) {
-    auto own = polynomialModes(surface, material, degree, /*withShapes=*/false);
+    auto own = polynomialModes(surface, material, degree, /*withShapes=*/false, placed.value().modal.eigenvaluesRad2PerS2.size());
     if (own) {
       if (check.parent && check.maxDof > 0) {
         const Body& body = *check.parent->body;

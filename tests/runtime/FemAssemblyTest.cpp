@@ -3,7 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cstring>
+#include <numeric>
 #include <random>
+#include <vector>
 
 #include "brittle/runtime/QuadraticTetMesh.h"
 #include "brittle/testing/BakeFixtures.h"
@@ -82,6 +86,57 @@ TEST(FemAssembly, PatchTestUniformStrainGivesUniformStress) {
   const double e = m.youngsModulusPa, nu = m.poissonRatio;
   EXPECT_NEAR(isotropicElasticity(e, nu)(0, 0), e * (1 - nu) / ((1 + nu) * (1 - 2 * nu)), 1e-6 * e);
   EXPECT_NEAR(isotropicElasticity(e, nu)(3, 3), e / (2 * (1 + nu)), 1e-6 * e);
+}
+
+// K and M are assembled straight into their columns, in element order: each entry must be the
+// bits setFromTriplets makes from the same elements in the same order. The reference takes each
+// element's entries from the assembly of that element alone (one contribution an entry: its
+// value exactly). Nodes are numbered at random, so that a node's neighbours are not in order.
+template <class Mesh>
+void expectTheTripletAssemblysBits(const Mesh& mesh) {
+  for (bool lumped : {false, true}) {
+    const FemSystem whole = assembleFem(mesh, presetGlass(), FemSettings{lumped}).value();
+    std::vector<Eigen::Triplet<double>> k, m;
+    for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+      Mesh one = mesh;
+      one.tets = mesh.tets.row(t);
+      const FemSystem element = assembleFem(one, presetGlass(), FemSettings{lumped}).value();
+      for (Eigen::Index c = 0; c < element.stiffness.outerSize(); ++c) {
+        for (SparseMatrixd::InnerIterator it(element.stiffness, c); it; ++it) k.emplace_back(it.row(), it.col(), it.value());
+        for (SparseMatrixd::InnerIterator it(element.mass, c); it; ++it) m.emplace_back(it.row(), it.col(), it.value());
+      }
+    }
+    SparseMatrixd kRef(whole.stiffness.rows(), whole.stiffness.cols()), mRef(whole.mass.rows(), whole.mass.cols());
+    kRef.setFromTriplets(k.begin(), k.end());
+    mRef.setFromTriplets(m.begin(), m.end());
+    for (const auto& [got, want] : {std::pair{&whole.stiffness, &kRef}, std::pair{&whole.mass, &mRef}}) {
+      ASSERT_EQ(got->nonZeros(), want->nonZeros()) << (lumped ? "lumped" : "consistent");
+      for (Eigen::Index c = 0; c <= got->outerSize(); ++c) ASSERT_EQ(got->outerIndexPtr()[c], want->outerIndexPtr()[c]);
+      for (Eigen::Index q = 0; q < got->nonZeros(); ++q) {
+        ASSERT_EQ(got->innerIndexPtr()[q], want->innerIndexPtr()[q]);
+        ASSERT_EQ(std::memcmp(got->valuePtr() + q, want->valuePtr() + q, sizeof(double)), 0) << "entry " << q;
+      }
+    }
+  }
+}
+
+template <class Mesh>
+Mesh renumbered(Mesh mesh, unsigned seed) {
+  std::vector<int32_t> order(static_cast<size_t>(mesh.nodes.rows()));
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), std::mt19937(seed));
+  Points nodes(mesh.nodes.rows(), 3);
+  for (Eigen::Index v = 0; v < mesh.nodes.rows(); ++v) nodes.row(order[static_cast<size_t>(v)]) = mesh.nodes.row(v);
+  mesh.nodes = nodes;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    for (Eigen::Index a = 0; a < mesh.tets.cols(); ++a) mesh.tets(t, a) = order[static_cast<size_t>(mesh.tets(t, a))];
+  return mesh;
+}
+
+TEST(FemAssembly, AssembledInPlaceAsFromTripletsBitForBit) {
+  const TetMesh mesh = renumbered(testing::makeBoxTetMesh(0.3, 0.2, 0.1, 3, 2, 2), 7);
+  expectTheTripletAssemblysBits(mesh);
+  expectTheTripletAssemblysBits(renumbered(makeQuadraticTetMesh(testing::makeBoxTetMesh(0.3, 0.2, 0.1, 2, 2, 1)).value(), 11));
 }
 
 TEST(FemAssembly, RejectsDegenerateAndInvertedTets) {

@@ -181,11 +181,13 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
           const Eigen::VectorXd& exactHz = exact ? exact.value().modal.frequenciesHz : none;
           double matchS = nan;
           // The fragment's own frequencies from its moments (PolynomialModes.h), at degrees 3–5.
+          // As the runtime: without shapes, as many as an entry has modes.
+          const Eigen::Index entryModes = p.database.entries.empty() ? -1 : p.database.entries.front().asset.modal.eigenvaluesRad2PerS2.size();
           Eigen::VectorXd polynomial[3];
           double polynomialS[3];
           for (int q = 0; q < 3; ++q) {
             polynomialS[q] = medianSeconds(s.repeats, [&] {
-              auto modes = polynomialModes(fr.surface, material, q + 3, /*withShapes=*/false);  // as the runtime
+              auto modes = polynomialModes(fr.surface, material, q + 3, /*withShapes=*/false, entryModes);
               polynomial[q] = modes ? modes.value().frequenciesHz : none;
             });
           }
