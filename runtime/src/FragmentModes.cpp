@@ -218,6 +218,19 @@ struct FragmentEigen {
   bool dense = false;
 };
 
+// How many different labels the corners hold (a face's three repeat one).
+int distinctLabels(const std::array<int, 4>& l) {
+  std::array<int, 4> sorted = l;
+  std::sort(sorted.begin(), sorted.end());
+  return static_cast<int>(std::unique(sorted.begin(), sorted.end()) - sorted.begin());
+}
+
+// The quad v0 v1 v2 v3 (in order around it) as two triangles, split through its corner of least key.
+std::array<std::array<int32_t, 3>, 2> splitQuad(const std::array<int32_t, 4>& v, const std::array<int64_t, 4>& key) {
+  if (std::min(key[0], key[2]) < std::min(key[1], key[3])) return {{{v[0], v[1], v[2]}, {v[0], v[2], v[3]}}};
+  return {{{v[1], v[2], v[3]}, {v[1], v[3], v[0]}}};
+}
+
 // σ = −10⁻³ (c/L)², as the bake's shift (ModalAnalysis.h): K − σM is positive definite, and σ
 // lies well below the first elastic eigenvalue of any compact body.
 double shiftBelow(const FragmentSubMesh& sub, const Material& material) {
@@ -284,10 +297,38 @@ std::vector<int64_t> fragmentTetCounts(const TetMesh& parent, const Eigen::Vecto
 }
 
 int64_t fragmentCutDof(const TetMesh& parent, const TetTopology& topology, const Eigen::VectorXi& nodeLabels, int label,
-                       ElementOrder order) {
+                       ElementOrder order, CutCells cells) {
   const Eigen::Index n = parent.nodes.rows(), t = parent.tets.rows();
   if (nodeLabels.size() != n || topology.tetEdges.rows() != t || topology.neighbours.rows() != t) return 0;
   auto mine = [&](int32_t v) { return v >= 0 && v < n && nodeLabels[v] == label; };
+  if (cells == CutCells::Prisms) {
+    if (order != ElementOrder::P1) return 0;
+    int64_t points = 0;
+    for (Eigen::Index v = 0; v < n; ++v) points += nodeLabels[v] == label ? 1 : 0;
+    for (Eigen::Index e = 0; e < topology.edges.rows(); ++e) points += (mine(topology.edges(e, 0)) != mine(topology.edges(e, 1))) ? 1 : 0;
+    for (Eigen::Index e = 0; e < t; ++e) {
+      std::array<int, 4> l{};
+      int c = 0;
+      for (int k = 0; k < 4; ++k) {
+        const int32_t v = parent.tets(e, k);
+        if (v < 0 || v >= n) return 0;
+        l[static_cast<size_t>(k)] = nodeLabels[v];
+        c += l[static_cast<size_t>(k)] == label ? 1 : 0;
+      }
+      if (c == 0 || c == 4 || distinctLabels(l) == 2) continue;
+      points += 1;  // the tet point
+      for (int f = 0; f < 4; ++f) {
+        const int32_t across = topology.neighbours(e, f);
+        if (across >= 0 && across < e) continue;  // counted from the lower tet
+        std::array<int, 4> face{};
+        for (int k = 0, j = 0; k < 4; ++k)
+          if (k != f) face[static_cast<size_t>(j++)] = l[static_cast<size_t>(k)];
+        face[3] = face[0];
+        if (distinctLabels(face) == 3 && (face[0] == label || face[1] == label || face[2] == label)) points += 1;  // the face point
+      }
+    }
+    return 3 * points;
+  }
   // Points: the label's nodes, a crack point per edge with one end in it (every such edge lies in a
   // crossed tet of the label, whose faces through that end use the point).
   int64_t points = 0, edges = 0;
@@ -320,7 +361,7 @@ int64_t fragmentCutDof(const TetMesh& parent, const TetTopology& topology, const
 }
 
 Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology& topology,
-                                        const Eigen::VectorXi& nodeLabels, const Eigen::VectorXd& edgeCuts, int label) {
+                                        const Eigen::VectorXi& nodeLabels, const Eigen::VectorXd& edgeCuts, int label, CutCells cells) {
   const Eigen::Index n = parent.nodes.rows(), t = parent.tets.rows();
   if (nodeLabels.size() != n || edgeCuts.size() != topology.edges.rows() || topology.tetEdges.rows() != t) {
     return invalidArgument("fragmentSubMesh: one label per node, one cut per edge and the mesh's topology expected");
@@ -342,11 +383,17 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
                                              std::vector<int32_t>(static_cast<size_t>(topology.edges.rows()), -1),
                                              std::vector<int32_t>(static_cast<size_t>(t), -1)};
   std::map<std::array<int32_t, 3>, int32_t> faceIds;
+  // Each point's key in the parent (node v: v; crack point on edge g: N + g; others after them):
+  // Prisms split quads of corners and crack points through their least key, the same from every
+  // tet and every fragment that has the quad.
+  std::vector<int64_t> keys;
+  const int64_t edgeKeys = n, otherKeys = n + topology.edges.rows();
   auto point = [&](int kind, int64_t key, const Eigen::Vector3d& x) {
     int32_t& id = ids[static_cast<size_t>(kind)][static_cast<size_t>(key)];
     if (id < 0) {
       id = static_cast<int32_t>(points.size());
       points.push_back(x);
+      keys.push_back(kind == 0 ? key : (kind == 1 ? edgeKeys + key : otherKeys));
     }
     return id;
   };
@@ -362,6 +409,29 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
     const double v = (points[static_cast<size_t>(b)] - pa).dot((points[static_cast<size_t>(c)] - pa).cross(points[static_cast<size_t>(d)] - pa));
     if (v > 0.0) tets.push_back({a, b, c, d});
     else if (v < 0.0) tets.push_back({a, c, b, d});
+  };
+  // A prism with long edges a_i–b_i in three tets. Each quad (a_i, a_i+1, b_i+1, b_i) is split
+  // through its corner of least key (as splitQuad), so that a face shared with the next tet is
+  // split the same way from both sides; with the prism's least key at a_0, two quads split through
+  // it, and the third picks one of two decompositions.
+  auto keyOf = [&](int32_t id) { return keys[static_cast<size_t>(id)]; };
+  auto addPrism = [&](std::array<int32_t, 3> a, std::array<int32_t, 3> b) {
+    int32_t least = a[0];
+    for (int32_t id : {a[1], a[2], b[0], b[1], b[2]})
+      if (keyOf(id) < keyOf(least)) least = id;
+    if (std::find(b.begin(), b.end(), least) != b.end()) std::swap(a, b);
+    while (a[0] != least) {
+      std::rotate(a.begin(), a.begin() + 1, a.end());
+      std::rotate(b.begin(), b.begin() + 1, b.end());
+    }
+    if (std::min(keyOf(a[1]), keyOf(b[2])) < std::min(keyOf(a[2]), keyOf(b[1]))) {
+      addTet(a[0], a[1], a[2], b[2]);
+      addTet(a[0], a[1], b[2], b[1]);
+    } else {
+      addTet(a[0], a[1], a[2], b[1]);
+      addTet(a[0], a[2], b[2], b[1]);
+    }
+    addTet(a[0], b[1], b[2], b[0]);
   };
 
   FragmentSubMesh sub;
@@ -392,6 +462,23 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
       centre += edgePoint(edge).second;
       ++crossings;
     }
+    if (cells == CutCells::Prisms && distinctLabels(l) == 2) {
+      // One crack through the tet: the label's part is a tet (one corner) or a prism (two or three)
+      // between its corners and the crack points, with no point of its own.
+      std::array<int, 4> in{}, out{};
+      int nIn = 0, nOut = 0;
+      for (int k = 0; k < 4; ++k) (l[static_cast<size_t>(k)] == label ? in[static_cast<size_t>(nIn++)] : out[static_cast<size_t>(nOut++)]) = k;
+      auto cut = [&](int i, int j) { return edgePoint(edgeOf(e, i, j)).first; };
+      auto corner = [&](int k) { return node(parent.tets(e, k)); };
+      if (nIn == 1) {
+        addTet(corner(in[0]), cut(in[0], out[0]), cut(in[0], out[1]), cut(in[0], out[2]));
+      } else if (nIn == 3) {
+        addPrism({corner(in[0]), corner(in[1]), corner(in[2])}, {cut(in[0], out[0]), cut(in[1], out[0]), cut(in[2], out[0])});
+      } else {
+        addPrism({corner(in[0]), cut(in[0], out[0]), cut(in[0], out[1])}, {corner(in[1]), cut(in[1], out[0]), cut(in[1], out[1])});
+      }
+      continue;
+    }
     const int32_t tetPoint = point(2, e, centre / crossings);
     for (int f = 0; f < 4; ++f) {
       const auto local = tetFaceNodes(f);
@@ -407,6 +494,23 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
         addTet(tetPoint, node(v[0]), node(v[1]), node(v[2]));
         continue;
       }
+      if (cells == CutCells::Prisms && distinctLabels(std::array<int, 4>{fl[0], fl[1], fl[2], fl[0]}) == 2) {
+        // Two labels on the face: the label's part is a triangle or a quad of its corners and crack
+        // points, split as the prisms split theirs (a face shared with a prism tet agrees).
+        int startK = 0;
+        while (!(fl[static_cast<size_t>(startK)] == label && fl[static_cast<size_t>((startK + 2) % 3)] != label)) ++startK;
+        const int32_t before = edgePoint(edgeOf(e, local[static_cast<size_t>((startK + 2) % 3)], local[static_cast<size_t>(startK)])).first;
+        const int next = (startK + 1) % 3;
+        if (mine == 1) {
+          addTet(tetPoint, before, node(v[static_cast<size_t>(startK)]),
+                 edgePoint(edgeOf(e, local[static_cast<size_t>(startK)], local[static_cast<size_t>(next)])).first);
+        } else {
+          const std::array<int32_t, 4> quad = {before, node(v[static_cast<size_t>(startK)]), node(v[static_cast<size_t>(next)]),
+                                               edgePoint(edgeOf(e, local[static_cast<size_t>(next)], local[static_cast<size_t>((next + 1) % 3)])).first};
+          for (const auto& tri : splitQuad(quad, {keyOf(quad[0]), keyOf(quad[1]), keyOf(quad[2]), keyOf(quad[3])})) addTet(tetPoint, tri[0], tri[1], tri[2]);
+        }
+        continue;
+      }
       std::array<int32_t, 3> key = v;
       std::sort(key.begin(), key.end());
       auto [it, inserted] = faceIds.try_emplace(key, -1);
@@ -419,6 +523,7 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
         }
         it->second = static_cast<int32_t>(points.size());
         points.push_back(sum / count);
+        keys.push_back(otherKeys);
       }
       const int32_t facePoint = it->second;
       // The label's corners are consecutive around the face: the crack point before the run, the

@@ -230,7 +230,8 @@ struct MeshCheck {
 // fragment's own frequencies (PolynomialModes.h: from the fragment's surface; the entry keeps its
 // shapes and stress modes), the lowest kMeshRatioModes of them corrected by the fragment's own
 // mesh when `check` allows it (FragmentModes.h, meshFrequencyRatios: the fragment cut out of its
-// parent in linear tets). `entryEigenvalues` then keeps the entry's own eigenvalues for the body's
+// parent in linear tets, a crossed tet's part as a tet or prism where one crack crosses it,
+// CutCells::Prisms). `entryEigenvalues` then keeps the entry's own eigenvalues for the body's
 // static correction, which stays the entry's, shared or not: the flexibility its kept modes leave
 // out. Should the analysis fail (only on a surface an impact would not make), the body keeps the
 // entry's frequencies; should the check fail (a sub-mesh that hangs by an edge or a node, whose
@@ -243,9 +244,11 @@ Result<ObjectAsset> placeEntry(const FragmentDatabase& db, const FragmentMatch& 
     if (own) {
       if (check.parent && check.maxDof > 0) {
         const Body& body = *check.parent->body;
-        const int64_t dof = fragmentCutDof(body.asset.tetMesh, body.topology, check.parent->nodeLabels, check.label, ElementOrder::P1);
+        const int64_t dof = fragmentCutDof(body.asset.tetMesh, body.topology, check.parent->nodeLabels, check.label, ElementOrder::P1,
+                                           CutCells::Prisms);
         if (dof > 0 && dof <= check.maxDof) {
-          auto sub = fragmentSubMesh(body.asset.tetMesh, body.topology, check.parent->nodeLabels, check.parent->edgeCuts, check.label);
+          auto sub = fragmentSubMesh(body.asset.tetMesh, body.topology, check.parent->nodeLabels, check.parent->edgeCuts, check.label,
+                                     CutCells::Prisms);
           auto ratios = sub ? meshFrequencyRatios(sub.value(), material, degree, kMeshRatioModes) : Result<MeshFrequencyRatios>(sub.error());
           if (ratios) applyMeshRatios(own.value().frequenciesHz, ratios.value());
         }

@@ -237,6 +237,76 @@ TEST(FragmentModes, SubMeshesHoldTheVolumesOfTheFragmentSurfaces) {
   EXPECT_NEAR(total, 0.2 * 0.1 * 0.08, 1e-14);
 }
 
+// The check's cut (CutCells::Prisms): a tet one crack crosses becomes the tet or prism between the
+// label's corners and the crack points. Each sub-mesh is conforming (its topology builds), the
+// pieces still tile the box (their quads split alike from every side), the count before the cut is
+// the sub-mesh's own, it has fewer nodes than the exact path's, and where the crack is one plane
+// (its points on it, so the fans' face and tet points too) both hold the same solid.
+TEST(FragmentModes, PrismCellsTileTheSolidWithFewerPoints) {
+  const TetMesh box = testing::makeBoxTetMesh(0.2, 0.1, 0.08, 6, 4, 3);
+  const TetTopology topology = buildTetTopology(box).value();
+  const std::vector<Eigen::Vector3d> seeds = {{0.02, 0.02, 0.02}, {0.15, 0.08, 0.06}, {0.1, 0.01, 0.07}, {0.05, 0.09, 0.04},
+                                              {0.18, 0.02, 0.01}};
+  Eigen::VectorXd uneven(topology.edges.rows());
+  for (Eigen::Index e = 0; e < uneven.size(); ++e) uneven[e] = 0.1 + 0.8 * std::fmod(0.618034 * static_cast<double>(e), 1.0);
+  // The plane x + 0.2 y = 0.06, slanted between the grid's first two layers of nodes across x, so
+  // that it crosses no edge within 6 % of an end (the cut's clamp, 5 %, would move a crack point
+  // off it).
+  const Eigen::Vector3d normal(1.0, 0.2, 0.0);
+  Eigen::VectorXi planeLabels(box.nodes.rows());
+  Eigen::VectorXd planeCuts(topology.edges.rows());
+  auto cutAt = [&](double offset) {
+    double nearest = 0.5;
+    for (Eigen::Index i = 0; i < box.nodes.rows(); ++i) planeLabels[i] = normal.dot(box.nodes.row(i).transpose()) < offset ? 0 : 1;
+    planeCuts.setConstant(std::nan(""));
+    for (Eigen::Index e = 0; e < planeCuts.size(); ++e) {
+      const double a = normal.dot(box.nodes.row(topology.edges(e, 0)).transpose()) - offset;
+      const double b = normal.dot(box.nodes.row(topology.edges(e, 1)).transpose()) - offset;
+      if ((a < 0.0) == (b < 0.0)) continue;
+      planeCuts[e] = a / (a - b);
+      nearest = std::min({nearest, planeCuts[e], 1.0 - planeCuts[e]});
+    }
+    return nearest;
+  };
+  ASSERT_GE(cutAt(0.06), 0.06);
+  for (int labelling = 0; labelling < 2; ++labelling) {
+    Eigen::VectorXi labels = planeLabels;
+    const int count = labelling == 0 ? 2 : static_cast<int>(seeds.size());
+    if (labelling == 1) {
+      for (Eigen::Index i = 0; i < box.nodes.rows(); ++i) {
+        const Eigen::Vector3d x = box.nodes.row(i);
+        int nearest = 0;
+        for (int s = 1; s < count; ++s)
+          if ((x - seeds[static_cast<size_t>(s)]).norm() < (x - seeds[static_cast<size_t>(nearest)]).norm()) nearest = s;
+        labels[i] = nearest;
+      }
+    }
+    const Eigen::VectorXd& cuts = labelling == 0 ? planeCuts : uneven;
+    double total = 0.0;
+    for (int label = 0; label < count; ++label) {
+      auto prisms = fragmentSubMesh(box, topology, labels, cuts, label, CutCells::Prisms);
+      auto fans = fragmentSubMesh(box, topology, labels, cuts, label);
+      ASSERT_TRUE(prisms && fans) << labelling << " " << label;
+      EXPECT_DOUBLE_EQ(prisms.value().droppedVolumeM3, 0.0);
+      EXPECT_TRUE(buildTetTopology(prisms.value().mesh)) << labelling << " " << label;
+      EXPECT_EQ(fragmentCutDof(box, topology, labels, label, ElementOrder::P1, CutCells::Prisms), 3 * prisms.value().mesh.nodes.rows())
+          << labelling << " " << label;
+      EXPECT_LT(prisms.value().mesh.nodes.rows(), fans.value().mesh.nodes.rows());
+      EXPECT_LT(prisms.value().mesh.tets.rows(), fans.value().mesh.tets.rows());
+      const double v = meshVolume(prisms.value().mesh);
+      if (labelling == 0) EXPECT_NEAR(v, meshVolume(fans.value().mesh), 1e-15) << label;
+      total += v;
+    }
+    EXPECT_NEAR(total, 0.2 * 0.1 * 0.08, 1e-14) << labelling;
+  }
+  EXPECT_EQ(fragmentCutDof(box, topology, planeLabels, 0, ElementOrder::P2, CutCells::Prisms), 0);  // P1 only
+  // The check runs on it.
+  auto piece = fragmentSubMesh(box, topology, planeLabels, planeCuts, 0, CutCells::Prisms);
+  auto ratios = meshFrequencyRatios(piece.value(), presetGlass(), 5, kMeshRatioModes);
+  ASSERT_TRUE(ratios) << ratios.error().message;
+  EXPECT_GT(ratios.value().ratios.minCoeff(), 0.5);
+}
+
 TEST(FragmentModes, TheCountBeforeTheCutIsTheSubMeshsOwn) {
   // fragmentCutDof counts, from the labels alone, the degrees of freedom that fragmentSubMesh's
   // mesh then has, in both orders: the World refuses the exact path on it before cutting. Two

@@ -76,7 +76,7 @@ Runner addImpactCommand(CLI::App& app) {
       ->capture_default_str()->check(CLI::Range(0, 5));
   cmd->add_option("--mesh-ratio-max-dof", o->meshRatioMaxDof,
                   "... and the lowest three of those are corrected by the fragment's own linear-tet mesh when it has at most "
-                  "this many degrees of freedom: finds the hinges and flaps no polynomial follows, ~6.7 µs per DOF on the workers (0: never)")
+                  "this many degrees of freedom: finds the hinges and flaps no polynomial follows, ~6 ms a piece on the workers (0: never)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--contact-spread", o->contactSpread,
                   "Spread the contact load over at least this fraction of the object's bounding-box diagonal "

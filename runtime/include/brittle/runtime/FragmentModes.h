@@ -41,6 +41,20 @@ struct FragmentSubMesh {
   double droppedVolumeM3 = 0.0;  ///< parts not face-connected to the largest one (normally none)
 };
 
+/// How fragmentSubMesh fills a tet the crack crosses.
+enum class CutCells {
+  /// The label's corner cells exactly (FragmentSurfaces.h): tets fanned from a point in the tet to
+  /// the label's part of each face, itself fanned from a point in the face. The sub-mesh holds the
+  /// fragment's own solid (the exact path's mesh).
+  Fans,
+  /// Where one crack crosses the tet (two labels at its corners), the label's part as the tet or
+  /// prism between its corners and the crack points, with no point of its own; fans elsewhere, with
+  /// no face point on a face of two labels. The same crack points, a planar crack face per tet: about
+  /// half the points and a quarter of the tets of Fans on the runtime's pieces, for the mesh check
+  /// (meshFrequencyRatios), which compares two models on one mesh.
+  Prisms,
+};
+
 /// Per label in [0, labelCount): how many parent tets hold a part of it (whole or split), the size
 /// the World compares with exactModesMaxTets before building anything. Labels out of range are
 /// not counted.
@@ -54,15 +68,18 @@ std::vector<int64_t> fragmentTetCounts(const TetMesh& parent, const Eigen::Vecto
 /// flat; with a part dropped, the sub-mesh has fewer. The World checks exactModesMaxDof on this
 /// before cutting anything: a P2 fragment of 150 parent tets has 3–9k, and cutting one out and
 /// numbering its edges took 0.2–0.7 ms, 2 of the stone ball's 10.5 ms. Labels out of range, or
-/// sizes that do not match, give 0.
+/// sizes that do not match, give 0. With CutCells::Prisms: the points that fragmentSubMesh makes
+/// then (the label's nodes, the crack points, a point per tet of three or four labels and per
+/// face of three), P1 only (P2 gives 0).
 int64_t fragmentCutDof(const TetMesh& parent, const TetTopology& topology, const Eigen::VectorXi& nodeLabels, int label,
-                       ElementOrder order);
+                       ElementOrder order, CutCells cells = CutCells::Fans);
 
 /// The fragment `label` of a cracked parent (labels and cuts as FractureState holds them) as a tet
 /// mesh. Errors: InvalidArgument (sizes, a crossed edge without a finite cut, a label that owns no
 /// node).
 Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology& topology,
-                                        const Eigen::VectorXi& nodeLabels, const Eigen::VectorXd& edgeCuts, int label);
+                                        const Eigen::VectorXi& nodeLabels, const Eigen::VectorXd& edgeCuts, int label,
+                                        CutCells cells = CutCells::Fans);
 
 struct ExactModesSettings {
   int modeCount = 40;        ///< elastic modes kept (fewer if the mesh has fewer degrees of freedom)

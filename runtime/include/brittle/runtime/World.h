@@ -139,16 +139,18 @@ struct FractureSettings {
   /// the impact. 0: the entry's own frequencies; at most kMaxPolynomialModeDegree (5).
   int polynomialModeDegree = 5;
   /// ... and the lowest kMeshRatioModes (3) of those frequencies are corrected by the fragment's
-  /// own mesh when its linear-tet model (the fragment cut out of its parent, FragmentModes.h) has at
-  /// most this many degrees of freedom: each Ritz value times the ratio of that mesh's own frequency
-  /// to the polynomial fields' on it (meshFrequencyRatios). It finds the hinges and flaps no
-  /// polynomial follows. On the default objects' pieces (chart 5, 169 fragments) the Ritz values are
-  /// 18 % off (median) and 158 % (p90); corrected at every size, 10 % and 36 %. It costs ~6.7 µs
-  /// per DOF on the workers (the cut, a sparse eigen solve, the projection: 10 ms at 1 500), and
-  /// the default keeps it to the pieces it costs least (42 of the 169: 15 % and 144 %): at 2 000
-  /// the pane's scene waited 22–35 ms in a frame for bodies, at 3 000 38–58 ms
-  /// (docs/results/speed-accuracy.md, "The fragment's own mesh checks the polynomials"). 0: never.
-  int meshRatioMaxDof = 1500;
+  /// own mesh when its linear-tet model (the fragment cut out of its parent, a crossed tet's part as
+  /// a tet or prism where one crack crosses it: FragmentModes.h, CutCells::Prisms) has at most this
+  /// many degrees of freedom: each Ritz value times the ratio of that mesh's own frequency to the
+  /// polynomial fields' on it (meshFrequencyRatios). It finds the hinges and flaps no polynomial
+  /// follows. On the default objects' pieces (chart 5, 169 fragments) the Ritz values are 18 % off
+  /// (median) and 158 % (p90); corrected at every size, 10 % and 45 %. It costs 6.1 ms a piece
+  /// (median; p90 16.5) on the workers; the default keeps it to the pieces it costs least (71 of
+  /// the 169, each within 11 ms: 13 % and 137 %), since a piece that rings lower breaks again more
+  /// readily, and at 900 the pane's scene breaks 14 times instead of 9 and waits up to 26 ms in a
+  /// frame for bodies, at 1 500 35 ms (docs/results/speed-accuracy.md, "The fragment's own mesh
+  /// checks the polynomials"). 0: never.
+  int meshRatioMaxDof = 800;
   DescriptorKind descriptor = DescriptorKind::Moment;
 };
 
