@@ -115,14 +115,14 @@ Status lowestEigenpairs(const FemSystem& fem, int count, double sigma, const Exa
   return Ok{};
 }
 
-// The standard form with the six rigid motions taken out: A' = (I − QQᵀ) A (I − QQᵀ), Q an
-// orthonormal basis of the rigid modes' ψ = Gᵀ φ. Elastic modes are (K − σM)-orthogonal to the
-// rigid ones, so their ψ are orthogonal to Q and keep θ; the rigid directions go to 0. Lanczos
-// then needs only the elastic modes wanted, not six more ahead of them at the top of A's spectrum.
 // Lanczos vectors beyond the wanted count in lowestElasticEigenvalues (Spectra's ncv − nev): 12
 // took the least time on the default objects' pieces (8, 12 and 20 measured).
 constexpr int kElasticLanczosExtra = 12;
 
+// The standard form with the six rigid motions taken out: A' = (I − QQᵀ) A (I − QQᵀ), Q an
+// orthonormal basis of the rigid modes' ψ = Gᵀ φ. Elastic modes are (K − σM)-orthogonal to the
+// rigid ones, so their ψ are orthogonal to Q and keep θ; the rigid directions go to 0. Lanczos
+// then needs only the elastic modes wanted, not six more ahead of them at the top of A's spectrum.
 class ElasticFormOp {
  public:
   using Scalar = double;
