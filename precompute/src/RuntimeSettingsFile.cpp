@@ -81,6 +81,11 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
       }
     } else if (key == "mesh_ratio_max_dof") {
       if (Status st = integer(key, s.meshRatioMaxDof); !st) return st.error();
+    } else if (key == "mesh_ratio_element") {
+      if (!value.is_string()) return settingsFileError(sourceName, "\"mesh_ratio_element\" must be a string");
+      const auto order = parseElementOrder(value.get<std::string>());
+      if (!order) return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"mesh_ratio_element\" must be \"p1\" or \"p2\"");
+      s.meshRatioElement = *order;
     } else if (key == "modes") {
       if (Status st = integer(key, s.modeCount); !st) return st.error();
     } else {
@@ -109,6 +114,7 @@ std::string runtimeSettingsJson(const FractureSettings& s) {
                               {"match_error_target", s.matchErrorTarget},
                               {"polynomial_mode_degree", s.polynomialModeDegree},
                               {"mesh_ratio_max_dof", s.meshRatioMaxDof},
+                              {"mesh_ratio_element", elementOrderName(s.meshRatioElement)},
                               {"modes", s.modeCount}};
   return doc.dump(2) + "\n";
 }

@@ -599,7 +599,8 @@ Result<FragmentSubMesh> fragmentSubMesh(const TetMesh& parent, const TetTopology
   return sub;
 }
 
-Result<MeshFrequencyRatios> meshFrequencyRatios(const FragmentSubMesh& sub, const Material& material, int degree, int count) {
+Result<MeshFrequencyRatios> meshFrequencyRatios(const FragmentSubMesh& sub, const Material& material, int degree, int count,
+                                                ElementOrder order) {
   if (degree < 1 || degree > kMaxPolynomialModeDegree || count < 1) {
     return invalidArgument("meshFrequencyRatios: degree " + std::to_string(degree) + " (in [1, " + std::to_string(kMaxPolynomialModeDegree) +
                            "]) and count " + std::to_string(count) + " (≥ 1)");
@@ -607,7 +608,7 @@ Result<MeshFrequencyRatios> meshFrequencyRatios(const FragmentSubMesh& sub, cons
   ExactModesSettings s;
   s.modeCount = count;
   if (Status st = checkExactInput(sub, s, "mesh ratios"); !st) return st.error();
-  auto femMesh = makeFemMesh(sub.mesh, ElementOrder::P1);
+  auto femMesh = makeFemMesh(sub.mesh, order);
   if (!femMesh) return femMesh.error();
   auto fem = assembleFem(femMesh.value(), material, FemSettings{});
   if (!fem) return fem.error();

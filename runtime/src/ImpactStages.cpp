@@ -224,6 +224,7 @@ struct MeshCheck {
   std::shared_ptr<const BrokenParent> parent;  // null: no check
   int label = -1;
   int maxDof = 0;
+  ElementOrder order = ElementOrder::P1;
 };
 
 // A matched entry placed on its fragment (ScalingLaws.h) and, with degree > 0, ringing at the
@@ -249,7 +250,8 @@ Result<ObjectAsset> placeEntry(const FragmentDatabase& db, const FragmentMatch& 
         if (dof > 0 && dof <= check.maxDof) {
           auto sub = fragmentSubMesh(body.asset.tetMesh, body.topology, check.parent->nodeLabels, check.parent->edgeCuts, check.label,
                                      CutCells::Prisms);
-          auto ratios = sub ? meshFrequencyRatios(sub.value(), material, degree, kMeshRatioModes) : Result<MeshFrequencyRatios>(sub.error());
+          auto ratios = sub ? meshFrequencyRatios(sub.value(), material, degree, kMeshRatioModes, check.order)
+                            : Result<MeshFrequencyRatios>(sub.error());
           if (ratios) applyMeshRatios(own.value().frequenciesHz, ratios.value());
         }
       }
@@ -285,7 +287,7 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
   const bool correct = job.settings->staticCorrection && job.prepareFragments;
   const int degree = job.settings->polynomialModeDegree;
   TriangleMesh surface = degree > 0 ? fr.surface : TriangleMesh{};  // for the worker: two allocations
-  const MeshCheck check{parent, static_cast<int>(i), job.settings->meshRatioMaxDof};
+  const MeshCheck check{parent, static_cast<int>(i), job.settings->meshRatioMaxDof, job.settings->meshRatioElement};
   return BodySource::deferred([db, shared, m, material, modeCount, correct, degree, check,
                                surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
     Eigen::VectorXd entryEigenvalues;
@@ -326,8 +328,8 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   const bool correct = fs.staticCorrection;  // the exact path's body adopts its analysis's factor
   const bool scheduleMatch = correct && job.prepareFragments;
   const int degree = fs.polynomialModeDegree;
-  const int meshRatioMaxDof = fs.meshRatioMaxDof;
-  return BodySource::deferred([parent, label = static_cast<int>(i), es, modeCount, correct, scheduleMatch, kind, matcher, db, degree, meshRatioMaxDof,
+  const MeshCheck check{parent, static_cast<int>(i), fs.meshRatioMaxDof, fs.meshRatioElement};
+  return BodySource::deferred([parent, label = static_cast<int>(i), es, modeCount, correct, scheduleMatch, kind, matcher, db, degree, check,
                                name = std::move(name), surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
     const Material& material = parent->body->material;
     const Body& body = *parent->body;
@@ -345,7 +347,7 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
     if (!match) return made.error();
     const FragmentMatch& m = match.value().front();
     Eigen::VectorXd entryEigenvalues;
-    auto placed = placeEntry(*db, m, material, surface, degree, MeshCheck{parent, label, meshRatioMaxDof}, entryEigenvalues);
+    auto placed = placeEntry(*db, m, material, surface, degree, check, entryEigenvalues);
     if (!placed) return made.error();
     return withCorrectionScheduled(makeBody(std::move(placed).value(), material, modeCount, nullptr, std::move(entryEigenvalues)),
                                    scheduleMatch);

@@ -19,6 +19,7 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   s.exactModeCount = 12;
   s.polynomialModeDegree = 3;
   s.meshRatioMaxDof = 2345;
+  s.meshRatioElement = ElementOrder::P2;
   s.modeCount = 15;
   const auto dir = testing::makeTempDir("runtime-settings");
   std::ofstream(dir / "s.json") << runtimeSettingsJson(s);
@@ -31,6 +32,7 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   EXPECT_EQ(back.value().exactModeCount, 12);
   EXPECT_EQ(back.value().polynomialModeDegree, 3);
   EXPECT_EQ(back.value().meshRatioMaxDof, 2345);
+  EXPECT_EQ(back.value().meshRatioElement, ElementOrder::P2);
   EXPECT_EQ(back.value().modeCount, 15);
 }
 
@@ -73,6 +75,9 @@ TEST(RuntimeSettingsFile, BadFilesGiveTypedErrors) {
   EXPECT_EQ(code(R"({ "polynomial_mode_degree": 0 })"), "ok");
   EXPECT_EQ(code(R"({ "mesh_ratio_max_dof": -1 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "mesh_ratio_max_dof": 0 })"), "ok");
+  EXPECT_EQ(code(R"({ "mesh_ratio_element": "p3" })"), "invalid_argument");
+  EXPECT_EQ(code(R"({ "mesh_ratio_element": 2 })"), "parse_error");
+  EXPECT_EQ(code(R"({ "mesh_ratio_element": "p2" })"), "ok");
   auto missing = loadRuntimeSettings("no-such-settings.json");
   ASSERT_FALSE(missing);
   EXPECT_EQ(missing.error().code, ErrorCode::FileNotFound);

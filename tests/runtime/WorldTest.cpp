@@ -450,6 +450,41 @@ TEST_F(WorldTest, MatchedBodiesRingAtTheirFragmentsOwnFrequencies) {
   EXPECT_TRUE(again.value().broken);
 }
 
+// The same in quadratic tets (FractureSettings::meshRatioElement): every checked piece's lowest
+// three are its Ritz values times the P2 check's ratios, bit for bit as the API computes them.
+TEST_F(WorldTest, AQuadraticCheckGivesTheApisValues) {
+  WorldSettings settings;
+  settings.fracture.meshRatioMaxDof = 1200;
+  settings.fracture.meshRatioElement = ElementOrder::P2;
+  World world = makeWorld(settings);
+  auto broken = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
+  ASSERT_TRUE(broken && broken.value().broken);
+  const Material glass = sPack->materials.front();
+  const ObjectAsset& plate = sPack->objects.front();
+  const TetTopology topology = buildTetTopology(plate.tetMesh).value();
+  const FractureState& fracture = broken.value().fracture;
+  int checked = 0;
+  for (size_t i = 0; i < broken.value().fragments.size(); ++i) {
+    const FragmentResult& f = broken.value().fragments[i];
+    if (f.path != FragmentPath::Matched) continue;
+    const int label = static_cast<int>(i);
+    if (fragmentCutDof(plate.tetMesh, topology, fracture.nodeLabels, label, ElementOrder::P1, CutCells::Prisms) > 1200) continue;
+    ++checked;
+    auto asset = world.objectAsset(f.object);
+    ASSERT_TRUE(asset);
+    const Eigen::Index r = asset.value()->modal.frequenciesHz.size();
+    Eigen::VectorXd expected = polynomialModes(f.surface, glass, 5, /*withShapes=*/false, r).value().frequenciesHz;
+    auto sub = fragmentSubMesh(plate.tetMesh, topology, fracture.nodeLabels, fracture.edgeCuts, label, CutCells::Prisms);
+    auto quadratic = meshFrequencyRatios(sub.value(), glass, 5, kMeshRatioModes, ElementOrder::P2);
+    auto linear = meshFrequencyRatios(sub.value(), glass, 5, kMeshRatioModes);
+    ASSERT_TRUE(quadratic && linear);
+    applyMeshRatios(expected, quadratic.value());
+    EXPECT_EQ(asset.value()->modal.frequenciesHz, expected.head(r)) << "fragment " << i;
+    EXPECT_NE(quadratic.value().ratios, linear.value().ratios);
+  }
+  EXPECT_GE(checked, 1);
+}
+
 // The scene's match-error target weighs each small fragment's match against the exact path: a
 // match predicted within the target is taken, one predicted over it gives way to the exact path
 // (and says so). The suite's database was calibrated when it was baked (MatchErrors.h).

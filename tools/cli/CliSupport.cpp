@@ -86,6 +86,7 @@ Status applyRuntimeSettingsFile(const std::string& path, const CLI::App& cmd, Fr
   if (given("--match-error-target")) merged.matchErrorTarget = fracture.matchErrorTarget;
   if (given("--polynomial-degree")) merged.polynomialModeDegree = fracture.polynomialModeDegree;
   if (given("--mesh-ratio-max-dof")) merged.meshRatioMaxDof = fracture.meshRatioMaxDof;
+  if (given("--mesh-ratio-element")) merged.meshRatioElement = fracture.meshRatioElement;
   fracture = merged;
   return Ok{};
 }

@@ -31,6 +31,7 @@ struct ImpactOptions {
   double matchErrorTarget = FractureSettings{}.matchErrorTarget;
   int polynomialDegree = FractureSettings{}.polynomialModeDegree;
   int meshRatioMaxDof = FractureSettings{}.meshRatioMaxDof;
+  std::string meshRatioElement = elementOrderName(FractureSettings{}.meshRatioElement);
   std::string runtimeSettings;
   double crackBlend = CrackSettings{}.directionBlend, crackNoise = CrackSettings{}.noiseRad;
   double contactSpread = FractureSettings{}.contactSpreadFraction;
@@ -78,6 +79,9 @@ Runner addImpactCommand(CLI::App& app) {
                   "... and the lowest three of those are corrected by the fragment's own linear-tet mesh when it has at most "
                   "this many degrees of freedom: finds the hinges and flaps no polynomial follows, ~6 ms a piece on the workers (0: never)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--mesh-ratio-element", o->meshRatioElement,
+                  "... in linear (p1) or quadratic (p2) tets: p2 removes the linear tets' locking from the check, ~10x the cost")
+      ->capture_default_str()->check(CLI::IsMember({"p1", "p2"}));
   cmd->add_option("--contact-spread", o->contactSpread,
                   "Spread the contact load over at least this fraction of the object's bounding-box diagonal "
                   "(0: the mesh's nearest ring only; see docs/realtime.md, \"Contact loads\")")
@@ -129,6 +133,7 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.matchErrorTarget = o->matchErrorTarget;
     settings.fracture.polynomialModeDegree = o->polynomialDegree;
     settings.fracture.meshRatioMaxDof = o->meshRatioMaxDof;
+    settings.fracture.meshRatioElement = *parseElementOrder(o->meshRatioElement);
     if (!o->runtimeSettings.empty()) {
       if (Status st = applyRuntimeSettingsFile(o->runtimeSettings, *cmd, settings.fracture); !st) return reportError(st.error());
     }

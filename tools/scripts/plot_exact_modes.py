@@ -120,6 +120,11 @@ def main():
         # The size the World compares with meshRatioMaxDof: the check's own cut (check_dof, CutCells::Prisms);
         # data from before it have the exact path's (p1_dof).
         dof = [number(r["check_dof"] if "check_dof" in r else r["p1_dof"]) for r in rows]
+        if "mesh_ratio_p2_freq_err" in rows[0]:
+            p2 = sorted(100 * number(r["mesh_ratio_p2_freq_err"]) for r in rows if math.isfinite(number(r["mesh_ratio_p2_freq_err"])))
+            p2_ms = [1e3 * number(r["mesh_ratio_p2_s"]) for r in rows]
+            print(f"  corrected by its own mesh in P2 tets: median error {float(np.median(p2)):.1f} % "
+                  f"(p90 {p2[int(0.9 * (len(p2) - 1))]:.1f} %), median time {med(p2_ms):.2f} ms")
         for cap in (800, 900, 1500, 3000, 6000):
             capped = sorted(e if d <= cap else p for e, p, d in zip(ratio_err, poly_err, dof) if math.isfinite(e) and math.isfinite(p))
             taken = sum(1 for d in dof if d <= cap)

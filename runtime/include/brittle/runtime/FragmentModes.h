@@ -132,7 +132,8 @@ struct MeshFrequencyRatios {
 /// those of exactFragmentAsset's analysis (DegenerateElement, FactorizationFailed,
 /// EigenNotConverged, RigidModeMismatch: the sub-mesh hangs together by an edge or a node) and
 /// of polynomialFrequenciesOnMesh.
-Result<MeshFrequencyRatios> meshFrequencyRatios(const FragmentSubMesh& sub, const Material& material, int degree, int count);
+Result<MeshFrequencyRatios> meshFrequencyRatios(const FragmentSubMesh& sub, const Material& material, int degree, int count,
+                                                ElementOrder order = ElementOrder::P1);
 
 /// Polynomial Ritz frequencies (ascending, Hz) times the ratios, mode by mode, for as many modes as
 /// there are ratios, then in ascending order again. The modes above keep their values: each is at
