@@ -144,9 +144,9 @@ struct FractureSettings {
   /// many degrees of freedom: each Ritz value times the ratio of that mesh's own frequency to the
   /// polynomial fields' on it (meshFrequencyRatios). It finds the hinges and flaps no polynomial
   /// follows. On the default objects' pieces (chart 5, 169 fragments) the Ritz values are 18 % off
-  /// (median) and 158 % (p90); corrected at every size, 10 % and 45 %. It costs 6.1 ms a piece
-  /// (median; p90 16.5) on the workers; the default keeps it to the pieces it costs least (71 of
-  /// the 169, each within 11 ms: 13 % and 137 %), since a piece that rings lower breaks again more
+  /// (median) and 158 % (p90); corrected at every size, 10 % and 45 %. It costs 5.7 ms a piece
+  /// (median; p90 15.3) on the workers; the default keeps it to the pieces it costs least (71 of
+  /// the 169, each within 6.4 ms: 13 % and 137 %), since a piece that rings lower breaks again more
   /// readily, and at 900 the pane's scene breaks 14 times instead of 9 and waits up to 26 ms in a
   /// frame for bodies, at 1 500 35 ms (docs/results/speed-accuracy.md, "The fragment's own mesh
   /// checks the polynomials"). 0: never.
@@ -154,8 +154,8 @@ struct FractureSettings {
   /// The check's element (meshRatioMaxDof still counts its mesh's linear DOF). P2 removes the
   /// linear tets' locking from the check: on chart 5's 169 pieces, checked every one, 1.4 % off
   /// (median) and 6 % (p90) against 10.3 % and 45 % with P1, which meets the matching targets
-  /// (10 % and 25 %), at ~10 times the cost (63 ms a piece median, 296 ms p90, against 6.1 and
-  /// 16.5): for a scene that needs its pieces' frequencies (sound) more than its frames.
+  /// (10 % and 25 %), at ~10 times the cost (58 ms a piece median, 243 ms p90, against 5.7 and
+  /// 15.3): for a scene that needs its pieces' frequencies (sound) more than its frames.
   ElementOrder meshRatioElement = ElementOrder::P1;
   DescriptorKind descriptor = DescriptorKind::Moment;
 };
