@@ -123,6 +123,7 @@ Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& 
       body->boundaryNodes.push_back(static_cast<int32_t>(i));
     }
   }
+  body->boundaryTree = TriangleBoxTree::build(asset.tetMesh.nodes, tri);
   const Eigen::Vector3d lo = asset.tetMesh.nodes.colwise().minCoeff(), hi = asset.tetMesh.nodes.colwise().maxCoeff();
   body->sizeM = (hi - lo).norm();
   body->centreM = 0.5 * (lo + hi);

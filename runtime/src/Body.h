@@ -25,6 +25,7 @@
 #include "brittle/runtime/FragmentSurfaces.h"
 #include "brittle/runtime/StaticCorrection.h"
 #include "brittle/runtime/TetTopology.h"
+#include "TriangleBoxTree.h"
 
 namespace brittle::detail {
 
@@ -37,6 +38,7 @@ struct Body {
   Points nodeNormals;                      // #N, area-weighted outward normals (boundary nodes)
   std::vector<std::vector<int32_t>> ring;  // boundary neighbours per node
   std::vector<int32_t> boundaryNodes;
+  TriangleBoxTree boundaryTree;            // over topology.boundaryTriangles: the contact's searches
   double sizeM = 0.0;                      // bounding-box diagonal
   Eigen::Vector3d centreM = Eigen::Vector3d::Zero();  // bounding-box centre: the origin of the tet moments
   /// The eigenvalues its static correction is built for when they are not its own (empty: its

@@ -6,9 +6,7 @@
 #include <string>
 
 namespace brittle::detail {
-namespace {
 
-// Closest point of triangle abc to p, with its barycentric weights.
 Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                   const Eigen::Vector3d& c, Eigen::Vector3d& bary) {
   const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
@@ -44,22 +42,23 @@ Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3
   return a + ab * v + ac * w;
 }
 
-}  // namespace
-
 Result<ContactSite> locateContact(const Body& body, const Eigen::Vector3d& p, double toleranceM) {
   const Points& x = body.asset.tetMesh.nodes;
   const Triangles& tri = body.topology.boundaryTriangles;
-  double best = std::numeric_limits<double>::infinity();
   ContactSite site;
-  for (Eigen::Index f = 0; f < tri.rows(); ++f) {
-    Eigen::Vector3d bary;
-    const Eigen::Vector3d c = closestOnTriangle(p, x.row(tri(f, 0)), x.row(tri(f, 1)), x.row(tri(f, 2)), bary);
-    const double d = (c - p).squaredNorm();
-    if (d < best) {
-      best = d;
-      site.face = f;
-      site.bary = bary;
-    }
+  // The face a scan of every face in row order would keep (the least distance, ties to the lower
+  // row), from the faces the tree cannot rule out.
+  double best;
+  site.face = body.boundaryTree.nearest(
+      p,
+      [&](int32_t f) {
+        Eigen::Vector3d bary;
+        return (closestOnTriangle(p, x.row(tri(f, 0)), x.row(tri(f, 1)), x.row(tri(f, 2)), bary) - p).squaredNorm();
+      },
+      best);
+  if (site.face >= 0) {
+    const Eigen::Index f = site.face;
+    closestOnTriangle(p, x.row(tri(f, 0)), x.row(tri(f, 1)), x.row(tri(f, 2)), site.bary);
   }
   site.distanceM = std::sqrt(best);
   if (site.face < 0 || site.distanceM > toleranceM) {
@@ -98,6 +97,12 @@ double contactLoadRadius(const Body& body, const ContactSite& site, double patch
 
 void contactLoadWeights(const Body& body, const ContactSite& site, const Eigen::Vector3d& normalLocal, double rho,
                         std::vector<std::pair<int32_t, double>>& weights) {
+  std::vector<int32_t> faces;
+  contactLoadWeights(body, site, normalLocal, rho, weights, faces);
+}
+
+void contactLoadWeights(const Body& body, const ContactSite& site, const Eigen::Vector3d& normalLocal, double rho,
+                        std::vector<std::pair<int32_t, double>>& weights, std::vector<int32_t>& faces) {
   const Points& x = body.asset.tetMesh.nodes;
   const TetTopology& topo = body.topology;
   const Triangles& tri = topo.boundaryTriangles;
@@ -121,7 +126,9 @@ void contactLoadWeights(const Body& body, const ContactSite& site, const Eigen::
   // the three-point rule at (2/3, 1/6, 1/6) (exact to degree 2), which follows the pressure's
   // square-root edge closely enough; the total is normalised below, so the resultant is exact.
   constexpr int kSplit = 4;
-  for (Eigen::Index f = 0; f < tri.rows(); ++f) {
+  // The faces in row order, as a scan of them all, of those whose box the disc reaches.
+  body.boundaryTree.within(p, rho, faces);
+  for (const int32_t f : faces) {
     const Eigen::Vector3d a = x.row(tri(f, 0)), b = x.row(tri(f, 1)), c = x.row(tri(f, 2));
     Eigen::Vector3d bary;
     if ((closestOnTriangle(p, a, b, c, bary) - p).squaredNorm() >= rho * rho) continue;

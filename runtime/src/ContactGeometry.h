@@ -2,7 +2,8 @@
 // body's nodes. Private to the runtime (ImpactStages.cpp).
 //
 // locateContact: the closest point of the body's boundary to the reported point (Ericson,
-// Real-Time Collision Detection §5.1.5), its face and barycentric weights, and the local radius of
+// Real-Time Collision Detection §5.1.5; the faces searched through the body's box tree,
+// TriangleBoxTree.h), its face and barycentric weights, and the local radius of
 // curvature at the nearest node, from the normal curvature along each surface edge there,
 // κ = 2 n·(x_i − x_j)/|x_i − x_j|², averaged (flat or concave: ∞).
 // contactLoadWeights: the consistent nodal loads f_i = ∫ N_i p dA of the Hertz pressure
@@ -44,6 +45,10 @@ struct ContactSite {
   double distanceM = 0.0;                         ///< from the reported point to the surface
 };
 
+/// The closest point of triangle abc to p, with its barycentric weights (a, b, c's) in `bary`.
+Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                  const Eigen::Vector3d& c, Eigen::Vector3d& bary);
+
 /// The closest boundary point to `pointLocal` (body frame, m). Errors: InvalidArgument when it is
 /// farther than `toleranceM` or the body has no boundary.
 Result<ContactSite> locateContact(const Body& body, const Eigen::Vector3d& pointLocal, double toleranceM);
@@ -64,5 +69,9 @@ double contactLoadRadius(const Body& body, const ContactSite& site, double patch
 /// order, which keeps its storage.
 void contactLoadWeights(const Body& body, const ContactSite& site, const Eigen::Vector3d& normalLocal, double rho,
                         std::vector<std::pair<int32_t, double>>& weights);
+/// The same with the faces the disc may reach in `faces`, which keeps its storage (the impact's
+/// workspace: no allocation once it has grown).
+void contactLoadWeights(const Body& body, const ContactSite& site, const Eigen::Vector3d& normalLocal, double rho,
+                        std::vector<std::pair<int32_t, double>>& weights, std::vector<int32_t>& faces);
 
 }  // namespace brittle::detail

@@ -481,7 +481,7 @@ void ElementStresses::all(const Eigen::VectorXd& u, Eigen::VectorXd& stress) con
   });
 }
 
-Eigen::MatrixXd rigidBodyModes(const Points& nodes, const SparseMatrixd& mass) {
+Eigen::MatrixXd rigidBodyMotions(const Points& nodes) {
   const Eigen::Index n = nodes.rows();
   const Eigen::RowVector3d center = nodes.colwise().mean();
   Eigen::MatrixXd r = Eigen::MatrixXd::Zero(3 * n, 6);
@@ -491,6 +491,11 @@ Eigen::MatrixXd rigidBodyModes(const Points& nodes, const SparseMatrixd& mass) {
     // Rotation about axis a: displacement e_a × p.
     for (int a = 0; a < 3; ++a) r.block<3, 1>(3 * i, 3 + a) = Eigen::Vector3d::Unit(a).cross(p);
   }
+  return r;
+}
+
+Eigen::MatrixXd rigidBodyModes(const Points& nodes, const SparseMatrixd& mass) {
+  Eigen::MatrixXd r = rigidBodyMotions(nodes);
   // M-orthonormalise (modified Gram–Schmidt in the M inner product).
   for (int j = 0; j < 6; ++j) {
     for (int k = 0; k < j; ++k) r.col(j) -= (r.col(k).dot(mass * r.col(j))) * r.col(k);

@@ -170,17 +170,8 @@ Result<Eigen::VectorXd> lowestElasticEigenvalues(const FemSystem& fem, const Poi
   if (factor.info() != Eigen::Success || !(factor.vectorD().minCoeff() > 0.0)) {
     return makeError(ErrorCode::FactorizationFailed, "fragment '" + name + "': K − σM did not factorise as positive definite");
   }
-  // The rigid motions: translations, and rotations about the nodes' mean; ψ = Gᵀφ = D^½ Lᵀ P φ.
-  const Eigen::Index nodeCount = nodes.rows();
-  const Eigen::RowVector3d centre = nodes.colwise().mean();
-  Eigen::MatrixXd rigid = Eigen::MatrixXd::Zero(n, 6);
-  for (Eigen::Index v = 0; v < nodeCount; ++v) {
-    const Eigen::RowVector3d x = nodes.row(v) - centre;
-    for (int a = 0; a < 3; ++a) rigid(3 * v + a, a) = 1.0;
-    rigid(3 * v + 1, 3) = -x(2), rigid(3 * v + 2, 3) = x(1);  // about x
-    rigid(3 * v + 0, 4) = x(2), rigid(3 * v + 2, 4) = -x(0);  // about y
-    rigid(3 * v + 0, 5) = -x(1), rigid(3 * v + 1, 5) = x(0);  // about z
-  }
+  // The rigid motions' ψ = Gᵀφ = D^½ Lᵀ P φ; Q orthonormalises them, so φ need not be M-normal.
+  const Eigen::MatrixXd rigid = rigidBodyMotions(nodes);
   const Eigen::VectorXd scale = factor.vectorD().cwiseSqrt();
   Eigen::MatrixXd psi(n, 6);
   for (int c = 0; c < 6; ++c) {

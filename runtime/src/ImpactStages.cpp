@@ -40,7 +40,7 @@ struct Flow {
 };
 
 // Contact: where on the surface, how curved there, Hertz, and the load's node weights.
-Status contactStage(const ImpactJob& job, Flow& flow, ImpactResult& result) {
+Status contactStage(const ImpactJob& job, Flow& flow, ImpactWorkspace& ws, ImpactResult& result) {
   const Body& body = *job.body;
   const ImpactDesc& desc = job.desc;
   flow.pointLocal = job.rotation.transpose() * (desc.pointWorld - job.translation);
@@ -70,7 +70,7 @@ Status contactStage(const ImpactJob& job, Flow& flow, ImpactResult& result) {
   if (!contact) return contact.error();
   result.contact = contact.value();
   result.loadRadiusM = contactLoadRadius(body, site.value(), result.contact.patchRadiusM, job.settings->contactSpreadFraction);
-  contactLoadWeights(body, site.value(), flow.normalLocal, result.loadRadiusM, result.loadWeights);
+  contactLoadWeights(body, site.value(), flow.normalLocal, result.loadRadiusM, result.loadWeights, ws.contactFaces);
   return Ok{};
 }
 
@@ -476,6 +476,7 @@ void ImpactWorkspace::reserve(const TetMesh& mesh, const TetTopology& topology, 
   surfaceBuffers.reserve(mesh.nodes.rows(), mesh.tets.rows(), topology.edges.rows(),
                          static_cast<Eigen::Index>(topology.boundaryFaces.size()));
   fragmentMoments.reserve(64 * static_cast<size_t>(kFragmentMomentCount));
+  contactFaces.reserve(topology.boundaryFaces.size());
 }
 
 void resetImpactResult(ImpactResult& r) {
@@ -510,7 +511,7 @@ Status computeImpact(const ImpactJob& submitted, ImpactWorkspace& ws, ImpactResu
   Flow flow;
   StageTimes& t = result.times;
   auto t0 = SteadyClock::now();
-  if (Status st = contactStage(job, flow, result); !st) return st;  // its errors name the impact already
+  if (Status st = contactStage(job, flow, ws, result); !st) return st;  // its errors name the impact already
   t.contactS = secondsSince(t0);
 
   t0 = SteadyClock::now();

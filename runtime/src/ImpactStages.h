@@ -50,6 +50,7 @@ struct ImpactJob {
 /// made), an impact allocates only what it hands over (World.h, "Allocation").
 struct ImpactWorkspace {
   std::vector<double> times, force;
+  std::vector<int32_t> contactFaces;  ///< the faces the contact load may reach (ContactGeometry.h)
   Eigen::VectorXd modalLoad, staticStress;
   Eigen::MatrixXd q;
   StaticCorrection::Workspace correction;

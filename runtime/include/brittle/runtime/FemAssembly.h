@@ -137,6 +137,10 @@ class ElementStresses {
   std::vector<Eigen::Matrix<double, 4, 3>> mGradients;    // P2: ∇λ per element (rows)
 };
 
+/// The six rigid-body motions of the mesh's nodes, unnormalised: 3N by 6, unit translations along
+/// x, y, z, then the infinitesimal rotations e_a × (p − c) about the nodes' mean c (m per rad).
+Eigen::MatrixXd rigidBodyMotions(const Points& nodes);
+
 /// The six rigid-body modes of the mesh (3 translations, 3 infinitesimal rotations about the
 /// centroid of the nodes), as a 3N by 6 matrix with M-orthonormal columns. Nodal values of the
 /// rigid fields, so it holds for any element whose interpolation reproduces linear fields: P1 and
