@@ -1,6 +1,7 @@
 // Body.h — what the runtime keeps per distinct asset (a pack object, or a fragment made by an
 // impact): the asset, its material, and what is precomputed from them once (topology, stress
-// bounds, surface normals and neighbours, the static correction's factorised K, the tets' moments). Private to the
+// bounds, surface normals and neighbours, the boundary's box tree, the static correction's
+// factorised K, the tets' moments). Private to the
 // runtime: World.cpp places bodies in slots, ImpactStages.cpp reads them.
 //
 // A Body is immutable once made, except for its static correction, stress bounds and tets' moments, each made
