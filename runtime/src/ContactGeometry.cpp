@@ -48,18 +48,13 @@ Result<ContactSite> locateContact(const Body& body, const Eigen::Vector3d& p, do
   ContactSite site;
   // The face a scan of every face in row order would keep (the least distance, ties to the lower
   // row), from the faces the tree cannot rule out.
+  auto closest = [&](Eigen::Index f, Eigen::Vector3d& bary) {
+    return closestOnTriangle(p, x.row(tri(f, 0)), x.row(tri(f, 1)), x.row(tri(f, 2)), bary);
+  };
   double best;
   site.face = body.boundaryTree.nearest(
-      p,
-      [&](int32_t f) {
-        Eigen::Vector3d bary;
-        return (closestOnTriangle(p, x.row(tri(f, 0)), x.row(tri(f, 1)), x.row(tri(f, 2)), bary) - p).squaredNorm();
-      },
-      best);
-  if (site.face >= 0) {
-    const Eigen::Index f = site.face;
-    closestOnTriangle(p, x.row(tri(f, 0)), x.row(tri(f, 1)), x.row(tri(f, 2)), site.bary);
-  }
+      p, [&](int32_t f) { Eigen::Vector3d bary; return (closest(f, bary) - p).squaredNorm(); }, best);
+  if (site.face >= 0) closest(site.face, site.bary);  // the kept face's weights, as the scan kept them
   site.distanceM = std::sqrt(best);
   if (site.face < 0 || site.distanceM > toleranceM) {
     return makeError(ErrorCode::InvalidArgument, "impact: the point is " + std::to_string(site.distanceM) +
@@ -93,12 +88,6 @@ double contactLoadRadius(const Body& body, const ContactSite& site, double patch
     for (int32_t j : body.ring[static_cast<size_t>(i)]) h = std::max(h, (x.row(i) - x.row(j)).norm());
   }
   return std::max({patchRadiusM, spreadFraction * body.sizeM, kContactRingReach * h});
-}
-
-void contactLoadWeights(const Body& body, const ContactSite& site, const Eigen::Vector3d& normalLocal, double rho,
-                        std::vector<std::pair<int32_t, double>>& weights) {
-  std::vector<int32_t> faces;
-  contactLoadWeights(body, site, normalLocal, rho, weights, faces);
 }
 
 void contactLoadWeights(const Body& body, const ContactSite& site, const Eigen::Vector3d& normalLocal, double rho,

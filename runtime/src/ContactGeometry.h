@@ -66,11 +66,8 @@ double contactLoadRadius(const Body& body, const ContactSite& site, double patch
 /// Node weights of the contact load spread over radius `rho` on the boundary faces that face the
 /// impactor (outward normal · normalLocal > 0) (summing to 1; FEM node ids, so
 /// mid-edge nodes N + edge for P2; P2 corner weights may be negative) into `weights`, in node
-/// order, which keeps its storage.
-void contactLoadWeights(const Body& body, const ContactSite& site, const Eigen::Vector3d& normalLocal, double rho,
-                        std::vector<std::pair<int32_t, double>>& weights);
-/// The same with the faces the disc may reach in `faces`, which keeps its storage (the impact's
-/// workspace: no allocation once it has grown).
+/// order, which keeps its storage. `faces` is scratch for the faces the disc may reach, which
+/// keeps its storage too (the impact's workspace: no allocation once it has grown).
 void contactLoadWeights(const Body& body, const ContactSite& site, const Eigen::Vector3d& normalLocal, double rho,
                         std::vector<std::pair<int32_t, double>>& weights, std::vector<int32_t>& faces);
 

@@ -87,7 +87,8 @@ TEST(ContactLoad, SpreadPressureKeepsItsResultantAndItsPointOfAction) {
     for (const double spread : {0.05, 0.0}) {
       const double rho = detail::contactLoadRadius(*body, site.value(), contact.patchRadiusM, spread);
       std::vector<std::pair<int32_t, double>> weights;
-      detail::contactLoadWeights(*body, site.value(), Eigen::Vector3d::UnitZ(), rho, weights);
+      std::vector<int32_t> faces;
+      detail::contactLoadWeights(*body, site.value(), Eigen::Vector3d::UnitZ(), rho, weights, faces);
       EXPECT_GE(rho, spread * diagonal(mesh) - 1e-15);
       EXPECT_GE(rho, contact.patchRadiusM);
       double sum = 0.0;
@@ -162,7 +163,8 @@ TEST(ContactLoad, AResolvedPatchGivesHertzsEdgeTension) {
   const double rho = detail::contactLoadRadius(*body, site.value(), a, 0.0);
   EXPECT_EQ(rho, a);  // resolved: the ring is inside the patch, and nothing is spread further
   std::vector<std::pair<int32_t, double>> weights;
-  detail::contactLoadWeights(*body, site.value(), Eigen::Vector3d::UnitZ(), rho, weights);
+  std::vector<int32_t> faces;
+  detail::contactLoadWeights(*body, site.value(), Eigen::Vector3d::UnitZ(), rho, weights, faces);
 
   // K u = f for a unit force along −z, the bottom (z = −6a) fixed.
   const FemSystem system = assembleFem(fem, glass, FemSettings{}).value();

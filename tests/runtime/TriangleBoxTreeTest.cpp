@@ -24,6 +24,7 @@ struct Faces {
 Faces boundaryOf(const TetMesh& mesh) {
   auto topology = buildTetTopology(mesh);
   EXPECT_TRUE(topology) << topology.error().message;
+  if (!topology) return {mesh.nodes, Triangles(0, 3)};  // the callers' face-count checks then fail
   return {mesh.nodes, topology.value().boundaryTriangles};
 }
 
