@@ -439,6 +439,46 @@ StressScan scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const 
 void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen::MatrixXd& q,
                   const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double threshold, bool prune,
                   StressScanWorkspace& w, StressScan& scan, int pointsPerElement) {
+  prepareStressScan(bounds, q, prune, w);
+  scanPreparedStresses(S, bounds, q, staticStress, forceN, threshold, prune, w, scan, pointsPerElement);
+}
+
+void prepareStressScan(const StressBounds& bounds, const Eigen::MatrixXd& q, bool prune, StressScanWorkspace& w) {
+  const Eigen::Index t = bounds.spectralNorms.size(), steps = q.rows(), r = q.cols();
+  w.qT = q.transpose();  // r by K: each instant's modal coordinates contiguous
+  if (!prune) return;
+  w.qAbsT = q.cwiseAbs().transpose();  // r by K
+  w.qMax = w.qAbsT.rowwise().maxCoeff();
+  w.qNorm.resize(steps);  // ‖W⁻¹ q_k‖
+  for (Eigen::Index k = 0; k < steps; ++k) w.qNorm[k] = w.qT.col(k).cwiseQuotient(bounds.modeScales.head(r)).norm();
+  const double qNormMax = steps > 0 ? w.qNorm.maxCoeff() : 0.0;
+  // Each point's modal terms of B_e (scanPreparedStresses adds the static ones): the pass over
+  // every point's bound rows, the scan's largest read (two rows of r doubles a point).
+  w.modalPressure.resize(t);
+  w.modalDeviator.resize(t);
+  detail::forFixedRanges(t, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index e = begin; e < end; ++e) {
+      const double* pe = bounds.pressureModes.row(e).data();
+      const double* de = bounds.deviatorNorms.row(e).data();
+      double pressure = 0.0, deviator = 0.0;
+      for (Eigen::Index j = 0; j < r; ++j) {
+        pressure += std::abs(pe[j]) * w.qMax[j];
+        deviator += de[j] * w.qMax[j];
+      }
+      w.modalPressure[e] = pressure;
+      w.modalDeviator[e] = std::min(deviator, bounds.deviatorSpectralNorms[e] * qNormMax);
+    }
+  });
+  const bool grouped = bounds.groupStart.size() >= 2 && bounds.groupStart.back() == t && bounds.groupCentres.cols() >= r;
+  if (grouped) {
+    w.qFloat.setZero((steps + kInstantPad - 1) / kInstantPad * kInstantPad, r);
+    w.qFloat.topRows(steps) = q.cast<float>();
+  }
+}
+
+void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen::MatrixXd& q,
+                          const Eigen::VectorXd& staticStress, const std::vector<double>& forceN, double threshold,
+                          bool prune, StressScanWorkspace& w, StressScan& scan, int pointsPerElement) {
   // Every stress point is scanned as one "element" e of S's rows; the peak and the seeds are then
   // reported by the element that holds the point.
   const Eigen::Index t = S.rows() / 6, steps = q.rows(), r = q.cols();
@@ -447,8 +487,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
   scan.peakElement = scan.peakInstant = -1;
   scan.seeds.clear();
   scan.evaluations = 0;
-  // σ_e at instant k.
-  w.qT = q.transpose();  // r by K: each instant's modal coordinates contiguous
+  // σ_e at instant k (w.qT: prepareStressScan's).
   auto voigt = [&](Eigen::Index e, Eigen::Index k) {
     Voigt s = elementStress(S, e, w.qT.col(k).data(), r);
     if (correction) s += staticStress.segment<6>(6 * e) * forceN[static_cast<size_t>(k)];
@@ -526,10 +565,7 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
     // Bounds per point over all instants, then per (point, instant) for the points visited; see
     // the header. The static correction adds σ̂_e F_k: its mean normal stress exactly, its norms to
     // the norms.
-    w.qAbsT = q.cwiseAbs().transpose();  // r by K
-    w.qMax = w.qAbsT.rowwise().maxCoeff();
-    w.qNorm.resize(steps);  // ‖W⁻¹ q_k‖
-    for (Eigen::Index k = 0; k < steps; ++k) w.qNorm[k] = w.qT.col(k).cwiseQuotient(bounds.modeScales.head(r)).norm();
+    // (w.qAbsT, w.qMax, w.qNorm and the points' modal terms: prepareStressScan's.)
     w.forceAbs.setZero(steps);
     if (correction) {
       for (Eigen::Index k = 0; k < steps; ++k) w.forceAbs[k] = std::abs(forceN[static_cast<size_t>(k)]);
@@ -557,15 +593,8 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
         } else {
           w.staticNorm[e] = w.staticPressure[e] = w.staticDeviator[e] = 0.0;
         }
-        const double* pe = bounds.pressureModes.row(e).data();
-        const double* de = bounds.deviatorNorms.row(e).data();
-        double pressure = 0.0, deviator = 0.0;
-        for (Eigen::Index j = 0; j < r; ++j) {
-          pressure += std::abs(pe[j]) * w.qMax[j];
-          deviator += de[j] * w.qMax[j];
-        }
-        pressure += std::abs(w.staticPressure[e]) * forceMax;
-        deviator = std::min(deviator, bounds.deviatorSpectralNorms[e] * qNormMax) + w.staticDeviator[e] * forceMax;
+        const double pressure = w.modalPressure[e] + std::abs(w.staticPressure[e]) * forceMax;
+        const double deviator = w.modalDeviator[e] + w.staticDeviator[e] * forceMax;
         w.pressureScale[e] = pressure;
         // The relative margin covers the sums' rounding (every term here is ≥ 0).
         w.elementBound[e] = std::min(bounds.spectralNorms[e] * qNormMax + w.staticNorm[e] * forceMax,
@@ -728,8 +757,6 @@ void scanStresses(const MatrixXdRow& S, const StressBounds& bounds, const Eigen:
       });
       w.groupBound.resize(groups);
       w.groupBoundAt.resize(static_cast<size_t>(groups * steps));
-      w.qFloat.setZero((steps + kInstantPad - 1) / kInstantPad * kInstantPad, r);
-      w.qFloat.topRows(steps) = q.cast<float>();
       tbb::parallel_for(0, kScanRanges, searchGroups);
     } else {
       tbb::parallel_for(0, kScanRanges, searchPoints);

@@ -274,6 +274,83 @@ TEST(CrackPropagation, GroupedScanEqualsTheFullScanAndItsGroupBoundsHold) {
   EXPECT_LT(tightLive, tightGroups / 4) << tightLive << " of " << tightGroups;
 }
 
+TEST(CrackPropagation, OnePreparationServesBothScansOfAnImpactWithScanStressesBits) {
+  // The impact prepares a scan (prepareStressScan) beside the static correction, then scans twice
+  // when the uncorrected peak is reported: the truncated modes alone, then with the correction.
+  // Here the workspace first serves another hit (stale buffers), is prepared for this one, scans
+  // without and then with the correction; the second scan must be scanStresses' own, bit for bit,
+  // in its group bounds too. Groups of points around shared centres, as at a mesh node.
+  std::mt19937_64 rng(31);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const int modes = 12, instants = 37;
+  std::vector<int32_t> keys;
+  std::vector<Eigen::MatrixXd> blocks;
+  for (int32_t group = 0; keys.size() < 300; ++group) {
+    Eigen::MatrixXd centre(6, modes);
+    for (Eigen::Index i = 0; i < centre.size(); ++i) centre.data()[i] = 1e6 * g(rng);
+    const int size = 1 + static_cast<int>(rng() % 10);
+    for (int m = 0; m < size; ++m) {
+      Eigen::MatrixXd block = centre;
+      for (Eigen::Index i = 0; i < block.size(); ++i) block.data()[i] += 0.05e6 * g(rng);
+      blocks.push_back(block);
+      keys.push_back(group);
+    }
+  }
+  const auto points = static_cast<Eigen::Index>(keys.size());
+  MatrixXdRow stressModes(6 * points, modes);
+  for (Eigen::Index e = 0; e < points; ++e) stressModes.middleRows(6 * e, 6) = blocks[static_cast<size_t>(e)];
+  const Eigen::VectorXd scales = Eigen::VectorXd::LinSpaced(modes, 1, modes).cwiseInverse();
+  const StressBounds bounds = stressModeBounds(stressModes, modes, scales, keys);
+  ASSERT_GE(bounds.groupStart.size(), 30u);
+  const auto other = randomHit(rng, g, points, modes, instants + 5, true);
+  const auto [q, staticStress, force] = randomHit(rng, g, points, modes, instants, true);
+  const double threshold = 3e6;
+  static const Eigen::VectorXd kNoStatic;
+
+  StressScanWorkspace reference;
+  StressScan expected;
+  scanStresses(stressModes, bounds, q, staticStress, force, threshold, true, reference, expected);
+  StressScan expectedUncorrected;
+  StressScanWorkspace uncorrectedWorkspace;
+  scanStresses(stressModes, bounds, q, kNoStatic, force, std::numeric_limits<double>::infinity(), true,
+               uncorrectedWorkspace, expectedUncorrected);
+
+  StressScanWorkspace workspace;
+  StressScan scan;
+  scanStresses(stressModes, bounds, other.q, other.staticStress, other.force, threshold, true, workspace, scan);
+  prepareStressScan(bounds, q, true, workspace);
+  scanPreparedStresses(stressModes, bounds, q, kNoStatic, force, std::numeric_limits<double>::infinity(), true, workspace,
+                       scan);
+  EXPECT_EQ(scan.peakPrincipalPa, expectedUncorrected.peakPrincipalPa);
+  EXPECT_EQ(scan.evaluations, expectedUncorrected.evaluations);
+  scanPreparedStresses(stressModes, bounds, q, staticStress, force, threshold, true, workspace, scan);
+  EXPECT_EQ(scan.peakPrincipalPa, expected.peakPrincipalPa);
+  EXPECT_EQ(scan.peakElement, expected.peakElement);
+  EXPECT_EQ(scan.peakInstant, expected.peakInstant);
+  EXPECT_EQ(scan.evaluations, expected.evaluations);
+  EXPECT_EQ(scan.seedCandidates, expected.seedCandidates);
+  EXPECT_FALSE(expected.seedCandidates.empty());
+  ASSERT_EQ(workspace.elementBound.size(), reference.elementBound.size());
+  EXPECT_EQ(std::memcmp(workspace.elementBound.data(), reference.elementBound.data(),
+                        sizeof(double) * static_cast<size_t>(reference.elementBound.size())),
+            0);
+  ASSERT_EQ(workspace.groupBoundAt.size(), reference.groupBoundAt.size());
+  // The groups the two searches bounded, at every instant (the others were never written, in
+  // either: compared only where the reference's are finite).
+  const auto groups = static_cast<Eigen::Index>(bounds.groupStart.size()) - 1;
+  int bounded = 0;
+  for (Eigen::Index group = 0; group < groups; ++group) {
+    if (std::isnan(reference.groupBound[group])) continue;
+    ++bounded;
+    EXPECT_EQ(workspace.groupBound[group], reference.groupBound[group]) << "group " << group;
+    EXPECT_EQ(std::memcmp(workspace.groupBoundAt.data() + group * instants, reference.groupBoundAt.data() + group * instants,
+                          sizeof(double) * instants),
+              0)
+        << "group " << group;
+  }
+  EXPECT_GT(bounded, 0);
+}
+
 TEST(CrackPropagation, SpectralBoundIsANormBoundWithinSixPercent) {
   // ‖D S_e W‖₂ from the trace of the 16th power of the Gram matrix: never below the exact norm
   // (an SVD), at most 6^(1/32) above it, for any number of the first modes, and so a bound on
