@@ -44,6 +44,25 @@ RandomHit randomHit(std::mt19937_64& rng, std::normal_distribution<double>& g, E
   return hit;
 }
 
+// Stress-mode blocks (6 by modes) in groups of 1–maxSize around shared centres, as the corners of
+// the elements at one node are: each block its centre (1e6 g) plus spread · 1e6 g, until there
+// are at least `count`; keyOf(group) gives each block's key as it is made.
+template <class KeyOf>
+void groupedBlocks(std::mt19937_64& rng, std::normal_distribution<double>& g, int modes, size_t count, int maxSize,
+                   double spread, KeyOf keyOf, std::vector<Eigen::MatrixXd>& blocks, std::vector<int32_t>& keys) {
+  for (int32_t group = 0; keys.size() < count; ++group) {
+    Eigen::MatrixXd centre(6, modes);
+    for (Eigen::Index i = 0; i < centre.size(); ++i) centre.data()[i] = 1e6 * g(rng);
+    const int size = 1 + static_cast<int>(rng() % static_cast<uint64_t>(maxSize));
+    for (int m = 0; m < size; ++m) {
+      Eigen::MatrixXd block = centre;
+      for (Eigen::Index i = 0; i < block.size(); ++i) block.data()[i] += spread * 1e6 * g(rng);
+      blocks.push_back(block);
+      keys.push_back(keyOf(group));
+    }
+  }
+}
+
 // The definition, as it was first written: relabel the whole mesh after every merge.
 int mergeCrumbsByRelabelling(const TetTopology& topo, int minNodes, Eigen::VectorXd& edgeCuts, Eigen::VectorXi& labels,
                              int& fragmentCount) {
@@ -195,17 +214,8 @@ TEST(CrackPropagation, GroupedScanEqualsTheFullScanAndItsGroupBoundsHold) {
       const double spread = trial < 2 ? 0.02 : 1.0;
       std::vector<int32_t> keys;
       std::vector<Eigen::MatrixXd> blocks;
-      for (int32_t group = 0; keys.size() < 240; ++group) {
-        Eigen::MatrixXd centre(6, modes);
-        for (Eigen::Index i = 0; i < centre.size(); ++i) centre.data()[i] = 1e6 * g(rng);
-        const int size = 1 + static_cast<int>(rng() % 12);
-        for (int m = 0; m < size; ++m) {
-          Eigen::MatrixXd block = centre;
-          for (Eigen::Index i = 0; i < block.size(); ++i) block.data()[i] += spread * 1e6 * g(rng);
-          blocks.push_back(block);
-          keys.push_back(trial == 5 ? static_cast<int32_t>(rng() % 17) : group);
-        }
-      }
+      groupedBlocks(rng, g, modes, 240, 12, spread,
+                    [&](int32_t group) { return trial == 5 ? static_cast<int32_t>(rng() % 17) : group; }, blocks, keys);
       // The points of a group are not next to each other in the stress modes' rows.
       std::vector<size_t> order(keys.size());
       std::iota(order.begin(), order.end(), size_t{0});
@@ -285,17 +295,7 @@ TEST(CrackPropagation, OnePreparationServesBothScansOfAnImpactWithScanStressesBi
   const int modes = 12, instants = 37;
   std::vector<int32_t> keys;
   std::vector<Eigen::MatrixXd> blocks;
-  for (int32_t group = 0; keys.size() < 300; ++group) {
-    Eigen::MatrixXd centre(6, modes);
-    for (Eigen::Index i = 0; i < centre.size(); ++i) centre.data()[i] = 1e6 * g(rng);
-    const int size = 1 + static_cast<int>(rng() % 10);
-    for (int m = 0; m < size; ++m) {
-      Eigen::MatrixXd block = centre;
-      for (Eigen::Index i = 0; i < block.size(); ++i) block.data()[i] += 0.05e6 * g(rng);
-      blocks.push_back(block);
-      keys.push_back(group);
-    }
-  }
+  groupedBlocks(rng, g, modes, 300, 10, 0.05, [](int32_t group) { return group; }, blocks, keys);
   const auto points = static_cast<Eigen::Index>(keys.size());
   MatrixXdRow stressModes(6 * points, modes);
   for (Eigen::Index e = 0; e < points; ++e) stressModes.middleRows(6 * e, 6) = blocks[static_cast<size_t>(e)];

@@ -313,7 +313,9 @@ TEST(FragmentModes, PrismCellsTileTheSolidWithFewerPoints) {
       EXPECT_LT(prisms.value().mesh.nodes.rows(), fans.value().mesh.nodes.rows());
       EXPECT_LT(prisms.value().mesh.tets.rows(), fans.value().mesh.tets.rows());
       const double v = meshVolume(prisms.value().mesh);
-      if (labelling == 0) EXPECT_NEAR(v, meshVolume(fans.value().mesh), 1e-15) << label;
+      if (labelling == 0) {
+        EXPECT_NEAR(v, meshVolume(fans.value().mesh), 1e-15) << label;
+      }
       total += v;
     }
     EXPECT_NEAR(total, 0.2 * 0.1 * 0.08, 1e-14) << labelling;
