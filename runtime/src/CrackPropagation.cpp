@@ -135,6 +135,12 @@ template <int L>
 // Rows of the float q are padded to a multiple of this, so that either form reads whole registers.
 constexpr Eigen::Index kInstantPad = 8;
 
+// Whether a scan of `points` stress points and r modes searches by the bounds' groups (and so
+// reads the float q that prepareStressScan makes for it).
+bool searchesByGroups(const StressBounds& bounds, Eigen::Index points, Eigen::Index r) {
+  return bounds.groupStart.size() >= 2 && bounds.groupStart.back() == points && bounds.groupCentres.cols() >= r;
+}
+
 void centreSumsNarrow(const float* c, Eigen::Index stride, const Eigen::MatrixXf& q, Eigen::Index k, float (*sums)[8]) {
   centreSumsInLanes<4>(c, stride, q, k, sums);
 }
@@ -469,8 +475,7 @@ void prepareStressScan(const StressBounds& bounds, const Eigen::MatrixXd& q, boo
       w.modalDeviator[e] = std::min(deviator, bounds.deviatorSpectralNorms[e] * qNormMax);
     }
   });
-  const bool grouped = bounds.groupStart.size() >= 2 && bounds.groupStart.back() == t && bounds.groupCentres.cols() >= r;
-  if (grouped) {
+  if (searchesByGroups(bounds, t, r)) {
     w.qFloat.setZero((steps + kInstantPad - 1) / kInstantPad * kInstantPad, r);
     w.qFloat.topRows(steps) = q.cast<float>();
   }
@@ -482,6 +487,11 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
   // Every stress point is scanned as one "element" e of S's rows; the peak and the seeds are then
   // reported by the element that holds the point.
   const Eigen::Index t = S.rows() / 6, steps = q.rows(), r = q.cols();
+  // A workspace prepared for another shape (or never) is prepared here, so that nothing below reads
+  // past its buffers; one prepared for another q of the same shape is the caller's error.
+  if (w.qT.rows() != r || w.qT.cols() != steps || (prune && (w.modalPressure.size() != t || w.qNorm.size() != steps))) {
+    prepareStressScan(bounds, q, prune, w);
+  }
   const bool correction = staticStress.size() > 0;
   scan.peakPrincipalPa = 0.0;
   scan.peakElement = scan.peakInstant = -1;
@@ -607,7 +617,7 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
     // B_e), so that ranges without the peak still prune and none has to climb to it alone; each
     // finds its exact maximum above that, and the ranges' maxima are combined in range order with
     // the same tie rule. The answer, and the evaluation count, are the same on any number of threads.
-    const bool grouped = bounds.groupStart.size() >= 2 && bounds.groupStart.back() == t && bounds.groupCentres.cols() >= r;
+    const bool grouped = searchesByGroups(bounds, t, r);
     const Eigen::Index groups = grouped ? static_cast<Eigen::Index>(bounds.groupStart.size()) - 1 : 0;
     auto rangeSpan = [&](int c) {  // positions [lo, hi) of range c's points (in groupPoints, if grouped)
       if (!grouped) return std::pair<size_t, size_t>(static_cast<size_t>(t * c / kScanRanges), static_cast<size_t>(t * (c + 1) / kScanRanges));

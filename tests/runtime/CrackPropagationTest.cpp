@@ -349,6 +349,13 @@ TEST(CrackPropagation, OnePreparationServesBothScansOfAnImpactWithScanStressesBi
         << "group " << group;
   }
   EXPECT_GT(bounded, 0);
+  // A workspace never prepared is prepared by the scan itself (nothing read past its buffers).
+  StressScanWorkspace unprepared;
+  StressScan direct;
+  scanPreparedStresses(stressModes, bounds, q, staticStress, force, threshold, true, unprepared, direct);
+  EXPECT_EQ(direct.peakPrincipalPa, expected.peakPrincipalPa);
+  EXPECT_EQ(direct.evaluations, expected.evaluations);
+  EXPECT_EQ(direct.seedCandidates, expected.seedCandidates);
 }
 
 TEST(CrackPropagation, SpectralBoundIsANormBoundWithinSixPercent) {
