@@ -145,53 +145,88 @@ void centreSumsNarrow(const float* c, Eigen::Index stride, const Eigen::MatrixXf
   centreSumsInLanes<4>(c, stride, q, k, sums);
 }
 
-// The split bounds of eight instants k..k+7 (those below `steps`) into out[k..]: centreSumsInLanes
-// in an AVX register, then splitBoundTerms four instants to a register, the same operations as the
-// SSE2 form's splitBound, so the same bits (CrackPropagation.GroupedScanEqualsTheFullScanAndItsGroupBoundsHold
-// compares the two forms). It calls nothing while its registers are live, so GCC clears their upper
-// halves on return (vzeroupper) and the SSE2 code after it runs at full speed.
-BRITTLE_TARGET_AVX void centreSplitBoundsWide(const float* c, Eigen::Index stride, const Eigen::MatrixXf& q, Eigen::Index k,
+// The split bounds of a group's centre stress at every instant k < steps into out[k], in AVX
+// registers: the instants in pairs of eight-lane blocks, twelve running sums over the modes, each
+// c_ij broadcast once for both blocks (one pass over the modes per sixteen instants, where a block
+// at a time took one per eight and spent as long again on its calls and the lanes' conversions);
+// then splitBoundTerms four instants to a register, their floats widened in the register. Every
+// lane takes centreSumsInLanes' sums and splitBound's operations in their order, so these are the
+// bits of the SSE2 form (CrackPropagation.GroupedScanEqualsTheFullScanAndItsGroupBoundsHold
+// compares the two). `force`, where not null, has q's padded rows (zero past steps). It calls
+// nothing while its registers are live, so GCC clears their upper halves on return (vzeroupper)
+// and the SSE2 code after it runs at full speed.
+BRITTLE_TARGET_AVX void centreSplitBoundsWide(const float* c, Eigen::Index stride, const Eigen::MatrixXf& q,
                                               Eigen::Index steps, const double* staticCentre, const double* force,
                                               double* out) {
+  using Oct = VectorOf<float, 8>;
+  using Quarter = VectorOf<float, 4>;
   using Quad = VectorOf<double, 4>;
-  float sums[6][8];
-  centreSumsInLanes<8>(c, stride, q, k, sums);
-  double bound[8];
-  for (int half = 0; half < 2; ++half) {
-    Quad s[6];
-    for (int i = 0; i < 6; ++i) {
-      const float* v = sums[i] + 4 * half;
-      s[i] = Quad{v[0], v[1], v[2], v[3]};
+  const Eigen::Index rows = q.rows(), r = q.cols();
+  const float* qData = q.data();
+  for (Eigen::Index k = 0; k < steps; k += 16) {
+    const int blocks = k + 8 < steps ? 2 : 1;
+    Oct acc[2][6];
+    for (int b = 0; b < 2; ++b) {
+      for (int i = 0; i < 6; ++i) acc[b][i] = Oct{};
     }
-    if (force) {
-      Quad f = {};
-      for (int l = 0; l < 4 && k + 4 * half + l < steps; ++l) f[l] = force[k + 4 * half + l];
-      for (int i = 0; i < 6; ++i) s[i] = s[i] + staticCentre[i] * f;
+    if (blocks == 2) {
+      for (Eigen::Index j = 0; j < r; ++j) {
+        Oct q0, q1;
+        loadLanes<8>(qData + j * rows + k, q0);
+        loadLanes<8>(qData + j * rows + k + 8, q1);
+        for (int i = 0; i < 6; ++i) {
+          const float cij = c[i * stride + j];
+          acc[0][i] += cij * q0;
+          acc[1][i] += cij * q1;
+        }
+      }
+    } else {
+      for (Eigen::Index j = 0; j < r; ++j) {
+        Oct q0;
+        loadLanes<8>(qData + j * rows + k, q0);
+        for (int i = 0; i < 6; ++i) acc[0][i] += c[i * stride + j] * q0;
+      }
     }
-    Quad p, squaredDeviator;
-    splitBoundTerms(s, p, squaredDeviator);
+    for (int b = 0; b < blocks; ++b) {
+      for (int half = 0; half < 2; ++half) {
+        const Eigen::Index first = k + 8 * b + 4 * half;
+        if (first >= steps) break;
+        Quad s[6];
+        for (int i = 0; i < 6; ++i) {
+          const Quarter lanes = half == 0 ? __builtin_shufflevector(acc[b][i], acc[b][i], 0, 1, 2, 3)
+                                          : __builtin_shufflevector(acc[b][i], acc[b][i], 4, 5, 6, 7);
+          s[i] = __builtin_convertvector(lanes, Quad);
+        }
+        if (force) {
+          Quad f;
+          loadLanes<4>(force + first, f);
+          for (int i = 0; i < 6; ++i) s[i] = s[i] + staticCentre[i] * f;
+        }
+        Quad p, squaredDeviator;
+        splitBoundTerms(s, p, squaredDeviator);
 #if defined(__x86_64__)
-    const Quad norm = _mm256_sqrt_pd(squaredDeviator);
+        const Quad norm = _mm256_sqrt_pd(squaredDeviator);
 #else
-    Quad norm = squaredDeviator;
-    for (int l = 0; l < 4; ++l) norm[l] = std::sqrt(norm[l]);
+        Quad norm = squaredDeviator;
+        for (int l = 0; l < 4; ++l) norm[l] = std::sqrt(norm[l]);
 #endif
-    const Quad b = p + kDeviatorShare * norm;
-    std::memcpy(bound + 4 * half, &b, sizeof b);
+        const Quad bound = p + kDeviatorShare * norm;
+        for (int l = 0; l < 4 && first + l < steps; ++l) out[first + l] = bound[l];
+      }
+    }
   }
-  for (int l = 0; l < 8 && k + l < steps; ++l) out[k + l] = bound[l];
 }
 
 // The split bound of a group's centre stress σ_c,k = S_c q_k + σ̂_c F_k at every instant k < steps
-// into out[k] (centreSumsInLanes), with force null for no static part. The sums are in float: they
-// only bound, and the caller's margin covers their rounding (at most (r + 2) 2⁻²⁴ Σ_j |S_c,j q_j|
-// per component).
+// into out[k] (centreSumsInLanes), with force null for no static part (else F_k at q's padded rows,
+// zero past steps). The sums are in float: they only bound, and the caller's margin covers their
+// rounding (at most (r + 2) 2⁻²⁴ Σ_j |S_c,j q_j| per component).
 void centreSplitBounds(const MatrixXfRow& centres, Eigen::Index g, const Eigen::MatrixXf& q, Eigen::Index steps,
                        const Voigt& staticCentre, const double* force, Lanes lanes, double* out) {
   const Eigen::Index stride = centres.cols();
   const float* c = centres.data() + 6 * g * stride;
   if (lanes == Lanes::Wide) {
-    for (Eigen::Index k = 0; k < steps; k += 8) centreSplitBoundsWide(c, stride, q, k, steps, staticCentre.data(), force, out);
+    centreSplitBoundsWide(c, stride, q, steps, staticCentre.data(), force, out);
     return;
   }
   float sums[6][8];
@@ -204,6 +239,14 @@ void centreSplitBounds(const MatrixXfRow& centres, Eigen::Index g, const Eigen::
       out[k + lane] = splitBound(sigma);
     }
   }
+}
+
+// Rows [first, first + count) of a row-major matrix into the cache ahead of their reads.
+template <class Matrix>
+void prefetchRows(const Matrix& m, Eigen::Index first, Eigen::Index count) {
+  const char* begin = reinterpret_cast<const char*>(m.data() + first * m.cols());
+  const char* end = reinterpret_cast<const char*>(m.data() + (first + count) * m.cols());
+  for (const char* line = begin; line < end; line += 64) __builtin_prefetch(line, 0, 3);
 }
 
 // A spin-wait's pause (a hint to the core that this thread only waits).
@@ -704,8 +747,8 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
       const double radius = bounds.groupRadii[g], staticRadius = w.groupStaticRadius[static_cast<size_t>(g)],
                    margin = w.groupMargin[static_cast<size_t>(g)];
       double* at = w.groupBoundAt.data() + g * steps;
-      centreSplitBounds(bounds.groupCentres, g, w.qFloat, steps, staticCentreOf(g), correction ? forceN.data() : nullptr,
-                        w.lanes, at);
+      centreSplitBounds(bounds.groupCentres, g, w.qFloat, steps, staticCentreOf(g),
+                        correction ? w.forceLanes.data() : nullptr, w.lanes, at);
       double most = -std::numeric_limits<double>::infinity();
       for (Eigen::Index k = 0; k < steps; ++k) {
         at[k] += (radius * w.qNorm[k] + staticRadius * w.forceAbs[k]) * (1.0 + 1e-9) + margin;
@@ -731,6 +774,10 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
         std::pop_heap(heapBegin, heapEnd);
         --heapEnd;
         const int32_t g = heapEnd->second;
+        // The next group's centre on its way while this one is bounded: the heap takes groups in
+        // no array's order, so its rows (15 cache lines of floats for 40 modes) would each miss.
+        // (Its radii, margin and row of bounds as well cost more than they saved.)
+        if (heapBegin != heapEnd) prefetchRows(bounds.groupCentres, 6 * heapBegin->second, 6);
         const int32_t* from = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g)];
         const int32_t* to = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g) + 1];
         const double* at = nullptr;
@@ -739,8 +786,18 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
           if (w.groupBound[g] < out.best) continue;
           at = w.groupBoundAt.data() + static_cast<size_t>(g) * static_cast<size_t>(steps);
         }
-        for (const int32_t* e = from; e != to; ++e) {
-          if (w.elementBound[*e] >= out.best) visitPoint(*e, at, out);
+        // Each point's bound rows (10 cache lines for 40 modes) on their way while the one before
+        // it is tested. The best only rises, so a point found ahead is tested again when its turn
+        // comes: the same points are visited as one test at a time would.
+        const int32_t* next = std::find_if(from, to, [&](int32_t e) { return w.elementBound[e] >= out.best; });
+        while (next != to) {
+          const int32_t e = *next;
+          next = std::find_if(next + 1, to, [&](int32_t n) { return w.elementBound[n] >= out.best; });
+          if (next != to) {
+            prefetchRows(bounds.pressureModes, *next, 1);
+            prefetchRows(bounds.deviatorNorms, *next, 1);
+          }
+          if (w.elementBound[e] >= out.best) visitPoint(e, at, out);
         }
       }
     };
@@ -762,6 +819,9 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
       w.groupStaticCentre.resize(static_cast<size_t>(6 * groups));
       w.groupStaticRadius.resize(static_cast<size_t>(groups));
       w.groupMargin.resize(static_cast<size_t>(groups));
+      // F_k at the float q's padded rows, zero past the last instant (the group bounds read whole registers).
+      w.forceLanes.assign(static_cast<size_t>(w.qFloat.rows()), 0.0);
+      if (correction) std::copy_n(forceN.begin(), steps, w.forceLanes.begin());
       detail::forFixedRanges(groups, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
         for (Eigen::Index g = begin; g < end; ++g) groupStatic(g);
       });

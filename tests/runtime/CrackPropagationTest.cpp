@@ -210,7 +210,9 @@ TEST(CrackPropagation, GroupedScanEqualsTheFullScanAndItsGroupBoundsHold) {
     std::normal_distribution<double> g(0.0, 1.0);
     for (int trial = 0; trial < 6; ++trial) {
       SCOPED_TRACE(::testing::Message() << "seed " << rngSeed << ", trial " << trial);
-      const int modes = 8, instants = 29;  // an odd count: the group bounds take instants four or eight at a time
+      // Odd counts: the group bounds take instants four, eight or sixteen at a time (29 leaves two
+      // blocks of eight in the last sixteen, 37 one).
+      const int modes = 8, instants = rngSeed == 23u ? 37 : 29;
       const double spread = trial < 2 ? 0.02 : 1.0;
       std::vector<int32_t> keys;
       std::vector<Eigen::MatrixXd> blocks;

@@ -151,6 +151,7 @@ struct StressScanWorkspace {
   std::vector<double> groupStaticCentre, groupStaticRadius, groupMargin;
   std::vector<double> groupBoundAt;
   Eigen::MatrixXf qFloat;                      ///< K (padded to a multiple of 8) by r: q in float
+  std::vector<double> forceLanes;              ///< F_k at qFloat's rows, zero past K (the group bounds' loads)
   /// The group centres' bounds take instants four to an SSE2 register or eight to an AVX one, with
   /// the same bits (brittle/core/Simd.h); tests run both.
   Lanes lanes = widestLanes();
