@@ -457,12 +457,18 @@ Voigt StressField::atPoint(Eigen::Index point) const {
   return s;
 }
 
+void StressField::prefetch(int32_t e) const {
+  const Eigen::Index rows = 6 * static_cast<Eigen::Index>(pointsPerElement);
+  prefetchRows(*stressModes, rows * e, rows);
+}
+
 Voigt StressField::at(int32_t e) const {
   if (pointsPerElement == 1) return atPoint(e);
   // The point with the largest σ₁, the first of equals. A later point whose bound does not exceed
   // the best σ₁ so far can at most tie, and a tie keeps the earlier one, so its eigen solve is left
   // out: the same point, and the same bits, as solving every one.
   const Eigen::Index first = static_cast<Eigen::Index>(pointsPerElement) * e;
+  prefetch(e);  // all of its points' rows at once (a P2 element's: 120 cache lines), not one stream after another
   Voigt best = atPoint(first);
   double bestS1 = maxPrincipalStress(best);
   for (int c = 1; c < pointsPerElement; ++c) {
@@ -1107,6 +1113,9 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
       }
       const int32_t e = w.wanted[taken & (kWanted - 1)];
       wantedTaken.store(++taken, std::memory_order_release);
+      // The next element's rows on their way while this one is computed (its slot is written
+      // before wantedEnd passes it, and is not reused before it is taken).
+      if (taken != wantedEnd.load(std::memory_order_acquire)) field.prefetch(w.wanted[taken & (kWanted - 1)]);
       claimAndCompute(e);
     }
   };

@@ -235,6 +235,9 @@ struct StressField {
   Voigt at(int32_t element) const;
   /// The stress at one stress point (row block `point` of stressModes).
   Voigt atPoint(Eigen::Index point) const;
+  /// Asks the cache for the element's rows of stressModes ahead of at(element) (a hint: no effect
+  /// on any value).
+  void prefetch(int32_t element) const;
 };
 
 /// Buffers of SeedOrder, kept between calls.
