@@ -89,8 +89,7 @@ template <int W, class V>
     const BackwardSolvePlan::Run& run = runs[i];
     if (i + 1 < runs.size()) {  // the next run's values follow this one's: ask for them now
       const BackwardSolvePlan::Run& next = runs[i + 1];
-      const V* end = values + offset[next.first] + columnLength(lower, next.first);
-      for (const V* p = values + offset[next.end - 1]; p < end; p += 64 / sizeof(V)) __builtin_prefetch(p);
+      prefetchBytes(values + offset[next.end - 1], values + offset[next.first] + columnLength(lower, next.first));
     }
     const auto [lastBegin, lastEnd] = columnRange(lower, run.last);
     const Eigen::Index m = lastEnd - lastBegin;

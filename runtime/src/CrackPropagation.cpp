@@ -244,9 +244,7 @@ void centreSplitBounds(const MatrixXfRow& centres, Eigen::Index g, const Eigen::
 // Rows [first, first + count) of a row-major matrix into the cache ahead of their reads.
 template <class Matrix>
 void prefetchRows(const Matrix& m, Eigen::Index first, Eigen::Index count) {
-  const char* begin = reinterpret_cast<const char*>(m.data() + first * m.cols());
-  const char* end = reinterpret_cast<const char*>(m.data() + (first + count) * m.cols());
-  for (const char* line = begin; line < end; line += 64) __builtin_prefetch(line, 0, 3);
+  prefetchBytes(m.data() + first * m.cols(), m.data() + (first + count) * m.cols());
 }
 
 // A spin-wait's pause (a hint to the core that this thread only waits).
@@ -826,8 +824,10 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
       w.groupStaticRadius.resize(static_cast<size_t>(groups));
       w.groupMargin.resize(static_cast<size_t>(groups));
       // F_k at the float q's padded rows, zero past the last instant (the group bounds read whole registers).
-      w.forceLanes.assign(static_cast<size_t>(w.qFloat.rows()), 0.0);
-      if (correction) std::copy_n(forceN.begin(), steps, w.forceLanes.begin());
+      if (correction) {
+        w.forceLanes.assign(static_cast<size_t>(w.qFloat.rows()), 0.0);
+        std::copy_n(forceN.begin(), steps, w.forceLanes.begin());
+      }
       detail::forFixedRanges(groups, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
         for (Eigen::Index g = begin; g < end; ++g) groupStatic(g);
       });
