@@ -1008,6 +1008,7 @@ std::vector<int32_t> orderedSeeds(const StressScan& scan, const StressField& fie
 void CrackWorkspace::reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index edges, int cracks) {
   const auto n = static_cast<size_t>(nodes), t = static_cast<size_t>(tets), c = static_cast<size_t>(std::max(cracks, 1));
   front.reserve(4 * t);
+  fronts.reserve(4 * t);
   seedOrder.candidates.reserve(4 * t);  // stress points: up to 4 per element (P2)
   seedOrder.evaluated.reserve(4 * t);
   seedOrder.bounded.reserve(4 * t);
@@ -1057,6 +1058,7 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
   w.cut.assign(tetCount, 0);
   w.seedEvaluations = 0;
   w.front.clear();
+  w.fronts.clear();
   w.seedNormals.clear();  // per crack: the plane it started on
   w.phi.clear();
   w.cutBy.clear();
@@ -1068,10 +1070,12 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
   // crack surface is where φ_c changes sign. Sharing nodal values makes the surface continuous
   // across elements, so a crack crosses a layer of elements instead of thickening into a blob, and
   // every edge it crosses is cut at the same point from every element around it.
-  // Stresses at the peak instant, each computed once (an element is read by its cut neighbours).
-  // A helper on another thread of the caller's arena, where there is one, computes ahead the
-  // stresses crack growth is likely to ask for next (the neighbours of each element put on a
-  // front), into the same cache. Each stress is field.at(e) whoever computes it, so the fracture is
+  // Stresses at the peak instant, each computed once (an element is read by its cut neighbours),
+  // with their largest principal value and direction (read when a front reaches the element: once,
+  // where an element met by several cracks or fronts solved it each time). A helper on another
+  // thread of the caller's arena, where there is one, computes ahead the stresses crack growth is
+  // likely to ask for next (the neighbours of each element put on a front), into the same cache.
+  // Each entry is field.at(e) and its maxPrincipalStress whoever computes it, so the fracture is
   // the same bits with or without the helper, and on any number of threads; the helper only saves
   // the growth its wait (a P2 element's four corners: 7.7 KB of stress modes and four eigen solves).
   // Each element's state: 0 unknown, 1 being computed, 2 known.
@@ -1081,16 +1085,20 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
     std::atomic_ref<char> known(w.stressKnown[static_cast<size_t>(e)]);
     char expected = 0;
     if (!known.compare_exchange_strong(expected, 1, std::memory_order_acquire)) return expected;
-    w.stressCache[static_cast<size_t>(e)] = field.at(e);
+    CrackWorkspace::Principal& p = w.stressCache[static_cast<size_t>(e)];
+    p.stress = field.at(e);
+    p.value = maxPrincipalStress(p.stress, &p.direction);
     known.store(2, std::memory_order_release);
     return char{2};
   };
-  auto stressAt = [&](int32_t e) -> const Voigt& {
+  auto awaitKnown = [&](int32_t e) -> const CrackWorkspace::Principal& {
     std::atomic_ref<char> known(w.stressKnown[static_cast<size_t>(e)]);
-    if (known.load(std::memory_order_acquire) != 2 && claimAndCompute(e) == 1) {
-      while (known.load(std::memory_order_acquire) != 2) spinPause();  // the helper is on it
-    }
+    while (known.load(std::memory_order_acquire) != 2) spinPause();  // the helper is on it
     return w.stressCache[static_cast<size_t>(e)];
+  };
+  auto stressAt = [&](int32_t e) -> const CrackWorkspace::Principal& {
+    if (std::atomic_ref<char>(w.stressKnown[static_cast<size_t>(e)]).load(std::memory_order_acquire) != 2) claimAndCompute(e);
+    return awaitKnown(e);
   };
   // The elements wanted ahead, a ring written by growth and read by the helper.
   constexpr uint32_t kWanted = 1u << 12;
@@ -1152,13 +1160,18 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
       const double sCut = d[i] / (d[i] - d[j]);
       state.edgeCuts[edge] = forward ? sCut : 1.0 - sCut;
     }
+    // The neighbours the plane reaches through a face, each a front. Their stresses are read only
+    // once all of them are asked for: those the helper is not on are computed here meanwhile, and
+    // the elements beyond them are wanted first, so that the helper has work while growth waits.
+    int32_t reached[4];
+    int count = 0;
+    const size_t firstPath = w.fronts.size();
     for (int f = 0; f < 4; ++f) {
       const int32_t nb = topo.neighbours(e, f);
       Eigen::Vector3d a, b;
       if (nb < 0 || cutBy(crack, nb) || !faceCut(mesh, e, f, d, a, b)) continue;
-      const Voigt& sNb = stressAt(nb);
-      w.front.push_back({n.dot(tensor(sNb) * n), nb, crack, n, a, b});
-      std::push_heap(w.front.begin(), w.front.end(), weaker);
+      reached[count++] = nb;
+      w.fronts.push_back({crack, n, a, b});
       if (helped) {  // where the crack may go from nb: across the faces the plane it comes on crosses
         Eigen::Vector4d dNb;
         for (int i = 0; i < 4; ++i) dNb[i] = n.dot(mesh.nodes.row(mesh.tets(nb, i)).transpose()) - offset;
@@ -1170,6 +1183,12 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
           if (std::max({d0, d1, d2}) > 0.0 && std::min({d0, d1, d2}) < 0.0) want(next);
         }
       }
+    }
+    for (int i = 0; i < count; ++i) claimAndCompute(reached[i]);  // returns at once where known or claimed
+    for (int i = 0; i < count; ++i) {  // pushed in face order, as they were found
+      const Voigt& sNb = awaitKnown(reached[i]).stress;
+      w.front.push_back({n.dot(tensor(sNb) * n), reached[i], static_cast<int32_t>(firstPath + static_cast<size_t>(i))});
+      std::push_heap(w.front.begin(), w.front.end(), weaker);
     }
     return true;
   };
@@ -1189,8 +1208,7 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
       nearCut = nb >= 0 && w.cut[static_cast<size_t>(nb)];
     }
     if (nearCut) continue;
-    Eigen::Vector3d dir;
-    maxPrincipalStress(stressAt(e), &dir);
+    const Eigen::Vector3d dir = stressAt(e).direction;
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
     for (int i = 0; i < 4; ++i) centroid += 0.25 * mesh.nodes.row(mesh.tets(e, i)).transpose();
     w.seedNormals.push_back(dir);
@@ -1203,12 +1221,14 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
   // Fronts advance together, strongest normal stress first.
   while (!w.front.empty() && !state.arrestedByEnergy) {
     std::pop_heap(w.front.begin(), w.front.end(), weaker);
-    const Front f = w.front.back();
+    const int32_t element = w.front.back().element;
+    const CrackWorkspace::FrontPath& f = w.fronts[static_cast<size_t>(w.front.back().entry)];
     w.front.pop_back();
-    if (cutBy(f.crack, f.element)) continue;
-    const Voigt& s = stressAt(f.element);
-    Eigen::Vector3d dir;
-    const double s1 = maxPrincipalStress(s, &dir);
+    if (cutBy(f.crack, element)) continue;
+    const CrackWorkspace::Principal& principal = stressAt(element);
+    const Voigt& s = principal.stress;
+    const double s1 = principal.value;
+    Eigen::Vector3d dir = principal.direction;
     if (dir.dot(f.normal) < 0.0) dir = -dir;
     // Blend with the crack's starting plane, not the parent's: blending with the parent would let
     // the noise accumulate into a random walk of orientations, and the sheet would curl up and fill
@@ -1232,7 +1252,7 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
     n = (n - n.dot(along) * along).normalized();
     if (!n.allFinite() || n.dot(f.normal) <= 0.0) n = f.normal;
     if (n.dot(tensor(s) * n) < settings.propagationStressRatio * sigmaT) continue;
-    if (!apply(f.element, n, n.dot(f.point), f.crack)) break;
+    if (!apply(element, n, n.dot(f.point), f.crack)) break;
   }
   };
   grow();

@@ -281,16 +281,28 @@ std::vector<int32_t> orderedSeeds(const StressScan& scan, const StressField& fie
 /// Buffers of crack growth, labelling and crumb merging, kept between calls: once they have grown
 /// to the largest body cracked (or been reserved for it), growing cracks allocates nothing.
 struct CrackWorkspace {
+  /// A front's place in the heap: what orders it, and its entry in `fronts` (the heap moves 16 bytes
+  /// an entry, not the path's 88).
   struct Front {
     double priority;         ///< normal stress on the parent plane
-    int32_t element, crack;
+    int32_t element, entry;
+  };
+  struct FrontPath {
+    int32_t crack;
     Eigen::Vector3d normal;  ///< parent's plane normal (orients the local principal direction)
     Eigen::Vector3d point, point2;  ///< the parent's cut through the shared face
   };
+  /// An element's stress at the peak instant, with its largest principal value and direction.
+  struct Principal {
+    Voigt stress;
+    Eigen::Vector3d direction;
+    double value;
+  };
   std::vector<Front> front;              ///< a max-heap
+  std::vector<FrontPath> fronts;         ///< every front pushed in this growth, in push order
   std::vector<char> cut, stressKnown;    ///< #T (stressKnown: 0 unknown, 1 being computed, 2 known)
   std::vector<int32_t> wanted;           ///< a ring of elements whose stress the helper computes ahead
-  std::vector<Voigt> stressCache;        ///< #T
+  std::vector<Principal> stressCache;    ///< #T
   std::vector<double> phi;               ///< cracks × #N: each crack's nodal level set
   std::vector<char> cutBy;               ///< cracks × #T
   std::vector<Eigen::Vector3d> seedNormals;
