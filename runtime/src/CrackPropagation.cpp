@@ -1053,6 +1053,8 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   state.clear();
   state.energyBudgetJ = budget;
+  state.edgeCuts.swap(w.spareEdgeCuts);  // clear() left them empty: the spares' storage, if any
+  state.nodeLabels.swap(w.spareNodeLabels);
   state.edgeCuts.resize(topo.edges.rows());
   state.edgeCuts.setConstant(kNaN);
   w.cut.assign(tetCount, 0);

@@ -387,6 +387,7 @@ Result<ImpactResult> World::impact(const ImpactDesc& desc) {
 Status World::impact(const ImpactDesc& desc, ImpactResult& result) {
   try {
     Impl& w = *mImpl;
+    w.work.crack.recycle(result.fracture);  // a reused result's arrays: this growth's storage
     detail::resetImpactResult(result);
     auto job = w.makeJob(desc);
     if (!job) return job.error();
@@ -449,8 +450,9 @@ Status World::collectImpact(ImpactTicket ticket, ImpactResult& result) {
     std::unique_ptr<PendingImpact> p = std::move(it->second);
     w.pending.erase(it);
     w.workers().execute([&] { p->group.wait(); });
-    w.spareWorkspaces.push_back(std::move(p->workspace));
     std::swap(result, p->result);
+    p->workspace->crack.recycle(p->result.fracture);  // the caller's old arrays: a later growth's storage
+    w.spareWorkspaces.push_back(std::move(p->workspace));
     Status status = p->status.value_or(Status(invalidArgument("collectImpact: the impact did not run")));
     if (!status) {
       w.slots[p->object.index].pending = false;

@@ -306,6 +306,18 @@ struct CrackWorkspace {
   std::vector<double> phi;               ///< cracks × #N: each crack's nodal level set
   std::vector<char> cutBy;               ///< cracks × #T
   std::vector<Eigen::Vector3d> seedNormals;
+  /// Storage for the next FractureState's two arrays, which have no capacity of their own: the
+  /// runtime puts a reused result's old arrays here before it clears the result (recycle), and a
+  /// growth whose state is empty takes them, so that it does not allocate them again.
+  Eigen::VectorXd spareEdgeCuts;
+  Eigen::VectorXi spareNodeLabels;
+  /// Takes `state`'s arrays as the spares (state's are left empty, as clear() leaves them).
+  void recycle(FractureState& state) {
+    spareEdgeCuts.swap(state.edgeCuts);
+    spareNodeLabels.swap(state.nodeLabels);
+    state.edgeCuts.resize(0);
+    state.nodeLabels.resize(0);
+  }
   SeedOrderWorkspace seedOrder;
   int64_t seedEvaluations = 0;           ///< stresses SeedOrder evaluated for the last growth
   // labelFragments
