@@ -747,8 +747,9 @@ TEST(CrackPropagation, ACrumbJoinsTheFragmentItWasCutFrom) {
 }
 
 // Growth asks a helper thread to compute ahead the stresses it will want next. Whoever computes
-// a stress, it is the same field.at(e), so the fracture is the same bits on one thread (no helper)
-// and on two or four: on a random field of quadratic-element corners, several noisy cracks.
+// a stress, it is the same field.at(e) and the same principal value and direction of it, so the
+// fracture is the same bits on one thread (no helper) and on two or four: on a random field of
+// quadratic-element corners, several noisy cracks.
 TEST(CrackPropagation, TheLookAheadHelperChangesNothing) {
   const TetMesh mesh = testing::makeBoxTetMesh(0.4, 0.2, 0.2, 10, 5, 5);
   const TetTopology topo = buildTetTopology(mesh).value();
@@ -794,6 +795,48 @@ TEST(CrackPropagation, TheLookAheadHelperChangesNothing) {
     EXPECT_EQ(other.energySpentJ, one.energySpentJ);
     EXPECT_EQ(other.crackAreaM2, one.crackAreaM2);
   }
+}
+
+// A result's fracture arrays handed back to the workspace (CrackWorkspace::recycle, as the World
+// does with a reused result) are the next growth's storage: the same fracture, in the same memory,
+// and the state left empty in between, as clear() leaves it.
+TEST(CrackPropagation, ARecycledStateGrowsInItsOldStorage) {
+  const TetMesh mesh = testing::makeBoxTetMesh(0.4, 0.2, 0.2, 8, 4, 4);
+  const TetTopology topo = buildTetTopology(mesh).value();
+  constexpr int kModes = 6;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> g(0.0, 1.0);
+  MatrixXdRow stressModes(6 * mesh.tets.rows(), kModes);
+  for (Eigen::Index i = 0; i < stressModes.size(); ++i) stressModes.data()[i] = g(rng);
+  Eigen::MatrixXd q(1, kModes);
+  for (int j = 0; j < kModes; ++j) q(0, j) = 20e6 * (1.0 + 0.2 * g(rng));
+  const double strengthPa = 30e6;
+  const StressScan scan = scanStresses(stressModes, stressModeBounds(stressModes, kModes), q, Eigen::VectorXd(), {0.0},
+                                       strengthPa, true, 1);
+  ASSERT_TRUE(scan.hasSeeds());
+  StressField field;
+  field.stressModes = &stressModes;
+  field.q = q.row(0).transpose();
+  CrackSettings settings;
+  settings.maxCracks = 3;
+  CrackWorkspace workspace;
+  FractureState state;
+  ASSERT_TRUE(propagateCracks(mesh, topo, scan, field, strengthPa, 8.0, 5.0, settings, workspace, state));
+  ASSERT_GE(state.fragmentCount, 2);
+  const FractureState first = state;
+  const double* cuts = state.edgeCuts.data();
+  const int* labels = state.nodeLabels.data();
+  workspace.recycle(state);
+  EXPECT_EQ(state.edgeCuts.size(), 0);
+  EXPECT_EQ(state.nodeLabels.size(), 0);
+  ASSERT_TRUE(propagateCracks(mesh, topo, scan, field, strengthPa, 8.0, 5.0, settings, workspace, state));
+  EXPECT_EQ(state.edgeCuts.data(), cuts) << "the edge cuts were allocated again";
+  EXPECT_EQ(state.nodeLabels.data(), labels) << "the node labels were allocated again";
+  ASSERT_EQ(state.edgeCuts.size(), first.edgeCuts.size());
+  EXPECT_EQ(std::memcmp(state.edgeCuts.data(), first.edgeCuts.data(), sizeof(double) * static_cast<size_t>(first.edgeCuts.size())), 0);
+  EXPECT_EQ(state.nodeLabels, first.nodeLabels);
+  EXPECT_EQ(state.cutElements, first.cutElements);
+  EXPECT_EQ(state.fragmentCount, first.fragmentCount);
 }
 
 TEST(CrackPropagation, BadSettingsAndMaterialValuesGiveTypedErrors) {
