@@ -1083,15 +1083,16 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
   // Each element's state: 0 unknown, 1 being computed, 2 known.
   w.stressCache.resize(tetCount);
   w.stressKnown.assign(tetCount, 0);
+  // Claims e and computes its entry unless it is known or claimed already (a load first: the
+  // locked compare-exchange only where the entry may still be free).
   auto claimAndCompute = [&](int32_t e) {
     std::atomic_ref<char> known(w.stressKnown[static_cast<size_t>(e)]);
-    char expected = 0;
-    if (!known.compare_exchange_strong(expected, 1, std::memory_order_acquire)) return expected;
+    char expected = known.load(std::memory_order_acquire);
+    if (expected != 0 || !known.compare_exchange_strong(expected, 1, std::memory_order_acquire)) return;
     CrackWorkspace::Principal& p = w.stressCache[static_cast<size_t>(e)];
     p.stress = field.at(e);
     p.value = maxPrincipalStress(p.stress, &p.direction);
     known.store(2, std::memory_order_release);
-    return char{2};
   };
   auto awaitKnown = [&](int32_t e) -> const CrackWorkspace::Principal& {
     std::atomic_ref<char> known(w.stressKnown[static_cast<size_t>(e)]);
@@ -1099,7 +1100,7 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
     return w.stressCache[static_cast<size_t>(e)];
   };
   auto stressAt = [&](int32_t e) -> const CrackWorkspace::Principal& {
-    if (std::atomic_ref<char>(w.stressKnown[static_cast<size_t>(e)]).load(std::memory_order_acquire) != 2) claimAndCompute(e);
+    claimAndCompute(e);
     return awaitKnown(e);
   };
   // The elements wanted ahead, a ring written by growth and read by the helper.
@@ -1186,7 +1187,7 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
         }
       }
     }
-    for (int i = 0; i < count; ++i) claimAndCompute(reached[i]);  // returns at once where known or claimed
+    for (int i = 0; i < count; ++i) claimAndCompute(reached[i]);
     for (int i = 0; i < count; ++i) {  // pushed in face order, as they were found
       const Voigt& sNb = awaitKnown(reached[i]).stress;
       w.front.push_back({n.dot(tensor(sNb) * n), reached[i], static_cast<int32_t>(firstPath + static_cast<size_t>(i))});

@@ -829,7 +829,12 @@ TEST(CrackPropagation, ARecycledStateGrowsInItsOldStorage) {
   workspace.recycle(state);
   EXPECT_EQ(state.edgeCuts.size(), 0);
   EXPECT_EQ(state.nodeLabels.size(), 0);
+  // The spares hold the storage meanwhile, so it cannot be freed and handed out again by malloc:
+  // the pointers below are equal only if growth took the spares.
+  EXPECT_EQ(workspace.spareEdgeCuts.data(), cuts);
+  EXPECT_EQ(workspace.spareNodeLabels.data(), labels);
   ASSERT_TRUE(propagateCracks(mesh, topo, scan, field, strengthPa, 8.0, 5.0, settings, workspace, state));
+  EXPECT_EQ(workspace.spareEdgeCuts.size(), 0) << "growth left the spares where they were";
   EXPECT_EQ(state.edgeCuts.data(), cuts) << "the edge cuts were allocated again";
   EXPECT_EQ(state.nodeLabels.data(), labels) << "the node labels were allocated again";
   ASSERT_EQ(state.edgeCuts.size(), first.edgeCuts.size());
