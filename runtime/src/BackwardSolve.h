@@ -54,8 +54,12 @@ class BackwardSolvePlan {
   static BackwardSolvePlan make(const Eigen::SparseMatrix<double>& lower, int parts, bool floatValues = false);
 
   /// A run of columns [first, end) inside one supernode whose last column is `last` (end ≤ last + 1).
+  /// Its `rowCount` rows below the supernode (R, the rows of column `last`) start at `rowsAt` in
+  /// the plan's copy of them.
   struct Run {
     int32_t first, end, last;
+    int32_t rowCount = 0;
+    int64_t rowsAt = 0;
   };
 
   /// Per-part buffers of solveInPlace, sized on first use: one per caller at a time.
@@ -91,12 +95,13 @@ class BackwardSolvePlan {
   std::vector<float> mFloats;               // or those rounded to float (one of the two is empty)
   bool mFloatValues = false;
   std::vector<int64_t> mOffset;             // column j's values start at mValues[mOffset[j]]
+  std::vector<int32_t> mRows;               // each run's R, in the order the runs are solved
   std::vector<int32_t> mSuperLast;          // per column, the last column of its supernode
   Eigen::Index mColumns = 0, mNonZeros = 0;  // of the L the plan was made from
   double mParallelShare = 0.0;
   double mCriticalShare = 1.0;
 
-  void copyValues(const Eigen::SparseMatrix<double>& lower);  // mValues, mOffset, mColumns, mNonZeros
+  void copyValues(const Eigen::SparseMatrix<double>& lower);  // mValues, mOffset, mRows, the runs' rows, mColumns, mNonZeros
   void sizeScratch(Scratch& scratch) const;  // a buffer per part (at least one) of mMaxGather
 };
 
