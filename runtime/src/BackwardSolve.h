@@ -29,7 +29,9 @@
 // solves; the SSE2 sums alone gave 5.7–6.1). The copy costs 8 bytes a non-zero (62 MB for the plate),
 // or 4 in float (the static correction's default, CorrectionStorage: its solve is of the
 // correction itself, so float rounding is relative to it), where AVX registers pay: the plate's
-// solve 7.5–8.2 → 6.3–6.8 ms on a machine that streams 9 GB/s a core.
+// solve 7.5–8.2 → 6.3–6.8 ms on a machine that streams 9 GB/s a core. Each run's rows below its
+// supernode are copied beside, in the same order, for the gather: read from Eigen's row indices,
+// they had been a quarter of the solve's samples (docs/realtime.md).
 //
 // Each x_j is computed by one thread, in a fixed order that depends on L alone (its global
 // supernode), so the result is the same bits on any number of threads. It is not the order of
