@@ -103,7 +103,8 @@ class BackwardSolvePlan {
   double mParallelShare = 0.0;
   double mCriticalShare = 1.0;
 
-  void copyValues(const Eigen::SparseMatrix<double>& lower);  // mValues, mOffset, mRows, the runs' rows, mColumns, mNonZeros
+  // mValues (or mFloats), mOffset, mRows and each run's rowCount and rowsAt, mColumns, mNonZeros
+  void copyValues(const Eigen::SparseMatrix<double>& lower);
   void sizeScratch(Scratch& scratch) const;  // a buffer per part (at least one) of mMaxGather
 };
 

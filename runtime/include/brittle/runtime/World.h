@@ -359,11 +359,11 @@ class World {
   /// correction, stress scan), and one that breaks it computes its cracks, labels and surfaces in
   /// those buffers and allocates only what it hands over: the fracture state's two arrays (in the
   /// storage of those `result` held, when it held some as large), and per fragment its surface's
-  /// two arrays, its reason text when it has one, and for a new object the source of its body (a task: the exact path cuts the fragment's own solid out and solves
-  /// its modes, a match places its entry, both after the impact, on the workers). So the
-  /// allocations are bounded by the fragments made, not by the body's size (tested:
-  /// HotPathAllocationTest, with and without the exact path). A body's first impact may factorise its K
-  /// (StaticCorrection.h).
+  /// two arrays, its reason text when it has one, and for a new object the source of its body (a
+  /// task: the exact path cuts the fragment's own solid out and solves its modes, a match places
+  /// its entry, both after the impact, on the workers). So the allocations are bounded by the
+  /// fragments made, not by the body's size (tested: HotPathAllocationTest, with and without the
+  /// exact path). A body's first impact may factorise its K (StaticCorrection.h).
   Status impact(const ImpactDesc& desc, ImpactResult& result);
 
   /// Starts the impact on a worker thread and returns at once; the struck object is pending until
