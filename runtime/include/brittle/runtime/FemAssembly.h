@@ -112,9 +112,9 @@ Result<FemSystem> assembleFem(const FemMesh& mesh, const Material& material, con
 MatrixXdRow computeStressModes(const FemMesh& mesh, const Material& material, const MatrixXdRow& modes);
 
 /// Stresses at every element's stress points (stressPointsPerElement) from nodal displacements:
-/// the recovery of the static correction and of the full-FEM reference. P1 keeps C B_e (6 by 12)
-/// per element; P2 keeps each element's barycentric gradients and forms B at its corners when
-/// asked, a tenth of the memory of 4 × (6 by 30) matrices.
+/// the recovery of the static correction and of the full-FEM reference. Each element keeps its
+/// barycentric gradients and forms ∇u from them when asked: for P1 a sixth of the memory of C B_e
+/// (6 by 12), for P2 a tenth of 4 × (6 by 30) matrices at its corners.
 class ElementStresses {
  public:
   /// Errors: InvalidMaterial.
@@ -133,8 +133,7 @@ class ElementStresses {
   Eigen::Index mFemNodes = 0;
   Eigen::Matrix<double, 6, 6> mElasticity;
   Eigen::Matrix<int32_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> mElements;  // #T by 4 or 10 FEM nodes
-  std::vector<Eigen::Matrix<double, 6, 12>> mLinear;       // P1: C B_e
-  std::vector<Eigen::Matrix<double, 4, 3>> mGradients;    // P2: ∇λ per element (rows)
+  std::vector<Eigen::Matrix<double, 4, 3>> mGradients;    // ∇λ per element (rows)
 };
 
 /// The six rigid-body motions of the mesh's nodes, unnormalised: 3N by 6, unit translations along
