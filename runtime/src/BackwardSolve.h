@@ -79,6 +79,8 @@ class BackwardSolvePlan {
   /// Eigen's sparse triangular solve (a column whose x is exactly zero passes nothing on, so a
   /// sparse right-hand side costs only its reach in the elimination tree), with each supernode's
   /// rows below it gathered once, in the first buffer of `scratch` (sized as solveInPlace sizes it).
+  /// A plan with float values reads L rounded to float, in Eigen's own order (ascending, the order
+  /// this solve reads): Eigen's solve of that rounded L, bit for bit.
   void forwardInPlace(const Eigen::SparseMatrix<double>& lower, Eigen::VectorXd& x, Scratch& scratch) const;
 
   /// The share of L's non-zeros solved in parallel (0 for one part); what the plan is worth.
@@ -87,7 +89,9 @@ class BackwardSolvePlan {
   double criticalShare() const { return mCriticalShare; }
   int parts() const { return static_cast<int>(mPartRuns.size()); }
   /// Bytes of the plan's copy of L's values.
-  size_t valueBytes() const { return sizeof(double) * mValues.size() + sizeof(float) * mFloats.size(); }
+  size_t valueBytes() const {
+    return sizeof(double) * mValues.size() + sizeof(float) * (mFloats.size() + mForwardFloats.size());
+  }
 
  private:
   std::vector<Run> mTopRuns;                // solved first, descending
@@ -95,6 +99,7 @@ class BackwardSolvePlan {
   size_t mMaxGather = 0;                    // the most rows below a supernode
   std::vector<double> mValues;              // L's values in the order the solve reads them,
   std::vector<float> mFloats;               // or those rounded to float (one of the two is empty)
+  std::vector<float> mForwardFloats;        // with mFloats: the same values in Eigen's order, for the forward solve
   bool mFloatValues = false;
   std::vector<int64_t> mOffset;             // column j's values start at mValues[mOffset[j]]
   std::vector<int32_t> mRows;               // each run's R, in the order the runs are solved

@@ -75,7 +75,8 @@ TEST(BackwardSolve, SameBitsOnAnyNumberOfPartsAndEigensSerialSolveWithinRounding
       const detail::BackwardSolvePlan plan = detail::BackwardSolvePlan::make(lower, parts);
       const detail::BackwardSolvePlan floats = detail::BackwardSolvePlan::make(lower, parts, true);
       EXPECT_EQ(plan.valueBytes(), sizeof(double) * static_cast<size_t>(lower.nonZeros()));  // each value once
-      EXPECT_EQ(floats.valueBytes(), sizeof(float) * static_cast<size_t>(lower.nonZeros()));
+      // in float each value twice: in the backward solve's order, and in Eigen's for the forward solve
+      EXPECT_EQ(floats.valueBytes(), 2 * sizeof(float) * static_cast<size_t>(lower.nonZeros()));
       for (Lanes lanes : lanesHere()) {  // SSE2 and, where the CPU has it, AVX: the same bits
         for (const auto& [p, expected] : {std::pair{&plan, &serial}, std::pair{&floats, &serialFloat}}) {
           Eigen::VectorXd x = y;
@@ -125,6 +126,40 @@ TEST(BackwardSolve, TheForwardSolveIsEigensBitForBitForSparseAndDenseRightHandSi
       EXPECT_EQ(std::memcmp(x.data(), expected.data(), sizeof(double) * static_cast<size_t>(x.size())), 0)
           << nonZeros << " non-zeros: max difference " << (x - expected).cwiseAbs().maxCoeff();
       EXPECT_GT((x - y).cwiseAbs().maxCoeff(), 0.0);  // (the solve did pass values on)
+    }
+  });
+}
+
+TEST(BackwardSolve, TheFloatPlansForwardSolveIsEigensOnTheFactorRoundedToFloat) {
+  // A plan with float values reads L rounded to float in the forward solve too: bit for bit
+  // Eigen's solve of that rounded L, and not Eigen's solve of L itself (the rounding is there).
+  forEachBoxFactor([&](ElementOrder order, const ShiftedFactor& factor, const Eigen::SparseMatrix<double>& lower) {
+    const detail::BackwardSolvePlan plan = detail::BackwardSolvePlan::make(lower, 2, true);
+    Eigen::SparseMatrix<double> rounded = lower;
+    for (Eigen::Index p = 0; p < rounded.nonZeros(); ++p) {
+      rounded.valuePtr()[p] = static_cast<double>(static_cast<float>(rounded.valuePtr()[p]));
+    }
+    std::mt19937_64 rng(11);
+    std::normal_distribution<double> g(0.0, 1.0);
+    std::uniform_int_distribution<Eigen::Index> row(0, lower.rows() - 1);
+    detail::BackwardSolvePlan::Scratch gathered;
+    for (int nonZeros : {1, 12, -1}) {  // -1: every entry
+      Eigen::VectorXd y = Eigen::VectorXd::Zero(lower.rows());
+      if (nonZeros < 0) {
+        for (Eigen::Index i = 0; i < y.size(); ++i) y[i] = g(rng);
+      } else {
+        for (int k = 0; k < nonZeros; ++k) y[row(rng)] = g(rng);
+      }
+      Eigen::VectorXd expected = y, exact = y, x = y;
+      rounded.triangularView<Eigen::UnitLower>().solveInPlace(expected);
+      factor.matrixL().solveInPlace(exact);
+      plan.forwardInPlace(lower, x, gathered);
+      EXPECT_EQ(std::memcmp(x.data(), expected.data(), sizeof(double) * static_cast<size_t>(x.size())), 0)
+          << elementOrderName(order) << ", " << nonZeros << " non-zeros: max difference " << (x - expected).cwiseAbs().maxCoeff();
+      if (nonZeros < 0) {
+        EXPECT_GT((x - exact).cwiseAbs().maxCoeff(), 0.0) << elementOrderName(order);
+      }
+      EXPECT_LE((x - exact).cwiseAbs().maxCoeff(), 1e-5 * exact.cwiseAbs().maxCoeff()) << elementOrderName(order);
     }
   });
 }
