@@ -88,6 +88,9 @@ class BackwardSolvePlan {
   /// The critical path's share of L's non-zeros: the top plus the heaviest part (1 for one part).
   double criticalShare() const { return mCriticalShare; }
   int parts() const { return static_cast<int>(mPartRuns.size()); }
+  /// With float values, L's values rounded to float at Eigen's positions (valuePtr's), which the
+  /// forward solve reads; else null. Whatever must match that solve (the correction's H) reads them.
+  const float* forwardFloats() const { return mFloatValues ? mForwardFloats.data() : nullptr; }
   /// Bytes of the plan's copy of L's values.
   size_t valueBytes() const {
     return sizeof(double) * mValues.size() + sizeof(float) * (mFloats.size() + mForwardFloats.size());

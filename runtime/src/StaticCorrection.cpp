@@ -146,9 +146,10 @@ Result<StaticCorrection> StaticCorrection::fromFactor(const ObjectAsset& asset, 
   // from the same rounded L: y − H c then subtracts two solves with one factor. (H from the double
   // L moved the P2 test slab's stress by 3e-6 of its peak; from the rounded one, by 6.5e-7.)
   const SparseMatrixd& lower = solver.matrixL().nestedExpression();
+  const float* rounded = data->backward.forwardFloats();  // the forward solve's own values, or null
   for (Eigen::Index j = 0; j < lower.outerSize(); ++j) {
     for (SparseMatrixd::InnerIterator it(lower, j); it; ++it) {
-      const double l = floats ? static_cast<double>(static_cast<float>(it.value())) : it.value();
+      const double l = rounded ? static_cast<double>(rounded[&it.value() - lower.valuePtr()]) : it.value();
       forward.row(it.index()) -= l * forward.row(j);
     }
   }
