@@ -94,25 +94,70 @@ double splitBound(const Voigt& s) {
 // costs an atan2, a sincos and a scaling.
 double principalBound(const Voigt& sigma) { return splitBound(sigma) + 1e-9 * kD.cwiseProduct(sigma).norm(); }
 
-// σ_e = S_e q over the first r modes: S's rows 6e..6e+5 (row-major, contiguous) against q, in one
-// pass with six running sums in mode order. Eigen's general matrix-vector kernel costs several times
-// the 6r products for so small a block, and the scan and the cracks make tens of thousands of
-// these; plain sums in a fixed order also give the same bits wherever the buffers lie.
-Voigt elementStress(const MatrixXdRow& S, Eigen::Index e, const double* q, Eigen::Index r) {
+// σ_e = S_e q over the first r modes: S's rows 6e..6e+5 (row-major, contiguous) against q, four
+// running sums a row (mode j to sum j mod 4, added as (a₀ + a₁) + (a₂ + a₃)): the same order in
+// SSE2 pairs and in AVX quads, so the same bits on either (CrackPropagation.ElementStressIsTheSame
+// BitsInEitherLanesAndNearEigensProduct). The scan and the cracks make tens of thousands of these
+// an impact, and one running sum a row made each wait r add latencies: on the brick they were 5.6 ms
+// of CPU an impact, the largest item of its stress and crack stages. Eigen's general
+// matrix-vector kernel costs several times the 6r products for so small a block; fixed sums also
+// give the same bits wherever the buffers lie.
+template <int L>
+[[gnu::always_inline]] inline void elementStressInLanes(const double* row, Eigen::Index stride, const double* q,
+                                                        Eigen::Index r, double* out) {
+  using Pack = VectorOf<double, L>;
+  constexpr int kPacks = 4 / L;  // registers a row
+  // The six rows are one block (stride ≥ r): every line of it asked for at once, where the rows'
+  // first loads otherwise waited for their lines one stream at a time.
+  prefetchBytes(row, row + 5 * stride + r);
+  Pack acc[6][kPacks];
+  for (int i = 0; i < 6; ++i) {
+    for (int n = 0; n < kPacks; ++n) acc[i][n] = Pack{};  // in registers (a zeroed array went through the stack)
+  }
+  const Eigen::Index whole = r / 4 * 4;
+  for (Eigen::Index j = 0; j < whole; j += 4) {
+    Pack qj[kPacks];
+    for (int n = 0; n < kPacks; ++n) loadLanes<L>(q + j + n * L, qj[n]);
+    for (int i = 0; i < 6; ++i) {
+      for (int n = 0; n < kPacks; ++n) {
+        Pack sij;
+        loadLanes<L>(row + i * stride + j + n * L, sij);
+        acc[i][n] += sij * qj[n];
+      }
+    }
+  }
+  for (int i = 0; i < 6; ++i) {
+    double lane[4];
+    std::memcpy(lane, acc[i], sizeof lane);
+    for (Eigen::Index j = whole; j < r; ++j) lane[j - whole] += row[i * stride + j] * q[j];
+    out[i] = (lane[0] + lane[1]) + (lane[2] + lane[3]);
+  }
+}
+
+void elementStressNarrow(const double* row, Eigen::Index stride, const double* q, Eigen::Index r, double* out) {
+  elementStressInLanes<2>(row, stride, q, r, out);
+}
+
+BRITTLE_TARGET_AVX void elementStressWide(const double* row, Eigen::Index stride, const double* q, Eigen::Index r,
+                                          double* out) {
+  elementStressInLanes<4>(row, stride, q, r, out);
+}
+
+}  // namespace
+
+Voigt detail::elementStress(const MatrixXdRow& S, Eigen::Index e, const double* q, Eigen::Index r, Lanes lanes) {
   const Eigen::Index stride = S.cols();
   const double* row = S.data() + 6 * e * stride;
-  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, s4 = 0.0, s5 = 0.0;
-  for (Eigen::Index j = 0; j < r; ++j) {
-    const double qj = q[j];
-    s0 += row[j] * qj;
-    s1 += row[stride + j] * qj;
-    s2 += row[2 * stride + j] * qj;
-    s3 += row[3 * stride + j] * qj;
-    s4 += row[4 * stride + j] * qj;
-    s5 += row[5 * stride + j] * qj;
+  Voigt s;
+  if (lanes == Lanes::Wide) {
+    elementStressWide(row, stride, q, r, s.data());
+  } else {
+    elementStressNarrow(row, stride, q, r, s.data());
   }
-  return (Voigt() << s0, s1, s2, s3, s4, s5).finished();
+  return s;
 }
+
+namespace {
 
 // A group's centre stress S_c q_k at instants k..k+L−1 into sums[i][lane]: S_c is rows 6g..6g+5 of
 // `centres`, q the instants' modal coordinates in float (one column per mode, its rows padded to a
@@ -450,7 +495,7 @@ StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::Vect
 }
 
 Voigt StressField::atPoint(Eigen::Index point) const {
-  Voigt s = elementStress(*stressModes, point, q.data(), q.size());
+  Voigt s = detail::elementStress(*stressModes, point, q.data(), q.size(), lanes);
   if (staticStress && staticStress->size() > 0) s += staticStress->segment<6>(6 * point) * forceN;
   return s;
 }
@@ -546,7 +591,7 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
   scan.evaluations = 0;
   // σ_e at instant k (w.qT: prepareStressScan's).
   auto voigt = [&](Eigen::Index e, Eigen::Index k) {
-    Voigt s = elementStress(S, e, w.qT.col(k).data(), r);
+    Voigt s = detail::elementStress(S, e, w.qT.col(k).data(), r, w.lanes);
     if (correction) s += staticStress.segment<6>(6 * e) * forceN[static_cast<size_t>(k)];
     return s;
   };

@@ -136,6 +136,30 @@ TEST(CrackPropagation, CrumbMergingEqualsRelabellingAfterEveryMerge) {
   EXPECT_GT(totalMerges, 40);  // the trials exercised merging
 }
 
+// The element stress sums each row in four running sums (mode j to sum j mod 4): the same bits in
+// SSE2 pairs and AVX quads, for every mode count (tails of 0–3 modes), and within rounding of
+// Eigen's product, which sums in another order.
+TEST(CrackPropagation, ElementStressIsTheSameBitsInEitherLanesAndNearEigensProduct) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal;
+  for (Eigen::Index r : {1, 2, 3, 4, 5, 7, 8, 13, 40, 41}) {
+    MatrixXdRow S(6 * 9, r + 3);  // a stride wider than the modes read
+    for (Eigen::Index i = 0; i < S.size(); ++i) S.data()[i] = normal(rng) * 1e6;
+    Eigen::VectorXd q(r);
+    for (Eigen::Index j = 0; j < r; ++j) q[j] = normal(rng) * 1e-6;
+    for (Eigen::Index p = 0; p < 9; ++p) {
+      const Voigt narrow = detail::elementStress(S, p, q.data(), r, Lanes::Narrow);
+      const Voigt eigen = S.block(6 * p, 0, 6, r) * q;
+      const double scale = (S.block(6 * p, 0, 6, r).cwiseAbs() * q.cwiseAbs()).maxCoeff();
+      EXPECT_LE((narrow - eigen).cwiseAbs().maxCoeff(), 1e-15 * r * scale) << r << " modes, point " << p;
+      if (widestLanes() == Lanes::Wide) {
+        const Voigt wide = detail::elementStress(S, p, q.data(), r, Lanes::Wide);
+        EXPECT_EQ(std::memcmp(wide.data(), narrow.data(), sizeof(double) * 6), 0) << r << " modes, point " << p;
+      }
+    }
+  }
+}
+
 TEST(CrackPropagation, PrunedScanEqualsTheFullScanOnRandomFields) {
   // Several generator seeds; fields with and without the static correction; thresholds from below
   // the typical peak (many seeds) to above every σ₁ (none).

@@ -231,6 +231,7 @@ struct StressField {
   const Eigen::VectorXd* staticStress = nullptr;  ///< 6PT per newton, or null
   double forceN = 0.0;
   int pointsPerElement = 1;                  ///< P: 1 (P1) or 4 (P2, the corners)
+  Lanes lanes = widestLanes();               ///< the registers of its sums (the same bits in either)
   /// The element's stress: at its point of largest σ₁, the first of equals (the one point of a P1 element).
   Voigt at(int32_t element) const;
   /// The stress at one stress point (row block `point` of stressModes).
@@ -353,5 +354,13 @@ int labelFragments(const TetTopology& topology, const Eigen::VectorXd& edgeCuts,
                    Eigen::VectorXi& labels);
 int labelFragments(const TetTopology& topology, const Eigen::VectorXd& edgeCuts, Eigen::Index nodeCount,
                    Eigen::VectorXi& labels, CrackWorkspace& workspace);
+
+namespace detail {
+/// σ = S_p q of stress point p over the first r modes (S's rows 6p..6p+5), in four running sums a
+/// row: the same bits in either lanes, within 1e-15 of the scale of Eigen's product (which sums in
+/// another order). The scan and StressField both read stresses through it.
+Voigt elementStress(const MatrixXdRow& S, Eigen::Index point, const double* q, Eigen::Index r,
+                    Lanes lanes = widestLanes());
+}  // namespace detail
 
 }  // namespace brittle
