@@ -96,9 +96,10 @@ double principalBound(const Voigt& sigma) { return splitBound(sigma) + 1e-9 * kD
 
 // σ_e = S_e q over the first r modes: S's rows 6e..6e+5 (row-major, contiguous) against q, four
 // running sums a row (mode j to sum j mod 4, added as (a₀ + a₁) + (a₂ + a₃)): the same order in
-// SSE2 pairs and in AVX quads, so the same bits on either (CrackPropagation.ElementStressIsTheSame
-// BitsInEitherLanesAndNearEigensProduct). The scan and the cracks make tens of thousands of these
-// an impact, and one running sum a row made each wait r add latencies: on the brick they were 5.6 ms
+// SSE2 pairs and in AVX quads, so the same bits on either (the test
+// CrackPropagation.ElementStressIsTheSameBitsInEitherLanesAndNearEigensProduct). The scan and the
+// cracks make tens of thousands of these an impact, and one running sum a row made each wait r add
+// latencies: on the brick they were 5.7 ms
 // of CPU an impact, the largest item of its stress and crack stages. Eigen's general
 // matrix-vector kernel costs several times the 6r products for so small a block; fixed sums also
 // give the same bits wherever the buffers lie.

@@ -357,8 +357,8 @@ int labelFragments(const TetTopology& topology, const Eigen::VectorXd& edgeCuts,
 
 namespace detail {
 /// σ = S_p q of stress point p over the first r modes (S's rows 6p..6p+5), in four running sums a
-/// row: the same bits in either lanes, within 1e-15 of the scale of Eigen's product (which sums in
-/// another order). The scan and StressField both read stresses through it.
+/// row: the same bits in either lanes, within 1e-15 r of the scale Σ|S_ij q_j| of Eigen's product
+/// (which sums in another order). The scan and StressField both read stresses through it.
 Voigt elementStress(const MatrixXdRow& S, Eigen::Index point, const double* q, Eigen::Index r,
                     Lanes lanes = widestLanes());
 }  // namespace detail
