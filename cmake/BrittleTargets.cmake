@@ -10,6 +10,11 @@ function(brittle_target_flags target)
   target_compile_features(${target} PUBLIC cxx_std_20)
   # One version for every module and tool (packs record it as "generator").
   target_compile_definitions(${target} PRIVATE BRITTLE_VERSION="${PROJECT_VERSION}")
+  # Eigen blocks its products by cache sizes it would read from the CPU, and another blocking
+  # rounds otherwise: fixed sizes instead, the same as brittle::pinEigenBlocking's, so that packs
+  # and fractures are the same bits on every machine (brittle/core/EigenBlocking.h).
+  target_compile_definitions(${target} PRIVATE EIGEN_NO_CPUID EIGEN_DEFAULT_L1_CACHE_SIZE=32768
+                                               EIGEN_DEFAULT_L2_CACHE_SIZE=262144 EIGEN_DEFAULT_L3_CACHE_SIZE=2097152)
   if(BRITTLE_SANITIZE)
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer
       -fno-sanitize-recover=undefined)

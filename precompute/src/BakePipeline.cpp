@@ -2,6 +2,7 @@
 
 #include <set>
 
+#include "brittle/core/EigenBlocking.h"
 #include "brittle/core/Timing.h"
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/precompute/FillOrdering.h"
@@ -36,6 +37,7 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
                                             ObjectBakeReport* report, SteadyClock::time_point start);
 
 Result<ObjectAsset> bakeObject(const ObjectBakeSettings& s, ProgressSink* progressIn, ObjectBakeReport* report) {
+  pinEigenBlocking();  // the same pack on every CPU (EigenBlocking.h)
   const auto start = SteadyClock::now();
   const std::string name = s.name.empty() ? s.meshPath.stem().string() : s.name;
   NamedProgress progress(progressIn, name);
@@ -51,6 +53,7 @@ Result<ObjectAsset> bakeObject(const ObjectBakeSettings& s, ProgressSink* progre
 
 Result<ObjectAsset> bakeSurface(TriangleMesh mesh, const ObjectBakeSettings& s, ProgressSink* progressIn,
                                 ObjectBakeReport* report) {
+  pinEigenBlocking();
   return bakeSurfaceSince(std::move(mesh), s, progressIn, report, SteadyClock::now());
 }
 
@@ -136,6 +139,7 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
 
 Result<Pack> bakePack(const std::vector<ObjectBakeSettings>& objects, ProgressSink* progress,
                       std::vector<ObjectBakeReport>* reports) {
+  pinEigenBlocking();
   Pack pack;
   if (reports) reports->clear();
   std::set<std::string> names;

@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "brittle/core/AtomicFile.h"
+#include "brittle/core/EigenBlocking.h"
 #include "brittle/core/JsonChecks.h"
 #include "brittle/core/Random.h"
 #include "brittle/database/Pack.h"
@@ -88,6 +89,7 @@ Result<FragmentEntry> bakeFragmentEntry(const TriangleMesh& fragment, const std:
                                         const DatabaseBakeSettings& settings,
                                         std::array<Descriptor, kDescriptorKindCount>& descriptors,
                                         ProgressSink* progress, const TetMesh* solid) {
+  pinEigenBlocking();
   auto frames = computeCanonicalFrames(fragment, settings.descriptors.frame);
   if (!frames) return frames.error();
   const CanonicalFrame& frame = frames.value().candidates.front();
@@ -289,6 +291,7 @@ FragmentDatabase databaseOf(const DatabaseBakeSettings& settings, std::vector<Fr
 }  // namespace
 
 Result<FragmentDatabase> bakeFragmentDatabase(const DatabaseBakeSettings& settings, ProgressSink* progress) {
+  pinEigenBlocking();  // the same database on every CPU (EigenBlocking.h)
   auto baker = EntryBaker::create(settings, progress);
   if (!baker) return baker.error();
   SharedProgress shared(progress, settings.entryCount);
@@ -447,6 +450,7 @@ Status prepareFragmentDatabaseCheckpoints(const DatabaseBakeSettings& settings, 
 Result<DatabaseCheckpointReport> bakeFragmentDatabaseChunks(const DatabaseBakeSettings& settings,
                                                             const DatabaseCheckpointSettings& c,
                                                             ProgressSink* progress) {
+  pinEigenBlocking();
   if (Status st = validateCheckpointSettings(settings, c); !st) return st.error();
   if (Status st = checkManifest(settings, c); !st) return st.error();
   DatabaseCheckpointReport report;

@@ -14,6 +14,7 @@
 
 #include "Body.h"
 #include "ImpactStages.h"
+#include "brittle/core/EigenBlocking.h"
 #include "brittle/core/Random.h"
 #include "brittle/runtime/PolynomialModes.h"
 
@@ -264,6 +265,7 @@ World::~World() = default;
 
 Result<World> World::create(Pack pack, const WorldSettings& settings) {
   if (Status st = validateWorldSettings(settings); !st) return st.error();
+  pinEigenBlocking();  // the same fractures on every CPU, whatever the host set (EigenBlocking.h)
   try {
     auto impl = std::make_unique<Impl>();
     impl->pack = std::move(pack);

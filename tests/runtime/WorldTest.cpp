@@ -23,6 +23,7 @@
 #include "brittle/testing/BakeFixtures.h"
 #include "brittle/testing/DatabaseFixtures.h"
 #include "brittle/testing/Fixtures.h"
+#include "brittle/core/EigenBlocking.h"
 
 namespace brittle {
 namespace {
@@ -1012,6 +1013,44 @@ TEST_F(WorldTest, BackgroundPreparationChangesNothingButWhereTheWorkRuns) {
     return r ? r.value().peakPrincipalStressPa : 0.0;
   };
   EXPECT_EQ(peak(true), peak(false));
+}
+
+// Eigen blocks its products by the cache sizes it reads from the CPU, and products blocked
+// otherwise round otherwise: a World pins them (EigenBlocking.h), so that a machine with other
+// caches, or a host that set its own, breaks the plate into the same bits. The sizes below are a
+// 48 KB / 2 MB / 260 MB Xeon's, a 32 KB / 512 KB / 16 MB EPYC-like machine's and a small one's;
+// without the pin the first two gave the main job's plate impact two fingerprints.
+TEST_F(WorldTest, TheSameFractureWhateverCacheSizesEigenWasGiven) {
+  struct Caches {
+    std::ptrdiff_t l1, l2, l3;
+  };
+  std::vector<uint64_t> prints, bodies;
+  for (const Caches c : {Caches{48 << 10, 2 << 20, 260 << 20}, Caches{32 << 10, 512 << 10, 16 << 20}, Caches{16 << 10, 64 << 10, 1 << 20}}) {
+    SCOPED_TRACE(std::to_string(c.l1) + " / " + std::to_string(c.l2) + " / " + std::to_string(c.l3) + " bytes");
+    Eigen::setCpuCacheSizes(c.l1, c.l2, c.l3);  // as the host's machine, or the host itself, had them
+    World world = makeWorld();
+    EXPECT_EQ(Eigen::l1CacheSize(), kEigenBlockingL1);
+    EXPECT_EQ(Eigen::l2CacheSize(), kEigenBlockingL2);
+    EXPECT_EQ(Eigen::l3CacheSize(), kEigenBlockingL3);
+    const ObjectId plate = world.addObject({.asset = "plate"}).value();
+    auto broken = world.impact(ball(plate, 60.0));
+    ASSERT_TRUE(broken && broken.value().broken);
+    prints.push_back(fingerprint(broken.value()));
+    // The new bodies too: their modal data, made on the workers.
+    Fingerprint made;
+    for (const FragmentResult& f : broken.value().fragments) {
+      if (!f.object.valid()) continue;
+      auto asset = world.objectAsset(f.object);
+      ASSERT_TRUE(asset) << asset.error().message;
+      made.add(asset.value()->modal.modes);
+      made.add(asset.value()->modal.frequenciesHz);
+    }
+    bodies.push_back(made.value());
+  }
+  EXPECT_EQ(prints[0], prints[1]);
+  EXPECT_EQ(prints[0], prints[2]);
+  EXPECT_EQ(bodies[0], bodies[1]);
+  EXPECT_EQ(bodies[0], bodies[2]);
 }
 
 }  // namespace

@@ -6,8 +6,10 @@
 
 #include "Commands.h"
 #include "CliSupport.h"
+#include "brittle/core/EigenBlocking.h"
 
 int main(int argc, char** argv) {
+  brittle::pinEigenBlocking();  // the same packs and fractures on every CPU (EigenBlocking.h)
   CLI::App app{"brittle: bake breakable objects and a fragment shape database offline (tet meshes, modal bases, stress modes, shape descriptors) into HDF5 packs"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("brittle ") + BRITTLE_VERSION);

@@ -321,8 +321,10 @@ struct ImpactResult {
 
 class World {
  public:
-  /// Validates the settings and builds the search index of the pack's database (if any).
-  /// Errors: InvalidArgument (settings), those of FragmentMatcher::build.
+  /// Validates the settings and builds the search index of the pack's database (if any). Sets
+  /// Eigen's product blocking process-wide to fixed cache sizes (brittle/core/EigenBlocking.h), so
+  /// that fractures are the same bits on every CPU; call it where no other thread runs Eigen
+  /// products at that moment. Errors: InvalidArgument (settings), those of FragmentMatcher::build.
   static Result<World> create(Pack pack, const WorldSettings& settings = {});
 
   World(World&&) noexcept;
