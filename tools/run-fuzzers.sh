@@ -2,7 +2,7 @@
 # Fuzzes brittle's readers (tests/fuzz) for a bounded time: installs clang and the libraries the
 # targets need if they are missing, builds them into build-fuzz/, and runs each target on a copy
 # of its seed corpus, so that a run never grows the repository.
-#   tools/run-fuzzers.sh [SECONDS_PER_TARGET]    default 10: six targets, about a minute
+#   tools/run-fuzzers.sh [SECONDS_PER_TARGET]    default 10: ten targets, two at a time, about a minute
 # Exits non-zero when a target crashed, leaked, hung (10 s on one input) or went over 2 GiB, and
 # prints how to reproduce it: build-fuzz/bin/<target> <input>.
 # BRITTLE_FUZZ_CORPUS=<dir>: a corpus kept between runs (a CI cache, say). Each target also starts
@@ -49,22 +49,21 @@ if ! cmp -s "$fresh_pack" tests/fuzz/corpus/fuzz_pack_bytes/seed.pack.h5; then
   echo "      regenerate it with $build/bin/brittle_fuzz_seed_pack tests/fuzz/corpus/fuzz_pack_bytes/seed.pack.h5"
 fi
 
-failed=()
-printf '%-26s %10s %10s %8s\n' target executions "exec/s" result
-while read -r target; do
-  [ -n "$target" ] || continue
-  corpus="$build/corpus/$target"
-  artifacts="$build/artifacts/$target"
-  log="$build/logs/$target.log"
+# One target: fuzz it, then write its line of the table (and, when it failed, how to reproduce it)
+# into $build/logs/<target>.report; its exit status says whether it failed.
+fuzz_one() {
+  local target=$1
+  local corpus="$build/corpus/$target" artifacts="$build/artifacts/$target" log="$build/logs/$target.log"
+  local report="$build/logs/$target.report"
   rm -rf "$corpus" "$artifacts"
   mkdir -p "$corpus" "$artifacts" "$(dirname "$log")"
   if [ -d "tests/fuzz/corpus/$target" ]; then cp -r "tests/fuzz/corpus/$target/." "$corpus/"; fi
-  kept=()
+  local kept=()
   if [ -n "${BRITTLE_FUZZ_CORPUS:-}" ]; then
     mkdir -p "$BRITTLE_FUZZ_CORPUS/$target"
     kept=("$BRITTLE_FUZZ_CORPUS/$target")
   fi
-  options=(-max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1
+  local options=(-max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1
     -artifact_prefix="$artifacts/")
   case $target in
     fuzz_mesh_reader) options+=(-dict=tests/fuzz/mesh.dict -max_len=4096) ;;
@@ -73,25 +72,46 @@ while read -r target; do
     # Its inputs are lists of edits: start at full length rather than growing from a few bytes.
     fuzz_pack_edits) options+=(-len_control=0 -max_len=512) ;;
   esac
-  status=0
+  local status=0
   "$build/bin/$target" "${options[@]}" "$corpus" "${kept[@]}" >"$log" 2>&1 || status=$?
+  local runs speed
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   speed=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
   if [ "$status" -eq 0 ]; then
-    printf '%-26s %10s %10s %8s\n' "$target" "${runs:-?}" "${speed:-?}" ok
+    printf '%-26s %10s %10s %8s\n' "$target" "${runs:-?}" "${speed:-?}" ok >"$report"
     if [ ${#kept[@]} -gt 0 ]; then
-      "$build/bin/$target" -merge=1 "${kept[0]}" "$corpus" >>"$log" 2>&1 || echo "    (merging into ${kept[0]} failed: $log)"
+      "$build/bin/$target" -merge=1 "${kept[0]}" "$corpus" >>"$log" 2>&1 || echo "    (merging into ${kept[0]} failed: $log)" >>"$report"
     fi
-  else
+    return 0
+  fi
+  {
     printf '%-26s %10s %10s %8s\n' "$target" "${runs:-?}" "${speed:-?}" "FAILED"
-    failed+=("$target")
     grep -E "ERROR|SUMMARY|fuzz finding|runtime error" "$log" | head -5 | sed 's/^/    /'
     for input in "$artifacts"/*; do
       [ -e "$input" ] && echo "    reproduce: $build/bin/$target $input"
     done
     echo "    log: $log"
-  fi
-done <"$build/fuzz-targets.txt"
+  } >"$report"
+  return 1
+}
+
+# Two targets at a time, one a core (each libFuzzer process is single-threaded); the table is
+# printed in the targets' order once all have run. Each target has its own corpus copy, artifacts
+# and log, so the pairs share nothing.
+mapfile -t targets < <(grep -v '^$' "$build/fuzz-targets.txt")
+failed=()
+for ((i = 0; i < ${#targets[@]}; i += 2)); do
+  pids=()
+  for target in "${targets[@]:i:2}"; do
+    fuzz_one "$target" &
+    pids+=($!)
+  done
+  for j in "${!pids[@]}"; do
+    wait "${pids[$j]}" || failed+=("${targets[$((i + j))]}")
+  done
+done
+printf '%-26s %10s %10s %8s\n' target executions "exec/s" result
+for target in "${targets[@]}"; do cat "$build/logs/$target.report"; done
 
 if [ ${#failed[@]} -gt 0 ]; then
   echo "fuzz: findings in ${failed[*]}" >&2

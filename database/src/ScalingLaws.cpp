@@ -75,8 +75,40 @@ void rotateVoigtRows(const Eigen::Matrix3d& q, Eigen::Ref<MatrixXdRow> s) {
   }
 }
 
+// The entry's physical data are there and consistent: InvalidArgument otherwise. Sets n, the FEM
+// node count (P2 entries: the FEM nodes include one per edge, and each tet has four stress points).
+Status checkEntryArrays(const ObjectAsset& a, Eigen::Index& n) {
+  const Eigen::Index t = a.tetMesh.tets.rows(), r = a.modal.modes.cols();
+  if (t == 0 || r == 0) {
+    return makeError(ErrorCode::InvalidArgument, "database entry '" + a.name + "' has no physical data (descriptors only)");
+  }
+  n = femNodeCount(a.tetMesh, a.elementOrder);
+  const Eigen::Index points = stressPointsPerElement(a.elementOrder);
+  if (n <= 0 || a.modal.modes.rows() != 3 * n || a.stressModes.rows() != 6 * points * t || a.stressModes.cols() != r ||
+      a.modal.eigenvaluesRad2PerS2.size() != r) {
+    return makeError(ErrorCode::InvalidArgument, "database entry '" + a.name + "' has inconsistent modal arrays");
+  }
+  return Ok{};
+}
+
+Result<EntryAtPoisson> entryAtPoisson(const FragmentEntry& entry, const Material& reference, double poissonRatio) {
+  if (Status st = validateMaterial(reference); !st) return st.error();
+  Material target = reference;
+  target.poissonRatio = poissonRatio;
+  if (Status st = validateMaterial(target); !st) return st.error();
+  const ObjectAsset& a = entry.asset;
+  Eigen::Index n = 0;
+  if (Status st = checkEntryArrays(a, n); !st) return st.error();
+  EntryAtPoisson out;
+  out.poissonRatio = poissonRatio;
+  out.modal = a.modal;
+  out.stressModes = a.stressModes;
+  correctPoisson(a.tetMesh, a.elementOrder, reference, poissonRatio, out.modal, out.stressModes);
+  return out;
+}
+
 Result<ObjectAsset> instantiateEntry(const FragmentEntry& entry, const Material& reference, const Material& target,
-                                     const CanonicalFrame& frame, InstantiateReport* report) {
+                                     const CanonicalFrame& frame, InstantiateReport* report, const EntryAtPoisson* atPoisson) {
   if (Status st = validateMaterial(reference); !st) return st.error();
   if (Status st = validateMaterial(target); !st) return st.error();
   if (!frame.rotation.allFinite() || !frame.translationM.allFinite() || !std::isfinite(frame.scalePerM) ||
@@ -84,23 +116,30 @@ Result<ObjectAsset> instantiateEntry(const FragmentEntry& entry, const Material&
     return makeError(ErrorCode::InvalidArgument, "query frame has a non-finite value or a non-positive scale");
   }
   const ObjectAsset& a = entry.asset;
-  // P2 entries: the FEM nodes include one per edge, and each tet has four stress points.
-  const Eigen::Index t = a.tetMesh.tets.rows(), r = a.modal.modes.cols();
-  if (t == 0 || r == 0) {
-    return makeError(ErrorCode::InvalidArgument, "database entry '" + a.name + "' has no physical data (descriptors only)");
-  }
-  const Eigen::Index n = femNodeCount(a.tetMesh, a.elementOrder), points = stressPointsPerElement(a.elementOrder);
-  if (n <= 0 || a.modal.modes.rows() != 3 * n || a.stressModes.rows() != 6 * points * t || a.stressModes.cols() != r ||
-      a.modal.eigenvaluesRad2PerS2.size() != r) {
-    return makeError(ErrorCode::InvalidArgument, "database entry '" + a.name + "' has inconsistent modal arrays");
+  Eigen::Index n = 0;
+  if (Status st = checkEntryArrays(a, n); !st) return st.error();
+  const bool otherPoisson = target.poissonRatio != reference.poissonRatio;
+  if (otherPoisson && atPoisson &&
+      (atPoisson->poissonRatio != target.poissonRatio || atPoisson->modal.modes.rows() != a.modal.modes.rows() ||
+       atPoisson->modal.modes.cols() != a.modal.modes.cols() || atPoisson->modal.eigenvaluesRad2PerS2.size() != a.modal.modes.cols() ||
+       atPoisson->stressModes.rows() != a.stressModes.rows() || atPoisson->stressModes.cols() != a.stressModes.cols())) {
+    return makeError(ErrorCode::InvalidArgument, "database entry '" + a.name + "': the basis given for ν = " +
+                                                     std::to_string(atPoisson->poissonRatio) + " does not fit a target of ν = " +
+                                                     std::to_string(target.poissonRatio) + " on this entry");
   }
 
   ObjectAsset out = a;
   out.materialName = target.name;
   InstantiateReport info;
   info.lengthScaleM = 1.0 / frame.scalePerM;
-  if (target.poissonRatio != reference.poissonRatio) {
-    correctPoisson(a.tetMesh, a.elementOrder, reference, target.poissonRatio, out.modal, out.stressModes);
+  if (otherPoisson) {
+    if (atPoisson) {
+      out.modal.modes = atPoisson->modal.modes;
+      out.modal.eigenvaluesRad2PerS2 = atPoisson->modal.eigenvaluesRad2PerS2;
+      out.stressModes = atPoisson->stressModes;
+    } else {
+      correctPoisson(a.tetMesh, a.elementOrder, reference, target.poissonRatio, out.modal, out.stressModes);
+    }
     info.poissonCorrected = true;
   }
 

@@ -72,13 +72,14 @@ const Result<std::shared_ptr<const Body>>& BodySource::get() const {
 }
 
 Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount,
-                                             const ExactModesFactor* factor, Eigen::VectorXd correctionEigenvalues) {
+                                             const ExactModesFactor* factor, Eigen::VectorXd correctionEigenvalues,
+                                             const TetTopology* sameTets) {
   const int points = stressPointsPerElement(asset.elementOrder);
   if (asset.modal.modes.cols() == 0 || asset.stressModes.rows() != 6 * points * asset.tetMesh.tets.rows()) {
     return makeError(ErrorCode::InvalidArgument,
                      "object '" + asset.name + "' has no modal data or stress modes of the wrong size");
   }
-  auto topo = buildTetTopology(asset.tetMesh);
+  auto topo = sameTets ? buildTetTopology(asset.tetMesh, *sameTets) : buildTetTopology(asset.tetMesh);
   if (!topo) return Error{topo.error().code, "object '" + asset.name + "': " + topo.error().message};
   // P2 modes cover the corners and one node per edge (ObjectAsset.h).
   const Eigen::Index femNodes =

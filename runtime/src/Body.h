@@ -109,10 +109,13 @@ inline int keptModeCount(int requested, int available) { return requested > 0 ? 
 /// Builds a body with the first `modeCount` stored modes (0: all, keptModeCount). With `factor` (the exact
 /// path's, holding a factorisation), its static correction is built at once from that factor
 /// (μ = −σ) instead of a second factorisation on its first impact. `correctionEigenvalues`: see Body.
+/// `sameTets`, when given, is a topology of a mesh with the asset's tets (a matched entry's own,
+/// EntryCache.h): its connectivity is reused, buildTetTopology(mesh, sameTets), the same bits.
 /// Errors: InvalidArgument (no modal data, stress modes of the wrong size, a zero-frequency
 /// elastic mode), those of buildTetTopology.
 Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount,
                                              const ExactModesFactor* factor = nullptr,
-                                             Eigen::VectorXd correctionEigenvalues = {});
+                                             Eigen::VectorXd correctionEigenvalues = {},
+                                             const TetTopology* sameTets = nullptr);
 
 }  // namespace brittle::detail

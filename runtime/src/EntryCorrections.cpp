@@ -24,7 +24,17 @@ const Result<StaticCorrection>& EntryCorrections::get(int32_t entry, const Mater
     // The entry at unit size and in its canonical axes, with the target material (and, where ν
     // differs, the same Rayleigh–Ritz modes the placed fragment gets).
     CanonicalFrame unit;
-    auto asset = instantiateEntry(mDatabase.entries[static_cast<size_t>(entry)], mDatabase.referenceMaterial, material, unit);
+    const EntryAtPoisson* atPoisson = nullptr;
+    if (mCache && material.poissonRatio != mDatabase.referenceMaterial.poissonRatio) {
+      const Result<EntryAtPoisson>& basis = mCache->atPoisson(entry, material.poissonRatio);
+      if (!basis) {
+        slot->correction.emplace(basis.error());
+        return;
+      }
+      atPoisson = &basis.value();
+    }
+    auto asset = instantiateEntry(mDatabase.entries[static_cast<size_t>(entry)], mDatabase.referenceMaterial, material, unit,
+                                  nullptr, atPoisson);
     if (!asset) {
       slot->correction.emplace(asset.error());
       return;

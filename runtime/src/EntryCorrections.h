@@ -22,13 +22,16 @@
 #include "brittle/database/FragmentDatabase.h"
 #include "brittle/database/Material.h"
 #include "brittle/runtime/StaticCorrection.h"
+#include "EntryCache.h"
 
 namespace brittle::detail {
 
 class EntryCorrections {
  public:
-  /// `database` outlives this.
-  explicit EntryCorrections(const FragmentDatabase& database) : mDatabase(database) {}
+  /// `database` outlives this, and so does `cache` (the entries' bases at other Poisson ratios,
+  /// shared with the matched bodies; null: each correction derives its own).
+  explicit EntryCorrections(const FragmentDatabase& database, const EntryCache* cache = nullptr)
+      : mDatabase(database), mCache(cache) {}
 
   /// Entry `entry`'s correction at unit size in `material` over its first `modes` modes (the
   /// matched body's count, the same for every fragment of an entry in one World), built on first
@@ -44,6 +47,7 @@ class EntryCorrections {
     std::optional<Result<StaticCorrection>> correction;
   };
   const FragmentDatabase& mDatabase;
+  const EntryCache* mCache;
   mutable std::mutex mMutex;  // guards mSlots' structure; each slot is built under its own once_flag
   mutable std::map<std::pair<int32_t, std::string>, std::unique_ptr<Slot>> mSlots;
   mutable std::atomic<int32_t> mBuilt{0};

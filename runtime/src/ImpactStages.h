@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "Body.h"
+#include "EntryCache.h"
 #include "EntryCorrections.h"
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/runtime/CrackPropagation.h"
@@ -38,6 +39,9 @@ struct ImpactJob {
   /// The database entries' shared static corrections (WorldSettings::shareEntryCorrections); null:
   /// each matched fragment factorises its own.
   const EntryCorrections* entryCorrections = nullptr;
+  /// The database entries' connectivity and bases at other Poisson ratios, shared by every matched
+  /// fragment (EntryCache.h); null: each placement derives its own.
+  const EntryCache* entryCache = nullptr;
   int32_t maxFragments = 256;          ///< WorldSettings::maxFragmentsPerImpact
   /// WorldSettings::prepareInBackground: a matched fragment's static correction is scheduled when
   /// its body is made (the World builds it on the workers), else on its first impact.

@@ -38,19 +38,57 @@ TetEdges numberTetEdges(const Tetrahedra& tets) {
   return out;
 }
 
-Result<TetTopology> buildTetTopology(const TetMesh& mesh) {
-  const auto n = mesh.nodes.rows(), t = mesh.tets.rows();
-  if (t == 0) return makeError(ErrorCode::InvalidArgument, "tet topology: no tetrahedra");
-  if (mesh.tets.minCoeff() < 0 || mesh.tets.maxCoeff() >= n) {
+namespace {
+
+// The tet's signed volume, an error unless it is positive.
+Status measureTet(const TetMesh& mesh, Eigen::Index e, double& volume) {
+  const Eigen::Vector3d a = mesh.nodes.row(mesh.tets(e, 0)), b = mesh.nodes.row(mesh.tets(e, 1)),
+                        c = mesh.nodes.row(mesh.tets(e, 2)), d = mesh.nodes.row(mesh.tets(e, 3));
+  volume = signedTetVolume(a, b, c, d);
+  if (!(volume > 0.0)) {
+    return makeError(ErrorCode::InvalidArgument, "tet topology: tet " + std::to_string(e) + " is not positively oriented");
+  }
+  return Ok{};
+}
+
+// The mean edge length, the boundary triangles' node areas and the volume, from the connectivity
+// (edges, boundary faces) and the tets' volumes already in topo.
+void measureTopology(const TetMesh& mesh, TetTopology& topo) {
+  double edgeLength = 0.0;
+  for (Eigen::Index i = 0; i < topo.edges.rows(); ++i) {
+    edgeLength += (mesh.nodes.row(topo.edges(i, 0)) - mesh.nodes.row(topo.edges(i, 1))).norm();
+  }
+  topo.meanEdgeLengthM = edgeLength / static_cast<double>(topo.edges.rows());
+  topo.nodeAreasM2.setZero(mesh.nodes.rows());
+  for (Eigen::Index i = 0; i < topo.boundaryTriangles.rows(); ++i) {
+    const Eigen::Vector3d a = mesh.nodes.row(topo.boundaryTriangles(i, 0));
+    const Eigen::Vector3d b = mesh.nodes.row(topo.boundaryTriangles(i, 1));
+    const Eigen::Vector3d c = mesh.nodes.row(topo.boundaryTriangles(i, 2));
+    const double area = 0.5 * (b - a).cross(c - a).norm();
+    for (int k = 0; k < 3; ++k) topo.nodeAreasM2[topo.boundaryTriangles(i, k)] += area / 3.0;
+  }
+  topo.volumeM3 = topo.tetVolumesM3.sum();
+}
+
+Status checkNodeIds(const TetMesh& mesh) {
+  if (mesh.tets.rows() == 0) return makeError(ErrorCode::InvalidArgument, "tet topology: no tetrahedra");
+  if (mesh.tets.minCoeff() < 0 || mesh.tets.maxCoeff() >= mesh.nodes.rows()) {
     return makeError(ErrorCode::InvalidArgument, "tet topology: node index out of range");
   }
+  return Ok{};
+}
+
+}  // namespace
+
+Result<TetTopology> buildTetTopology(const TetMesh& mesh) {
+  if (Status st = checkNodeIds(mesh); !st) return st.error();
+  const auto t = mesh.tets.rows();
   TetTopology topo;
   TetEdges numbered = numberTetEdges(mesh.tets);
   topo.edges = std::move(numbered.edges);
   topo.tetEdges = std::move(numbered.tetEdges);
   topo.neighbours.setConstant(t, 4, -1);
   topo.tetVolumesM3.resize(t);
-  topo.nodeAreasM2.setZero(n);
   // Faces keyed by their sorted nodes; the value is the first (tet, face) seen.
   struct FaceKey {
     std::array<int32_t, 3> v;
@@ -65,13 +103,7 @@ Result<TetTopology> buildTetTopology(const TetMesh& mesh) {
   std::unordered_map<FaceKey, std::array<int32_t, 2>, FaceHash> faces;
   faces.reserve(static_cast<size_t>(t) * 3);
   for (Eigen::Index e = 0; e < t; ++e) {
-    const Eigen::Vector3d a = mesh.nodes.row(mesh.tets(e, 0)), b = mesh.nodes.row(mesh.tets(e, 1)),
-                          c = mesh.nodes.row(mesh.tets(e, 2)), d = mesh.nodes.row(mesh.tets(e, 3));
-    const double volume = signedTetVolume(a, b, c, d);
-    if (!(volume > 0.0)) {
-      return makeError(ErrorCode::InvalidArgument, "tet topology: tet " + std::to_string(e) + " is not positively oriented");
-    }
-    topo.tetVolumesM3[e] = volume;
+    if (Status st = measureTet(mesh, e, topo.tetVolumesM3[e]); !st) return st.error();
     for (int f = 0; f < 4; ++f) {
       const auto local = tetFaceNodes(f);
       FaceKey key{{mesh.tets(e, local[0]), mesh.tets(e, local[1]), mesh.tets(e, local[2])}};
@@ -87,11 +119,6 @@ Result<TetTopology> buildTetTopology(const TetMesh& mesh) {
       topo.neighbours(other, otherFace) = static_cast<int32_t>(e);
     }
   }
-  double edgeLength = 0.0;
-  for (Eigen::Index i = 0; i < topo.edges.rows(); ++i) {
-    edgeLength += (mesh.nodes.row(topo.edges(i, 0)) - mesh.nodes.row(topo.edges(i, 1))).norm();
-  }
-  topo.meanEdgeLengthM = edgeLength / static_cast<double>(topo.edges.rows());
   for (Eigen::Index e = 0; e < t; ++e) {
     for (int f = 0; f < 4; ++f) {
       if (topo.neighbours(e, f) < 0) topo.boundaryFaces.push_back({static_cast<int32_t>(e), f});
@@ -102,13 +129,31 @@ Result<TetTopology> buildTetTopology(const TetMesh& mesh) {
     const auto [e, f] = topo.boundaryFaces[i];
     const auto local = tetFaceNodes(f);
     for (int k = 0; k < 3; ++k) topo.boundaryTriangles(static_cast<Eigen::Index>(i), k) = mesh.tets(e, local[static_cast<size_t>(k)]);
-    const Eigen::Vector3d a = mesh.nodes.row(topo.boundaryTriangles(static_cast<Eigen::Index>(i), 0));
-    const Eigen::Vector3d b = mesh.nodes.row(topo.boundaryTriangles(static_cast<Eigen::Index>(i), 1));
-    const Eigen::Vector3d c = mesh.nodes.row(topo.boundaryTriangles(static_cast<Eigen::Index>(i), 2));
-    const double area = 0.5 * (b - a).cross(c - a).norm();
-    for (int k = 0; k < 3; ++k) topo.nodeAreasM2[topo.boundaryTriangles(static_cast<Eigen::Index>(i), k)] += area / 3.0;
   }
-  topo.volumeM3 = topo.tetVolumesM3.sum();
+  measureTopology(mesh, topo);
+  return topo;
+}
+
+Result<TetTopology> buildTetTopology(const TetMesh& mesh, const TetTopology& sameTets) {
+  if (Status st = checkNodeIds(mesh); !st) return st.error();
+  const auto t = mesh.tets.rows();
+  if (sameTets.tetEdges.rows() != t || sameTets.neighbours.rows() != t || sameTets.edges.rows() == 0 ||
+      sameTets.edges.maxCoeff() >= mesh.nodes.rows() || sameTets.boundaryTriangles.rows() != static_cast<Eigen::Index>(sameTets.boundaryFaces.size()) ||
+      (sameTets.boundaryTriangles.size() > 0 && sameTets.boundaryTriangles.maxCoeff() >= mesh.nodes.rows())) {
+    return makeError(ErrorCode::InvalidArgument, "tet topology: the connectivity given is not of a mesh of these " +
+                                                     std::to_string(t) + " tets and " + std::to_string(mesh.nodes.rows()) + " nodes");
+  }
+  TetTopology topo;
+  topo.edges = sameTets.edges;
+  topo.tetEdges = sameTets.tetEdges;
+  topo.neighbours = sameTets.neighbours;
+  topo.boundaryFaces = sameTets.boundaryFaces;
+  topo.boundaryTriangles = sameTets.boundaryTriangles;
+  topo.tetVolumesM3.resize(t);
+  for (Eigen::Index e = 0; e < t; ++e) {
+    if (Status st = measureTet(mesh, e, topo.tetVolumesM3[e]); !st) return st.error();
+  }
+  measureTopology(mesh, topo);
   return topo;
 }
 

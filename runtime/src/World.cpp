@@ -66,6 +66,7 @@ struct World::Impl {
   Pack pack;
   WorldSettings settings;
   std::optional<FragmentMatcher> matcher;
+  std::unique_ptr<detail::EntryCache> entryCache;              // with a matcher
   std::unique_ptr<detail::EntryCorrections> entryCorrections;  // with a matcher and shareEntryCorrections
   std::set<std::string> entryCorrectionsScheduled;  // materials whose entries placement has scheduled
   std::vector<std::shared_ptr<const BodySource>> packBodies;  // per pack object, built on first use
@@ -183,6 +184,7 @@ struct World::Impl {
     job.matcher = matcher ? &*matcher : nullptr;
     job.database = &pack.database;
     job.entryCorrections = entryCorrections.get();
+    job.entryCache = entryCache.get();
     job.workers = &workers();
     job.maxFragments = settings.maxFragmentsPerImpact;
     return job;
@@ -279,8 +281,9 @@ Result<World> World::create(Pack pack, const WorldSettings& settings) {
       auto matcher = FragmentMatcher::build(db, ms);
       if (!matcher) return matcher.error();
       impl->matcher.emplace(std::move(matcher).value());
+      impl->entryCache = std::make_unique<detail::EntryCache>(db);
       if (settings.shareEntryCorrections) {
-        impl->entryCorrections = std::make_unique<detail::EntryCorrections>(db);
+        impl->entryCorrections = std::make_unique<detail::EntryCorrections>(db, impl->entryCache.get());
       }
     }
     return World(std::move(impl));

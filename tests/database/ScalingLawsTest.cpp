@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include "FragmentTestSupport.h"
 #include "brittle/precompute/BakePipeline.h"
 #include "brittle/runtime/FemAssembly.h"
@@ -215,6 +217,56 @@ TEST_F(ScalingLawsTest, QuadraticEntriesRescaleAndTakeAnotherPoissonRatio) {
       }
     }
   }
+}
+
+// The Rayleigh–Ritz basis at another ν depends on the entry and ν alone: computed once
+// (entryAtPoisson) and handed to instantiateEntry, it places the entry with the same bits as the
+// correction instantiateEntry makes itself, at any size and pose. One for another ν, or of
+// another entry's shape, is refused.
+TEST_F(ScalingLawsTest, APoissonBasisComputedOnceGivesTheSameBits) {
+  const Material steel = materialPreset("steel").value();
+  ASSERT_NE(steel.poissonRatio, reference->poissonRatio);
+  auto basis = entryAtPoisson(*entry, *reference, steel.poissonRatio);
+  ASSERT_TRUE(basis) << basis.error().message;
+  EXPECT_EQ(basis.value().poissonRatio, steel.poissonRatio);
+  auto sameBits = [](const auto& a, const auto& b) {
+    return a.rows() == b.rows() && a.cols() == b.cols() &&
+           std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
+  };
+  for (double length : {0.5, 0.013}) {
+    SCOPED_TRACE(length);
+    InstantiateReport report;
+    auto own = instantiateEntry(*entry, *reference, steel, someFrame(length));
+    auto given = instantiateEntry(*entry, *reference, steel, someFrame(length), &report, &basis.value());
+    ASSERT_TRUE(own && given);
+    EXPECT_TRUE(report.poissonCorrected);
+    EXPECT_TRUE(sameBits(given.value().modal.modes, own.value().modal.modes));
+    EXPECT_TRUE(sameBits(given.value().modal.eigenvaluesRad2PerS2, own.value().modal.eigenvaluesRad2PerS2));
+    EXPECT_TRUE(sameBits(given.value().modal.frequenciesHz, own.value().modal.frequenciesHz));
+    EXPECT_TRUE(sameBits(given.value().stressModes, own.value().stressModes));
+    EXPECT_TRUE(sameBits(given.value().tetMesh.nodes, own.value().tetMesh.nodes));
+    // And it is a correction: the basis differs from the entry's own at ν₀.
+    EXPECT_FALSE(sameBits(given.value().stressModes, instantiateEntry(*entry, *reference, sameNuMaterial(), someFrame(length))
+                                                         .value().stressModes));
+  }
+  // At ν₀ there is nothing to correct, and a basis given is not read.
+  auto atReference = instantiateEntry(*entry, *reference, sameNuMaterial(), someFrame(0.5), nullptr, &basis.value());
+  ASSERT_TRUE(atReference);
+  EXPECT_TRUE(sameBits(atReference.value().stressModes,
+                       instantiateEntry(*entry, *reference, sameNuMaterial(), someFrame(0.5)).value().stressModes));
+
+  Material other = steel;
+  other.poissonRatio = 0.21;
+  EXPECT_EQ(instantiateEntry(*entry, *reference, other, someFrame(0.5), nullptr, &basis.value()).error().code,
+            ErrorCode::InvalidArgument);
+  EntryAtPoisson truncated = basis.value();
+  truncated.stressModes.conservativeResize(truncated.stressModes.rows() - 6, Eigen::NoChange);
+  EXPECT_EQ(instantiateEntry(*entry, *reference, steel, someFrame(0.5), nullptr, &truncated).error().code,
+            ErrorCode::InvalidArgument);
+  EXPECT_EQ(entryAtPoisson(*entry, *reference, 0.7).error().code, ErrorCode::InvalidMaterial);
+  FragmentEntry descriptorsOnly = *entry;
+  descriptorsOnly.asset.tetMesh.tets.resize(0, 4);
+  EXPECT_EQ(entryAtPoisson(descriptorsOnly, *reference, steel.poissonRatio).error().code, ErrorCode::InvalidArgument);
 }
 
 TEST_F(ScalingLawsTest, TypedErrors) {

@@ -6,6 +6,9 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
 #include <map>
 #include <set>
 
@@ -183,6 +186,47 @@ TEST(TetTopology, BadMeshesGiveTypedErrors) {
   ASSERT_FALSE(fanError);
   EXPECT_EQ(fanError.error().code, ErrorCode::InvalidArgument);
   EXPECT_NE(fanError.error().message.find("more than two"), std::string::npos) << fanError.error().message;
+}
+
+
+// A placed copy of a mesh (a database entry at a fragment's size and pose) shares its tets: the
+// topology from the original's connectivity is buildTetTopology's own, bit for bit, in every field
+// (the measured ones recomputed from the copy's nodes in the same order), and the copy's own
+// defects are still reported.
+TEST(TetTopology, TheSameTetsConnectivityGivesBuildTetTopologysBits) {
+  const TetMesh original = testing::makeBoxTetMesh(0.3, 0.2, 0.1, 3, 2, 2);
+  const TetTopology connectivity = buildTetTopology(original).value();
+  TetMesh placed = original;
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1.0, 2.0, -0.5).normalized()).toRotationMatrix();
+  placed.nodes = ((original.nodes * (0.37 * rotation.transpose())).rowwise() + Eigen::RowVector3d(1.5, -0.25, 3.0)).eval();
+  const TetTopology direct = buildTetTopology(placed).value();
+  auto shared = buildTetTopology(placed, connectivity);
+  ASSERT_TRUE(shared) << shared.error().message;
+  const TetTopology& t = shared.value();
+  EXPECT_EQ(t.edges, direct.edges);
+  EXPECT_EQ(t.tetEdges, direct.tetEdges);
+  EXPECT_EQ(t.neighbours, direct.neighbours);
+  EXPECT_EQ(t.boundaryFaces, direct.boundaryFaces);
+  EXPECT_EQ(t.boundaryTriangles, direct.boundaryTriangles);
+  auto sameBits = [](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
+  };
+  EXPECT_TRUE(sameBits(t.tetVolumesM3, direct.tetVolumesM3));
+  EXPECT_TRUE(sameBits(t.nodeAreasM2, direct.nodeAreasM2));
+  EXPECT_EQ(std::bit_cast<uint64_t>(t.volumeM3), std::bit_cast<uint64_t>(direct.volumeM3));
+  EXPECT_EQ(std::bit_cast<uint64_t>(t.meanEdgeLengthM), std::bit_cast<uint64_t>(direct.meanEdgeLengthM));
+  EXPECT_NEAR(t.volumeM3, 0.3 * 0.2 * 0.1 * std::pow(0.37, 3), 1e-15);
+  expectConsistent(placed, t);
+
+  // Another mesh's connectivity, or a copy whose tet turned inside out: typed errors.
+  const TetMesh other = testing::makeBoxTetMesh(0.3, 0.2, 0.1, 2, 2, 2);
+  EXPECT_EQ(buildTetTopology(placed, buildTetTopology(other).value()).error().code, ErrorCode::InvalidArgument);
+  TetMesh mirrored = placed;
+  mirrored.nodes.col(0) *= -1.0;
+  const auto inverted = buildTetTopology(mirrored, connectivity);
+  ASSERT_FALSE(inverted);
+  EXPECT_EQ(inverted.error().code, ErrorCode::InvalidArgument);
+  EXPECT_NE(inverted.error().message.find("not positively oriented"), std::string::npos) << inverted.error().message;
 }
 
 }  // namespace

@@ -39,16 +39,34 @@ struct InstantiateReport {
   double lengthScaleM = 0.0;      ///< L = 1/frame.scalePerM
 };
 
+/// An entry's modes and stress modes at another Poisson ratio ν: the Rayleigh–Ritz correction in
+/// its stored basis (above), at the entry's unit size, canonical axes, E₀ and ρ₀. It depends on the
+/// entry and ν alone, so a runtime that places one entry many times keeps it per (entry, ν) and
+/// hands it to instantiateEntry, which then skips the correction (the same bits as computing it).
+struct EntryAtPoisson {
+  double poissonRatio = 0.0;  ///< ν the basis is corrected for
+  ModalBasis modal;           ///< the entry's modes and eigenvalues (rad²/s²) at ν; frequencies not set
+  MatrixXdRow stressModes;    ///< 6PT by r, Pa per unit modal coordinate, at ν
+};
+
+/// The correction above for `poissonRatio`. Errors: InvalidMaterial (reference, or ν outside
+/// (−1, 0.5)), InvalidArgument (an entry without physical data or with inconsistent arrays).
+Result<EntryAtPoisson> entryAtPoisson(const FragmentEntry& entry, const Material& reference, double poissonRatio);
+
 /// The entry's physical data placed onto a query: entry points x̂ map to frame.toQuery(x̂).
 /// Inputs: entry (canonical, unit volume, baked at `reference`); `target` material; `frame`, the
 /// query's canonical frame that matched (rotation, translation in m, scale in 1/m).
 /// Output: an ObjectAsset in the query frame with material `target` (nodes in m, modes per unit
 /// modal coordinate, stress modes in Pa per unit modal coordinate, exact mass properties).
 /// residuals, orthonormalityError and the bake record are those of the stored basis.
+/// `atPoisson`, when given for a target whose ν differs from the reference's, is this entry's
+/// entryAtPoisson for that ν, used instead of computing it again.
 /// Errors: InvalidMaterial (reference or target), InvalidArgument (frame not finite or scale ≤ 0,
-/// entry without physical data, stress modes inconsistent with the mesh).
+/// entry without physical data, stress modes inconsistent with the mesh, `atPoisson` for another
+/// ν or of another shape).
 Result<ObjectAsset> instantiateEntry(const FragmentEntry& entry, const Material& reference, const Material& target,
-                                     const CanonicalFrame& frame, InstantiateReport* report = nullptr);
+                                     const CanonicalFrame& frame, InstantiateReport* report = nullptr,
+                                     const EntryAtPoisson* atPoisson = nullptr);
 
 /// Rotates every Voigt stress row block of a 6T by r matrix: σ' = Q σ Qᵀ per element and mode.
 /// Takes any row-major view: a stress vector mapped as 6P by 1 too (StaticCorrection::placed).

@@ -48,4 +48,12 @@ TetEdges numberTetEdges(const Tetrahedra& tets);
 /// shared by more than two tets).
 Result<TetTopology> buildTetTopology(const TetMesh& mesh);
 
+/// The same for a mesh whose tets are those `sameTets` was built from (a database entry placed
+/// with another size and pose, say): the connectivity (edges, neighbours, boundary faces) is
+/// copied, and only what depends on the nodes (volumes, areas, edge lengths) is measured, so the
+/// result equals buildTetTopology(mesh) bit for bit, without its hash maps. The caller vouches
+/// for the tets being the same; the shapes are checked. Errors: those of buildTetTopology but the
+/// shared face, InvalidArgument (connectivity of another shape).
+Result<TetTopology> buildTetTopology(const TetMesh& mesh, const TetTopology& sameTets);
+
 }  // namespace brittle

@@ -1,0 +1,76 @@
+// EntryCache.h (private to the runtime): a database entry's connectivity and its basis at another
+// Poisson ratio, built once and shared, with the bits of building them each time.
+#include "EntryCache.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <vector>
+
+#include <oneapi/tbb/parallel_for.h>
+
+#include "brittle/testing/DatabaseFixtures.h"
+
+namespace brittle::detail {
+namespace {
+
+template <class A, class B>
+bool sameBits(const A& a, const B& b) {
+  return a.rows() == b.rows() && a.cols() == b.cols() &&
+         std::memcmp(a.data(), b.data(), sizeof(*a.data()) * static_cast<size_t>(a.size())) == 0;
+}
+
+TEST(EntryCache, BuildsEachEntrysDataOnceWithTheBitsOfBuildingItEachTime) {
+  auto baked = bakeFragmentDatabase(testing::smallDatabaseSettings(3, true));
+  ASSERT_TRUE(baked) << baked.error().message;
+  const FragmentDatabase& db = baked.value();
+  ASSERT_GE(db.entries.size(), 2u);
+  const double nu = db.referenceMaterial.poissonRatio + 0.05;
+  EntryCache cache(db);
+  EXPECT_EQ(cache.built(), 0);
+
+  // Asked for from many tasks at once: one build per (entry) and per (entry, ν), one object each.
+  std::vector<const Result<TetTopology>*> topologies(64);
+  std::vector<const Result<EntryAtPoisson>*> bases(64);
+  tbb::parallel_for(0, 64, [&](int i) {
+    topologies[static_cast<size_t>(i)] = &cache.topology(i % 2);
+    bases[static_cast<size_t>(i)] = &cache.atPoisson(i % 2, nu);
+  });
+  for (size_t i = 2; i < 64; ++i) {
+    EXPECT_EQ(topologies[i], topologies[i % 2]);
+    EXPECT_EQ(bases[i], bases[i % 2]);
+  }
+  EXPECT_EQ(cache.built(), 4);
+  for (int32_t e : {0, 1}) {
+    SCOPED_TRACE(e);
+    const FragmentEntry& entry = db.entries[static_cast<size_t>(e)];
+    const Result<TetTopology>& topology = cache.topology(e);
+    ASSERT_TRUE(topology) << topology.error().message;
+    const TetTopology direct = buildTetTopology(entry.asset.tetMesh).value();
+    EXPECT_EQ(topology.value().edges, direct.edges);
+    EXPECT_EQ(topology.value().neighbours, direct.neighbours);
+    EXPECT_TRUE(sameBits(topology.value().tetVolumesM3, direct.tetVolumesM3));
+    const Result<EntryAtPoisson>& basis = cache.atPoisson(e, nu);
+    ASSERT_TRUE(basis) << basis.error().message;
+    const EntryAtPoisson own = entryAtPoisson(entry, db.referenceMaterial, nu).value();
+    EXPECT_EQ(basis.value().poissonRatio, nu);
+    EXPECT_TRUE(sameBits(basis.value().modal.modes, own.modal.modes));
+    EXPECT_TRUE(sameBits(basis.value().modal.eigenvaluesRad2PerS2, own.modal.eigenvaluesRad2PerS2));
+    EXPECT_TRUE(sameBits(basis.value().stressModes, own.stressModes));
+  }
+  EXPECT_EQ(cache.built(), 4);  // the checks above were served from the cache
+  // Another ν is another basis.
+  ASSERT_TRUE(cache.atPoisson(0, nu + 0.05));
+  EXPECT_NE(&cache.atPoisson(0, nu + 0.05), bases[0]);
+  EXPECT_EQ(cache.built(), 5);
+
+  // Typed errors, kept as the slot's answer: an entry out of range, a ν no material can have.
+  const auto outside = static_cast<int32_t>(db.entries.size());
+  EXPECT_EQ(cache.topology(outside).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(cache.atPoisson(-1, nu).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(cache.atPoisson(0, 0.5).error().code, ErrorCode::InvalidMaterial);
+  EXPECT_EQ(&cache.atPoisson(0, 0.5), &cache.atPoisson(0, 0.5));
+}
+
+}  // namespace
+}  // namespace brittle::detail
