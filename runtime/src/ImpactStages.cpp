@@ -362,8 +362,9 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   const int degree = fs.polynomialModeDegree;
   const MeshCheck check{parent, static_cast<int>(i), fs.meshRatioMaxDof, fs.meshRatioElement};
   const EntryCache* cache = job.entryCache;
-  return BodySource::deferred([parent, label = static_cast<int>(i), es, modeCount, correct, scheduleMatch, kind, matcher, db, cache, degree, check,
-                               name = std::move(name), surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
+  return BodySource::deferred([parent, label = static_cast<int>(i), es, modeCount, correct, scheduleMatch, kind, matcher, db,
+                               cache, degree, check, name = std::move(name),
+                               surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
     const Material& material = parent->body->material;
     const Body& body = *parent->body;
     auto own = [&]() -> Result<std::shared_ptr<const Body>> {

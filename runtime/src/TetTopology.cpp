@@ -137,9 +137,11 @@ Result<TetTopology> buildTetTopology(const TetMesh& mesh) {
 Result<TetTopology> buildTetTopology(const TetMesh& mesh, const TetTopology& sameTets) {
   if (Status st = checkNodeIds(mesh); !st) return st.error();
   const auto t = mesh.tets.rows();
+  const auto n = mesh.nodes.rows();
+  const auto faces = static_cast<Eigen::Index>(sameTets.boundaryFaces.size());
   if (sameTets.tetEdges.rows() != t || sameTets.neighbours.rows() != t || sameTets.edges.rows() == 0 ||
-      sameTets.edges.maxCoeff() >= mesh.nodes.rows() || sameTets.boundaryTriangles.rows() != static_cast<Eigen::Index>(sameTets.boundaryFaces.size()) ||
-      (sameTets.boundaryTriangles.size() > 0 && sameTets.boundaryTriangles.maxCoeff() >= mesh.nodes.rows())) {
+      sameTets.edges.maxCoeff() >= n || sameTets.boundaryTriangles.rows() != faces ||
+      (faces > 0 && sameTets.boundaryTriangles.maxCoeff() >= n)) {
     return makeError(ErrorCode::InvalidArgument, "tet topology: the connectivity given is not of a mesh of these " +
                                                      std::to_string(t) + " tets and " + std::to_string(mesh.nodes.rows()) + " nodes");
   }
