@@ -99,6 +99,7 @@ fuzz_one() {
 # printed in the targets' order once all have run. Each target has its own corpus copy, artifacts
 # and log, so the pairs share nothing.
 mapfile -t targets < <(grep -v '^$' "$build/fuzz-targets.txt")
+for target in "${targets[@]}"; do rm -f "$build/logs/$target.report"; done
 failed=()
 for ((i = 0; i < ${#targets[@]}; i += 2)); do
   pids=()
@@ -111,7 +112,10 @@ for ((i = 0; i < ${#targets[@]}; i += 2)); do
   done
 done
 printf '%-26s %10s %10s %8s\n' target executions "exec/s" result
-for target in "${targets[@]}"; do cat "$build/logs/$target.report"; done
+for target in "${targets[@]}"; do
+  # A target whose run stopped before its report (its set-up failed) is listed as failed.
+  cat "$build/logs/$target.report" 2>/dev/null || printf '%-26s %10s %10s %8s\n' "$target" "?" "?" "FAILED (no report; log: $build/logs/$target.log)"
+done
 
 if [ ${#failed[@]} -gt 0 ]; then
   echo "fuzz: findings in ${failed[*]}" >&2
