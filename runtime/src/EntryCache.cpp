@@ -36,4 +36,18 @@ const Result<EntryAtPoisson>& EntryCache::atPoisson(int32_t entry, double poisso
   });
 }
 
+Result<ObjectAsset> EntryCache::place(int32_t entry, const Material& target, const CanonicalFrame& frame) const {
+  if (entry < 0 || static_cast<size_t>(entry) >= mDatabase.entries.size()) {
+    return makeError(ErrorCode::InvalidArgument, "entry " + std::to_string(entry) + " out of range");
+  }
+  const EntryAtPoisson* basis = nullptr;
+  if (target.poissonRatio != mDatabase.referenceMaterial.poissonRatio) {
+    const Result<EntryAtPoisson>& corrected = atPoisson(entry, target.poissonRatio);
+    if (!corrected) return corrected.error();
+    basis = &corrected.value();
+  }
+  return instantiateEntry(mDatabase.entries[static_cast<size_t>(entry)], mDatabase.referenceMaterial, target, frame,
+                          nullptr, basis);
+}
+
 }  // namespace brittle::detail

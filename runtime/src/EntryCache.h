@@ -39,6 +39,11 @@ class EntryCache {
   /// entryAtPoisson(entry, the database's reference material, ν). Errors: those of
   /// entryAtPoisson, InvalidArgument (an entry out of range).
   const Result<EntryAtPoisson>& atPoisson(int32_t entry, double poissonRatio) const;
+  /// instantiateEntry of entry `entry` in `target` at `frame`, with the basis at target's ν from
+  /// this cache where ν differs from the database's (atPoisson): every placement of a database
+  /// entry in the runtime goes through here. Errors: those of atPoisson and instantiateEntry,
+  /// InvalidArgument (an entry out of range).
+  Result<ObjectAsset> place(int32_t entry, const Material& target, const CanonicalFrame& frame) const;
   /// How many topologies and bases are built so far, failed ones included.
   int32_t built() const { return mBuilt.load(std::memory_order_acquire); }
 

@@ -28,10 +28,9 @@ namespace brittle::detail {
 
 class EntryCorrections {
  public:
-  /// `database` outlives this, and so does `cache` (the entries' bases at other Poisson ratios,
-  /// shared with the matched bodies; null: each correction derives its own).
-  explicit EntryCorrections(const FragmentDatabase& database, const EntryCache* cache = nullptr)
-      : mDatabase(database), mCache(cache) {}
+  /// `cache` (the same database's entries, placed with the bases the matched bodies share)
+  /// outlives this.
+  explicit EntryCorrections(const EntryCache& cache) : mCache(cache) {}
 
   /// Entry `entry`'s correction at unit size in `material` over its first `modes` modes (the
   /// matched body's count, the same for every fragment of an entry in one World), built on first
@@ -46,8 +45,7 @@ class EntryCorrections {
     std::once_flag once;
     std::optional<Result<StaticCorrection>> correction;
   };
-  const FragmentDatabase& mDatabase;
-  const EntryCache* mCache;
+  const EntryCache& mCache;
   mutable std::mutex mMutex;  // guards mSlots' structure; each slot is built under its own once_flag
   mutable std::map<std::pair<int32_t, std::string>, std::unique_ptr<Slot>> mSlots;
   mutable std::atomic<int32_t> mBuilt{0};

@@ -247,17 +247,10 @@ struct MeshCheck {
 // out. Should the analysis fail (only on a surface an impact would not make), the body keeps the
 // entry's frequencies; should the check fail (a sub-mesh that hangs by an edge or a node, whose
 // linear tets have more than six rigid modes), the Ritz values stand.
-// `cache`, where not null, gives the entry's basis at the material's ν (EntryCache.h).
-Result<ObjectAsset> placeEntry(const FragmentDatabase& db, const EntryCache* cache, const FragmentMatch& m, const Material& material,
-                               const TriangleMesh& surface, int degree, const MeshCheck& check, Eigen::VectorXd& entryEigenvalues) {
-  const EntryAtPoisson* atPoisson = nullptr;
-  if (cache && material.poissonRatio != db.referenceMaterial.poissonRatio) {
-    const Result<EntryAtPoisson>& basis = cache->atPoisson(m.entry, material.poissonRatio);
-    if (!basis) return basis.error();
-    atPoisson = &basis.value();
-  }
-  auto placed = instantiateEntry(db.entries[static_cast<size_t>(m.entry)], db.referenceMaterial, material, m.queryFrame,
-                                 nullptr, atPoisson);
+// The entry is placed by the World's EntryCache (its basis at the material's ν shared).
+Result<ObjectAsset> placeEntry(const EntryCache& cache, const FragmentMatch& m, const Material& material, const TriangleMesh& surface,
+                               int degree, const MeshCheck& check, Eigen::VectorXd& entryEigenvalues) {
+  auto placed = cache.place(m.entry, material, m.queryFrame);
   if (placed && degree > 0) {
     auto own = polynomialModes(surface, material, degree, /*withShapes=*/false, placed.value().modal.eigenvaluesRad2PerS2.size());
     if (own) {
@@ -280,19 +273,14 @@ Result<ObjectAsset> placeEntry(const FragmentDatabase& db, const EntryCache* cac
   return placed;
 }
 
-// The matched entry placed (placeEntry) and made a body, its tet connectivity the entry's own
-// where the cache has it.
-Result<std::shared_ptr<const Body>> matchedBody(const FragmentDatabase& db, const EntryCache* cache, const FragmentMatch& m,
-                                                const Material& material, int modeCount, const TriangleMesh& surface, int degree,
-                                                const MeshCheck& check) {
+// The matched entry placed (placeEntry) and made a body, its tet connectivity the entry's own.
+Result<std::shared_ptr<const Body>> matchedBody(const EntryCache& cache, const FragmentMatch& m, const Material& material,
+                                                int modeCount, const TriangleMesh& surface, int degree, const MeshCheck& check) {
   Eigen::VectorXd entryEigenvalues;
-  auto placed = placeEntry(db, cache, m, material, surface, degree, check, entryEigenvalues);
+  auto placed = placeEntry(cache, m, material, surface, degree, check, entryEigenvalues);
   if (!placed) return Error{placed.error().code, "entry " + std::to_string(m.entry) + ": " + placed.error().message};
-  const TetTopology* sameTets = nullptr;
-  if (cache) {
-    const Result<TetTopology>& topology = cache->topology(m.entry);
-    if (topology) sameTets = &topology.value();  // else makeBody builds it and reports the error
-  }
+  const Result<TetTopology>& topology = cache.topology(m.entry);
+  const TetTopology* sameTets = topology ? &topology.value() : nullptr;  // else makeBody builds it and reports the error
   return makeBody(std::move(placed).value(), material, modeCount, nullptr, std::move(entryEigenvalues), sameTets);
 }
 
@@ -316,16 +304,15 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
   fr.matchDistance = m.distance;
   fr.predictedMatchError = m.predictedError.median;
   fr.predictedMatchErrorP90 = m.predictedError.p90;
-  const FragmentDatabase* db = job.database;
   const EntryCorrections* shared = job.entryCorrections;
   const bool correct = job.settings->staticCorrection && job.prepareFragments;
   const int degree = job.settings->polynomialModeDegree;
   TriangleMesh surface = degree > 0 ? fr.surface : TriangleMesh{};  // for the worker: two allocations
   const MeshCheck check{parent, static_cast<int>(i), job.settings->meshRatioMaxDof, job.settings->meshRatioElement};
   const EntryCache* cache = job.entryCache;
-  return BodySource::deferred([db, cache, shared, m, material, modeCount, correct, degree, check,
+  return BodySource::deferred([cache, shared, m, material, modeCount, correct, degree, check,
                                surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
-    auto made = matchedBody(*db, cache, m, material, modeCount, surface, degree, check);
+    auto made = matchedBody(*cache, m, material, modeCount, surface, degree, check);
     if (made && correct && shared) {
       // The entry's correction placed as instantiateEntry placed the entry: x = L Rᵀ_frame x̂ + t.
       const Result<StaticCorrection>& entry = shared->get(m.entry, material, made.value()->modes);
@@ -354,7 +341,6 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   const int modeCount = fs.modeCount;
   const DescriptorKind kind = fs.descriptor;
   const FragmentMatcher* matcher = job.matcher;
-  const FragmentDatabase* db = job.database;
   std::string name = parent->body->asset.name + ".f" + std::to_string(i);
   TriangleMesh surface = matcher ? fr.surface : TriangleMesh{};
   const bool correct = fs.staticCorrection;  // the exact path's body adopts its analysis's factor
@@ -362,8 +348,8 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   const int degree = fs.polynomialModeDegree;
   const MeshCheck check{parent, static_cast<int>(i), fs.meshRatioMaxDof, fs.meshRatioElement};
   const EntryCache* cache = job.entryCache;
-  return BodySource::deferred([parent, label = static_cast<int>(i), es, modeCount, correct, scheduleMatch, kind, matcher, db,
-                               cache, degree, check, name = std::move(name),
+  return BodySource::deferred([parent, label = static_cast<int>(i), es, modeCount, correct, scheduleMatch, kind, matcher, cache,
+                               degree, check, name = std::move(name),
                                surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
     const Material& material = parent->body->material;
     const Body& body = *parent->body;
@@ -380,7 +366,7 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
     auto match = matcher->match(surface, kind, 1);
     if (!match) return made.error();
     const FragmentMatch& m = match.value().front();
-    auto matched = matchedBody(*db, cache, m, material, modeCount, surface, degree, check);
+    auto matched = matchedBody(*cache, m, material, modeCount, surface, degree, check);
     if (!matched) return made.error();
     return withCorrectionScheduled(std::move(matched), scheduleMatch);
   });

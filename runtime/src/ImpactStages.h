@@ -35,12 +35,11 @@ struct ImpactJob {
   uint64_t crackSeed = 0;            ///< from the world seed and the impact's number
   const FractureSettings* settings = nullptr;
   const FragmentMatcher* matcher = nullptr;  ///< null: no database search
-  const FragmentDatabase* database = nullptr;
   /// The database entries' shared static corrections (WorldSettings::shareEntryCorrections); null:
   /// each matched fragment factorises its own.
   const EntryCorrections* entryCorrections = nullptr;
   /// The database entries' connectivity and bases at other Poisson ratios, shared by every matched
-  /// fragment (EntryCache.h); null: each placement derives its own.
+  /// fragment (EntryCache.h): set whenever `matcher` is (World.cpp), and what places the entries.
   const EntryCache* entryCache = nullptr;
   int32_t maxFragments = 256;          ///< WorldSettings::maxFragmentsPerImpact
   /// WorldSettings::prepareInBackground: a matched fragment's static correction is scheduled when

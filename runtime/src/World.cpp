@@ -182,7 +182,6 @@ struct World::Impl {
     job.settings = &settings.fracture;
     job.prepareFragments = settings.prepareInBackground;
     job.matcher = matcher ? &*matcher : nullptr;
-    job.database = &pack.database;
     job.entryCorrections = entryCorrections.get();
     job.entryCache = entryCache.get();
     job.workers = &workers();
@@ -283,7 +282,7 @@ Result<World> World::create(Pack pack, const WorldSettings& settings) {
       impl->matcher.emplace(std::move(matcher).value());
       impl->entryCache = std::make_unique<detail::EntryCache>(db);
       if (settings.shareEntryCorrections) {
-        impl->entryCorrections = std::make_unique<detail::EntryCorrections>(db, impl->entryCache.get());
+        impl->entryCorrections = std::make_unique<detail::EntryCorrections>(*impl->entryCache);
       }
     }
     return World(std::move(impl));

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cstring>
 #include <vector>
 
@@ -13,6 +14,8 @@
 
 namespace brittle::detail {
 namespace {
+
+int32_t outsideEntry(const FragmentDatabase& db) { return static_cast<int32_t>(db.entries.size()); }
 
 template <class A, class B>
 bool sameBits(const A& a, const B& b) {
@@ -63,6 +66,27 @@ TEST(EntryCache, BuildsEachEntrysDataOnceWithTheBitsOfBuildingItEachTime) {
   ASSERT_TRUE(cache.atPoisson(0, nu + 0.05));
   EXPECT_NE(&cache.atPoisson(0, nu + 0.05), bases[0]);
   EXPECT_EQ(cache.built(), 5);
+
+  // Placing an entry through the cache is instantiateEntry's placement, bit for bit, at ν₀ (no
+  // basis read) and at another ν (the cached basis); it builds nothing new for a basis it has.
+  CanonicalFrame frame;
+  frame.rotation = Eigen::AngleAxisd(0.4, Eigen::Vector3d(0.3, -1.0, 0.2).normalized()).toRotationMatrix();
+  frame.translationM = Eigen::Vector3d(0.2, -0.1, 0.7);
+  frame.scalePerM = 1.0 / 0.08;
+  Material other = db.referenceMaterial;
+  other.name = "other-nu";
+  other.poissonRatio = nu;
+  for (const Material& target : {db.referenceMaterial, other}) {
+    SCOPED_TRACE(target.name);
+    auto placed = cache.place(1, target, frame);
+    auto direct = instantiateEntry(db.entries[1], db.referenceMaterial, target, frame);
+    ASSERT_TRUE(placed && direct);
+    EXPECT_TRUE(sameBits(placed.value().modal.modes, direct.value().modal.modes));
+    EXPECT_TRUE(sameBits(placed.value().stressModes, direct.value().stressModes));
+    EXPECT_TRUE(sameBits(placed.value().tetMesh.nodes, direct.value().tetMesh.nodes));
+  }
+  EXPECT_EQ(cache.built(), 5);
+  EXPECT_EQ(cache.place(outsideEntry(db), other, frame).error().code, ErrorCode::InvalidArgument);
 
   // Typed errors, kept as the slot's answer: an entry out of range, a ν no material can have.
   const auto outside = static_cast<int32_t>(db.entries.size());
