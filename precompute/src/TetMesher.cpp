@@ -8,18 +8,24 @@
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polyhedral_mesh_domain_with_features_3.h>
 #include <CGAL/Random.h>
-#include <CGAL/make_mesh_3.h>
+#include <CGAL/make_mesh_3.h>  // includes CGAL/Mesh_3/Dump_c3t3.h, specialised below
 
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <cstdio>
 #include <string>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <optional>
+#include <stdexcept>
+#include <thread>
 #include <unordered_map>
 #include <vector>
 
@@ -37,6 +43,25 @@ using Domain = CGAL::Polyhedral_mesh_domain_with_features_3<Kernel>;
 using Tr = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_tag>::type;
 using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr, Domain::Corner_index, Domain::Curve_index>;
 using Criteria = CGAL::Mesh_criteria_3<Tr>;
+
+}  // namespace
+}  // namespace brittle
+
+// Mesh_3 writes the complex to dump-bug.mesh and dump-bug.binary.cgal in the working directory
+// before it raises some errors (an already inserted surface point, a protection failure). The
+// error reaches the caller as MeshingFailed; files left in whatever directory the bake ran in do
+// not, so this complex is never dumped.
+template <>
+struct CGAL::Dump_c3t3<brittle::C3t3, true> {
+  void dump_c3t3(const brittle::C3t3&, const std::string&) const {}
+};
+template <>
+struct CGAL::Dump_c3t3<brittle::C3t3, false> {
+  void dump_c3t3(const brittle::C3t3&, const std::string&) const {}
+};
+
+namespace brittle {
+namespace {
 
 // Only the vertices the faces use: an unused one would be an isolated polyhedron vertex, on
 // which CGAL's feature detection crashes (libcgal-demo's prim.off lists three).
@@ -84,6 +109,46 @@ struct LocalSize {
 
 enum class Protection { None, Detected, Curves };
 
+// Raises Mesh_3's stop flag once a run has taken `seconds` of wall clock (none when ≤ 0). Mesh_3
+// polls the flag between the elements it refines, in protection and in refinement alike.
+class RunDeadline {
+ public:
+  explicit RunDeadline(double seconds) {
+    if (!(seconds > 0.0)) return;
+    mWatch = std::thread([this, seconds] {
+      std::unique_lock lock(mMutex);
+      if (!mDone.wait_for(lock, std::chrono::duration<double>(seconds), [this] { return mFinished; })) mStop = true;
+    });
+  }
+  RunDeadline(const RunDeadline&) = delete;
+  RunDeadline& operator=(const RunDeadline&) = delete;
+  ~RunDeadline() {
+    {
+      std::lock_guard lock(mMutex);
+      mFinished = true;
+    }
+    mDone.notify_one();
+    if (mWatch.joinable()) mWatch.join();
+  }
+  std::atomic<bool>* flag() { return &mStop; }
+  bool passed() const { return mStop.load(); }
+
+ private:
+  std::atomic<bool> mStop{false};
+  std::mutex mMutex;
+  std::condition_variable mDone;
+  bool mFinished = false;
+  std::thread mWatch;
+};
+
+// A Mesh_3 run stopped by its deadline (caught in meshSurface like Mesh_3's own errors).
+struct RunTimedOut : std::runtime_error {
+  explicit RunTimedOut(double seconds)
+      : std::runtime_error("a Mesh_3 run did not finish within its time limit of " + std::to_string(seconds) +
+                           " s (TetMeshSettings::runTimeLimitS); Mesh_3's refinement can cycle without inserting "
+                           "points on some inputs") {}
+};
+
 // What one final run does: the settings' values plus the mesher's adjustments.
 struct RunPlan {
   double h = 0.0;
@@ -124,12 +189,18 @@ TetMesh meshOnce(const Polyhedron& poly, const TetMeshSettings& s, const RunPlan
   // unless told otherwise, which makes the mesh depend on machine load. time_limit = 0 means
   // "no clock"; the perturber then stops once every dihedral angle reaches sliverBoundDeg, so the
   // result depends on the input, the settings and the seed only.
+  //
+  // A run that outlasts s.runTimeLimitS is stopped and thrown away: the limit changes no mesh
+  // that is made within it.
+  RunDeadline deadline(s.runTimeLimitS);
+  const auto options = params::mesh_3_options(params::pointer_to_stop_atomic_boolean = deadline.flag());
   C3t3 c3t3 = s.optimize
                   ? CGAL::make_mesh_3<C3t3>(
                         domain, criteria,
                         params::perturb(params::time_limit = 0.0, params::sliver_bound = s.sliverBoundDeg),
-                        params::exude(params::time_limit = 0.0, params::sliver_bound = s.sliverBoundDeg))
-                  : CGAL::make_mesh_3<C3t3>(domain, criteria, params::no_perturb(), params::no_exude());
+                        params::exude(params::time_limit = 0.0, params::sliver_bound = s.sliverBoundDeg), options)
+                  : CGAL::make_mesh_3<C3t3>(domain, criteria, params::no_perturb(), params::no_exude(), options);
+  if (deadline.passed()) throw RunTimedOut(s.runTimeLimitS);
 
   std::unordered_map<Tr::Vertex_handle, int32_t> index;
   std::vector<Eigen::Vector3d> nodes;

@@ -16,6 +16,7 @@
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/Pack.h"
 #include "brittle/precompute/MeshValidation.h"
+#include "brittle/precompute/TetMeshQuality.h"
 #include "brittle/testing/AssetChecks.h"
 #include "brittle/testing/DatabaseFixtures.h"
 
@@ -421,6 +422,36 @@ TEST_F(FragmentDatabaseBakeTest, ManifestDatabaseSectionAndErrors) {
   DatabaseBakeSettings empty = testing::smallDatabaseSettings(3, false);
   empty.shapes.clear();
   EXPECT_EQ(bakeFragmentDatabase(empty).error().code, ErrorCode::InvalidArgument);
+}
+
+// Entry 8 587 of a seed-1, 300-tet database: Mesh_3 (CGAL 5.5, this build) refines the wedge
+// piece's canonical surface without end. Found by `brittle bake-db --entries 10000 --tets 300
+// --modes 12`, which sat on it for over ten minutes. With a time limit the run is given up and the
+// entry meshed finer (bakeFragmentEntry), as a piece that splits is: the bake goes on.
+TEST(FragmentDatabaseEntry, APieceMesh3RefinesWithoutEndIsGivenUpAndMeshedFiner) {
+  DatabaseBakeSettings s;  // bake-db's defaults
+  s.shapes = testing::shippedBaseShapes();
+  s.tetMesh.targetTets = 300;
+  s.modeCount = 12;
+  s.tetMesh.runTimeLimitS = 15.0;  // the normal runs take ≤ 1 s, also under the sanitizers
+  const int64_t i = 8587;
+  const auto& shape = s.shapes[static_cast<size_t>(i) % s.shapes.size()];
+  ASSERT_EQ(shape.name, "wedge");
+  auto base = makeBaseShape(shape);
+  ASSERT_TRUE(base) << base.error().message;
+  auto fragment = generateFragment(base.value(), s.fragments, fragmentEntrySeed(1, i));
+  ASSERT_TRUE(fragment) << fragment.error().message;
+  const auto dir = testing::makeTempDir("mesh3-stall");
+  const auto cwd = std::filesystem::current_path();
+  std::filesystem::current_path(dir);  // where Mesh_3 would dump its complex on an error
+  std::array<Descriptor, kDescriptorKindCount> row;
+  auto entry = bakeFragmentEntry(fragment.value(), "wedge-8587", s, row);
+  std::filesystem::current_path(cwd);
+  ASSERT_TRUE(entry) << entry.error().message;
+  EXPECT_GT(entry.value().asset.tetMesh.tets.rows(), 450);  // meshed at 600 tets: the 300-tet run was given up
+  EXPECT_EQ(countFaceConnectedComponents(entry.value().asset.tetMesh), 1);
+  EXPECT_EQ(entry.value().asset.modal.frequenciesHz.size(), 12);
+  EXPECT_TRUE(std::filesystem::is_empty(dir));
 }
 
 }  // namespace

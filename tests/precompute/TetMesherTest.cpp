@@ -165,6 +165,26 @@ TEST(TetMesher, SameSeedSameMesh) {
   EXPECT_EQ(a.value().mesh.nodes, b.value().mesh.nodes);
 }
 
+TEST(TetMesher, ARunPastItsTimeLimitIsAMeshingFailedAndALimitItMeetsChangesNothing) {
+  TetMeshSettings s;
+  s.targetTets = 1500;
+  const auto surface = testing::makeIcosphere(0.1, 2);
+  auto free = tetrahedralize(surface, s);
+  s.runTimeLimitS = 600.0;
+  auto limited = tetrahedralize(surface, s);
+  ASSERT_TRUE(free.ok() && limited.ok());
+  EXPECT_EQ(limited.value().mesh.tets, free.value().mesh.tets);
+  EXPECT_EQ(limited.value().mesh.nodes, free.value().mesh.nodes);
+  // A 20k-tet run (about a second of refinement here) cannot finish in 1 µs: the deadline stops
+  // it, and the stopped complex is thrown away, not returned.
+  s.targetTets = 20000;
+  s.runTimeLimitS = 1e-6;
+  auto stopped = tetrahedralize(surface, s);
+  ASSERT_FALSE(stopped.ok());
+  EXPECT_EQ(stopped.error().code, ErrorCode::MeshingFailed);
+  EXPECT_NE(stopped.error().message.find("time limit"), std::string::npos) << stopped.error().message;
+}
+
 TEST(TetMesher, CellSizeDrivenAndErrors) {
   TetMeshSettings s;
   s.meshingRuns = 0;

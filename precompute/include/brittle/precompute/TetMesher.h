@@ -60,6 +60,15 @@ struct TetMeshSettings {
   /// keep a few slivers below the bound (see docs/results/bake-cost.md).
   double sliverBoundDeg = 5.0;
   uint64_t seed = 1;                    ///< seeds CGAL's random generator (determinism)
+  /// Wall-clock limit of one Mesh_3 run, in seconds (0: none). Mesh_3's facet refinement can
+  /// run on without end: a 300-tet piece of the wedge, in a 10⁴-entry database bake, was still
+  /// in Refine_facets_3 after ten minutes. A run stopped by the limit is a MeshingFailed. The
+  /// limit changes no mesh that is made within it, so results stay deterministic unless a run
+  /// takes about as long as the limit on one machine and not on another: keep it far above the
+  /// normal run time. Object bakes have none by default (a large object can take minutes);
+  /// database entries, drawn again from their next seed on failure, have one
+  /// (DatabaseBakeSettings::defaultFragmentTetMeshSettings).
+  double runTimeLimitS = 0.0;
   /// Elements this many times wider than thick across the solid's thinnest principal axis, in
   /// [1, 16]: the surface is stretched by it along that axis, meshed, and the nodes taken back
   /// (targetTets and cellSizeM are those of the stretched solid). 1 keeps Mesh_3's near-regular
