@@ -3,12 +3,14 @@
 #include "brittle/database/MatchErrors.h"
 
 #include <tbb/global_control.h>
+#include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <tuple>
@@ -190,40 +192,80 @@ class EntryBaker {
     return baker;
   }
 
-  // entries and rows get end − first elements, entry i at i − first. Errors: the first failing
-  // entry's after kEntryAttempts, Cancelled.
-  Status bake(int64_t first, int64_t end, std::vector<FragmentEntry>& entries,
-              std::vector<std::array<Descriptor, kDescriptorKindCount>>& rows, SharedProgress& shared) const {
-    const auto count = static_cast<size_t>(end - first);
-    std::vector<std::optional<Result<FragmentEntry>>> results(count);
-    rows.assign(count, {});
+  using Row = std::array<Descriptor, kDescriptorKindCount>;
+  /// Called with a range's entries and rows (entry first + k at k) once its last entry is made.
+  using RangeDone = std::function<Status(size_t range, std::vector<FragmentEntry>&& entries, std::vector<Row>&& rows)>;
+
+  // Bakes the entries of `ranges` ([first, end) each), handing them to the workers one at a time
+  // in entry order, and gives a range to `done` as soon as its last entry is made, on the worker
+  // that made it (one call at a time). No worker waits at the end of a range for its slowest
+  // entry: with a wait after each 64-entry chunk, a 10⁴-entry bake kept 2 cores 83 % busy.
+  // Errors: the failing entry's of the lowest index (every entry before it was handed out and
+  // finished, so it is the same on any thread count), done's first error, Cancelled.
+  Status bake(const std::vector<std::pair<int64_t, int64_t>>& ranges, SharedProgress& shared,
+              const RangeDone& done) const {
+    struct Pending {
+      std::vector<std::optional<Result<FragmentEntry>>> results;
+      std::vector<Row> rows;
+      std::atomic<int64_t> left{0};
+    };
+    std::vector<Pending> pending(ranges.size());
+    std::vector<int64_t> starts;  // position of each range's first entry in the hand-out order
+    int64_t total = 0;
+    for (size_t r = 0; r < ranges.size(); ++r) {
+      const int64_t count = ranges[r].second - ranges[r].first;
+      pending[r].results.resize(static_cast<size_t>(count));
+      pending[r].rows.assign(static_cast<size_t>(count), {});
+      pending[r].left = count;
+      starts.push_back(total);
+      total += count;
+    }
+    std::atomic<int64_t> next{0};
     std::atomic<bool> stop{false};
-    auto bakeOne = [&](size_t k) {
-      if (stop.load()) return;
-      if (shared.interrupted()) {
-        stop = true;
-        results[k] = Result<FragmentEntry>(makeError(ErrorCode::Cancelled, "fragment database bake cancelled"));
-        return;
-      }
-      results[k] = bakeEntry(first + static_cast<int64_t>(k), rows[k]);
-      if (results[k]->ok()) {
+    std::mutex doneMutex;
+    std::optional<Error> doneError;
+    auto work = [&] {
+      for (int64_t n; !stop.load() && (n = next++) < total;) {
+        const size_t r = static_cast<size_t>(std::upper_bound(starts.begin(), starts.end(), n) - starts.begin()) - 1;
+        const auto k = static_cast<size_t>(n - starts[r]);
+        Pending& range = pending[r];
+        if (shared.interrupted()) {
+          stop = true;
+          range.results[k] = Result<FragmentEntry>(makeError(ErrorCode::Cancelled, "fragment database bake cancelled"));
+          return;
+        }
+        range.results[k] = bakeEntry(ranges[r].first + static_cast<int64_t>(k), range.rows[k]);
+        if (!range.results[k]->ok()) {
+          stop = true;
+          return;
+        }
         shared.entryDone();
-      } else {
-        stop = true;
+        if (--range.left > 0) continue;
+        std::vector<FragmentEntry> entries;
+        entries.reserve(range.results.size());
+        for (auto& result : range.results) entries.push_back(std::move(*result).value());
+        range.results = {};
+        const std::lock_guard<std::mutex> lock(doneMutex);
+        if (doneError) return;
+        if (Status st = done(r, std::move(entries), std::move(range.rows)); !st) {
+          doneError = st.error();
+          stop = true;
+        }
       }
     };
     std::optional<tbb::global_control> limit;
     if (mSettings.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, mSettings.threads);
-    tbb::parallel_for(size_t{0}, count, bakeOne);
+    const int workers = mSettings.threads > 0 ? mSettings.threads : tbb::info::default_concurrency();
+    tbb::parallel_for(0, workers, [&](int) { work(); });
 
-    for (size_t k = 0; k < count; ++k) {
-      if (results[k] && !*results[k]) return results[k]->error();  // skipped after another entry failed
+    for (const Pending& range : pending) {
+      for (const auto& result : range.results) {
+        if (result && !*result) return result->error();  // the lowest failing entry's
+      }
     }
-    entries.clear();
-    entries.reserve(count);
-    for (size_t k = 0; k < count; ++k) {
-      if (!results[k]) return makeError(ErrorCode::Cancelled, "fragment database bake stopped early");
-      entries.push_back(std::move(*results[k]).value());
+    if (doneError) return *doneError;
+    for (const Pending& range : pending) {
+      if (range.left > 0) return makeError(ErrorCode::Cancelled, "fragment database bake stopped early");
     }
     return Ok{};
   }
@@ -300,7 +342,12 @@ Result<FragmentDatabase> bakeFragmentDatabase(const DatabaseBakeSettings& settin
   SharedProgress shared(progress, settings.entryCount);
   std::vector<FragmentEntry> entries;
   std::vector<std::array<Descriptor, kDescriptorKindCount>> rows;
-  if (Status st = baker.value()->bake(0, settings.entryCount, entries, rows, shared); !st) return st.error();
+  Status baked = baker.value()->bake({{0, settings.entryCount}}, shared, [&](size_t, auto&& e, auto&& r) -> Status {
+    entries = std::move(e);
+    rows = std::move(r);
+    return Ok{};
+  });
+  if (!baked) return baked.error();
   FragmentDatabase db = databaseOf(settings, std::move(entries), rows);
   if (Status st = calibrateDatabaseMatchErrors(db); !st) return st.error();
   return db;
@@ -475,17 +522,18 @@ Result<DatabaseCheckpointReport> bakeFragmentDatabaseChunks(const DatabaseBakeSe
 
   auto baker = EntryBaker::create(settings, progress);
   if (!baker) return baker.error();
-  for (int64_t chunk : missing) {
-    const auto [first, end] = chunkRange(settings, c, chunk);
-    std::vector<FragmentEntry> entries;
-    std::vector<std::array<Descriptor, kDescriptorKindCount>> rows;
-    if (Status st = baker.value()->bake(first, end, entries, rows, shared); !st) return st.error();
+  std::vector<std::pair<int64_t, int64_t>> ranges;
+  for (int64_t chunk : missing) ranges.push_back(chunkRange(settings, c, chunk));
+  // Each chunk is written as soon as its entries are made, while the other workers go on.
+  Status baked = baker.value()->bake(ranges, shared, [&](size_t r, auto&& entries, auto&& rows) -> Status {
     Pack pack;
     pack.database = databaseOf(settings, std::move(entries), rows);  // not calibrated: see the assembly
-    if (Status st = writePack(pack, fragmentDatabaseChunkPath(settings, c, chunk)); !st) return st.error();
+    if (Status st = writePack(pack, fragmentDatabaseChunkPath(settings, c, missing[r])); !st) return st.error();
     ++report.chunksBaked;
-    report.entriesBaked += end - first;
-  }
+    report.entriesBaked += ranges[r].second - ranges[r].first;
+    return Ok{};
+  });
+  if (!baked) return baked.error();
   return report;
 }
 
