@@ -4,35 +4,25 @@
 
 namespace brittle::detail {
 
-template <class T, class Key, class Make>
-const Result<T>& EntryCache::get(std::map<Key, std::unique_ptr<Slot<T>>>& slots, const Key& key, int32_t entry,
-                                 Make&& make) const {
-  Slot<T>* slot = nullptr;
-  {
-    std::lock_guard<std::mutex> lock(mMutex);
-    auto& held = slots[key];
-    if (!held) held = std::make_unique<Slot<T>>();
-    slot = held.get();  // map nodes do not move: the pointer stays valid
+template <class T, class Make>
+Result<T> EntryCache::ofEntry(int32_t entry, Make&& make) const {
+  if (entry < 0 || static_cast<size_t>(entry) >= mDatabase.entries.size()) {
+    return makeError(ErrorCode::InvalidArgument, "entry " + std::to_string(entry) + " out of range");
   }
-  std::call_once(slot->once, [&] {
-    if (entry < 0 || static_cast<size_t>(entry) >= mDatabase.entries.size()) {
-      slot->value.emplace(makeError(ErrorCode::InvalidArgument, "entry " + std::to_string(entry) + " out of range"));
-    } else {
-      slot->value.emplace(make(mDatabase.entries[static_cast<size_t>(entry)]));
-    }
-    mBuilt.fetch_add(1, std::memory_order_release);
+  return make(mDatabase.entries[static_cast<size_t>(entry)]);
+}
+
+std::shared_ptr<const Result<TetTopology>> EntryCache::topology(int32_t entry) const {
+  return mTopologies.get(entry, [&] {
+    return ofEntry<TetTopology>(entry, [](const FragmentEntry& e) { return buildTetTopology(e.asset.tetMesh); });
   });
-  return *slot->value;
 }
 
-const Result<TetTopology>& EntryCache::topology(int32_t entry) const {
-  return get(mTopologies, entry, entry, [](const FragmentEntry& e) { return buildTetTopology(e.asset.tetMesh); });
-}
-
-const Result<EntryAtPoisson>& EntryCache::atPoisson(int32_t entry, double poissonRatio) const {
+std::shared_ptr<const Result<EntryAtPoisson>> EntryCache::atPoisson(int32_t entry, double poissonRatio) const {
   // Keyed by the value itself: instantiateEntry corrects wherever ν differs from ν₀ at all.
-  return get(mBases, std::pair<int32_t, double>{entry, poissonRatio}, entry, [&](const FragmentEntry& e) {
-    return entryAtPoisson(e, mDatabase.referenceMaterial, poissonRatio);
+  return mBases.get({entry, poissonRatio}, [&] {
+    return ofEntry<EntryAtPoisson>(
+        entry, [&](const FragmentEntry& e) { return entryAtPoisson(e, mDatabase.referenceMaterial, poissonRatio); });
   });
 }
 
@@ -40,14 +30,13 @@ Result<ObjectAsset> EntryCache::place(int32_t entry, const Material& target, con
   if (entry < 0 || static_cast<size_t>(entry) >= mDatabase.entries.size()) {
     return makeError(ErrorCode::InvalidArgument, "entry " + std::to_string(entry) + " out of range");
   }
-  const EntryAtPoisson* basis = nullptr;
+  std::shared_ptr<const Result<EntryAtPoisson>> corrected;  // held while the entry is placed
   if (target.poissonRatio != mDatabase.referenceMaterial.poissonRatio) {
-    const Result<EntryAtPoisson>& corrected = atPoisson(entry, target.poissonRatio);
-    if (!corrected) return corrected.error();
-    basis = &corrected.value();
+    corrected = atPoisson(entry, target.poissonRatio);
+    if (!*corrected) return corrected->error();
   }
   return instantiateEntry(mDatabase.entries[static_cast<size_t>(entry)], mDatabase.referenceMaterial, target, frame,
-                          nullptr, basis);
+                          nullptr, corrected ? &corrected->value() : nullptr);
 }
 
 }  // namespace brittle::detail

@@ -8,59 +8,57 @@
 // depend on the entry and ν alone, not on the fragment's size, pose or frequencies, and they were
 // a third of the CPU a matched body cost (measured on the main job's vase hit: the correction 27 %
 // of the body making, the connectivity 9–14 %). Built on first use by whichever worker needs it
-// (others wait), kept for the World's life: ~0.1–1 MB an (entry, ν) for the default database's
-// 1k-tet, 12-mode entries, only for the entries matched. Results are the same bits as without it.
+// (others wait), kept for the most recently matched entries (SharedSlots.h): ~0.1–1 MB an
+// (entry, ν) for the default database's 1k-tet, 12-mode entries. Results are the same bits as
+// without it.
 #pragma once
 
-#include <atomic>
+#include <cstddef>
 #include <cstdint>
-#include <map>
 #include <memory>
-#include <mutex>
-#include <optional>
 #include <utility>
 
 #include "brittle/core/Result.h"
 #include "brittle/database/FragmentDatabase.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/runtime/TetTopology.h"
+#include "SharedSlots.h"
 
 namespace brittle::detail {
 
 class EntryCache {
  public:
-  /// `database` outlives this.
-  explicit EntryCache(const FragmentDatabase& database) : mDatabase(database) {}
+  /// `database` outlives this. capacity: the entries kept of each kind (connectivity, and basis
+  /// per (entry, ν)), the least recently used dropped first; 0: no bound
+  /// (WorldSettings::entryCacheCapacity).
+  explicit EntryCache(const FragmentDatabase& database, size_t capacity = 0)
+      : mDatabase(database), mTopologies(capacity), mBases(capacity) {}
 
   /// Entry `entry`'s tet topology (of its own mesh: the connectivity is what a placed copy shares,
   /// buildTetTopology(mesh, sameTets)). Errors: those of buildTetTopology, InvalidArgument (an
   /// entry out of range).
-  const Result<TetTopology>& topology(int32_t entry) const;
+  std::shared_ptr<const Result<TetTopology>> topology(int32_t entry) const;
   /// entryAtPoisson(entry, the database's reference material, ν). Errors: those of
   /// entryAtPoisson, InvalidArgument (an entry out of range).
-  const Result<EntryAtPoisson>& atPoisson(int32_t entry, double poissonRatio) const;
+  std::shared_ptr<const Result<EntryAtPoisson>> atPoisson(int32_t entry, double poissonRatio) const;
   /// instantiateEntry of entry `entry` in `target` at `frame`, with the basis at target's ν from
   /// this cache where ν differs from the database's (atPoisson): every placement of a database
   /// entry in the runtime goes through here. Errors: those of atPoisson and instantiateEntry,
   /// InvalidArgument (an entry out of range).
   Result<ObjectAsset> place(int32_t entry, const Material& target, const CanonicalFrame& frame) const;
-  /// How many topologies and bases are built so far, failed ones included.
-  int32_t built() const { return mBuilt.load(std::memory_order_acquire); }
+  /// How many topologies and bases are built so far, failed and rebuilt ones included.
+  int32_t built() const { return mTopologies.built() + mBases.built(); }
+  /// How many are kept now.
+  size_t held() const { return mTopologies.size() + mBases.size(); }
 
  private:
-  template <class T>
-  struct Slot {
-    std::once_flag once;
-    std::optional<Result<T>> value;
-  };
-  template <class T, class Key, class Make>
-  const Result<T>& get(std::map<Key, std::unique_ptr<Slot<T>>>& slots, const Key& key, int32_t entry, Make&& make) const;
+  // make(entry) for an entry in range, else an InvalidArgument.
+  template <class T, class Make>
+  Result<T> ofEntry(int32_t entry, Make&& make) const;
 
   const FragmentDatabase& mDatabase;
-  mutable std::mutex mMutex;  // guards the maps' structure; each slot is built under its own once_flag
-  mutable std::map<int32_t, std::unique_ptr<Slot<TetTopology>>> mTopologies;
-  mutable std::map<std::pair<int32_t, double>, std::unique_ptr<Slot<EntryAtPoisson>>> mBases;
-  mutable std::atomic<int32_t> mBuilt{0};
+  mutable SharedSlots<int32_t, TetTopology> mTopologies;
+  mutable SharedSlots<std::pair<int32_t, double>, EntryAtPoisson> mBases;
 };
 
 }  // namespace brittle::detail

@@ -279,8 +279,8 @@ Result<std::shared_ptr<const Body>> matchedBody(const EntryCache& cache, const F
   Eigen::VectorXd entryEigenvalues;
   auto placed = placeEntry(cache, m, material, surface, degree, check, entryEigenvalues);
   if (!placed) return Error{placed.error().code, "entry " + std::to_string(m.entry) + ": " + placed.error().message};
-  const Result<TetTopology>& topology = cache.topology(m.entry);
-  const TetTopology* sameTets = topology ? &topology.value() : nullptr;  // else makeBody builds it and reports the error
+  const auto topology = cache.topology(m.entry);  // held while the body is made
+  const TetTopology* sameTets = *topology ? &topology->value() : nullptr;  // else makeBody builds it and reports the error
   return makeBody(std::move(placed).value(), material, modeCount, nullptr, std::move(entryEigenvalues), sameTets);
 }
 
@@ -315,9 +315,9 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
     auto made = matchedBody(*cache, m, material, modeCount, surface, degree, check);
     if (made && correct && shared) {
       // The entry's correction placed as instantiateEntry placed the entry: x = L Rᵀ_frame x̂ + t.
-      const Result<StaticCorrection>& entry = shared->get(m.entry, material, made.value()->modes);
-      if (entry) {
-        made.value()->adoptStaticCorrection(entry.value().placed(m.queryFrame.rotation.transpose(), 1.0 / m.queryFrame.scalePerM));
+      const auto entry = shared->get(m.entry, material, made.value()->modes);
+      if (*entry) {
+        made.value()->adoptStaticCorrection(entry->value().placed(m.queryFrame.rotation.transpose(), 1.0 / m.queryFrame.scalePerM));
         return made;
       }
     }

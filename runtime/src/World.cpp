@@ -240,8 +240,11 @@ std::string_view fragmentPathName(FragmentPath path) {
 Status validateWorldSettings(const WorldSettings& s) {
   const FractureSettings& f = s.fracture;
   if (s.maxObjects < 1) return invalidArgument("WorldSettings: maxObjects must be ≥ 1");
-  if (s.maxPendingImpacts < 1 || s.workerThreads < 0 || s.maxFragmentsPerImpact < 2 || s.prepareEntryCorrections < 0) {
-    return invalidArgument("WorldSettings: maxPendingImpacts must be ≥ 1, workerThreads ≥ 0, maxFragmentsPerImpact ≥ 2 and prepareEntryCorrections ≥ 0");
+  if (s.maxPendingImpacts < 1 || s.workerThreads < 0 || s.maxFragmentsPerImpact < 2 || s.prepareEntryCorrections < 0 ||
+      s.entryCacheCapacity < 0 || (s.entryCacheCapacity > 0 && s.prepareEntryCorrections > s.entryCacheCapacity)) {
+    return invalidArgument("WorldSettings: maxPendingImpacts must be ≥ 1, workerThreads ≥ 0, maxFragmentsPerImpact ≥ 2, "
+                           "prepareEntryCorrections ≥ 0 and entryCacheCapacity ≥ 0 (0: no bound), and no more entries "
+                           "prepared than kept");
   }
   if (f.modeCount < 0 || f.pulseSteps < 2 || f.ringDownSteps < 0 || !(f.ringDownPeriods >= 0.0) ||
       !std::isfinite(f.ringDownPeriods) || !(f.debrisVolumeFraction >= 0.0 && f.debrisVolumeFraction < 1.0) ||
@@ -280,9 +283,10 @@ Result<World> World::create(Pack pack, const WorldSettings& settings) {
       auto matcher = FragmentMatcher::build(db, ms);
       if (!matcher) return matcher.error();
       impl->matcher.emplace(std::move(matcher).value());
-      impl->entryCache = std::make_unique<detail::EntryCache>(db);
+      const auto kept = static_cast<size_t>(settings.entryCacheCapacity);
+      impl->entryCache = std::make_unique<detail::EntryCache>(db, kept);
       if (settings.shareEntryCorrections) {
-        impl->entryCorrections = std::make_unique<detail::EntryCorrections>(*impl->entryCache);
+        impl->entryCorrections = std::make_unique<detail::EntryCorrections>(*impl->entryCache, kept);
       }
     }
     return World(std::move(impl));

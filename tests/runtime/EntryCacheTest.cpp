@@ -33,11 +33,11 @@ TEST(EntryCache, BuildsEachEntrysDataOnceWithTheBitsOfBuildingItEachTime) {
   EXPECT_EQ(cache.built(), 0);
 
   // Asked for from many tasks at once: one build per (entry) and per (entry, ν), one object each.
-  std::vector<const Result<TetTopology>*> topologies(64);
-  std::vector<const Result<EntryAtPoisson>*> bases(64);
+  std::vector<std::shared_ptr<const Result<TetTopology>>> topologies(64);
+  std::vector<std::shared_ptr<const Result<EntryAtPoisson>>> bases(64);
   tbb::parallel_for(0, 64, [&](int i) {
-    topologies[static_cast<size_t>(i)] = &cache.topology(i % 2);
-    bases[static_cast<size_t>(i)] = &cache.atPoisson(i % 2, nu);
+    topologies[static_cast<size_t>(i)] = cache.topology(i % 2);
+    bases[static_cast<size_t>(i)] = cache.atPoisson(i % 2, nu);
   });
   for (size_t i = 2; i < 64; ++i) {
     EXPECT_EQ(topologies[i], topologies[i % 2]);
@@ -47,13 +47,13 @@ TEST(EntryCache, BuildsEachEntrysDataOnceWithTheBitsOfBuildingItEachTime) {
   for (int32_t e : {0, 1}) {
     SCOPED_TRACE(e);
     const FragmentEntry& entry = db.entries[static_cast<size_t>(e)];
-    const Result<TetTopology>& topology = cache.topology(e);
+    const Result<TetTopology>& topology = *cache.topology(e);
     ASSERT_TRUE(topology) << topology.error().message;
     const TetTopology direct = buildTetTopology(entry.asset.tetMesh).value();
     EXPECT_EQ(topology.value().edges, direct.edges);
     EXPECT_EQ(topology.value().neighbours, direct.neighbours);
     EXPECT_TRUE(sameBits(topology.value().tetVolumesM3, direct.tetVolumesM3));
-    const Result<EntryAtPoisson>& basis = cache.atPoisson(e, nu);
+    const Result<EntryAtPoisson>& basis = *cache.atPoisson(e, nu);
     ASSERT_TRUE(basis) << basis.error().message;
     const EntryAtPoisson own = entryAtPoisson(entry, db.referenceMaterial, nu).value();
     EXPECT_EQ(basis.value().poissonRatio, nu);
@@ -63,8 +63,8 @@ TEST(EntryCache, BuildsEachEntrysDataOnceWithTheBitsOfBuildingItEachTime) {
   }
   EXPECT_EQ(cache.built(), 4);  // the checks above were served from the cache
   // Another ν is another basis.
-  ASSERT_TRUE(cache.atPoisson(0, nu + 0.05));
-  EXPECT_NE(&cache.atPoisson(0, nu + 0.05), bases[0]);
+  ASSERT_TRUE(*cache.atPoisson(0, nu + 0.05));
+  EXPECT_NE(cache.atPoisson(0, nu + 0.05), bases[0]);
   EXPECT_EQ(cache.built(), 5);
 
   // Placing an entry through the cache is instantiateEntry's placement, bit for bit, at ν₀ (no
@@ -90,10 +90,44 @@ TEST(EntryCache, BuildsEachEntrysDataOnceWithTheBitsOfBuildingItEachTime) {
 
   // Typed errors, kept as the slot's answer: an entry out of range, a ν no material can have.
   const auto outside = static_cast<int32_t>(db.entries.size());
-  EXPECT_EQ(cache.topology(outside).error().code, ErrorCode::InvalidArgument);
-  EXPECT_EQ(cache.atPoisson(-1, nu).error().code, ErrorCode::InvalidArgument);
-  EXPECT_EQ(cache.atPoisson(0, 0.5).error().code, ErrorCode::InvalidMaterial);
-  EXPECT_EQ(&cache.atPoisson(0, 0.5), &cache.atPoisson(0, 0.5));
+  EXPECT_EQ(cache.topology(outside)->error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(cache.atPoisson(-1, nu)->error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(cache.atPoisson(0, 0.5)->error().code, ErrorCode::InvalidMaterial);
+  EXPECT_EQ(cache.atPoisson(0, 0.5), cache.atPoisson(0, 0.5));
+}
+
+// Bounded, the cache drops the least recently asked-for entry: what a worker still holds stays
+// valid, and an entry asked for again is built again, to the same bits.
+TEST(EntryCache, KeepsTheMostRecentlyUsedEntriesUpToItsCapacity) {
+  auto baked = bakeFragmentDatabase(testing::smallDatabaseSettings(3, true));
+  ASSERT_TRUE(baked) << baked.error().message;
+  const FragmentDatabase& db = baked.value();
+  ASSERT_EQ(db.entries.size(), 3u);
+  const double nu = db.referenceMaterial.poissonRatio + 0.05;
+  EntryCache cache(db, 2);
+  const auto first = cache.atPoisson(0, nu);
+  ASSERT_TRUE(*first);
+  (void)cache.atPoisson(1, nu);
+  (void)cache.atPoisson(0, nu);  // 0 is now more recent than 1
+  EXPECT_EQ(cache.built(), 2);
+  (void)cache.atPoisson(2, nu);  // drops 1, the least recent
+  EXPECT_EQ(cache.built(), 3);
+  EXPECT_EQ(cache.held(), 2u);
+  EXPECT_EQ(cache.atPoisson(0, nu), first);  // kept: the same object, nothing built
+  EXPECT_EQ(cache.built(), 3);
+  const auto again = cache.atPoisson(1, nu);  // dropped: built again (and 2 dropped)
+  EXPECT_EQ(cache.built(), 4);
+  const EntryAtPoisson own = entryAtPoisson(db.entries[1], db.referenceMaterial, nu).value();
+  ASSERT_TRUE(*again);
+  EXPECT_TRUE(sameBits(again->value().modal.modes, own.modal.modes));
+  EXPECT_TRUE(sameBits(again->value().stressModes, own.stressModes));
+  // A value dropped while held lives on with its holder.
+  for (int32_t e : {2, 1, 2}) (void)cache.atPoisson(e, nu);
+  EXPECT_EQ(cache.held(), 2u);
+  EXPECT_TRUE(sameBits(first->value().modal.modes, entryAtPoisson(db.entries[0], db.referenceMaterial, nu).value().modal.modes));
+  // Topologies are kept under the same bound, separately.
+  for (int32_t e : {0, 1, 2}) ASSERT_TRUE(*cache.topology(e));
+  EXPECT_EQ(cache.held(), 4u);
 }
 
 }  // namespace

@@ -700,14 +700,16 @@ TEST_F(WorldTest, AMatchedFragmentsSharedEntryCorrectionEqualsItsOwnFactorisatio
 }
 
 // Entries' corrections factorised at placement (prepareEntryCorrections) are the ones a matched
-// fragment would otherwise factorise on first use: the break, and a hit on its largest matched
-// piece, are the same bits either way.
+// fragment would otherwise factorise on first use, and an entry dropped from a full cache
+// (entryCacheCapacity) is built again to the same bits: the break, and a hit on its largest
+// matched piece, are the same bits every way.
 TEST_F(WorldTest, EntryCorrectionsFactorisedAtPlacementChangeNoBits) {
   std::vector<uint64_t> prints;
-  for (const int prepare : {0, 1000}) {
-    SCOPED_TRACE(prepare ? "every entry factorised at placement" : "each entry on first use");
+  for (const auto [prepare, kept] : {std::pair{0, 256}, std::pair{1000, 0}, std::pair{0, 1}}) {
+    SCOPED_TRACE(prepare ? "every entry factorised at placement" : kept == 1 ? "one entry kept" : "each entry on first use");
     WorldSettings settings;
     settings.prepareEntryCorrections = prepare;
+    settings.entryCacheCapacity = kept;
     World world = makeWorld(settings);
     const ObjectId plate = world.addObject({.asset = "plate"}).value();
     ASSERT_TRUE(world.waitUntilPrepared());
@@ -731,8 +733,16 @@ TEST_F(WorldTest, EntryCorrectionsFactorisedAtPlacementChangeNoBits) {
   }
   EXPECT_EQ(prints[0], prints[2]);
   EXPECT_EQ(prints[1], prints[3]);
+  EXPECT_EQ(prints[0], prints[4]);
+  EXPECT_EQ(prints[1], prints[5]);
   WorldSettings bad;
   bad.prepareEntryCorrections = -1;
+  EXPECT_EQ(World::create(Pack(*sPack), bad).error().code, ErrorCode::InvalidArgument);
+  bad.prepareEntryCorrections = 0;
+  bad.entryCacheCapacity = -1;
+  EXPECT_EQ(World::create(Pack(*sPack), bad).error().code, ErrorCode::InvalidArgument);
+  bad.entryCacheCapacity = 8;
+  bad.prepareEntryCorrections = 9;  // prepared only to be dropped
   EXPECT_EQ(World::create(Pack(*sPack), bad).error().code, ErrorCode::InvalidArgument);
 }
 

@@ -67,6 +67,10 @@ Runner addPlayCommand(CLI::App& app) {
                   "Database entries whose static corrections are factorised when an object is placed, so that matched "
                   "pieces need none (about 6 ms of background work and 1.8 MB each; 0: each on first use)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--kept-entries", o->settings.world.entryCacheCapacity,
+                  "Matched database entries whose shared data (connectivity, basis, static correction) the World "
+                  "keeps, the least recently matched dropped first (0: no bound); at least --prepare-entries")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--hull-vertices", o->settings.hullMaxVertices,
                   "Most vertices of a fragment's collision hull: its extreme vertices in this many directions (0: the exact hull)")
       ->capture_default_str()->check(CLI::Range(0, 4096));

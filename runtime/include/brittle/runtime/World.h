@@ -204,6 +204,15 @@ struct WorldSettings {
   /// modes): the default database's 70 entries 0.1–0.35 s and 128 MB. What a fracture computes
   /// does not depend on it. `brittle play` sets 256.
   int32_t prepareEntryCorrections = 0;
+  /// What the World keeps of the database entries matched so far, shared by the fragments matched
+  /// to them: each kept entry's connectivity, its basis at a material's ν other than the
+  /// database's, and its static correction per material (~2.4 MB an entry of 1k tets and 12
+  /// modes, ~0.8 MB at 300 tets). Past this many of each, the least recently matched is dropped
+  /// and built again if matched again (to the same bits). 0: no bound (every entry ever matched
+  /// is kept, which a long session with a 10⁴-entry database cannot afford). The default keeps
+  /// the whole default database; it must be ≥ prepareEntryCorrections, or those would be dropped
+  /// as they are made.
+  int32_t entryCacheCapacity = 256;
   /// Called on a worker when the work of a submitted impact is done, before impactReady turns
   /// true, with the result collectImpact will hand over (the fragments' surfaces and mass
   /// properties are final; object ids are not assigned yet). A host builds what it needs per
