@@ -705,7 +705,7 @@ TEST_F(WorldTest, AMatchedFragmentsSharedEntryCorrectionEqualsItsOwnFactorisatio
 // matched piece, are the same bits every way.
 TEST_F(WorldTest, EntryCorrectionsFactorisedAtPlacementChangeNoBits) {
   std::vector<uint64_t> prints;
-  for (const auto [prepare, kept] : {std::pair{0, 256}, std::pair{1000, 0}, std::pair{0, 1}}) {
+  for (const auto& [prepare, kept] : {std::pair{0, 256}, std::pair{1000, 0}, std::pair{0, 1}}) {
     SCOPED_TRACE(prepare ? "every entry factorised at placement" : kept == 1 ? "one entry kept" : "each entry on first use");
     WorldSettings settings;
     settings.prepareEntryCorrections = prepare;
