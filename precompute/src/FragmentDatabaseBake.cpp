@@ -79,7 +79,7 @@ TetMeshSettings DatabaseBakeSettings::defaultFragmentTetMeshSettings() {
   s.needleTurnDeg = 0.0;
   s.meshingRuns = 1;
   // A fragment's run takes 0.05–5 s at 300–1000 tets; one that runs on (TetMeshSettings) is
-  // given up after a minute and the entry drawn again from its next seed.
+  // given up after a minute, and the fragment meshed finer (bakeFragmentEntry) or drawn again.
   s.runTimeLimitS = 60.0;
   return s;
 }

@@ -27,16 +27,15 @@ std::shared_ptr<const Result<EntryAtPoisson>> EntryCache::atPoisson(int32_t entr
 }
 
 Result<ObjectAsset> EntryCache::place(int32_t entry, const Material& target, const CanonicalFrame& frame) const {
-  if (entry < 0 || static_cast<size_t>(entry) >= mDatabase.entries.size()) {
-    return makeError(ErrorCode::InvalidArgument, "entry " + std::to_string(entry) + " out of range");
-  }
-  std::shared_ptr<const Result<EntryAtPoisson>> corrected;  // held while the entry is placed
-  if (target.poissonRatio != mDatabase.referenceMaterial.poissonRatio) {
-    corrected = atPoisson(entry, target.poissonRatio);
-    if (!*corrected) return corrected->error();
-  }
-  return instantiateEntry(mDatabase.entries[static_cast<size_t>(entry)], mDatabase.referenceMaterial, target, frame,
-                          nullptr, corrected ? &corrected->value() : nullptr);
+  return ofEntry<ObjectAsset>(entry, [&](const FragmentEntry& e) -> Result<ObjectAsset> {
+    std::shared_ptr<const Result<EntryAtPoisson>> corrected;  // held while the entry is placed
+    if (target.poissonRatio != mDatabase.referenceMaterial.poissonRatio) {
+      corrected = atPoisson(entry, target.poissonRatio);
+      if (!*corrected) return corrected->error();
+    }
+    return instantiateEntry(e, mDatabase.referenceMaterial, target, frame, nullptr,
+                            corrected ? &corrected->value() : nullptr);
+  });
 }
 
 }  // namespace brittle::detail

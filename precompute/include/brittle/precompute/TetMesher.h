@@ -66,8 +66,8 @@ struct TetMeshSettings {
   /// limit changes no mesh that is made within it, so results stay deterministic unless a run
   /// takes about as long as the limit on one machine and not on another: keep it far above the
   /// normal run time. Object bakes have none by default (a large object can take minutes);
-  /// database entries, drawn again from their next seed on failure, have one
-  /// (DatabaseBakeSettings::defaultFragmentTetMeshSettings).
+  /// database entries, which on a failure are meshed finer and then drawn again from their next
+  /// seed, have one (DatabaseBakeSettings::defaultFragmentTetMeshSettings).
   double runTimeLimitS = 0.0;
   /// Elements this many times wider than thick across the solid's thinnest principal axis, in
   /// [1, 16]: the surface is stretched by it along that axis, meshed, and the nodes taken back
