@@ -8,8 +8,10 @@
 namespace brittle {
 
 bool FragmentDatabase::hasPhysics() const {
-  for (const FragmentEntry& e : entries) {
-    if (e.asset.tetMesh.tets.rows() == 0 || e.asset.modal.eigenvaluesRad2PerS2.size() == 0) return false;
+  for (size_t i = 0; i < entries.size(); ++i) {
+    const FragmentEntry& e = entries[i];
+    const int64_t tets = entrySource ? entrySource->tetCount(static_cast<int64_t>(i)) : e.asset.tetMesh.tets.rows();
+    if (tets == 0 || e.asset.modal.eigenvaluesRad2PerS2.size() == 0) return false;
   }
   return !entries.empty();
 }
@@ -28,29 +30,49 @@ DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entrie
   return kind == DescriptorKind::Moment ? sizedInvertedFile(entries) : DescriptorIndexSettings{};
 }
 
-Status validateFragmentDatabase(const FragmentDatabase& db) {
-  auto invalid = [](std::string message) { return makeError(ErrorCode::InvalidArgument, std::move(message)); };
-  if (Status st = validateMaterial(db.referenceMaterial); !st) return invalid("reference material: " + st.error().message);
-  if (Status st = validateShapeDescriptorSettings(db.descriptorSettings); !st) return st;
-  const auto rows = static_cast<Eigen::Index>(db.entries.size());
-  std::set<std::string> names;
-  for (size_t i = 0; i < db.entries.size(); ++i) {
-    const FragmentEntry& e = db.entries[i];
-    const std::string label = "entry " + std::to_string(i) + " ('" + e.asset.name + "')";
-    if (!names.insert(e.asset.name).second) return invalid("two entries are named '" + e.asset.name + "'");
-    if (e.asset.materialName != db.referenceMaterial.name) {
-      return invalid(label + " names material '" + e.asset.materialName + "', not the reference material '" +
-                     db.referenceMaterial.name + "'");
-    }
+namespace {
+
+Status invalid(std::string message) { return makeError(ErrorCode::InvalidArgument, std::move(message)); }
+
+// validateFragmentEntry, the surface only where `withSurface`.
+Status checkEntry(const FragmentEntry& e, const Material& reference, const std::string& label, bool withSurface) {
+  if (e.asset.materialName != reference.name) {
+    return invalid(label + " names material '" + e.asset.materialName + "', not the reference material '" +
+                   reference.name + "'");
+  }
+  if (withSurface) {
     const TriangleMesh& s = e.surface;
     if (s.vertices.rows() < 4 || s.faces.rows() < 4) return invalid(label + " has no closed surface");
     if (!s.vertices.allFinite()) return invalid(label + " surface has a non-finite vertex");
     if (s.faces.minCoeff() < 0 || s.faces.maxCoeff() >= s.vertices.rows()) {
       return invalid(label + " surface has a face index out of range");
     }
-    if (!std::isfinite(e.baseVolumeFraction) || e.baseVolumeFraction < 0.0) {
-      return invalid(label + " has an invalid baseVolumeFraction");
-    }
+  }
+  if (!std::isfinite(e.baseVolumeFraction) || e.baseVolumeFraction < 0.0) {
+    return invalid(label + " has an invalid baseVolumeFraction");
+  }
+  return Ok{};
+}
+
+std::string entryLabel(size_t i, const FragmentEntry& e) {
+  return "entry " + std::to_string(i) + " ('" + e.asset.name + "')";
+}
+
+}  // namespace
+
+Status validateFragmentEntry(const FragmentEntry& entry, const Material& referenceMaterial) {
+  return checkEntry(entry, referenceMaterial, "entry '" + entry.asset.name + "'", true);
+}
+
+Status validateFragmentDatabase(const FragmentDatabase& db) {
+  if (Status st = validateMaterial(db.referenceMaterial); !st) return invalid("reference material: " + st.error().message);
+  if (Status st = validateShapeDescriptorSettings(db.descriptorSettings); !st) return st;
+  const auto rows = static_cast<Eigen::Index>(db.entries.size());
+  std::set<std::string> names;
+  for (size_t i = 0; i < db.entries.size(); ++i) {
+    const FragmentEntry& e = db.entries[i];
+    if (!names.insert(e.asset.name).second) return invalid("two entries are named '" + e.asset.name + "'");
+    if (Status st = checkEntry(e, db.referenceMaterial, entryLabel(i, e), !db.entrySource); !st) return st;
   }
   for (DescriptorKind kind : kAllDescriptorKinds) {
     const DescriptorMatrix& m = db.descriptorsOf(kind);

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 namespace brittle::hdf5 {
 namespace {
@@ -21,6 +22,66 @@ std::string indexString(size_t flat, const std::vector<hsize_t>& dims) {
   }
   return shapeString(index);
 }
+
+// A failed read of a dataset whose shape and type checked out means its stored bytes are bad:
+// the Fletcher-32 filter found a mismatch, or deflate could not decode the chunk. `dims` are the
+// dataset's; only `rows` of them are read.
+void readRows(const Handle& dset, const std::string& path, hid_t memType, void* buffer, size_t count,
+              const std::vector<hsize_t>& dims = {}, Rows rows = {}) {
+  if (count == 0) return;
+  Handle fileSpace, memSpace;
+  if (rows.count != kAny) {
+    std::vector<hsize_t> start(dims.size(), 0), extent = dims;
+    start[0] = rows.first;
+    extent[0] = rows.count;
+    fileSpace = hdf5::dataspaceHandle(H5Dget_space(dset.get()));
+    memSpace = hdf5::dataspaceHandle(H5Screate_simple(static_cast<int>(extent.size()), extent.data(), nullptr));
+    if (!fileSpace.valid() || !memSpace.valid() ||
+        H5Sselect_hyperslab(fileSpace.get(), H5S_SELECT_SET, start.data(), nullptr, extent.data(), nullptr) < 0) {
+      fail(ErrorCode::PackIoError, "cannot select rows of dataset '" + path + "'" + hdf5::withDetail());
+    }
+  }
+  const hid_t mem = memSpace.valid() ? memSpace.get() : H5S_ALL;
+  const hid_t file = fileSpace.valid() ? fileSpace.get() : H5S_ALL;
+  if (H5Dread(dset.get(), memType, mem, file, H5P_DEFAULT, buffer) < 0) {
+    fail(ErrorCode::PackCorrupt,
+         "cannot read dataset '" + path + "': checksum mismatch or damaged data" + hdf5::withDetail());
+  }
+}
+
+// The HDF5 type of each value type a Dataset reads.
+template <typename T>
+struct TypeOf;
+template <>
+struct TypeOf<double> {
+  static constexpr H5T_class_t kClass = H5T_FLOAT;
+  static constexpr const char* kName = "float64";
+  static hid_t memType() { return H5T_NATIVE_DOUBLE; }
+};
+template <>
+struct TypeOf<float> {
+  static constexpr H5T_class_t kClass = H5T_FLOAT;
+  static constexpr const char* kName = "float32";
+  static hid_t memType() { return H5T_NATIVE_FLOAT; }
+};
+template <>
+struct TypeOf<int64_t> {
+  static constexpr H5T_class_t kClass = H5T_INTEGER;
+  static constexpr const char* kName = "int64";
+  static hid_t memType() { return H5T_NATIVE_INT64; }
+};
+template <>
+struct TypeOf<int32_t> {
+  static constexpr H5T_class_t kClass = H5T_INTEGER;
+  static constexpr const char* kName = "int32";
+  static hid_t memType() { return H5T_NATIVE_INT32; }
+};
+template <>
+struct TypeOf<uint8_t> {
+  static constexpr H5T_class_t kClass = H5T_INTEGER;
+  static constexpr const char* kName = "uint8";
+  static hid_t memType() { return H5T_NATIVE_UINT8; }
+};
 
 }  // namespace
 
@@ -90,36 +151,23 @@ std::optional<int64_t> FileReader::intAttribute(const std::string& where, const 
 }
 
 Array<double> FileReader::f64(const std::string& path, const std::vector<hsize_t>& shape) {
-  Array<double> a = numeric<double>(path, shape, H5T_FLOAT, H5T_NATIVE_DOUBLE, "float64");
-  for (size_t i = 0; i < a.values.size(); ++i) {
-    if (!std::isfinite(a.values[i])) {
-      fail(ErrorCode::PackCorrupt, "dataset '" + path + "' holds a non-finite value (" + std::to_string(a.values[i]) +
-                                       ") at " + indexString(i, a.dims));
-    }
-  }
-  return a;
+  return open<double>(path, shape).read();
 }
 
 Array<float> FileReader::f32(const std::string& path, const std::vector<hsize_t>& shape) {
-  Array<float> a = numeric<float>(path, shape, H5T_FLOAT, H5T_NATIVE_FLOAT, "float32");
-  for (size_t i = 0; i < a.values.size(); ++i) {
-    if (!std::isfinite(a.values[i])) {
-      fail(ErrorCode::PackCorrupt, "dataset '" + path + "' holds a non-finite value at " + indexString(i, a.dims));
-    }
-  }
-  return a;
+  return open<float>(path, shape).read();
 }
 
 Array<int64_t> FileReader::i64(const std::string& path, const std::vector<hsize_t>& shape) {
-  return numeric<int64_t>(path, shape, H5T_INTEGER, H5T_NATIVE_INT64, "int64");
+  return open<int64_t>(path, shape).read();
 }
 
 Array<int32_t> FileReader::i32(const std::string& path, const std::vector<hsize_t>& shape) {
-  return numeric<int32_t>(path, shape, H5T_INTEGER, H5T_NATIVE_INT32, "int32");
+  return open<int32_t>(path, shape).read();
 }
 
 Array<uint8_t> FileReader::u8(const std::string& path, const std::vector<hsize_t>& shape) {
-  return numeric<uint8_t>(path, shape, H5T_INTEGER, H5T_NATIVE_UINT8, "uint8");
+  return open<uint8_t>(path, shape).read();
 }
 
 std::vector<std::string> FileReader::strings(const std::string& path, hsize_t count) {
@@ -137,7 +185,7 @@ std::vector<std::string> FileReader::strings(const std::string& path, hsize_t co
   const std::vector<hsize_t> dims = checkedDims(dset, path, {count}, width);
   Handle mem = stringMemType(width, H5Tget_cset(type.get()));
   std::vector<char> buffer(dims[0] * width, '\0');
-  read(dset, path, mem.get(), buffer.data(), dims[0]);
+  readRows(dset, path, mem.get(), buffer.data(), dims[0]);
   std::vector<std::string> out(dims[0]);
   for (size_t i = 0; i < out.size(); ++i) out[i].assign(&buffer[i * width], strnlen(&buffer[i * width], width));
   return out;
@@ -212,26 +260,63 @@ Handle FileReader::stringMemType(size_t width, H5T_cset_t cset) {
 }
 
 template <typename T>
-Array<T> FileReader::numeric(const std::string& path, const std::vector<hsize_t>& shape, H5T_class_t typeClass, hid_t memType,
-                             const char* typeName) {
-  Handle dset = openDataset(path);
-  Handle type = hdf5::datatypeHandle(H5Dget_type(dset.get()));
+Dataset<T> FileReader::open(const std::string& path, const std::vector<hsize_t>& shape) {
+  Dataset<T> d;
+  d.mPath = path;
+  d.mDset = openDataset(path);
+  Handle type = hdf5::datatypeHandle(H5Dget_type(d.mDset.get()));
   if (!type.valid())
     fail(ErrorCode::PackCorrupt, "cannot read the type of dataset '" + path + "'" + hdf5::withDetail());
   // The exact type is required: HDF5 would otherwise convert silently, and a narrowing
   // conversion (float64 → int32, int64 → int32) clips values instead of failing.
-  if (H5Tget_class(type.get()) != typeClass || H5Tget_size(type.get()) != sizeof(T) ||
-      (typeClass == H5T_INTEGER && H5Tget_sign(type.get()) != H5Tget_sign(memType))) {
-    fail(ErrorCode::PackShapeMismatch, "dataset '" + path + "' must hold " + typeName);
+  using Type = TypeOf<T>;
+  if (H5Tget_class(type.get()) != Type::kClass || H5Tget_size(type.get()) != sizeof(T) ||
+      (Type::kClass == H5T_INTEGER && H5Tget_sign(type.get()) != H5Tget_sign(Type::memType()))) {
+    fail(ErrorCode::PackShapeMismatch, "dataset '" + path + "' must hold " + Type::kName);
   }
+  d.mDims = checkedDims(d.mDset, path, shape, sizeof(T));
+  return d;
+}
+
+template <typename T>
+Array<T> Dataset<T>::read(Rows rows) const {
   Array<T> a;
-  a.dims = checkedDims(dset, path, shape, sizeof(T));
+  a.dims = mDims;
+  if (rows.count != kAny) {
+    if (mDims.empty() || rows.first > mDims[0] || rows.count > mDims[0] - rows.first) {
+      fail(ErrorCode::PackShapeMismatch, "dataset '" + mPath + "' has shape " + shapeString(mDims) +
+                                             ", without rows " + std::to_string(rows.first) + " to " +
+                                             std::to_string(rows.first + rows.count));
+    }
+    a.dims[0] = rows.count;
+  }
   size_t count = 1;
   for (hsize_t d : a.dims) count *= d;
   a.values.resize(count);
-  read(dset, path, memType, a.values.data(), count);
+  readRows(mDset, mPath, TypeOf<T>::memType(), a.values.data(), count, mDims, rows);
+  if constexpr (std::is_floating_point_v<T>) {
+    const size_t rowSize = a.dims.empty() || a.dims[0] == 0 ? 1 : count / a.dims[0];
+    const size_t skipped = rows.count == kAny ? 0 : rows.first * rowSize;
+    for (size_t i = 0; i < count; ++i) {
+      if (!std::isfinite(a.values[i])) {
+        fail(ErrorCode::PackCorrupt, "dataset '" + mPath + "' holds a non-finite value (" +
+                                         std::to_string(a.values[i]) + ") at " + indexString(skipped + i, mDims));
+      }
+    }
+  }
   return a;
 }
+
+template Dataset<double> FileReader::open<double>(const std::string&, const std::vector<hsize_t>&);
+template Dataset<float> FileReader::open<float>(const std::string&, const std::vector<hsize_t>&);
+template Dataset<int64_t> FileReader::open<int64_t>(const std::string&, const std::vector<hsize_t>&);
+template Dataset<int32_t> FileReader::open<int32_t>(const std::string&, const std::vector<hsize_t>&);
+template Dataset<uint8_t> FileReader::open<uint8_t>(const std::string&, const std::vector<hsize_t>&);
+template class Dataset<double>;
+template class Dataset<float>;
+template class Dataset<int64_t>;
+template class Dataset<int32_t>;
+template class Dataset<uint8_t>;
 
 std::vector<hsize_t> FileReader::checkedDims(const Handle& dset, const std::string& path, const std::vector<hsize_t>& shape,
                                              size_t elementBytes) {
@@ -265,13 +350,6 @@ std::vector<hsize_t> FileReader::checkedDims(const Handle& dset, const std::stri
     }
   }
   return dims;
-}
-
-void FileReader::read(const Handle& dset, const std::string& path, hid_t memType, void* buffer, size_t count) {
-  if (count > 0 && H5Dread(dset.get(), memType, H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer) < 0) {
-    fail(ErrorCode::PackCorrupt,
-         "cannot read dataset '" + path + "': checksum mismatch or damaged data" + hdf5::withDetail());
-  }
 }
 
 }  // namespace brittle::hdf5

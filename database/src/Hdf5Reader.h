@@ -36,8 +36,36 @@ struct Array {
   std::vector<hsize_t> dims;
 };
 
+/// Rows [first, first + count) of a dataset's first dimension; the default is every row.
+struct Rows {
+  hsize_t first = 0;
+  hsize_t count = kAny;
+};
+
 /// "[2, 3]"; kAny reads "*".
 std::string shapeString(const std::vector<hsize_t>& dims);
+
+/// A dataset of T (double, float, int64_t, int32_t or uint8_t) whose type, shape and stored size
+/// were checked when FileReader::open opened it, kept open to read rows of it. A reader of a few
+/// rows at a time (an entry read on demand, PackReader.cpp) pays those checks once: the stored
+/// size walks the dataset's whole chunk index. Move-only; reads are thread-safe (HDF5 is built
+/// thread-safe and serialises them).
+template <typename T>
+class Dataset {
+ public:
+  const std::vector<hsize_t>& dims() const { return mDims; }
+
+  /// `rows` of it (the result's dims[0] is rows.count), every float checked finite. Throws
+  /// ReadFailure: rows past its end (PackShapeMismatch), stored bytes that fail their checksum or
+  /// do not inflate, or a non-finite float (PackCorrupt).
+  Array<T> read(Rows rows = {}) const;
+
+ private:
+  friend class FileReader;
+  Handle mDset;
+  std::string mPath;
+  std::vector<hsize_t> mDims;
+};
 
 /// Reads checked attributes and datasets from an open file of `fileBytes` bytes.
 class FileReader {
@@ -55,6 +83,12 @@ class FileReader {
   /// nullopt when the attribute is missing or is not one integer.
   std::optional<int64_t> intAttribute(const std::string& where, const char* name);
 
+  /// The dataset at `path`, its exact type T and its shape checked (kAny: any size there), and
+  /// its claimed size against what the file stores, before anything is allocated for it.
+  template <typename T>
+  Dataset<T> open(const std::string& path, const std::vector<hsize_t>& shape);
+
+  /// open(path, shape).read(): the whole dataset.
   Array<double> f64(const std::string& path, const std::vector<hsize_t>& shape);
   Array<float> f32(const std::string& path, const std::vector<hsize_t>& shape);
   Array<int64_t> i64(const std::string& path, const std::vector<hsize_t>& shape);
@@ -76,18 +110,10 @@ class FileReader {
 
   static Handle stringMemType(size_t width, H5T_cset_t cset);
 
-  template <typename T>
-  Array<T> numeric(const std::string& path, const std::vector<hsize_t>& shape, H5T_class_t typeClass, hid_t memType,
-                   const char* typeName);
-
   // The dataset's dimensions, once its rank and fixed dimensions match `shape` and its claimed
   // size is plausible for what the file stores.
   std::vector<hsize_t> checkedDims(const Handle& dset, const std::string& path, const std::vector<hsize_t>& shape,
                                    size_t elementBytes);
-
-  // A failed read of a dataset whose shape and type checked out means its stored bytes are bad:
-  // the Fletcher-32 filter found a mismatch, or deflate could not decode the chunk.
-  static void read(const Handle& dset, const std::string& path, hid_t memType, void* buffer, size_t count);
 
   hid_t mFile;
   uintmax_t mFileBytes;

@@ -6,9 +6,6 @@
 namespace brittle::hdf5 {
 namespace {
 
-// About 256 KiB per chunk: few enough chunks that the chunk index stays small for big meshes,
-// small enough that the chunk cache and a partial read stay cheap.
-constexpr hsize_t kTargetChunkBytes = 256 * 1024;
 constexpr unsigned kDeflateLevel = 4;
 
 Handle fixedStringType(size_t width) {
@@ -107,7 +104,7 @@ void FileWriter::dataset(const std::string& path, hid_t fileType, hid_t memType,
       rowBytes *= chunk[d];
     }
   }
-  chunk[0] = std::clamp<hsize_t>(kTargetChunkBytes / rowBytes, 1, std::max<hsize_t>(dims[0], 1));
+  chunk[0] = std::clamp<hsize_t>(mChunkBytes / rowBytes, 1, std::max<hsize_t>(dims[0], 1));
 
   Handle space = dataspaceHandle(H5Screate_simple(rank, dims.data(), maxDims.data()));
   if (!space.valid()) failHdf5("cannot create the dataspace of dataset '" + path + "'");

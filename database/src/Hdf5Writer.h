@@ -27,10 +27,18 @@ struct WriteFailure {
 /// Throws a PackIoError with HDF5's innermost message appended.
 [[noreturn]] void failHdf5(const std::string& message);
 
+/// About 256 KiB per chunk: few enough chunks that the chunk index stays small for big meshes,
+/// small enough that the chunk cache and a partial read stay cheap.
+inline constexpr hsize_t kDefaultChunkBytes = 256 * 1024;
+
 /// Writes groups, attributes and datasets into an open file.
 class FileWriter {
  public:
   explicit FileWriter(hid_t file);
+
+  /// The bytes of a chunk of the datasets written next (whole rows, at least one): the
+  /// default, or smaller where rows are read a few at a time (PackWriter.cpp).
+  void setChunkBytes(hsize_t bytes) { mChunkBytes = bytes; }
 
   Handle createGroup(const std::string& path);
 
@@ -57,6 +65,7 @@ class FileWriter {
                const std::vector<hsize_t>& dims, const char* unit);
 
   hid_t mFile;
+  hsize_t mChunkBytes = kDefaultChunkBytes;
 };
 
 }  // namespace brittle::hdf5

@@ -26,6 +26,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using hdf5::Array;
+using hdf5::Dataset;
 using hdf5::fail;
 using hdf5::FileReader;
 using hdf5::Handle;
@@ -142,11 +143,25 @@ std::vector<Material> readMaterials(FileReader& r, const std::string& prefix) {
   return materials;
 }
 
-std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, const std::vector<Material>& materials,
-                                     int64_t version) {
+// An object table (/objects or /database/entries) read but for the arrays that grow with the
+// mesh: every object's other fields, those arrays checked and open, and their offset tables
+// checked against their row counts. readObjectArrays reads the arrays of any run of objects.
+struct ObjectTable {
+  std::string prefix;
+  std::vector<ObjectAsset> objects;  // without tetMesh, surfaceFaces, modal.modes, stressModes, eliminationOrder
+  Dataset<double> nodes, modes, stressModes;
+  Dataset<int32_t> tets, faces;
+  std::optional<Dataset<int32_t>> elimination;
+  std::vector<int64_t> nodeOffsets, tetOffsets, faceOffsets, modesOffsets, stressOffsets, eliminationOffsets;
+};
+
+ObjectTable readObjectTable(FileReader& r, const std::string& prefix, const std::vector<Material>& materials,
+                            int64_t version) {
   r.requireGroup(prefix);
   r.requireGroup(prefix + "/quality");
   r.requireGroup(prefix + "/bake");
+  ObjectTable table;
+  table.prefix = prefix;
   const std::vector<std::string> names = r.strings(prefix + "/name", kAny);
   const hsize_t o = names.size();
   const std::vector<std::string> materialNames = r.strings(prefix + "/material_name", o);
@@ -154,12 +169,15 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
   const std::vector<int32_t> orders =
       version >= 3 ? r.i32(prefix + "/element_order", {o}).values : std::vector<int32_t>(o, 1);
 
-  const Array<double> nodes = r.f64(prefix + "/nodes", {kAny, 3});
-  const auto nodeOffsets = readOffsets(r, prefix + "/node_offsets", o, nodes.dims[0], prefix + "/nodes");
-  const Array<int32_t> tets = r.i32(prefix + "/tets", {kAny, 4});
-  const auto tetOffsets = readOffsets(r, prefix + "/tet_offsets", o, tets.dims[0], prefix + "/tets");
-  const Array<int32_t> faces = r.i32(prefix + "/surface_faces", {kAny, 3});
-  const auto faceOffsets = readOffsets(r, prefix + "/face_offsets", o, faces.dims[0], prefix + "/surface_faces");
+  const auto offsets = [&](const std::string& offsetsName, const auto& values, const std::string& valuesName) {
+    return readOffsets(r, prefix + "/" + offsetsName, o, values.dims()[0], prefix + "/" + valuesName);
+  };
+  table.nodes = r.open<double>(prefix + "/nodes", {kAny, 3});
+  table.nodeOffsets = offsets("node_offsets", table.nodes, "nodes");
+  table.tets = r.open<int32_t>(prefix + "/tets", {kAny, 4});
+  table.tetOffsets = offsets("tet_offsets", table.tets, "tets");
+  table.faces = r.open<int32_t>(prefix + "/surface_faces", {kAny, 3});
+  table.faceOffsets = offsets("face_offsets", table.faces, "surface_faces");
 
   const auto massKg = r.f64(prefix + "/mass_kg", {o}).values;
   const auto volumeM3 = r.f64(prefix + "/volume_m3", {o}).values;
@@ -173,19 +191,14 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
   const auto frequencies = r.f64(prefix + "/frequencies_hz", {modeTotal}).values;
   const auto residuals = r.f64(prefix + "/residuals", {modeTotal}).values;
   const auto orthonormality = r.f64(prefix + "/orthonormality_error", {o}).values;
-  const Array<double> modes = r.f64(prefix + "/modes", {kAny});
-  const auto modesOffsets = readOffsets(r, prefix + "/modes_value_offsets", o, modes.dims[0], prefix + "/modes");
-  const Array<double> stressModes = r.f64(prefix + "/stress_modes", {kAny});
-  const auto stressOffsets =
-      readOffsets(r, prefix + "/stress_modes_value_offsets", o, stressModes.dims[0], prefix + "/stress_modes");
+  table.modes = r.open<double>(prefix + "/modes", {kAny});
+  table.modesOffsets = offsets("modes_value_offsets", table.modes, "modes");
+  table.stressModes = r.open<double>(prefix + "/stress_modes", {kAny});
+  table.stressOffsets = offsets("stress_modes_value_offsets", table.stressModes, "stress_modes");
   // Optional, without a version bump (PACK_SCHEMA.md): packs baked before it have none.
-  const bool hasElimination = r.exists(prefix + "/elimination_order");
-  Array<int32_t> elimination;
-  std::vector<int64_t> eliminationOffsets;
-  if (hasElimination) {
-    elimination = r.i32(prefix + "/elimination_order", {kAny});
-    eliminationOffsets = readOffsets(r, prefix + "/elimination_order_offsets", o, elimination.dims[0],
-                                     prefix + "/elimination_order");
+  if (r.exists(prefix + "/elimination_order")) {
+    table.elimination = r.open<int32_t>(prefix + "/elimination_order", {kAny});
+    table.eliminationOffsets = offsets("elimination_order_offsets", *table.elimination, "elimination_order");
   }
 
   const auto qNodes = r.i64(prefix + "/quality/node_count", {o}).values;
@@ -227,9 +240,9 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
     return values[i] == 1;
   };
 
-  std::vector<ObjectAsset> objects(o);
+  table.objects.resize(o);
   for (size_t i = 0; i < o; ++i) {
-    ObjectAsset& a = objects[i];
+    ObjectAsset& a = table.objects[i];
     a.name = names[i];
     a.materialName = materialNames[i];
     if (a.name.empty()) fail(ErrorCode::PackCorrupt, "object " + std::to_string(i) + " has an empty name");
@@ -238,33 +251,11 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
       fail(ErrorCode::PackCorrupt,
            "object '" + a.name + "' names material '" + a.materialName + "', which is not in the pack's materials");
     }
-
-    const int64_t n = nodeOffsets[i + 1] - nodeOffsets[i];
-    const int64_t t = tetOffsets[i + 1] - tetOffsets[i];
-    const int64_t f = faceOffsets[i + 1] - faceOffsets[i];
-    const int64_t m = modeOffsets[i + 1] - modeOffsets[i];
-    a.tetMesh.nodes = Eigen::Map<const Points>(nodes.values.data() + 3 * nodeOffsets[i], n, 3);
-    a.tetMesh.tets = Eigen::Map<const Tetrahedra>(tets.values.data() + 4 * tetOffsets[i], t, 4);
-    checkIndices(a.tetMesh.tets, prefix + "/tets", tetOffsets[i], n, a.name);
-    a.surfaceFaces = Eigen::Map<const Triangles>(faces.values.data() + 3 * faceOffsets[i], f, 3);
-    checkIndices(a.surfaceFaces, prefix + "/surface_faces", faceOffsets[i], n, a.name);
     if (orders[i] != 1 && orders[i] != 2) {
       fail(ErrorCode::PackCorrupt, "dataset '" + prefix + "/element_order' [" + std::to_string(i) + "] = " +
                                        std::to_string(orders[i]) + " is neither 1 (P1) nor 2 (P2)");
     }
     a.elementOrder = static_cast<ElementOrder>(orders[i]);
-    const int64_t femNodes = femNodeCount(a.tetMesh, a.elementOrder);
-    checkBlockSize(modesOffsets, i, prefix + "/modes", 3, femNodes, m, a.name);
-    checkBlockSize(stressOffsets, i, prefix + "/stress_modes", 6 * stressPointsPerElement(a.elementOrder), t, m, a.name);
-    if (hasElimination && eliminationOffsets[i + 1] > eliminationOffsets[i]) {
-      a.eliminationOrder = Eigen::Map<const Eigen::VectorXi>(elimination.values.data() + eliminationOffsets[i],
-                                                             eliminationOffsets[i + 1] - eliminationOffsets[i]);
-      if (!isPermutation(a.eliminationOrder, 3 * femNodes)) {
-        fail(ErrorCode::PackCorrupt, "dataset '" + prefix + "/elimination_order' of object '" + a.name +
-                                         "' is not a permutation of its " + std::to_string(3 * femNodes) +
-                                         " degrees of freedom");
-      }
-    }
 
     MassProperties& mp = a.massProperties;
     mp.massKg = massKg[i];
@@ -278,13 +269,11 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
     }
 
     ModalBasis& modal = a.modal;
+    const int64_t m = modeOffsets[i + 1] - modeOffsets[i];
     modal.eigenvaluesRad2PerS2 = Eigen::Map<const Eigen::VectorXd>(eigenvalues.values.data() + modeOffsets[i], m);
     modal.frequenciesHz = Eigen::Map<const Eigen::VectorXd>(frequencies.data() + modeOffsets[i], m);
     modal.residuals = Eigen::Map<const Eigen::VectorXd>(residuals.data() + modeOffsets[i], m);
     modal.orthonormalityError = orthonormality[i];
-    modal.modes = Eigen::Map<const MatrixXdRow>(modes.values.data() + modesOffsets[i], 3 * femNodes, m);
-    a.stressModes = Eigen::Map<const MatrixXdRow>(stressModes.values.data() + stressOffsets[i],
-                                                  6 * stressPointsPerElement(a.elementOrder) * t, m);
 
     MeshQuality& q = a.quality;
     q.nodeCount = qNodes[i];
@@ -319,7 +308,66 @@ std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, c
     b.totalS = totalS[i];
     b.generator = generator[i];
   }
-  return objects;
+  return table;
+}
+
+// The rows [offsets[first], offsets[last]) of a ragged dataset: a run of objects' arrays.
+hdf5::Rows rowsOf(const std::vector<int64_t>& offsets, size_t first, size_t last) {
+  return {static_cast<hsize_t>(offsets[first]), static_cast<hsize_t>(offsets[last] - offsets[first])};
+}
+
+// Reads the arrays of objects [first, last) of `table` into objectAt(i), an ObjectAsset& whose
+// other fields are read, and checks them: every index in range, every block of the size its
+// object's mesh and modes give, every elimination order a permutation.
+template <class ObjectAt>
+void readObjectArrays(const ObjectTable& t, size_t first, size_t last, ObjectAt&& objectAt) {
+  const std::string& prefix = t.prefix;
+  const Array<double> nodes = t.nodes.read(rowsOf(t.nodeOffsets, first, last));
+  const Array<int32_t> tets = t.tets.read(rowsOf(t.tetOffsets, first, last));
+  const Array<int32_t> faces = t.faces.read(rowsOf(t.faceOffsets, first, last));
+  const Array<double> modes = t.modes.read(rowsOf(t.modesOffsets, first, last));
+  const Array<double> stressModes = t.stressModes.read(rowsOf(t.stressOffsets, first, last));
+  Array<int32_t> elimination;
+  if (t.elimination) elimination = t.elimination->read(rowsOf(t.eliminationOffsets, first, last));
+  // Where object i's rows start in what was read.
+  const auto at = [&](const std::vector<int64_t>& offsets, size_t i) { return offsets[i] - offsets[first]; };
+
+  for (size_t i = first; i < last; ++i) {
+    ObjectAsset& a = objectAt(i);
+    const int64_t n = t.nodeOffsets[i + 1] - t.nodeOffsets[i];
+    const int64_t tetCount = t.tetOffsets[i + 1] - t.tetOffsets[i];
+    const int64_t f = t.faceOffsets[i + 1] - t.faceOffsets[i];
+    const auto m = a.modal.eigenvaluesRad2PerS2.size();
+    a.tetMesh.nodes = Eigen::Map<const Points>(nodes.values.data() + 3 * at(t.nodeOffsets, i), n, 3);
+    a.tetMesh.tets = Eigen::Map<const Tetrahedra>(tets.values.data() + 4 * at(t.tetOffsets, i), tetCount, 4);
+    checkIndices(a.tetMesh.tets, prefix + "/tets", t.tetOffsets[i], n, a.name);
+    a.surfaceFaces = Eigen::Map<const Triangles>(faces.values.data() + 3 * at(t.faceOffsets, i), f, 3);
+    checkIndices(a.surfaceFaces, prefix + "/surface_faces", t.faceOffsets[i], n, a.name);
+    const int64_t femNodes = femNodeCount(a.tetMesh, a.elementOrder);
+    checkBlockSize(t.modesOffsets, i, prefix + "/modes", 3, femNodes, m, a.name);
+    checkBlockSize(t.stressOffsets, i, prefix + "/stress_modes", 6 * stressPointsPerElement(a.elementOrder), tetCount,
+                   m, a.name);
+    if (t.elimination && t.eliminationOffsets[i + 1] > t.eliminationOffsets[i]) {
+      a.eliminationOrder = Eigen::Map<const Eigen::VectorXi>(elimination.values.data() + at(t.eliminationOffsets, i),
+                                                             t.eliminationOffsets[i + 1] - t.eliminationOffsets[i]);
+      if (!isPermutation(a.eliminationOrder, 3 * femNodes)) {
+        fail(ErrorCode::PackCorrupt, "dataset '" + prefix + "/elimination_order' of object '" + a.name +
+                                         "' is not a permutation of its " + std::to_string(3 * femNodes) +
+                                         " degrees of freedom");
+      }
+    }
+    a.modal.modes = Eigen::Map<const MatrixXdRow>(modes.values.data() + at(t.modesOffsets, i), 3 * femNodes, m);
+    a.stressModes = Eigen::Map<const MatrixXdRow>(stressModes.values.data() + at(t.stressOffsets, i),
+                                                  6 * stressPointsPerElement(a.elementOrder) * tetCount, m);
+  }
+}
+
+// Every object of the table, whole.
+std::vector<ObjectAsset> readObjects(FileReader& r, const std::string& prefix, const std::vector<Material>& materials,
+                                     int64_t version) {
+  ObjectTable table = readObjectTable(r, prefix, materials, version);
+  readObjectArrays(table, 0, table.objects.size(), [&](size_t i) -> ObjectAsset& { return table.objects[i]; });
+  return std::move(table.objects);
 }
 
 // One value of a [1] dataset.
@@ -328,7 +376,80 @@ T scalar(const Array<T>& a) {
   return a.values.front();
 }
 
-FragmentDatabase readDatabase(FileReader& r, int64_t version) {
+// The database entries' exact surfaces: /database/fragments/surface_*, open, and their offsets.
+struct SurfaceTable {
+  Dataset<double> vertices;
+  Dataset<int32_t> faces;
+  std::vector<int64_t> vertexOffsets, faceOffsets;
+};
+
+// Reads the surfaces of entries [first, last) into entryAt(i), a FragmentEntry&, and checks their
+// faces.
+template <class EntryAt>
+void readEntrySurfaces(const SurfaceTable& t, size_t first, size_t last, EntryAt&& entryAt) {
+  const Array<double> vertices = t.vertices.read(rowsOf(t.vertexOffsets, first, last));
+  const Array<int32_t> faces = t.faces.read(rowsOf(t.faceOffsets, first, last));
+  for (size_t i = first; i < last; ++i) {
+    FragmentEntry& e = entryAt(i);
+    const int64_t nv = t.vertexOffsets[i + 1] - t.vertexOffsets[i];
+    const int64_t nf = t.faceOffsets[i + 1] - t.faceOffsets[i];
+    e.surface.vertices =
+        Eigen::Map<const Points>(vertices.values.data() + 3 * (t.vertexOffsets[i] - t.vertexOffsets[first]), nv, 3);
+    e.surface.faces = Eigen::Map<const Triangles>(faces.values.data() + 3 * (t.faceOffsets[i] - t.faceOffsets[first]), nf, 3);
+    checkIndices(e.surface.faces, "/database/fragments/surface_faces", t.faceOffsets[i], nv, e.asset.name);
+  }
+}
+
+// The entries of a pack read with EntryReading::OnDemand (Pack.h): it keeps the file and the
+// entries' array datasets open (their shapes and stored sizes checked once, at open) and reads an
+// entry's rows with the same checks as a whole read, each time it is asked.
+class PackEntrySource final : public FragmentEntrySource {
+ public:
+  PackEntrySource(Handle file, std::string label, ObjectTable table, SurfaceTable surfaces,
+                  std::vector<FragmentEntry> skeletons, Material reference)
+      : mFile(std::move(file)), mLabel(std::move(label)), mTable(std::move(table)),
+        mSurfaces(std::move(surfaces)), mSkeletons(std::move(skeletons)), mReference(std::move(reference)) {}
+
+  Result<FragmentEntry> load(int64_t entry) const override {
+    if (entry < 0 || entry >= entryCount()) {
+      return makeError(ErrorCode::InvalidArgument, "entry " + std::to_string(entry) + " out of range");
+    }
+    const auto i = static_cast<size_t>(entry);
+    hdf5::ErrorSilencer silencer;
+    try {
+      FragmentEntry e = mSkeletons[i];
+      readObjectArrays(mTable, i, i + 1, [&](size_t) -> ObjectAsset& { return e.asset; });
+      readEntrySurfaces(mSurfaces, i, i + 1, [&](size_t) -> FragmentEntry& { return e; });
+      if (Status valid = validateFragmentEntry(e, mReference); !valid) {
+        return makeError(ErrorCode::PackCorrupt, mLabel + ": /database: " + valid.error().message);
+      }
+      return e;
+    } catch (const hdf5::ReadFailure& failure) {
+      return makeError(failure.error.code, mLabel + ": " + failure.error.message);
+    } catch (const std::exception& e) {
+      return makeError(ErrorCode::PackIoError, mLabel + ": " + e.what());
+    }
+  }
+
+  int64_t tetCount(int64_t entry) const override {
+    const auto i = static_cast<size_t>(entry);
+    return entry < 0 || entry >= entryCount() ? 0 : mTable.tetOffsets[i + 1] - mTable.tetOffsets[i];
+  }
+
+ private:
+  int64_t entryCount() const { return static_cast<int64_t>(mSkeletons.size()); }
+
+  Handle mFile;  // closed last, after the datasets of mTable and mSurfaces
+  std::string mLabel;
+  ObjectTable mTable;  // its objects moved to mSkeletons
+  SurfaceTable mSurfaces;
+  std::vector<FragmentEntry> mSkeletons;  // every field but the arrays
+  Material mReference;
+};
+
+// Reads /database. With `onDemand` (the open file's handle and label), the entries' arrays are
+// left in the file and the database's entrySource reads them, taking over the handle.
+FragmentDatabase readDatabase(FileReader& r, int64_t version, Handle* onDemand, const std::string& label) {
   r.requireGroup("/database");
   FragmentDatabase db;
   db.seed = static_cast<uint64_t>(scalar(r.i64("/database/seed", {1})));
@@ -337,20 +458,21 @@ FragmentDatabase readDatabase(FileReader& r, int64_t version) {
     fail(ErrorCode::PackShapeMismatch, "'/database/reference_material' must hold exactly one material");
   }
   db.referenceMaterial = reference.front();
-  std::vector<ObjectAsset> assets = readObjects(r, "/database/entries", reference, version);
-  const hsize_t count = assets.size();
+  ObjectTable table = readObjectTable(r, "/database/entries", reference, version);
+  const hsize_t count = table.objects.size();
 
   r.requireGroup("/database/fragments");
   const auto shapes = r.strings("/database/fragments/base_shape", count);
   const auto cuts = r.strings("/database/fragments/cut", count);
   const auto seeds = r.i64("/database/fragments/seed", {count}).values;
   const auto fractions = r.f64("/database/fragments/base_volume_fraction", {count}).values;
-  const Array<double> vertices = r.f64("/database/fragments/surface_vertices", {kAny, 3});
-  const auto vertexOffsets = readOffsets(r, "/database/fragments/surface_vertex_offsets", count, vertices.dims[0],
-                                         "/database/fragments/surface_vertices");
-  const Array<int32_t> faces = r.i32("/database/fragments/surface_faces", {kAny, 3});
-  const auto faceOffsets = readOffsets(r, "/database/fragments/surface_face_offsets", count, faces.dims[0],
-                                       "/database/fragments/surface_faces");
+  SurfaceTable surfaces;
+  surfaces.vertices = r.open<double>("/database/fragments/surface_vertices", {kAny, 3});
+  surfaces.vertexOffsets = readOffsets(r, "/database/fragments/surface_vertex_offsets", count,
+                                       surfaces.vertices.dims()[0], "/database/fragments/surface_vertices");
+  surfaces.faces = r.open<int32_t>("/database/fragments/surface_faces", {kAny, 3});
+  surfaces.faceOffsets = readOffsets(r, "/database/fragments/surface_face_offsets", count, surfaces.faces.dims()[0],
+                                     "/database/fragments/surface_faces");
 
   const std::string s = "/database/descriptor_settings";
   r.requireGroup(s);
@@ -422,16 +544,19 @@ FragmentDatabase readDatabase(FileReader& r, int64_t version) {
   db.entries.resize(count);
   for (size_t i = 0; i < count; ++i) {
     FragmentEntry& e = db.entries[i];
-    e.asset = std::move(assets[i]);
+    e.asset = std::move(table.objects[i]);
     e.baseShape = shapes[i];
     e.cut = cuts[i];
     e.seed = static_cast<uint64_t>(seeds[i]);
     e.baseVolumeFraction = fractions[i];
-    const int64_t nv = vertexOffsets[i + 1] - vertexOffsets[i];
-    const int64_t nf = faceOffsets[i + 1] - faceOffsets[i];
-    e.surface.vertices = Eigen::Map<const Points>(vertices.values.data() + 3 * vertexOffsets[i], nv, 3);
-    e.surface.faces = Eigen::Map<const Triangles>(faces.values.data() + 3 * faceOffsets[i], nf, 3);
-    checkIndices(e.surface.faces, "/database/fragments/surface_faces", faceOffsets[i], nv, e.asset.name);
+  }
+  if (onDemand) {
+    db.entrySource = std::make_shared<PackEntrySource>(std::move(*onDemand), label, std::move(table),
+                                                       std::move(surfaces), db.entries, db.referenceMaterial);
+  } else {
+    const auto entryAt = [&](size_t i) -> FragmentEntry& { return db.entries[i]; };
+    readObjectArrays(table, 0, count, [&](size_t i) -> ObjectAsset& { return db.entries[i].asset; });
+    readEntrySurfaces(surfaces, 0, count, entryAt);
   }
   if (Status valid = validateFragmentDatabase(db); !valid) fail(ErrorCode::PackCorrupt, "/database: " + valid.error().message);
   return db;
@@ -439,7 +564,7 @@ FragmentDatabase readDatabase(FileReader& r, int64_t version) {
 
 }  // namespace
 
-Result<Pack> readPack(const fs::path& path) {
+Result<Pack> readPack(const fs::path& path, EntryReading entries) {
   const std::string label = "pack '" + path.string() + "'";
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
@@ -469,7 +594,9 @@ Result<Pack> readPack(const fs::path& path) {
     pack.materials = readMaterials(reader, "/materials");
     pack.objects = readObjects(reader, "/objects", pack.materials, version);
     // The database is optional from version 2 on; version 1 packs have none.
-    if (version >= 2 && reader.exists("/database")) pack.database = readDatabase(reader, version);
+    if (version >= 2 && reader.exists("/database")) {
+      pack.database = readDatabase(reader, version, entries == EntryReading::OnDemand ? &file : nullptr, label);
+    }
     return pack;
   } catch (const hdf5::ReadFailure& failure) {
     return makeError(failure.error.code, label + ": " + failure.error.message);

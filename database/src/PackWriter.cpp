@@ -28,6 +28,9 @@ using hdf5::failIo;
 using hdf5::FileWriter;
 using hdf5::Handle;
 
+// The chunk size of the database entries' arrays (writeDatabase).
+constexpr hsize_t kEntryChunkBytes = 32 * 1024;
+
 // ---------------------------------------------------------------------------------------------
 // Validation: everything the reader would reject is rejected here, so a bake fails at write time
 // with InvalidArgument instead of producing a pack that cannot be loaded.
@@ -171,6 +174,10 @@ Status validatePack(const Pack& pack) {
       return st;
     }
     if (!objectNames.insert(o.name).second) return invalidArgument("two objects are named '" + o.name + "'");
+  }
+  if (pack.database.entrySource) {
+    return invalidArgument("database: its entries were read on demand (EntryReading::OnDemand) and are not all in "
+                           "memory; read the pack whole to write it");
   }
   if (!pack.database.empty()) {
     if (Status st = validateFragmentDatabase(pack.database); !st) return invalidArgument("database: " + st.error().message);
@@ -394,6 +401,10 @@ void writeDatabase(FileWriter& w, const FragmentDatabase& db) {
   writeMaterials(w, "/database/reference_material", {db.referenceMaterial});
   ObjectList assets;
   for (const FragmentEntry& e : db.entries) assets.push_back(&e.asset);
+  // A World reads an entry's rows alone when it is matched (EntryReading::OnDemand), so the
+  // entries' arrays and surfaces come in chunks near one small entry's size: a read inflates
+  // little more than the entry itself. The descriptors after them are read whole.
+  w.setChunkBytes(kEntryChunkBytes);
   writeObjects(w, "/database/entries", assets);
 
   const hsize_t count = db.entries.size();
@@ -422,6 +433,7 @@ void writeDatabase(FileWriter& w, const FragmentDatabase& db) {
     w.i64("/database/fragments/surface_face_offsets", faceOffsets, {count + 1});
     w.i32("/database/fragments/surface_faces", faces, {static_cast<hsize_t>(faceOffsets.back()), 3});
   }
+  w.setChunkBytes(hdf5::kDefaultChunkBytes);
   {
     const ShapeDescriptorSettings& d = db.descriptorSettings;
     Handle settings = w.createGroup("/database/descriptor_settings");

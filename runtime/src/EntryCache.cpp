@@ -9,7 +9,10 @@ Result<T> EntryCache::ofEntry(int32_t entry, Make&& make) const {
   if (entry < 0 || static_cast<size_t>(entry) >= mDatabase.entries.size()) {
     return makeError(ErrorCode::InvalidArgument, "entry " + std::to_string(entry) + " out of range");
   }
-  return make(mDatabase.entries[static_cast<size_t>(entry)]);
+  if (!mDatabase.entrySource) return make(mDatabase.entries[static_cast<size_t>(entry)]);
+  const auto read = mEntries.get(entry, [&] { return mDatabase.entrySource->load(entry); });
+  if (!*read) return read->error();
+  return make(read->value());
 }
 
 std::shared_ptr<const Result<TetTopology>> EntryCache::topology(int32_t entry) const {

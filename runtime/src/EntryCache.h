@@ -11,6 +11,11 @@
 // (others wait), kept for the most recently matched entries (SharedSlots.h): ~0.1–1 MB an
 // (entry, ν) for the default database's 1k-tet, 12-mode entries. Results are the same bits as
 // without it.
+//
+// A database read on demand (EntryReading::OnDemand, Pack.h) holds no entry's arrays: the cache
+// then reads each entry from the pack when it is first matched and keeps it like the rest, so a
+// World over a 10⁴-entry pack holds its most recently matched entries instead of all of them.
+// Reading is the same for the bits: an entry read on demand equals the one read whole.
 #pragma once
 
 #include <cstddef>
@@ -32,7 +37,7 @@ class EntryCache {
   /// per (entry, ν)), the least recently used dropped first; 0: no bound
   /// (WorldSettings::entryCacheCapacity).
   explicit EntryCache(const FragmentDatabase& database, size_t capacity = 0)
-      : mDatabase(database), mTopologies(capacity), mBases(capacity) {}
+      : mDatabase(database), mEntries(capacity), mTopologies(capacity), mBases(capacity) {}
 
   /// Entry `entry`'s tet topology (of its own mesh: the connectivity is what a placed copy shares,
   /// buildTetTopology(mesh, sameTets)). Errors: those of buildTetTopology, InvalidArgument (an
@@ -50,13 +55,19 @@ class EntryCache {
   int32_t built() const { return mTopologies.built() + mBases.built(); }
   /// How many are kept now.
   size_t held() const { return mTopologies.size() + mBases.size(); }
+  /// How many entries were read from the pack so far (a database read on demand), and how many
+  /// of them are kept now.
+  int32_t entriesRead() const { return mEntries.built(); }
+  size_t entriesHeld() const { return mEntries.size(); }
 
  private:
-  // make(entry) for an entry in range, else an InvalidArgument.
+  // make(entry) for an entry in range, read first if the database holds no arrays; else an
+  // InvalidArgument, or the read's error.
   template <class T, class Make>
   Result<T> ofEntry(int32_t entry, Make&& make) const;
 
   const FragmentDatabase& mDatabase;
+  mutable SharedSlots<int32_t, FragmentEntry> mEntries;  // entries read on demand
   mutable SharedSlots<int32_t, TetTopology> mTopologies;
   mutable SharedSlots<std::pair<int32_t, double>, EntryAtPoisson> mBases;
 };

@@ -332,7 +332,8 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
                                           static_cast<size_t>(w.settings.prepareEntryCorrections));
             const int modeCount = w.settings.fracture.modeCount;
             for (size_t e = 0; e < entries; ++e) {
-              const auto stored = static_cast<int>(w.pack.database.entries[e].asset.modal.modes.cols());
+              // its frequencies: the entry's arrays may not be read yet (EntryReading::OnDemand)
+              const auto stored = static_cast<int>(w.pack.database.entries[e].asset.modal.frequenciesHz.size());
               const int modes = detail::keptModeCount(modeCount, stored);  // the matched body's, as makeBody keeps them
               w.background.run([ec = w.entryCorrections.get(), e, material = *mat, modes] {
                 (void)ec->get(static_cast<int32_t>(e), material, modes);

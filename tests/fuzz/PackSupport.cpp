@@ -146,6 +146,39 @@ std::string packProblem(const Pack& pack) {
 
 }  // namespace
 
+void checkOnDemandRead(const std::filesystem::path& path, bool wholeReadOk) {
+  bool everyEntryOk = true;
+  {
+    auto read = readPack(path, EntryReading::OnDemand);
+    expectDocumentedError(read, {ErrorCode::FileNotFound, ErrorCode::PackIoError, ErrorCode::PackFormatMismatch,
+                                 ErrorCode::PackVersionMismatch, ErrorCode::PackShapeMismatch, ErrorCode::PackCorrupt});
+    everyEntryOk = read.ok();
+    if (read.ok() && read.value().database.entrySource) {
+      const FragmentDatabase& db = read.value().database;
+      for (size_t i = 0; i < db.entries.size(); ++i) {
+        auto entry = db.entrySource->load(static_cast<int64_t>(i));
+        expectDocumentedError(entry, {ErrorCode::PackIoError, ErrorCode::PackShapeMismatch, ErrorCode::PackCorrupt});
+        everyEntryOk = everyEntryOk && entry.ok();
+        if (entry.ok()) {
+          if (Status s = validateFragmentEntry(entry.value(), db.referenceMaterial); !s) {
+            finding("an entry read on demand passed a check it fails: " + s.error().message);
+          }
+          if (entry.value().asset.tetMesh.tets.rows() != db.entrySource->tetCount(static_cast<int64_t>(i))) {
+            finding("an entry read on demand has another tet count than its table's");
+          }
+        }
+      }
+    }
+  }
+  if (everyEntryOk != wholeReadOk) {
+    finding(std::string("read whole the pack ") + (wholeReadOk ? "passed" : "failed") + ", read on demand it " +
+            (everyEntryOk ? "passed" : "failed") + " (with every entry read)");
+  }
+  if (const ssize_t open = H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL); open != 0) {
+    finding("a pack read on demand left " + std::to_string(open) + " HDF5 objects open once it was gone");
+  }
+}
+
 void checkReadResult(const Result<Pack>& result) {
   // For looking at what a corpus reaches: BRITTLE_FUZZ_VERBOSE=1 <target> -runs=0 <corpus>.
   static const bool verbose = std::getenv("BRITTLE_FUZZ_VERBOSE") != nullptr;

@@ -2,6 +2,8 @@
 // the checks on what readPack returns.
 #pragma once
 
+#include <filesystem>
+
 #include "brittle/database/Pack.h"
 
 namespace brittle::fuzz {
@@ -17,5 +19,11 @@ Pack makeSeedPack();
 /// reject), the fragment database's, and a material for every object. Also aborts when the read
 /// left an HDF5 object open.
 void checkReadResult(const Result<Pack>& result);
+
+/// Reads the pack at `path` on demand (EntryReading::OnDemand) and every entry of it, and aborts
+/// unless each result is a documented error or a checked entry, the reads agree with the whole
+/// read (`wholeReadOk`: the file passes read whole iff it passes on demand with every entry
+/// read), and nothing is left open once the pack is gone.
+void checkOnDemandRead(const std::filesystem::path& path, bool wholeReadOk);
 
 }  // namespace brittle::fuzz

@@ -11,7 +11,7 @@
 //   delete a dataset or group, or put a soft, hard or external link or a group in its place;
 //   replace, retype or delete a root attribute;
 //   flip bytes at an offset, or truncate the file (applied after HDF5 has closed it).
-// The result goes through the same checks as fuzz_pack_bytes (checkReadResult).
+// The result goes through the same checks as fuzz_pack_bytes (checkReadResult, checkOnDemandRead).
 #include <fuzzer/FuzzedDataProvider.h>
 #include <hdf5.h>
 
@@ -386,5 +386,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const Result<Pack> pack = readPack(path);
   fuzz::checkReadResult(pack);
   if (pack.ok() && outside) finding("readPack accepted a pack whose values are kept in another file");
+  fuzz::checkOnDemandRead(path, pack.ok());
   return 0;
 }

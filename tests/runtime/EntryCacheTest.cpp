@@ -1,15 +1,20 @@
 // EntryCache.h (private to the runtime): a database entry's connectivity and its basis at another
-// Poisson ratio, built once and shared, with the bits of building them each time.
+// Poisson ratio, built once and shared, with the bits of building them each time; and the entries
+// of a pack read on demand (EntryReading::OnDemand), read as they are asked for.
 #include "EntryCache.h"
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 
 #include <Eigen/Geometry>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <vector>
 
 #include <oneapi/tbb/parallel_for.h>
 
+#include "brittle/database/Pack.h"
 #include "brittle/testing/DatabaseFixtures.h"
 
 namespace brittle::detail {
@@ -23,13 +28,20 @@ bool sameBits(const A& a, const B& b) {
          std::memcmp(a.data(), b.data(), sizeof(*a.data()) * static_cast<size_t>(a.size())) == 0;
 }
 
-// A three-entry database with modes, baked once for the suite.
+// A three-entry database with modes, baked once for the suite, and a pack of it.
 class EntryCacheTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     auto baked = bakeFragmentDatabase(testing::smallDatabaseSettings(3, true));
     ASSERT_TRUE(baked) << baked.error().message;
     sDatabase = new FragmentDatabase(std::move(baked).value());
+    Pack pack;
+    pack.database = *sDatabase;
+    ASSERT_TRUE(writePack(pack, packPath()));
+  }
+  static std::filesystem::path packPath() {
+    static const std::filesystem::path path = testing::makeTempDir("entry-cache") / "db.h5";
+    return path;
   }
   static void TearDownTestSuite() {
     delete sDatabase;
@@ -140,6 +152,139 @@ TEST_F(EntryCacheTest, KeepsTheMostRecentlyUsedEntriesUpToItsCapacity) {
   // Topologies are kept under the same bound, separately.
   for (int32_t e : {0, 1, 2}) ASSERT_TRUE(*cache.topology(e));
   EXPECT_EQ(cache.held(), 4u);
+}
+
+// A pack read on demand holds every entry's small fields and no arrays; each entry read from it
+// equals the whole read's, bit for bit, and so does everything the cache derives from it.
+TEST_F(EntryCacheTest, EntriesReadOnDemandAreTheEntriesOfAWholeRead) {
+  auto whole = readPack(packPath());
+  auto lazy = readPack(packPath(), EntryReading::OnDemand);
+  ASSERT_TRUE(whole && lazy);
+  const FragmentDatabase& a = whole.value().database;
+  const FragmentDatabase& b = lazy.value().database;
+  EXPECT_EQ(a.entrySource, nullptr);
+  ASSERT_NE(b.entrySource, nullptr);
+  ASSERT_EQ(a.entries.size(), b.entries.size());
+  EXPECT_TRUE(a.hasPhysics());
+  EXPECT_TRUE(b.hasPhysics());
+  for (DescriptorKind kind : kAllDescriptorKinds) EXPECT_EQ(a.descriptorsOf(kind), b.descriptorsOf(kind));
+  for (size_t i = 0; i < a.entries.size(); ++i) {
+    SCOPED_TRACE(i);
+    const FragmentEntry& w = a.entries[i];
+    const FragmentEntry& skeleton = b.entries[i];
+    EXPECT_EQ(skeleton.asset.name, w.asset.name);
+    EXPECT_TRUE(sameBits(skeleton.asset.modal.frequenciesHz, w.asset.modal.frequenciesHz));
+    EXPECT_EQ(skeleton.asset.massProperties.massKg, w.asset.massProperties.massKg);
+    EXPECT_EQ(skeleton.asset.tetMesh.tets.rows(), 0);  // the arrays stay in the file
+    EXPECT_EQ(skeleton.asset.stressModes.size(), 0);
+    EXPECT_EQ(b.entrySource->tetCount(static_cast<int64_t>(i)), w.asset.tetMesh.tets.rows());
+    auto read = b.entrySource->load(static_cast<int64_t>(i));
+    ASSERT_TRUE(read) << read.error().message;
+    const FragmentEntry& e = read.value();
+    EXPECT_EQ(e.asset.name, w.asset.name);
+    EXPECT_EQ(e.asset.elementOrder, w.asset.elementOrder);
+    EXPECT_TRUE(sameBits(e.asset.tetMesh.nodes, w.asset.tetMesh.nodes));
+    EXPECT_EQ(e.asset.tetMesh.tets, w.asset.tetMesh.tets);
+    EXPECT_EQ(e.asset.surfaceFaces, w.asset.surfaceFaces);
+    EXPECT_TRUE(sameBits(e.asset.modal.modes, w.asset.modal.modes));
+    EXPECT_TRUE(sameBits(e.asset.modal.eigenvaluesRad2PerS2, w.asset.modal.eigenvaluesRad2PerS2));
+    EXPECT_TRUE(sameBits(e.asset.stressModes, w.asset.stressModes));
+    EXPECT_EQ(e.asset.eliminationOrder, w.asset.eliminationOrder);
+    EXPECT_TRUE(sameBits(e.surface.vertices, w.surface.vertices));
+    EXPECT_EQ(e.surface.faces, w.surface.faces);
+    EXPECT_EQ(e.seed, w.seed);
+    EXPECT_EQ(e.baseShape, w.baseShape);
+  }
+  EXPECT_EQ(b.entrySource->load(-1).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(b.entrySource->load(static_cast<int64_t>(b.entries.size())).error().code, ErrorCode::InvalidArgument);
+
+  // The cache reads each entry once while it keeps it, and places it to the bits of the whole read.
+  EntryCache fromWhole(a), onDemand(b, 2);
+  CanonicalFrame frame;
+  frame.rotation = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1.0, 0.2, -0.4).normalized()).toRotationMatrix();
+  frame.scalePerM = 1.0 / 0.05;
+  Material other = a.referenceMaterial;
+  other.name = "other-nu";
+  other.poissonRatio = nu;
+  for (int32_t entry : {0, 1, 0, 2, 0}) {
+    auto expected = fromWhole.place(entry, other, frame);
+    auto placed = onDemand.place(entry, other, frame);
+    ASSERT_TRUE(expected && placed) << (placed ? expected.error().message : placed.error().message);
+    EXPECT_TRUE(sameBits(placed.value().modal.modes, expected.value().modal.modes));
+    EXPECT_TRUE(sameBits(placed.value().stressModes, expected.value().stressModes));
+    EXPECT_TRUE(sameBits(placed.value().tetMesh.nodes, expected.value().tetMesh.nodes));
+    EXPECT_EQ(onDemand.topology(entry)->value().edges, fromWhole.topology(entry)->value().edges);
+  }
+  EXPECT_EQ(onDemand.entriesRead(), 3);  // 0 kept throughout (the most recent), 1 dropped for 2
+  EXPECT_EQ(onDemand.entriesHeld(), 2u);
+  EXPECT_EQ(fromWhole.entriesRead(), 0);
+  EXPECT_EQ(onDemand.place(3, other, frame).error().code, ErrorCode::InvalidArgument);
+
+  // Such a database is not all in memory: writing it is refused, and nothing is written.
+  const auto copy = packPath().parent_path() / "rewritten.h5";
+  auto written = writePack(lazy.value(), copy);
+  ASSERT_FALSE(written);
+  EXPECT_EQ(written.error().code, ErrorCode::InvalidArgument);
+  EXPECT_FALSE(std::filesystem::exists(copy));
+}
+
+// Entries' arrays are stored in small chunks (PackWriter.cpp), so one entry's bytes can be damaged
+// alone: a whole read refuses the pack, a read on demand finds it when that entry is read, as a
+// typed error of that entry, and reads the others.
+TEST_F(EntryCacheTest, ADamagedEntryIsAnErrorWhenItIsReadAndOnlyThen) {
+  const auto path = packPath().parent_path() / "damaged.h5";
+  std::filesystem::copy_file(packPath(), path, std::filesystem::copy_options::overwrite_existing);
+  haddr_t address = 0;
+  hsize_t size = 0;
+  {
+    const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    ASSERT_GE(file, 0);
+    const hid_t offsets = H5Dopen2(file, "/database/entries/stress_modes_value_offsets", H5P_DEFAULT);
+    std::vector<int64_t> start(db.entries.size() + 1);
+    ASSERT_GE(H5Dread(offsets, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, start.data()), 0);
+    H5Dclose(offsets);
+    const hid_t dset = H5Dopen2(file, "/database/entries/stress_modes", H5P_DEFAULT);
+    const hid_t dcpl = H5Dget_create_plist(dset);
+    hsize_t chunk = 0;
+    ASSERT_EQ(H5Pget_chunk(dcpl, 1, &chunk), 1);
+    H5Pclose(dcpl);
+    EXPECT_LE(chunk * sizeof(double), 32u * 1024u);  // a small entry spans a few chunks
+    // The first chunk wholly inside entry 1's rows.
+    const auto first = static_cast<hsize_t>((start[1] + static_cast<int64_t>(chunk) - 1) / static_cast<int64_t>(chunk)) * chunk;
+    ASSERT_LE(static_cast<int64_t>(first + chunk), start[2]) << "entry 1 is smaller than two chunks";
+    hsize_t coord[1] = {first};
+    unsigned filterMask = 0;
+    EXPECT_GE(H5Dget_chunk_info_by_coord(dset, coord, &filterMask, &address, &size), 0);
+    H5Dclose(dset);
+    H5Fclose(file);
+  }
+  ASSERT_GT(size, 8u);
+  {
+    std::fstream io(path, std::ios::in | std::ios::out | std::ios::binary);
+    io.seekg(static_cast<std::streamoff>(address + size / 2));
+    char bytes[4];
+    io.read(bytes, sizeof bytes);
+    for (char& b : bytes) b = static_cast<char>(~b);
+    io.seekp(static_cast<std::streamoff>(address + size / 2));
+    io.write(bytes, sizeof bytes);
+    ASSERT_TRUE(io.good());
+  }
+  auto whole = readPack(path);
+  ASSERT_FALSE(whole);
+  EXPECT_EQ(whole.error().code, ErrorCode::PackCorrupt);
+  auto lazy = readPack(path, EntryReading::OnDemand);
+  ASSERT_TRUE(lazy) << lazy.error().message;
+  const FragmentDatabase& damaged = lazy.value().database;
+  EXPECT_TRUE(damaged.entrySource->load(0));
+  EXPECT_TRUE(damaged.entrySource->load(2));
+  auto bad = damaged.entrySource->load(1);
+  ASSERT_FALSE(bad);
+  EXPECT_EQ(bad.error().code, ErrorCode::PackCorrupt);
+  EXPECT_NE(bad.error().message.find("/database/entries/stress_modes"), std::string::npos) << bad.error().message;
+  EntryCache cache(damaged);
+  EXPECT_EQ(cache.place(1, damaged.referenceMaterial, CanonicalFrame{}).error().code, ErrorCode::PackCorrupt);
+  EXPECT_EQ(cache.topology(1)->error().code, ErrorCode::PackCorrupt);
+  EXPECT_TRUE(cache.place(0, damaged.referenceMaterial, CanonicalFrame{}));
 }
 
 }  // namespace

@@ -746,6 +746,37 @@ TEST_F(WorldTest, EntryCorrectionsFactorisedAtPlacementChangeNoBits) {
   EXPECT_EQ(World::create(Pack(*sPack), bad).error().code, ErrorCode::InvalidArgument);
 }
 
+// A World over a pack read on demand (EntryReading::OnDemand, as `brittle impact`, `play`, `view`
+// and `bench impact` read theirs) reads each entry when it is matched: the same fractures, the
+// same matched bodies, to the bit, as over the pack read whole.
+TEST_F(WorldTest, AWorldReadingEntriesOnDemandBreaksToTheSameBits) {
+  const auto path = testing::makeTempDir("world-on-demand") / "pack.h5";
+  ASSERT_TRUE(writePack(*sPack, path));
+  std::vector<uint64_t> prints;
+  for (EntryReading reading : {EntryReading::Whole, EntryReading::OnDemand}) {
+    SCOPED_TRACE(reading == EntryReading::Whole ? "whole" : "on demand");
+    auto pack = readPack(path, reading);
+    ASSERT_TRUE(pack) << pack.error().message;
+    EXPECT_EQ(pack.value().database.entrySource != nullptr, reading == EntryReading::OnDemand);
+    WorldSettings settings;
+    settings.prepareEntryCorrections = 4;  // read in the background at placement, the rest when matched
+    auto world = World::create(std::move(pack).value(), settings);
+    ASSERT_TRUE(world) << world.error().message;
+    const ObjectId plate = world.value().addObject({.asset = "plate"}).value();
+    ASSERT_TRUE(world.value().waitUntilPrepared());
+    auto broken = world.value().impact(ball(plate, 60.0));
+    ASSERT_TRUE(broken && broken.value().broken);
+    ImpactDesc soft = softHitOnTheLargestMatched(world.value(), broken.value());  // its body made from its entry
+    ASSERT_TRUE(soft.object.valid());
+    auto hit = world.value().impact(soft);
+    ASSERT_TRUE(hit) << hit.error().message;
+    prints.push_back(fingerprint(broken.value()));
+    prints.push_back(fingerprint(hit.value()));
+  }
+  EXPECT_EQ(prints[0], prints[2]);
+  EXPECT_EQ(prints[1], prints[3]);
+}
+
 TEST_F(WorldTest, BadInputsGiveTypedErrorsNeverCrashes) {
   World world = makeWorld({}, false);
   auto id = world.addObject({.asset = "plate"});

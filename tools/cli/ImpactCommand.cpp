@@ -113,7 +113,7 @@ Runner addImpactCommand(CLI::App& app) {
       ->capture_default_str()->check(CLI::Range(1, 10000));
 
   return [o, cmd]() -> int {
-    auto pack = readPack(o->pack);
+    auto pack = readPack(o->pack, EntryReading::OnDemand);  // a World reads entries as it matches them
     if (!pack) return reportError(pack.error());
     auto impactor = resolveMaterial(o->impactorMaterial);
     if (!impactor) return reportError(impactor.error());

@@ -82,7 +82,7 @@ Runner addPlayCommand(CLI::App& app) {
   return [o, cmd]() -> int {
     auto scene = loadScene(o->scene);
     if (!scene) return reportError(scene.error());
-    auto pack = readPack(o->pack);
+    auto pack = readPack(o->pack, EntryReading::OnDemand);  // a World reads entries as it matches them
     if (!pack) return reportError(pack.error());
     o->settings.world.fracture.modeCount = o->modes;
     o->settings.fractureBudgetS = 1e-3 * o->frameBudgetMs;

@@ -107,7 +107,7 @@ Runner addViewCommand(CLI::App& app) {
       if (!script) return reportError(script.error());
       v.script = std::move(script).value();
     }
-    auto pack = readPack(o->pack);
+    auto pack = readPack(o->pack, EntryReading::OnDemand);  // a World reads entries as it matches them
     if (!pack) return reportError(pack.error());
     PlayerSettings settings;
     settings.world.fracture.modeCount = o->modes;

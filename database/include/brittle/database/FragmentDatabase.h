@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,20 @@ struct FragmentEntry {
   double baseVolumeFraction = 0.0;   ///< fragment volume / base shape volume, before normalising
 };
 
+/// Reads the arrays of entries that a database does not hold: a pack read with
+/// EntryReading::OnDemand (Pack.h). Thread-safe; every call reads and checks the entry anew.
+class FragmentEntrySource {
+ public:
+  virtual ~FragmentEntrySource() = default;
+  /// Entry `entry` whole, its arrays read and checked as a whole read checks them (indices,
+  /// block sizes, checksums, finite values, its surface by validateFragmentEntry). Errors: the
+  /// pack's typed read errors (PackCorrupt, PackShapeMismatch, PackIoError), InvalidArgument (an
+  /// entry out of range).
+  virtual Result<FragmentEntry> load(int64_t entry) const = 0;
+  /// Entry `entry`'s number of tets, known without reading its arrays; 0 out of range.
+  virtual int64_t tetCount(int64_t entry) const = 0;
+};
+
 struct FragmentDatabase {
   Material referenceMaterial;          ///< the material every entry's physics was baked with
   ShapeDescriptorSettings descriptorSettings;
@@ -51,9 +66,14 @@ struct FragmentDatabase {
   /// Per kind: the match error against the descriptor distance, calibrated when the database was
   /// baked with physics (MatchErrors.h); empty without physics and in packs baked before it.
   std::array<MatchErrorModel, kDescriptorKindCount> matchErrors;
+  /// Null: `entries` are whole. Set: the pack was read with EntryReading::OnDemand, `entries` hold
+  /// every field but the arrays (asset.tetMesh, asset.surfaceFaces, asset.modal.modes,
+  /// asset.stressModes, asset.eliminationOrder, surface), and this reads them. Such a database
+  /// cannot be written (writePack refuses it).
+  std::shared_ptr<const FragmentEntrySource> entrySource;
 
   bool empty() const { return entries.empty(); }
-  bool hasPhysics() const;  ///< every entry has a tet mesh and at least one mode
+  bool hasPhysics() const;  ///< every entry has a tet mesh and at least one mode (read whole or not)
   const DescriptorMatrix& descriptorsOf(DescriptorKind kind) const {
     return descriptors[static_cast<size_t>(kind)];
   }
@@ -73,9 +93,15 @@ DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entrie
 DescriptorIndexSettings sizedInvertedFile(int64_t entries);
 inline constexpr int64_t kIvfRowsPerList = 390;
 
+/// Checks one entry against the database's reference material: its material, its base volume
+/// fraction and its surface (at least 4 vertices and faces, finite, indices in range). Error:
+/// InvalidArgument naming the entry.
+Status validateFragmentEntry(const FragmentEntry& entry, const Material& referenceMaterial);
+
 /// Checks sizes and values: descriptor matrices have one finite row per entry and the width of
 /// their settings, unique entry names, every entry's material is the reference material, and
-/// valid surfaces and settings. Error: InvalidArgument naming the entry or field.
+/// valid surfaces (of entries it holds whole) and settings. Error: InvalidArgument naming the
+/// entry or field.
 Status validateFragmentDatabase(const FragmentDatabase& database);
 
 }  // namespace brittle

@@ -46,6 +46,21 @@ Status writePack(const Pack& pack, const std::filesystem::path& path);
 /// is not "brittle-pack"), PackVersionMismatch, PackShapeMismatch (a dataset's size disagrees with
 /// its offsets or counts, a missing group or dataset), PackCorrupt (checksum failure, non-finite
 /// value, index out of range).
-Result<Pack> readPack(const std::filesystem::path& path);
+/// How readPack reads the fragment database's entries.
+enum class EntryReading {
+  /// Every entry whole, read and checked before readPack returns: for tools that walk the entries
+  /// (query, inspect, benchmarks, a resumed bake) and for writing the pack back.
+  Whole,
+  /// Only what a World needs before its first match: the descriptors, the index settings, the
+  /// match-error models and every entry's small fields (name, mass properties, frequencies,
+  /// quality, bake record). An entry's arrays (tet mesh, modes, stress modes, exact surface) stay
+  /// in the file, and database.entrySource reads and checks them when the entry is matched
+  /// (FragmentDatabase.h). The pack then keeps its file open while it (or a copy) lives. A World
+  /// made from it matches to the same bits; a damaged entry is found when it is read, as that
+  /// fragment's error, instead of failing the whole read.
+  OnDemand,
+};
+
+Result<Pack> readPack(const std::filesystem::path& path, EntryReading entries = EntryReading::Whole);
 
 }  // namespace brittle
