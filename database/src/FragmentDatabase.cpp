@@ -81,7 +81,9 @@ Status validateFragmentDatabase(const FragmentDatabase& db) {
       return invalid(what + " is " + std::to_string(m.rows()) + " x " + std::to_string(m.cols()) + ", expected " +
                      std::to_string(rows) + " x " + std::to_string(descriptorSize(kind, db.descriptorSettings)));
     }
-    if (!m.allFinite()) return invalid(what + " holds a non-finite value");
+    // In storage order: Eigen's allFinite walks a row-major matrix by columns, a stride of a row
+    // per value (1 s of a 10⁴-entry database's 1.9 s read).
+    if (!Eigen::Map<const Eigen::ArrayXf>(m.data(), m.size()).allFinite()) return invalid(what + " holds a non-finite value");
     const DescriptorIndexSettings& index = db.indexSettings[static_cast<size_t>(kind)];
     if (index.trees < 1 || index.checks < 1 || !(index.targetPrecision > 0.0f && index.targetPrecision <= 1.0f)) {
       return invalid("index settings of the " + std::string(descriptorKindName(kind)) + " descriptor are out of range");

@@ -24,11 +24,11 @@ Status runImpactBench(const ImpactBenchSettings& s) {
   FragmentDatabase database;
   if (!s.databasePack.empty()) {
     const auto t0 = SteadyClock::now();
-    auto source = readPack(s.databasePack, EntryReading::OnDemand);  // as a World's host reads it
+    auto source = readPack(s.databasePack, s.databaseReading);
     if (!source) return source.error();
     database = std::move(source.value().database);
-    std::printf("database: %zu entries read in %.2f s (their arrays on demand)\n", database.entries.size(),
-                secondsSince(t0));
+    std::printf("database: %zu entries read in %.2f s (%s)\n", database.entries.size(), secondsSince(t0),
+                s.databaseReading == EntryReading::OnDemand ? "their arrays on demand" : "whole");
     if (database.empty() || !database.hasPhysics()) {
       return makeError(ErrorCode::InvalidArgument, s.databasePack.string() + " has no fragment database with modal data");
     }

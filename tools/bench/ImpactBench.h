@@ -32,6 +32,9 @@ struct ImpactBenchSettings {
   uint64_t seed = 1;
   std::filesystem::path csv = "docs/results/data/impact_latency.csv";
   std::filesystem::path databasePack;  ///< empty: no database, fragments stay surfaces
+  /// How the database's entries are read: on demand, as the runtime commands read a pack, or
+  /// whole (every entry in memory before the first impact), to compare the two.
+  EntryReading databaseReading = EntryReading::OnDemand;
   int exactModesMaxTets = 150;         ///< with a database: the World's default
   int polynomialModeDegree = FractureSettings{}.polynomialModeDegree;  ///< matched bodies' own frequencies (0: the entries')
   int meshRatioMaxDof = FractureSettings{}.meshRatioMaxDof;            ///< ... corrected by their own mesh up to this size (0: never)

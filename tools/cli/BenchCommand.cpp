@@ -93,6 +93,10 @@ Runner addBenchCommand(CLI::App& app) {
   place->add_option("--csv", pb->csv, "Output CSV")->capture_default_str();
   impact->add_option("--database", is->databasePack,
                      "A pack whose fragment database the fragments are matched against (none: they stay surfaces)");
+  impact->add_flag_callback(
+      "--whole-database", [is] { is->databaseReading = EntryReading::Whole; },
+      "Read every database entry before the first impact instead of each when it is first matched (as the runtime "
+      "commands do): the memory and load time of the whole database, for comparison");
   impact->add_option("--exact-max-tets", is->exactModesMaxTets,
                      "With a database: fragments of at most this many parent tets get their own modes (0: all matched)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
