@@ -18,7 +18,14 @@ Result<FragmentMatcher> FragmentMatcher::build(const FragmentDatabase& database,
   for (DescriptorKind kind : kAllDescriptorKinds) {
     const auto slot = static_cast<size_t>(kind);
     if (!settings.enabled[slot]) continue;
-    const DescriptorMatrix& m = database.descriptorsOf(kind);
+    // A database read on demand holds no descriptors: the kind's matrix is read for its index.
+    DescriptorMatrix read;
+    if (database.entrySource && database.descriptorsOf(kind).size() == 0) {
+      auto loaded = database.entrySource->descriptors(kind);
+      if (!loaded) return loaded.error();
+      read = std::move(loaded).value();
+    }
+    const DescriptorMatrix& m = read.size() > 0 ? read : database.descriptorsOf(kind);
     const DescriptorIndexSettings indexSettings = settings.indexOverride[slot].value_or(database.indexSettings[slot]);
     if (m.rows() != static_cast<Eigen::Index>(database.entries.size())) {
       return makeError(ErrorCode::InvalidArgument, std::string("the ") + descriptorKindName(kind) +

@@ -7,6 +7,7 @@
 // range. Only a pack that passes all of it reaches the runtime.
 #include <hdf5.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -400,15 +401,38 @@ void readEntrySurfaces(const SurfaceTable& t, size_t first, size_t last, EntryAt
   }
 }
 
-// The entries of a pack read with EntryReading::OnDemand (Pack.h): it keeps the file and the
-// entries' array datasets open (their shapes and stored sizes checked once, at open) and reads an
-// entry's rows with the same checks as a whole read, each time it is asked.
+// The descriptor matrices of /database/descriptors, open, by kind.
+using DescriptorTable = std::array<Dataset<float>, kDescriptorKindCount>;
+
+// A descriptor matrix read whole (its shape, #entries × the kind's width, checked at open).
+DescriptorMatrix readDescriptors(const Dataset<float>& dataset) {
+  const Array<float> m = dataset.read();
+  return Eigen::Map<const DescriptorMatrix>(m.values.data(), static_cast<Eigen::Index>(m.dims[0]),
+                                            static_cast<Eigen::Index>(m.dims[1]));
+}
+
+// The entries of a pack read with EntryReading::OnDemand (Pack.h): it keeps the file, the
+// entries' array datasets and the descriptor matrices open (their shapes and stored sizes checked
+// once, at open) and reads an entry's rows, or a kind's matrix, with the same checks as a whole
+// read, each time it is asked.
 class PackEntrySource final : public FragmentEntrySource {
  public:
   PackEntrySource(Handle file, std::string label, ObjectTable table, SurfaceTable surfaces,
-                  std::vector<FragmentEntry> skeletons, Material reference)
+                  DescriptorTable descriptors, std::vector<FragmentEntry> skeletons, Material reference)
       : mFile(std::move(file)), mLabel(std::move(label)), mTable(std::move(table)),
-        mSurfaces(std::move(surfaces)), mSkeletons(std::move(skeletons)), mReference(std::move(reference)) {}
+        mSurfaces(std::move(surfaces)), mDescriptors(std::move(descriptors)), mSkeletons(std::move(skeletons)),
+        mReference(std::move(reference)) {}
+
+  Result<DescriptorMatrix> descriptors(DescriptorKind kind) const override {
+    hdf5::ErrorSilencer silencer;
+    try {
+      return readDescriptors(mDescriptors[static_cast<size_t>(kind)]);
+    } catch (const hdf5::ReadFailure& failure) {
+      return makeError(failure.error.code, mLabel + ": " + failure.error.message);
+    } catch (const std::exception& e) {
+      return makeError(ErrorCode::PackIoError, mLabel + ": " + e.what());
+    }
+  }
 
   Result<FragmentEntry> load(int64_t entry) const override {
     if (entry < 0 || entry >= entryCount()) {
@@ -443,6 +467,7 @@ class PackEntrySource final : public FragmentEntrySource {
   std::string mLabel;
   ObjectTable mTable;  // its objects moved to mSkeletons
   SurfaceTable mSurfaces;
+  DescriptorTable mDescriptors;
   std::vector<FragmentEntry> mSkeletons;  // every field but the arrays
   Material mReference;
 };
@@ -499,12 +524,13 @@ FragmentDatabase readDatabase(FileReader& r, int64_t version, Handle* onDemand, 
   if (Status valid = validateShapeDescriptorSettings(d); !valid) fail(ErrorCode::PackCorrupt, s + ": " + valid.error().message);
 
   r.requireGroup("/database/descriptors");
+  DescriptorTable descriptors;
   for (DescriptorKind kind : kAllDescriptorKinds) {
     const std::string path = std::string("/database/descriptors/") + descriptorKindName(kind);
     const auto width = static_cast<hsize_t>(descriptorSize(kind, d));
-    const Array<float> m = r.f32(path, {count, width});
-    db.descriptors[static_cast<size_t>(kind)] =
-        Eigen::Map<const DescriptorMatrix>(m.values.data(), static_cast<Eigen::Index>(count), static_cast<Eigen::Index>(width));
+    descriptors[static_cast<size_t>(kind)] = r.open<float>(path, {count, width});
+    // On demand, a kind is read when an index is built over it (FragmentMatcher::build).
+    if (!onDemand) db.descriptors[static_cast<size_t>(kind)] = readDescriptors(descriptors[static_cast<size_t>(kind)]);
   }
 
   r.requireGroup("/database/index");
@@ -552,7 +578,8 @@ FragmentDatabase readDatabase(FileReader& r, int64_t version, Handle* onDemand, 
   }
   if (onDemand) {
     db.entrySource = std::make_shared<PackEntrySource>(std::move(*onDemand), label, std::move(table),
-                                                       std::move(surfaces), db.entries, db.referenceMaterial);
+                                                       std::move(surfaces), std::move(descriptors), db.entries,
+                                                       db.referenceMaterial);
   } else {
     const auto entryAt = [&](size_t i) -> FragmentEntry& { return db.entries[i]; };
     readObjectArrays(table, 0, count, [&](size_t i) -> ObjectAsset& { return db.entries[i].asset; });

@@ -155,6 +155,15 @@ void checkOnDemandRead(const std::filesystem::path& path, bool wholeReadOk) {
     everyEntryOk = read.ok();
     if (read.ok() && read.value().database.entrySource) {
       const FragmentDatabase& db = read.value().database;
+      for (DescriptorKind kind : kAllDescriptorKinds) {
+        auto matrix = db.entrySource->descriptors(kind);
+        expectDocumentedError(matrix, {ErrorCode::PackIoError, ErrorCode::PackShapeMismatch, ErrorCode::PackCorrupt});
+        everyEntryOk = everyEntryOk && matrix.ok();
+        if (matrix.ok() && (matrix.value().rows() != static_cast<Eigen::Index>(db.entries.size()) ||
+                            matrix.value().cols() != descriptorSize(kind, db.descriptorSettings))) {
+          finding("a descriptor matrix read on demand has the wrong shape");
+        }
+      }
       for (size_t i = 0; i < db.entries.size(); ++i) {
         auto entry = db.entrySource->load(static_cast<int64_t>(i));
         expectDocumentedError(entry, {ErrorCode::PackIoError, ErrorCode::PackShapeMismatch, ErrorCode::PackCorrupt});

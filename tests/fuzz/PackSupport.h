@@ -20,10 +20,10 @@ Pack makeSeedPack();
 /// left an HDF5 object open.
 void checkReadResult(const Result<Pack>& result);
 
-/// Reads the pack at `path` on demand (EntryReading::OnDemand) and every entry of it, and aborts
-/// unless each result is a documented error or a checked entry, the reads agree with the whole
-/// read (`wholeReadOk`: the file passes read whole iff it passes on demand with every entry
-/// read), and nothing is left open once the pack is gone.
+/// Reads the pack at `path` on demand (EntryReading::OnDemand), then every entry and descriptor
+/// matrix of it, and aborts unless each result is a documented error or checked data, the reads
+/// agree with the whole read (`wholeReadOk`: the file passes read whole iff it passes on demand
+/// with everything read), and nothing is left open once the pack is gone.
 void checkOnDemandRead(const std::filesystem::path& path, bool wholeReadOk);
 
 }  // namespace brittle::fuzz

@@ -51,6 +51,9 @@ class FragmentEntrySource {
   virtual Result<FragmentEntry> load(int64_t entry) const = 0;
   /// Entry `entry`'s number of tets, known without reading its arrays; 0 out of range.
   virtual int64_t tetCount(int64_t entry) const = 0;
+  /// The descriptor matrix of `kind` (#entries by descriptorSize), read and checked (finite).
+  /// Errors: the pack's typed read errors.
+  virtual Result<DescriptorMatrix> descriptors(DescriptorKind kind) const = 0;
 };
 
 struct FragmentDatabase {
@@ -59,7 +62,7 @@ struct FragmentDatabase {
   uint64_t seed = 0;                  ///< the bake seed (entry i's seed derives from it)
   std::vector<FragmentEntry> entries;
   /// Per kind (indexed by DescriptorKind): #entries by descriptorSize(kind), row i for entry i in
-  /// its primary frame.
+  /// its primary frame. Empty when read on demand (entrySource).
   std::array<DescriptorMatrix, kDescriptorKindCount> descriptors;
   /// Per kind: how the runtime builds the search index at load.
   std::array<DescriptorIndexSettings, kDescriptorKindCount> indexSettings;
@@ -68,8 +71,9 @@ struct FragmentDatabase {
   std::array<MatchErrorModel, kDescriptorKindCount> matchErrors;
   /// Null: `entries` are whole. Set: the pack was read with EntryReading::OnDemand, `entries` hold
   /// every field but the arrays (asset.tetMesh, asset.surfaceFaces, asset.modal.modes,
-  /// asset.stressModes, asset.eliminationOrder, surface), and this reads them. Such a database
-  /// cannot be written (writePack refuses it).
+  /// asset.stressModes, asset.eliminationOrder, surface), `descriptors` are empty (0 rows), and
+  /// this reads them (FragmentMatcher::build reads the kinds it indexes). Such a database cannot
+  /// be written (writePack refuses it).
   std::shared_ptr<const FragmentEntrySource> entrySource;
 
   bool empty() const { return entries.empty(); }

@@ -52,9 +52,11 @@ struct FragmentMatcherSettings {
 
 class FragmentMatcher {
  public:
-  /// Builds one index per enabled kind over the database's descriptor matrices. The database is
-  /// referenced, not copied: it must outlive the matcher.
-  /// Errors: InvalidArgument (empty database, bad index settings), those of DescriptorIndex::build.
+  /// Builds one index per enabled kind over the database's descriptor matrices (read now, for a
+  /// database read on demand, and dropped once indexed). The database is referenced, not copied:
+  /// it must outlive the matcher.
+  /// Errors: InvalidArgument (empty database, bad index settings), those of DescriptorIndex::build,
+  /// the pack's read errors of a matrix read on demand.
   static Result<FragmentMatcher> build(const FragmentDatabase& database, const FragmentMatcherSettings& settings = {});
 
   /// The k best entries for the solid bounded by `surface` (closed, outward, metres), nearest
