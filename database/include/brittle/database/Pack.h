@@ -51,13 +51,15 @@ enum class EntryReading {
   /// Every entry whole, read and checked before readPack returns: for tools that walk the entries
   /// (query, inspect, benchmarks, a resumed bake) and for writing the pack back.
   Whole,
-  /// Only what a World needs before its first match: the descriptors, the index settings, the
-  /// match-error models and every entry's small fields (name, mass properties, frequencies,
-  /// quality, bake record). An entry's arrays (tet mesh, modes, stress modes, exact surface) stay
-  /// in the file, and database.entrySource reads and checks them when the entry is matched
-  /// (FragmentDatabase.h). The pack then keeps its file open while it (or a copy) lives. A World
-  /// made from it matches to the same bits; a damaged entry is found when it is read, as that
-  /// fragment's error, instead of failing the whole read.
+  /// Only what a World needs before its first match: the index settings, the match-error models
+  /// and every entry's small fields (name, mass properties, frequencies, quality, bake record).
+  /// The descriptor matrices and each entry's arrays (tet mesh, modes, stress modes, exact
+  /// surface) stay in the file, and database.entrySource reads and checks them when they are
+  /// needed: a kind's matrix when an index is built over it (FragmentMatcher::build), an entry
+  /// when it is matched (FragmentDatabase.h). The pack keeps its file open while it (or a copy)
+  /// lives. A World made from it matches to the same bits; a damaged entry is found when it is
+  /// read, as that fragment's error, instead of failing the whole read. The objects are read
+  /// whole either way.
   OnDemand,
 };
 
