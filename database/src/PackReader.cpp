@@ -463,7 +463,7 @@ class PackEntrySource final : public FragmentEntrySource {
  private:
   int64_t entryCount() const { return static_cast<int64_t>(mSkeletons.size()); }
 
-  Handle mFile;  // closed last, after the datasets of mTable and mSurfaces
+  Handle mFile;  // closed last, after the datasets of the members below
   std::string mLabel;
   ObjectTable mTable;  // its objects moved to mSkeletons
   SurfaceTable mSurfaces;
@@ -472,8 +472,9 @@ class PackEntrySource final : public FragmentEntrySource {
   Material mReference;
 };
 
-// Reads /database. With `onDemand` (the open file's handle and label), the entries' arrays are
-// left in the file and the database's entrySource reads them, taking over the handle.
+// Reads /database. With `onDemand` (the open file's handle), the entries' arrays and the
+// descriptor matrices are left in the file, and the database's entrySource reads them: it takes
+// over the handle and labels its errors with `label`.
 FragmentDatabase readDatabase(FileReader& r, int64_t version, Handle* onDemand, const std::string& label) {
   r.requireGroup("/database");
   FragmentDatabase db;
