@@ -2,15 +2,18 @@
 
 #include "brittle/descriptors/MeshRefinement.h"
 
+#include <hdf5.h>
 #include <unistd.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <map>
 #include <stdexcept>
+#include <vector>
 
 namespace brittle::testing {
 
@@ -140,6 +143,39 @@ std::filesystem::path cgalDemoMeshDir() {
                           "\" \"" + (root / "test-data" / "cgal").string() + "\"";
   if (std::system(cmd.c_str()) != 0 || !std::filesystem::exists(dir)) return {};
   return dir;
+}
+
+bool damageChunk(const std::filesystem::path& path, const std::string& dataset, uint64_t row) {
+  haddr_t address = 0;
+  hsize_t size = 0;
+  {
+    const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (file < 0) return false;
+    const hid_t dset = H5Dopen2(file, dataset.c_str(), H5P_DEFAULT);
+    const hid_t space = dset >= 0 ? H5Dget_space(dset) : -1;
+    const hid_t dcpl = dset >= 0 ? H5Dget_create_plist(dset) : -1;
+    const int rank = space >= 0 ? H5Sget_simple_extent_ndims(space) : -1;
+    std::vector<hsize_t> chunk(static_cast<size_t>(std::max(rank, 1))), coord(chunk.size(), 0);
+    bool found = rank >= 1 && dcpl >= 0 && H5Pget_chunk(dcpl, rank, chunk.data()) == rank;
+    if (found) {
+      coord[0] = row / chunk[0] * chunk[0];
+      unsigned filterMask = 0;
+      found = H5Dget_chunk_info_by_coord(dset, coord.data(), &filterMask, &address, &size) >= 0 && size > 8;
+    }
+    if (dcpl >= 0) H5Pclose(dcpl);
+    if (space >= 0) H5Sclose(space);
+    if (dset >= 0) H5Dclose(dset);
+    H5Fclose(file);
+    if (!found) return false;
+  }
+  std::fstream io(path, std::ios::in | std::ios::out | std::ios::binary);
+  io.seekg(static_cast<std::streamoff>(address + size / 2));
+  char bytes[4];
+  io.read(bytes, sizeof bytes);
+  for (char& b : bytes) b = static_cast<char>(~b);
+  io.seekp(static_cast<std::streamoff>(address + size / 2));
+  io.write(bytes, sizeof bytes);
+  return io.good();
 }
 
 }  // namespace brittle::testing

@@ -631,7 +631,18 @@ TEST_F(CliTest, BakeDbThenQueryFindsTheEntryInAnotherPose) {
   EXPECT_NE(text.out.find("-00004"), std::string::npos) << text.out;
   const CliRun inspect = run("inspect " + path("db.h5") + " --json");
   ASSERT_EQ(inspect.exitCode, 0) << inspect.out;
-  EXPECT_NE(inspect.out.find("\"database\""), std::string::npos);
+  const auto inspected = nlohmann::json::parse(inspect.out);
+  int64_t tets = 0;
+  for (const FragmentEntry& e : db.entries) tets += e.asset.tetMesh.tets.rows();
+  EXPECT_EQ(inspected["database"]["total_tets"].get<int64_t>(), tets);  // counted without reading the entries
+  EXPECT_TRUE(inspected["database"]["physics"].get<bool>());
+  // inspect checks every entry, one at a time: a damaged one is a pack error (exit 6).
+  std::filesystem::copy_file(dir / "db.h5", dir / "damaged.h5");
+  ASSERT_TRUE(testing::damageChunk(dir / "damaged.h5", "/database/entries/stress_modes", 0));
+  const CliRun damaged = run("inspect " + path("damaged.h5"));
+  EXPECT_EQ(damaged.exitCode, 6) << damaged.out;
+  EXPECT_NE(damaged.out.find("error [pack_corrupt]"), std::string::npos) << damaged.out;
+  EXPECT_NE(damaged.out.find("/database/entries/stress_modes"), std::string::npos) << damaged.out;
 
   // Errors: an unknown shape, an unknown descriptor, a pack without a database, an open query mesh.
   const CliRun unknownShape = run("bake-db --shapes " + shapes + " --only teapot --entries 2 --quiet --out " + path("x.h5"));

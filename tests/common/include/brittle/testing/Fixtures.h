@@ -42,6 +42,11 @@ void writeOff(const TriangleMesh& mesh, const std::filesystem::path& path);
 /// A fresh, empty directory under the system temp directory, unique to this test process.
 std::filesystem::path makeTempDir(const std::string& tag);
 
+/// Flips four bytes in the middle of the stored chunk of `dataset` (an HDF5 path) that holds row
+/// `row`, in the pack at `path`: a disk fault under one chunk, which its Fletcher-32 checksum
+/// then catches. False when the dataset or the chunk cannot be found.
+bool damageChunk(const std::filesystem::path& path, const std::string& dataset, uint64_t row);
+
 /// The repository root (BRITTLE_SOURCE_DIR if set, else the configured source directory).
 std::filesystem::path sourceDir();
 
