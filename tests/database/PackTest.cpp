@@ -799,32 +799,7 @@ TEST_F(PackTest, AbsurdDatasetSizeIsRejectedBeforeAllocating) {
 
 TEST_F(PackTest, FlippedBytesInAChunkAreCaughtByTheChecksum) {
   writeValidPack();
-  haddr_t address = 0;
-  hsize_t size = 0;
-  {
-    const hid_t file = H5Fopen(mPath.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-    ASSERT_GE(file, 0);
-    const hid_t dset = H5Dopen2(file, "/objects/nodes", H5P_DEFAULT);
-    ASSERT_GE(dset, 0);
-    const hid_t space = H5Dget_space(dset);
-    hsize_t offset[2] = {0, 0};
-    unsigned filterMask = 0;
-    EXPECT_GE(H5Dget_chunk_info(dset, space, 0, offset, &filterMask, &address, &size), 0);
-    H5Sclose(space);
-    H5Dclose(dset);
-    H5Fclose(file);
-  }
-  ASSERT_GT(size, 8u);
-  {
-    std::fstream io(mPath, std::ios::in | std::ios::out | std::ios::binary);
-    io.seekg(static_cast<std::streamoff>(address + size / 2));
-    char bytes[4];
-    io.read(bytes, sizeof bytes);
-    for (char& b : bytes) b = static_cast<char>(~b);
-    io.seekp(static_cast<std::streamoff>(address + size / 2));
-    io.write(bytes, sizeof bytes);
-    ASSERT_TRUE(io.good());
-  }
+  ASSERT_TRUE(testing::damageChunk(mPath, "/objects/nodes", 0));
   expectReadError(ErrorCode::PackCorrupt, "/objects/nodes");
 }
 
