@@ -333,7 +333,13 @@ class World {
   /// Validates the settings and builds the search index of the pack's database (if any). Sets
   /// Eigen's product blocking process-wide to fixed cache sizes (brittle/core/EigenBlocking.h), so
   /// that fractures are the same bits on every CPU; call it where no other thread runs Eigen
-  /// products at that moment. Errors: InvalidArgument (settings), those of FragmentMatcher::build.
+  /// products at that moment. A pack read with EntryReading::OnDemand (Pack.h) gives the same
+  /// fractures: the World reads the descriptor kind it searches here, and each database entry on a
+  /// worker when a fragment is first matched to it, keeping it under entryCacheCapacity; the
+  /// pack's file stays open while the World lives. An entry that fails its read (a damaged pack)
+  /// fails the body of the fragment matched to it: objectAsset and impacts on that object return
+  /// the read's typed error; nothing else is affected. Errors: InvalidArgument
+  /// (settings), those of FragmentMatcher::build (with a pack read on demand, its read errors).
   static Result<World> create(Pack pack, const WorldSettings& settings = {});
 
   World(World&&) noexcept;
