@@ -777,6 +777,44 @@ TEST_F(WorldTest, AWorldReadingEntriesOnDemandBreaksToTheSameBits) {
   EXPECT_EQ(prints[1], prints[3]);
 }
 
+// A World over a damaged pack read on demand: the objects and the search read whole at creation,
+// and every entry's stress modes damaged. The break still happens, and each matched fragment's
+// body, made from its entry, is the read's typed error; the plate breaks again as before.
+TEST_F(WorldTest, ADamagedEntryFailsOnlyTheBodiesMatchedToIt) {
+  const auto path = testing::makeTempDir("world-damaged") / "pack.h5";
+  ASSERT_TRUE(writePack(*sPack, path));
+  int damaged = 0;
+  for (uint64_t row = 0; testing::damageChunk(path, "/database/entries/stress_modes", row); row += 4096) ++damaged;
+  ASSERT_GT(damaged, 1);  // every chunk (32 KiB of doubles each)
+  ASSERT_FALSE(readPack(path));  // read whole, the pack is refused
+  auto pack = readPack(path, EntryReading::OnDemand);
+  ASSERT_TRUE(pack) << pack.error().message;
+  auto world = World::create(std::move(pack).value(), {});
+  ASSERT_TRUE(world) << world.error().message;
+  World& w = world.value();
+  const ObjectId plate = w.addObject({.asset = "plate"}).value();
+  ASSERT_TRUE(w.waitUntilPrepared());
+  auto broken = w.impact(ball(plate, 60.0));
+  ASSERT_TRUE(broken && broken.value().broken) << (broken ? "" : broken.error().message);
+  int matched = 0;
+  for (const FragmentResult& f : broken.value().fragments) {
+    if (f.path != FragmentPath::Matched) continue;
+    ++matched;
+    auto asset = w.objectAsset(f.object);
+    ASSERT_FALSE(asset);
+    EXPECT_EQ(asset.error().code, ErrorCode::PackCorrupt) << asset.error().message;
+    ImpactDesc d = ball(f.object, 1.0);
+    d.pointToleranceM = 1.0;  // wherever the piece lies: its body is what fails
+    auto hit = w.impact(d);
+    ASSERT_FALSE(hit);
+    EXPECT_EQ(hit.error().code, ErrorCode::PackCorrupt) << hit.error().message;
+  }
+  EXPECT_GT(matched, 0);
+  auto again = w.impact(ball(w.addObject({.asset = "plate"}).value(), 60.0));
+  ASSERT_TRUE(again) << again.error().message;
+  EXPECT_TRUE(again.value().broken);
+}
+
 TEST_F(WorldTest, BadInputsGiveTypedErrorsNeverCrashes) {
   World world = makeWorld({}, false);
   auto id = world.addObject({.asset = "plate"});
