@@ -44,6 +44,10 @@ void readRows(const Handle& dset, const std::string& path, hid_t memType, void* 
   const hid_t mem = memSpace.valid() ? memSpace.get() : H5S_ALL;
   const hid_t file = fileSpace.valid() ? fileSpace.get() : H5S_ALL;
   if (H5Dread(dset.get(), memType, mem, file, H5P_DEFAULT, buffer) < 0) {
+    // A read the disk failed (a network file system's EIO) is not damage: it may work next time.
+    if (hdf5::lastErrorIsIo()) {
+      fail(ErrorCode::PackIoError, "cannot read dataset '" + path + "': the file's read failed" + hdf5::withDetail());
+    }
     fail(ErrorCode::PackCorrupt,
          "cannot read dataset '" + path + "': checksum mismatch or damaged data" + hdf5::withDetail());
   }

@@ -94,6 +94,21 @@ inline std::string lastErrorDetail() {
   return detail;
 }
 
+/// True when the innermost entry of HDF5's current error stack is a failure of the file's I/O
+/// (major H5E_IO: the file driver could not read), as opposed to bad stored bytes (a checksum
+/// failure is innermost "Data storage", under an outer H5E_IO entry). It leaves the stack.
+inline bool lastErrorIsIo() {
+  bool io = false;
+  H5Ewalk2(
+      H5E_DEFAULT, H5E_WALK_UPWARD,
+      [](unsigned n, const H5E_error2_t* err, void* data) -> herr_t {
+        if (n == 0 && err && err->maj_num == H5E_IO) *static_cast<bool*>(data) = true;
+        return 0;
+      },
+      &io);
+  return io;
+}
+
 /// " (<detail>)" or "" — for appending the HDF5 cause to a message.
 inline std::string withDetail() {
   const std::string detail = lastErrorDetail();

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <string>
@@ -423,7 +424,20 @@ class PackEntrySource final : public FragmentEntrySource {
         mSurfaces(std::move(surfaces)), mDescriptors(std::move(descriptors)), mSkeletons(std::move(skeletons)),
         mReference(std::move(reference)) {}
 
+  // Closed quietly: a host may keep a pack (or its World) in a static that outlives HDF5's own
+  // exit handler, and closing then must not print HDF5's errors.
+  ~PackEntrySource() override {
+    hdf5::ErrorSilencer silencer;
+    mDescriptors = {};
+    mSurfaces = {};
+    mTable = {};
+    mFile = {};
+  }
+  PackEntrySource(const PackEntrySource&) = delete;
+  PackEntrySource& operator=(const PackEntrySource&) = delete;
+
   Result<DescriptorMatrix> descriptors(DescriptorKind kind) const override {
+    auto serial = serialised();
     hdf5::ErrorSilencer silencer;
     try {
       return readDescriptors(mDescriptors[static_cast<size_t>(kind)]);
@@ -439,6 +453,7 @@ class PackEntrySource final : public FragmentEntrySource {
       return makeError(ErrorCode::InvalidArgument, "entry " + std::to_string(entry) + " out of range");
     }
     const auto i = static_cast<size_t>(entry);
+    auto serial = serialised();
     hdf5::ErrorSilencer silencer;
     try {
       FragmentEntry e = mSkeletons[i];
@@ -463,6 +478,16 @@ class PackEntrySource final : public FragmentEntrySource {
  private:
   int64_t entryCount() const { return static_cast<int64_t>(mSkeletons.size()); }
 
+  // Workers read entries at once. A thread-safe HDF5 (Debian's, which the project builds with)
+  // serialises its calls, and its error silencer is per thread; any other build is serialised here.
+  std::unique_lock<std::mutex> serialised() const {
+    static const bool threadSafe = [] {
+      hbool_t safe = 0;
+      return H5is_library_threadsafe(&safe) >= 0 && safe > 0;
+    }();
+    return threadSafe ? std::unique_lock<std::mutex>() : std::unique_lock<std::mutex>(mSerial);
+  }
+
   Handle mFile;  // closed last, after the datasets of the members below
   std::string mLabel;
   ObjectTable mTable;  // its objects moved to mSkeletons
@@ -470,6 +495,7 @@ class PackEntrySource final : public FragmentEntrySource {
   DescriptorTable mDescriptors;
   std::vector<FragmentEntry> mSkeletons;  // every field but the arrays
   Material mReference;
+  mutable std::mutex mSerial;
 };
 
 // Reads /database. With `onDemand` (the open file's handle), the entries' arrays and the

@@ -11,7 +11,11 @@ Result<T> EntryCache::ofEntry(int32_t entry, Make&& make) const {
   }
   if (!mDatabase.entrySource) return make(mDatabase.entries[static_cast<size_t>(entry)]);
   const auto read = mEntries.get(entry, [&] { return mDatabase.entrySource->load(entry); });
-  if (!*read) return read->error();
+  if (!*read) {
+    // Damage stays (the answer is kept); a read the disk failed is tried again next time.
+    if (read->error().code == ErrorCode::PackIoError) mEntries.drop(entry);
+    return read->error();
+  }
   return make(read->value());
 }
 

@@ -51,6 +51,13 @@ class SharedSlots {
     return std::shared_ptr<const Result<T>>(slot, &*slot->value);
   }
 
+  /// Forgets `key`'s value (its holders keep it): asked for again, it is built again. For a
+  /// failure that may not recur, such as a read the disk failed.
+  void drop(const Key& key) {
+    std::lock_guard<std::mutex> lock(mMutex);
+    mSlots.erase(key);
+  }
+
   /// Values built so far (failed ones and rebuilt ones included).
   int32_t built() const { return mBuilt.load(std::memory_order_acquire); }
   /// Keys held now (≤ the capacity).
