@@ -53,39 +53,15 @@ void readRows(const Handle& dset, const std::string& path, hid_t memType, void* 
   }
 }
 
-// The HDF5 type of each value type a Dataset reads.
+// The HDF5 memory type of a value type a Dataset reads; its class and its name follow from T.
 template <typename T>
-struct TypeOf;
-template <>
-struct TypeOf<double> {
-  static constexpr H5T_class_t kClass = H5T_FLOAT;
-  static constexpr const char* kName = "float64";
-  static hid_t memType() { return H5T_NATIVE_DOUBLE; }
-};
-template <>
-struct TypeOf<float> {
-  static constexpr H5T_class_t kClass = H5T_FLOAT;
-  static constexpr const char* kName = "float32";
-  static hid_t memType() { return H5T_NATIVE_FLOAT; }
-};
-template <>
-struct TypeOf<int64_t> {
-  static constexpr H5T_class_t kClass = H5T_INTEGER;
-  static constexpr const char* kName = "int64";
-  static hid_t memType() { return H5T_NATIVE_INT64; }
-};
-template <>
-struct TypeOf<int32_t> {
-  static constexpr H5T_class_t kClass = H5T_INTEGER;
-  static constexpr const char* kName = "int32";
-  static hid_t memType() { return H5T_NATIVE_INT32; }
-};
-template <>
-struct TypeOf<uint8_t> {
-  static constexpr H5T_class_t kClass = H5T_INTEGER;
-  static constexpr const char* kName = "uint8";
-  static hid_t memType() { return H5T_NATIVE_UINT8; }
-};
+hid_t memTypeOf() {
+  if constexpr (std::is_same_v<T, double>) return H5T_NATIVE_DOUBLE;
+  if constexpr (std::is_same_v<T, float>) return H5T_NATIVE_FLOAT;
+  if constexpr (std::is_same_v<T, int64_t>) return H5T_NATIVE_INT64;
+  if constexpr (std::is_same_v<T, int32_t>) return H5T_NATIVE_INT32;
+  if constexpr (std::is_same_v<T, uint8_t>) return H5T_NATIVE_UINT8;
+}
 
 }  // namespace
 
@@ -273,10 +249,13 @@ Dataset<T> FileReader::open(const std::string& path, const std::vector<hsize_t>&
     fail(ErrorCode::PackCorrupt, "cannot read the type of dataset '" + path + "'" + hdf5::withDetail());
   // The exact type is required: HDF5 would otherwise convert silently, and a narrowing
   // conversion (float64 → int32, int64 → int32) clips values instead of failing.
-  using Type = TypeOf<T>;
-  if (H5Tget_class(type.get()) != Type::kClass || H5Tget_size(type.get()) != sizeof(T) ||
-      (Type::kClass == H5T_INTEGER && H5Tget_sign(type.get()) != H5Tget_sign(Type::memType()))) {
-    fail(ErrorCode::PackShapeMismatch, "dataset '" + path + "' must hold " + Type::kName);
+  constexpr bool floating = std::is_floating_point_v<T>;
+  const H5T_class_t typeClass = floating ? H5T_FLOAT : H5T_INTEGER;
+  if (H5Tget_class(type.get()) != typeClass || H5Tget_size(type.get()) != sizeof(T) ||
+      (!floating && H5Tget_sign(type.get()) != H5Tget_sign(memTypeOf<T>()))) {
+    const std::string name = std::string(floating ? "float" : std::is_signed_v<T> ? "int" : "uint") +
+                             std::to_string(8 * sizeof(T));  // "float64", "int32", "uint8"
+    fail(ErrorCode::PackShapeMismatch, "dataset '" + path + "' must hold " + name);
   }
   d.mDims = checkedDims(d.mDset, path, shape, sizeof(T));
   return d;
@@ -297,7 +276,7 @@ Array<T> Dataset<T>::read(Rows rows) const {
   size_t count = 1;
   for (hsize_t d : a.dims) count *= d;
   a.values.resize(count);
-  readRows(mDset, mPath, TypeOf<T>::memType(), a.values.data(), count, mDims, rows);
+  readRows(mDset, mPath, memTypeOf<T>(), a.values.data(), count, mDims, rows);
   if constexpr (std::is_floating_point_v<T>) {
     const size_t rowSize = a.dims.empty() || a.dims[0] == 0 ? 1 : count / a.dims[0];
     const size_t skipped = rows.count == kAny ? 0 : rows.first * rowSize;

@@ -145,6 +145,19 @@ std::filesystem::path cgalDemoMeshDir() {
   return dir;
 }
 
+uint64_t chunkRows(const std::filesystem::path& path, const std::string& dataset) {
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return 0;
+  const hid_t dset = H5Dopen2(file, dataset.c_str(), H5P_DEFAULT);
+  const hid_t dcpl = dset >= 0 ? H5Dget_create_plist(dset) : -1;
+  hsize_t chunk[H5S_MAX_RANK] = {0};
+  const bool found = dcpl >= 0 && H5Pget_chunk(dcpl, H5S_MAX_RANK, chunk) >= 1;
+  if (dcpl >= 0) H5Pclose(dcpl);
+  if (dset >= 0) H5Dclose(dset);
+  H5Fclose(file);
+  return found ? chunk[0] : 0;
+}
+
 bool damageChunk(const std::filesystem::path& path, const std::string& dataset, uint64_t row) {
   haddr_t address = 0;
   hsize_t size = 0;

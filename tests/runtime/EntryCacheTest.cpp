@@ -4,7 +4,6 @@
 #include "EntryCache.h"
 
 #include <gtest/gtest.h>
-#include <hdf5.h>
 
 #include <Eigen/Geometry>
 #include <cstring>
@@ -246,26 +245,12 @@ TEST_F(EntryCacheTest, EntriesReadOnDemandAreTheEntriesOfAWholeRead) {
 TEST_F(EntryCacheTest, ADamagedEntryIsAnErrorWhenItIsReadAndOnlyThen) {
   const auto path = packPath().parent_path() / "damaged.h5";
   std::filesystem::copy_file(packPath(), path, std::filesystem::copy_options::overwrite_existing);
-  hsize_t first = 0;  // the first row of a chunk wholly inside entry 1's rows
-  {
-    const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-    ASSERT_GE(file, 0);
-    const hid_t offsets = H5Dopen2(file, "/database/entries/stress_modes_value_offsets", H5P_DEFAULT);
-    std::vector<int64_t> start(db.entries.size() + 1);
-    ASSERT_GE(H5Dread(offsets, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, start.data()), 0);
-    H5Dclose(offsets);
-    const hid_t dset = H5Dopen2(file, "/database/entries/stress_modes", H5P_DEFAULT);
-    const hid_t dcpl = H5Dget_create_plist(dset);
-    hsize_t chunk = 0;
-    ASSERT_EQ(H5Pget_chunk(dcpl, 1, &chunk), 1);
-    H5Pclose(dcpl);
-    H5Dclose(dset);
-    H5Fclose(file);
-    EXPECT_LE(chunk * sizeof(double), 32u * 1024u);  // a small entry spans a few chunks
-    first = static_cast<hsize_t>((start[1] + static_cast<int64_t>(chunk) - 1) / static_cast<int64_t>(chunk)) * chunk;
-    ASSERT_LE(static_cast<int64_t>(first + chunk), start[2]) << "entry 1 is smaller than two chunks";
-  }
-  ASSERT_TRUE(testing::damageChunk(path, "/database/entries/stress_modes", first));
+  const uint64_t chunk = testing::chunkRows(path, "/database/entries/stress_modes");
+  EXPECT_GT(chunk, 0u);
+  EXPECT_LE(chunk * sizeof(double), 32u * 1024u);  // a small entry spans a few chunks
+  const auto first = testing::stressChunkInsideEntry(db, 1, chunk);
+  ASSERT_TRUE(first) << "entry 1 spans no whole chunk";
+  ASSERT_TRUE(testing::damageChunk(path, "/database/entries/stress_modes", *first));
   auto whole = readPack(path);
   ASSERT_FALSE(whole);
   EXPECT_EQ(whole.error().code, ErrorCode::PackCorrupt);

@@ -794,25 +794,24 @@ TEST_F(WorldTest, ADamagedEntryFailsOnlyTheBodiesMatchedToIt) {
     return std::pair{std::move(w), std::move(broken).value()};
   };
   // The entry to damage: one the plate's pieces are matched to, long enough to hold a whole chunk
-  // of its own (32 KiB of doubles: PackWriter.cpp), so that no other entry shares the damage.
-  constexpr int64_t kChunkRows = 4096;
-  const std::vector<FragmentEntry>& entries = sPack->database.entries;
-  std::vector<int64_t> start{0};
-  for (const FragmentEntry& e : entries) start.push_back(start.back() + e.asset.stressModes.size());
+  // of its own, so that no other entry shares the damage.
+  const uint64_t chunk = testing::chunkRows(dir / "pack.h5", "/database/entries/stress_modes");
+  ASSERT_GT(chunk, 0u);
   int32_t damagedEntry = -1;
-  int64_t damagedRow = 0;
+  uint64_t damagedRow = 0;
   {
     auto [w, clean] = breakPlate(dir / "pack.h5");
     for (const FragmentResult& f : clean.fragments) {
       if (f.path != FragmentPath::Matched || damagedEntry >= 0) continue;
-      const auto e = static_cast<size_t>(f.matchedEntry);
-      const int64_t first = (start[e] + kChunkRows - 1) / kChunkRows * kChunkRows;
-      if (first + kChunkRows <= start[e + 1]) damagedEntry = f.matchedEntry, damagedRow = first;
+      if (auto first = testing::stressChunkInsideEntry(sPack->database, static_cast<size_t>(f.matchedEntry), chunk)) {
+        damagedEntry = f.matchedEntry;
+        damagedRow = *first;
+      }
     }
   }
   ASSERT_GE(damagedEntry, 0) << "no matched entry spans a whole chunk";
   std::filesystem::copy_file(dir / "pack.h5", dir / "damaged.h5");
-  ASSERT_TRUE(testing::damageChunk(dir / "damaged.h5", "/database/entries/stress_modes", static_cast<uint64_t>(damagedRow)));
+  ASSERT_TRUE(testing::damageChunk(dir / "damaged.h5", "/database/entries/stress_modes", damagedRow));
   ASSERT_FALSE(readPack(dir / "damaged.h5"));  // read whole, the pack is refused
 
   auto [w, broken] = breakPlate(dir / "damaged.h5");

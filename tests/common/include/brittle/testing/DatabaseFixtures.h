@@ -2,6 +2,7 @@
 // bake one (database, precompute, runtime, player). Header-only: its users link brittle::precompute.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,18 @@ namespace brittle::testing {
 inline std::vector<BaseShapeDefinition> shippedBaseShapes() {
   auto shapes = loadBaseShapes(sourceDir() / "assets" / "shapes" / "base-shapes.json");
   return shapes ? shapes.value() : std::vector<BaseShapeDefinition>{};
+}
+
+/// The first row of a chunk of `chunkRows` rows (of /database/entries/stress_modes in a pack of
+/// `db`) that lies wholly inside entry `entry`'s rows, so that damaging it damages that entry
+/// alone; nullopt when the entry spans no whole chunk.
+inline std::optional<uint64_t> stressChunkInsideEntry(const FragmentDatabase& db, size_t entry, uint64_t chunkRows) {
+  if (chunkRows == 0 || entry >= db.entries.size()) return std::nullopt;
+  uint64_t start = 0;  // the entry's first row: the stress modes are stored entry after entry
+  for (size_t e = 0; e < entry; ++e) start += static_cast<uint64_t>(db.entries[e].asset.stressModes.size());
+  const uint64_t end = start + static_cast<uint64_t>(db.entries[entry].asset.stressModes.size());
+  const uint64_t first = (start + chunkRows - 1) / chunkRows * chunkRows;
+  return first + chunkRows <= end ? std::optional<uint64_t>(first) : std::nullopt;
 }
 
 /// Settings for a small, fast database: coarse tets and few modes.

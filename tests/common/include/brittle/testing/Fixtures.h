@@ -47,6 +47,9 @@ std::filesystem::path makeTempDir(const std::string& tag);
 /// then catches. False when the dataset or the chunk cannot be found.
 bool damageChunk(const std::filesystem::path& path, const std::string& dataset, uint64_t row);
 
+/// The rows of a chunk of `dataset` in the pack at `path`; 0 when it cannot be read.
+uint64_t chunkRows(const std::filesystem::path& path, const std::string& dataset);
+
 /// The repository root (BRITTLE_SOURCE_DIR if set, else the configured source directory).
 std::filesystem::path sourceDir();
 
