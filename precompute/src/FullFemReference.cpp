@@ -45,7 +45,7 @@ Result<FullFemResult> solveFullFemImpact(const TetMesh& mesh, const Material& ma
 
   Eigen::VectorXd u = Eigen::VectorXd::Zero(dofs), v = u, a = u;  // at rest; F(0) = 0
   const int points = stresses.pointsPerElement();
-  Eigen::Matrix<double, 6, Eigen::Dynamic> sigma(6, points);
+  Eigen::VectorXd sigma;  // every point's, P2 corners as nodal means (as the runtime reads them)
   FullFemResult result;
   result.steps = steps;
   result.peakPrincipalPa = -std::numeric_limits<double>::infinity();
@@ -60,10 +60,10 @@ Result<FullFemResult> solveFullFemImpact(const TetMesh& mesh, const Material& ma
     v += h * ((1.0 - gamma) * a + gamma * aNext);
     a = aNext;
     u = next;
+    stresses.all(u, sigma);
     for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) {
-      stresses.element(e, u, sigma.data());
       for (int p = 0; p < points; ++p) {
-        const double s1 = maxPrincipalStress(sigma.col(p));
+        const double s1 = maxPrincipalStress(sigma.segment<6>(6 * (points * e + p)));
         if (s1 > result.peakPrincipalPa) {
           result.peakPrincipalPa = s1;
           result.peakElement = static_cast<int32_t>(e);

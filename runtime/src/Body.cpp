@@ -89,6 +89,13 @@ Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& 
                                                      ") has modes of " + std::to_string(asset.modal.modes.rows()) +
                                                      " rows, expected " + std::to_string(3 * femNodes));
   }
+  if (asset.elementOrder == ElementOrder::P2) {
+    // The pack holds each element's own corner stresses; the runtime reads their nodal means
+    // (CornerStressMeans, FemAssembly.h), as the static correction's recovery does.
+    auto means = CornerStressMeans::make(asset.tetMesh);
+    if (!means) return Error{means.error().code, "object '" + asset.name + "': " + means.error().message};
+    means.value().apply(asset.stressModes.data(), asset.stressModes.cols());
+  }
   auto body = std::make_shared<Body>();
   body->topology = std::move(topo).value();
   body->material = material;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -433,7 +434,67 @@ Result<ElementStresses> ElementStresses::make(const FemMesh& fem, const Material
     const auto i = static_cast<Eigen::Index>(e);
     out.mGradients[e] = barycentricGradients(corner(i, 0), corner(i, 1), corner(i, 2), corner(i, 3), nullptr);
   }
+  if (fem.order == ElementOrder::P2) {
+    auto means = CornerStressMeans::make(mesh);
+    if (!means) return means.error();
+    out.mMeans = std::move(means).value();
+  }
   return out;
+}
+
+Result<CornerStressMeans> CornerStressMeans::make(const TetMesh& mesh) {
+  const Eigen::Index t = mesh.tets.rows(), n = mesh.nodes.rows();
+  CornerStressMeans out;
+  out.mElements = t;
+  out.mStart.assign(static_cast<size_t>(n) + 1, 0);
+  std::vector<double> volume(static_cast<size_t>(t)), nodeVolume(static_cast<size_t>(n), 0.0);
+  for (Eigen::Index e = 0; e < t; ++e) {
+    Eigen::Vector3d p[4];
+    for (int c = 0; c < 4; ++c) {
+      const int32_t v = mesh.tets(e, c);
+      if (v < 0 || v >= n) return makeError(ErrorCode::InvalidArgument, "corner stress means: tet " + std::to_string(e) + " has a node out of range");
+      p[c] = mesh.nodes.row(v).transpose();
+    }
+    const double v = std::abs((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0])) / 6.0;
+    if (!(v > 0.0)) return makeError(ErrorCode::InvalidArgument, "corner stress means: tet " + std::to_string(e) + " has no volume");
+    volume[static_cast<size_t>(e)] = v;
+    for (int c = 0; c < 4; ++c) {
+      ++out.mStart[static_cast<size_t>(mesh.tets(e, c)) + 1];
+      nodeVolume[static_cast<size_t>(mesh.tets(e, c))] += v;
+    }
+  }
+  std::partial_sum(out.mStart.begin(), out.mStart.end(), out.mStart.begin());
+  out.mPoints.resize(static_cast<size_t>(4 * t));
+  out.mWeights.resize(static_cast<size_t>(4 * t));
+  std::vector<int32_t> fill(out.mStart.begin(), out.mStart.end() - 1);
+  for (Eigen::Index e = 0; e < t; ++e) {  // ascending points within each node
+    for (int c = 0; c < 4; ++c) {
+      const auto v = static_cast<size_t>(mesh.tets(e, c));
+      const auto k = static_cast<size_t>(fill[v]++);
+      out.mPoints[k] = static_cast<int32_t>(4 * e + c);
+      out.mWeights[k] = volume[static_cast<size_t>(e)] / nodeVolume[v];
+    }
+  }
+  return out;
+}
+
+void CornerStressMeans::apply(double* rows, Eigen::Index cols) const {
+  const auto nodes = static_cast<Eigen::Index>(mStart.size()) - 1;
+  // Each value (component i, column j) of a node's points is read by that node's mean alone, so
+  // the mean is written back at once, and nodes in different ranges never touch the same rows.
+  detail::forFixedRanges(nodes, 16, [&](int, Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index v = begin; v < end; ++v) {
+      const auto first = static_cast<size_t>(mStart[static_cast<size_t>(v)]), last = static_cast<size_t>(mStart[static_cast<size_t>(v) + 1]);
+      if (last - first < 2) continue;
+      for (int i = 0; i < 6; ++i) {
+        for (Eigen::Index j = 0; j < cols; ++j) {
+          double mean = 0.0;
+          for (size_t k = first; k < last; ++k) mean += mWeights[k] * rows[(6 * static_cast<Eigen::Index>(mPoints[k]) + i) * cols + j];
+          for (size_t k = first; k < last; ++k) rows[(6 * static_cast<Eigen::Index>(mPoints[k]) + i) * cols + j] = mean;
+        }
+      }
+    }
+  });
 }
 
 // σ = C ε(∇u), ∇u(i, j) = ∂u_i/∂x_j, ε in Voigt order (xx, yy, zz, yz, xz, xy; engineering shears).
@@ -483,6 +544,7 @@ void ElementStresses::all(const Eigen::VectorXd& u, Eigen::VectorXd& stress) con
   detail::forFixedRanges(count, 16, [&](int, Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index e = begin; e < end; ++e) element(e, u, stress.data() + rows * e);
   });
+  if (mOrder == ElementOrder::P2) mMeans.apply(stress.data(), 1);
 }
 
 Eigen::MatrixXd rigidBodyMotions(const Points& nodes) {

@@ -13,6 +13,8 @@
 
 #include "Body.h"
 #include "ContactGeometry.h"
+#include "brittle/precompute/BakeManifest.h"
+#include "brittle/precompute/BakePipeline.h"
 #include "brittle/precompute/TetMesher.h"
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/HertzContact.h"
@@ -235,11 +237,15 @@ TEST(ContactLoad, AResolvedPatchGivesHertzsEdgeTension) {
     std::printf("r in [%.2f, %.2f) a: σ_rr/p0 %.4f (Hertz %.4f) over %d corners\n", ringEdges[b], ringEdges[b + 1],
                 fe[b] / count[b] / p0, hertz[b] / count[b] / p0, count[b]);
   }
-  // Measured: the axis −0.679 p₀ (Hertz −0.700), the rings across the edge 0.0457 and 0.1172 p₀
-  // (Hertz 0.0439, 0.1111); farther out 0.084 and 0.052 (0.071, 0.041), the finite block adding
-  // some tension as it bends.
+  // Measured, the corners as the runtime reads them (nodal means, CornerStressMeans): the axis
+  // −0.679 p₀ (Hertz −0.700), the rings across the edge 0.0496 and 0.1109 p₀ (Hertz 0.0439,
+  // 0.1111); farther out 0.079 and 0.049 (0.071, 0.041), the finite block adding some tension as
+  // it bends. Each element's own corners read 0.0457, 0.1172, 0.084 and 0.052: the mean is exact
+  // at the edge and closer beyond it, and smooths the inner ring, which straddles the edge's kink,
+  // over a patch of elements (+13 %).
   EXPECT_NEAR(centre, centreHertz, 0.05 * std::abs(centreHertz));
-  for (size_t b : {0, 1}) EXPECT_NEAR(fe[b] / count[b], hertz[b] / count[b], 0.1 * hertz[b] / count[b]) << b;
+  EXPECT_NEAR(fe[0] / count[0], hertz[0] / count[0], 0.15 * hertz[0] / count[0]);
+  EXPECT_NEAR(fe[1] / count[1], hertz[1] / count[1], 0.05 * hertz[1] / count[1]);
   for (size_t b : {2, 3}) EXPECT_NEAR(fe[b] / count[b], hertz[b] / count[b], 0.3 * hertz[b] / count[b]) << b;
   EXPECT_GT(fe[1] / count[1], fe[2] / count[2]);  // the tension peaks at the edge and falls off as 1/r²
   EXPECT_GT(fe[2] / count[2], fe[3] / count[3]);
@@ -280,6 +286,66 @@ TEST(ContactLoad, CorrectedPeakAgreesOnThreeMeshSizes) {
   }
   const auto [lo, hi] = std::minmax_element(peaks.begin(), peaks.end());
   EXPECT_LT(*hi / *lo, 1.15);
+}
+
+TEST(ContactLoad, TheDefaultSolidsCorrectedPeaksAgreeOnThreeMeshSizes) {
+  // The main job's brick corner drop (10 m/s) and stone-ball ground drop (15 m/s) on three P2
+  // meshes of each (the default manifest's objects, 12 modes), the load spread over 0.15 D (the
+  // brick 3.7 cm, the ball 5.2 cm: above every mesh's ring, so the same pressure on each). The
+  // corrected peak is read at P2 corners as nodal means (CornerStressMeans); each element's own
+  // corners gave 18/22/30/12 MPa (brick) and 59/60/37/46 (ball) on 0.8k–6.4k tets, the peak next to
+  // the load and moving from element to element. Measured (40 modes within 1 % of these): brick
+  // 11.33 / 11.16 / 10.50 MPa on 1.6k / 3.2k / 6.4k-tet targets, ball 11.75 / 12.32 / 11.00 on
+  // 0.8k / 1.6k / 3.2k. With 0.05 D (the default) their rings are wider than ρ, which then follows
+  // the mesh (docs/decisions.md, "Contact loads").
+  auto manifest = loadBakeManifest(testing::sourceDir() / "assets" / "default-pack.json");
+  ASSERT_TRUE(manifest) << manifest.error().message;
+  struct Drop {
+    const char* object;
+    std::array<int64_t, 3> tets;
+    Eigen::Vector3d point, normal;
+    double speed;
+  };
+  const Drop drops[] = {
+      {"brick", {1600, 3200, 6400}, Eigen::Vector3d(0.1075, 0.05125, 0.0325), Eigen::Vector3d(0.7, 0.5, 0.5).normalized(), 10.0},
+      {"stone-ball", {800, 1600, 3200}, Eigen::Vector3d(0.0, 0.0, -0.1), -Eigen::Vector3d::UnitZ(), 15.0}};
+  for (const Drop& drop : drops) {
+    SCOPED_TRACE(drop.object);
+    const auto settings = std::find_if(manifest.value().begin(), manifest.value().end(),
+                                       [&](const ObjectBakeSettings& o) { return o.name == drop.object; });
+    ASSERT_NE(settings, manifest.value().end());
+    ASSERT_EQ(settings->elementOrder, ElementOrder::P2);
+    std::vector<double> peaks;
+    for (const int64_t tets : drop.tets) {
+      ObjectBakeSettings o = *settings;
+      o.tetMesh.targetTets = tets;
+      o.modal.modeCount = 12;
+      auto asset = bakeObject(o);
+      ASSERT_TRUE(asset) << asset.error().message;
+      Pack pack;
+      pack.materials.push_back(o.material);
+      pack.objects.push_back(std::move(asset).value());
+      WorldSettings s;
+      s.fracture.contactSpreadFraction = 0.15;
+      World world = World::create(Pack(pack), s).value();
+      ImpactDesc d;
+      d.object = world.addObject({.asset = drop.object}).value();
+      d.pointWorld = drop.point;
+      d.normalWorld = drop.normal;
+      d.speedMps = drop.speed;
+      d.impactorMassKg = std::numeric_limits<double>::infinity();  // the ground
+      d.impactorRadiusM = std::numeric_limits<double>::infinity();
+      auto r = world.impact(d);
+      ASSERT_TRUE(r) << r.error().message;
+      const double expectedRho = 0.15 * diagonal(pack.objects[0].tetMesh);
+      EXPECT_NEAR(r.value().loadRadiusM, expectedRho, 1e-12 * expectedRho) << tets << " tets: the ring is wider";
+      peaks.push_back(r.value().peakPrincipalStressPa);
+      std::printf("%s, %lld tets: corrected peak %.2f MPa, ρ = %.4f m\n", drop.object,
+                  static_cast<long long>(pack.objects[0].tetMesh.tets.rows()), peaks.back() / 1e6, r.value().loadRadiusM);
+    }
+    const auto [lo, hi] = std::minmax_element(peaks.begin(), peaks.end());
+    EXPECT_LT(*hi / *lo, 1.15);
+  }
 }
 
 }  // namespace

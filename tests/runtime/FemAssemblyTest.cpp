@@ -312,8 +312,8 @@ TEST(FemAssemblyP2, QuadraticFieldIsRepresentedExactly) {
 
 TEST(FemAssemblyP2, ElementStressesRecoverTheStressModesOfAnyDisplacementAtEitherOrder) {
   // The static correction's and the full-FEM reference's stress recovery equals the bake's stress
-  // modes for the same displacement, point by point, and the order dispatch builds the same
-  // FEM nodes the pack reader counts.
+  // modes for the same displacement, point by point (P2: both as nodal means, as a body reads its
+  // modes), and the order dispatch builds the same FEM nodes the pack reader counts.
   const TetMesh mesh = testing::makeBoxTetMesh(0.3, 0.2, 0.1, 3, 2, 1);
   const Material m = presetGlass();
   std::mt19937_64 rng(7);
@@ -325,7 +325,9 @@ TEST(FemAssemblyP2, ElementStressesRecoverTheStressModesOfAnyDisplacementAtEithe
     EXPECT_EQ(assembleFem(fem, m, {}).value().stiffness.rows(), 3 * nodes.rows());
     MatrixXdRow u(3 * nodes.rows(), 1);
     for (Eigen::Index i = 0; i < u.rows(); ++i) u(i, 0) = unit(rng);
-    const MatrixXdRow modes = computeStressModes(fem, m, u);
+    MatrixXdRow modes = computeStressModes(fem, m, u);
+    const MatrixXdRow own = modes;
+    if (order == ElementOrder::P2) CornerStressMeans::make(mesh).value().apply(modes.data(), modes.cols());
     const auto recovery = ElementStresses::make(fem, m);
     ASSERT_TRUE(recovery.ok()) << recovery.error().message;
     EXPECT_EQ(recovery.value().pointsPerElement(), stressPointsPerElement(order));
@@ -334,6 +336,12 @@ TEST(FemAssemblyP2, ElementStressesRecoverTheStressModesOfAnyDisplacementAtEithe
     recovery.value().all(u.col(0), stress);
     ASSERT_EQ(stress.size(), modes.rows());
     EXPECT_LE((stress - modes.col(0)).cwiseAbs().maxCoeff(), 1e-9 * modes.cwiseAbs().maxCoeff()) << elementOrderName(order);
+    Eigen::VectorXd single(6 * stressPointsPerElement(order));
+    for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) {  // element(): the element's own stresses
+      recovery.value().element(e, u.col(0), single.data());
+      EXPECT_LE((single - own.col(0).segment(single.size() * e, single.size())).cwiseAbs().maxCoeff(),
+                1e-9 * modes.cwiseAbs().maxCoeff());
+    }
   }
   EXPECT_EQ(femNodeCount(mesh, ElementOrder::P2), quadraticBox(0.3, 0.2, 0.1, 3, 2, 1).nodes.rows());
 }

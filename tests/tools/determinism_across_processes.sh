@@ -53,11 +53,13 @@ for i in 1 2 3; do
 done
 same_packs "bake-db (threads 1, 2, 1; the third in SSE2)" "$work/db1.h5" "$work/db2.h5" "$work/db3.h5"
 
-# 2. The four default objects, smaller, with a small database.
+# 2. The four default objects, smaller, with a small database. The plate keeps its default size: at
+#    1 000 tets its ring (3.8 cm) is wider than 0.05 D, and the 5 m/s hit reads 36 MPa at its
+#    corners' nodal means, short of glass's strength.
 cat > "$work/manifest.json" <<JSON
 {
   "objects": [
-    { "name": "glass-plate", "mesh": "$src/assets/meshes/plate.off", "material": "glass", "tets": 1000, "modes": 12, "element": "p2", "stretch": 2 },
+    { "name": "glass-plate", "mesh": "$src/assets/meshes/plate.off", "material": "glass", "tets": 4000, "modes": 12, "element": "p2", "stretch": 2 },
     { "name": "porcelain-vase", "mesh": "$src/assets/meshes/vase.off", "material": "porcelain", "tets": 1500, "modes": 12 },
     { "name": "brick", "mesh": "$src/assets/meshes/brick.off", "material": "concrete", "tets": 1000, "modes": 12 },
     { "name": "stone-ball", "mesh": "$src/assets/meshes/ball.off", "material": "stone", "tets": 1000, "modes": 12 }

@@ -49,7 +49,7 @@ Status runImpactBench(const ImpactBenchSettings& s) {
     pack.objects.push_back(std::move(asset).value());
     pack.database = database;
     for (int modes : s.modes) {
-      for (bool prune : {true, false}) {
+      for (bool prune : s.pruning) {
         WorldSettings ws;
         ws.seed = s.seed;
         ws.fracture.modeCount = modes;

@@ -42,6 +42,9 @@ struct ImpactBenchSettings {
   /// The World's worker threads (0: one per core). The impact's parallel stages (the seed scan,
   /// surfaces beside moments, new bodies) use them; with 1 an impact runs on this thread alone.
   int threads = 0;
+  /// The scans timed: pruned by the stress bounds (the World's default), unpruned (every element
+  /// at every instant, the reference), or both.
+  std::vector<bool> pruning = {true, false};
   bool quiet = false;
 };
 

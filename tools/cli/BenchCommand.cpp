@@ -108,6 +108,14 @@ Runner addBenchCommand(CLI::App& app) {
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   impact->add_option("--threads", is->threads, "The World's worker threads (0: one per core; 1: each impact on one thread)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  impact->add_option_function<std::string>(
+          "--pruning",
+          [is](const std::string& v) {
+            is->pruning = v == "on" ? std::vector<bool>{true} : v == "off" ? std::vector<bool>{false} : std::vector<bool>{true, false};
+          },
+          "The stress scans timed: on (pruned by the stress bounds, the World's default), off (every element at every "
+          "instant) or both (default)")
+      ->check(CLI::IsMember({"on", "off", "both"}));
   impact->add_flag("--quiet", is->quiet, "No progress lines");
   auto* integrators = cmd->add_subcommand(
       "integrators", "Error and stability of the modal time integrators against the time step (ωh from 0.01 to 100)");
