@@ -212,6 +212,9 @@ ObjectTable readObjectTable(FileReader& r, const std::string& prefix, const std:
   const auto qMeanRatio = r.f64(prefix + "/quality/mean_radius_edge_ratio", {o}).values;
   const auto qMinVolume = r.f64(prefix + "/quality/min_tet_volume_m3", {o}).values;
 
+  // Optional, without a version bump (PACK_SCHEMA.md): packs baked before it give none (0).
+  const auto spread = r.exists(prefix + "/contact_spread_fraction") ? r.f64(prefix + "/contact_spread_fraction", {o}).values
+                                                                      : std::vector<double>(static_cast<size_t>(o), 0.0);
   const auto sourceMesh = r.strings(prefix + "/bake/source_mesh", o);
   const auto targetTets = r.i64(prefix + "/bake/target_tets", {o}).values;
   const auto cellSize = r.f64(prefix + "/bake/cell_size_m", {o}).values;
@@ -258,6 +261,11 @@ ObjectTable readObjectTable(FileReader& r, const std::string& prefix, const std:
                                        std::to_string(orders[i]) + " is neither 1 (P1) nor 2 (P2)");
     }
     a.elementOrder = static_cast<ElementOrder>(orders[i]);
+    a.contactSpreadFraction = spread[i];
+    if (!isContactSpreadFraction(a.contactSpreadFraction)) {
+      fail(ErrorCode::PackCorrupt, "dataset '" + prefix + "/contact_spread_fraction' [" + std::to_string(i) + "] is " +
+                                       std::to_string(a.contactSpreadFraction) + ", outside [0, 1)");
+    }
 
     MassProperties& mp = a.massProperties;
     mp.massKg = massKg[i];

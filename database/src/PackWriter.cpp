@@ -103,6 +103,9 @@ Status validateObject(const ObjectAsset& o, const std::string& label, const std:
                    std::to_string(m.modes.cols()) + ", expected 3N by r = " + std::to_string(3 * fem) + " by " +
                    std::to_string(r) + " (" + elementOrderName(o.elementOrder) + ")");
   }
+  if (!isContactSpreadFraction(o.contactSpreadFraction)) {
+    return invalidArgument(label + ": contactSpreadFraction " + std::to_string(o.contactSpreadFraction) + " is outside [0, 1)");
+  }
   if (o.eliminationOrder.size() > 0 && !isPermutation(o.eliminationOrder, 3 * fem)) {
     return invalidArgument(label + ": eliminationOrder is not a permutation of its " + std::to_string(3 * fem) +
                            " degrees of freedom");
@@ -362,6 +365,9 @@ void writeObjects(FileWriter& w, const std::string& prefix, const ObjectList& ob
     w.f64(prefix + "/quality/min_tet_volume_m3",
           gather<double>(objects, [](const O& o) { return o.quality.minTetVolumeM3; }), {count}, "m^3");
   }
+
+  w.f64(prefix + "/contact_spread_fraction", gather<double>(objects, [](const O& o) { return o.contactSpreadFraction; }),
+        {count}, "1");
 
   // Bake record.
   {

@@ -32,7 +32,7 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
       return makeError(ErrorCode::ParseError, "manifest " + path.filename().string() + ": needs an \"objects\" array");
     }
     static const std::set<std::string> kKeys = {"name", "mesh", "material", "tets", "modes", "element", "repair", "lumped_mass", "seed",
-                                                "sharp_features", "sliver_bound", "meshing_runs", "stretch"};
+                                                "sharp_features", "sliver_bound", "meshing_runs", "stretch", "contact_spread"};
     for (size_t i = 0; i < doc["objects"].size(); ++i) {
       const auto& o = doc["objects"][i];
       const std::string where = "manifest " + path.filename().string() + ", object " + std::to_string(i);
@@ -57,7 +57,8 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
       };
       for (const Range& r : {Range{"tets", 0.0, 5e6, true}, Range{"modes", 1.0, 2000.0, true},
                              Range{"seed", 0.0, 9.007199254740992e15, true}, Range{"sliver_bound", 0.0, 30.0, false},
-                             Range{"meshing_runs", 1.0, 8.0, true}, Range{"stretch", 1.0, kMaxThinStretch, false}}) {
+                             Range{"meshing_runs", 1.0, 8.0, true}, Range{"stretch", 1.0, kMaxThinStretch, false},
+                             Range{"contact_spread", 0.0, 0.99, false}}) {
         if (!o.contains(r.key)) continue;
         const double v = o[r.key].is_number() ? o[r.key].get<double>() : std::nan("");
         if (!(v >= r.lo && v <= r.hi) || (r.integer && v != std::floor(v))) {
@@ -79,6 +80,7 @@ Result<std::vector<ObjectBakeSettings>> loadBakeManifest(const std::filesystem::
       s.tetMesh.sliverBoundDeg = o.value("sliver_bound", s.tetMesh.sliverBoundDeg);
       s.tetMesh.meshingRuns = o.value("meshing_runs", s.tetMesh.meshingRuns);
       s.tetMesh.thinStretch = o.value("stretch", s.tetMesh.thinStretch);
+      s.contactSpreadFraction = o.value("contact_spread", s.contactSpreadFraction);
       const auto seed = o.value("seed", static_cast<uint64_t>(1));
       s.modal.seed = s.tetMesh.seed = seed;
       out.push_back(std::move(s));

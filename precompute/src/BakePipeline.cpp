@@ -65,6 +65,9 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
   ObjectBakeReport& rep = report ? *report : localReport;
   if (name.empty()) return makeError(ErrorCode::InvalidArgument, "an object to bake needs a name");
   if (Status m = validateMaterial(s.material); !m) return inObject(name, m.error());
+  if (!isContactSpreadFraction(s.contactSpreadFraction)) {
+    return inObject(name, makeError(ErrorCode::InvalidArgument, "the contact spread must be in [0, 1) of the diagonal"));
+  }
   if (s.repair) {
     auto repaired = repairSurfaceMesh(mesh, s.repairSettings, &rep.repair, &progress);
     if (!repaired) return inObject(name, repaired.error());
@@ -77,6 +80,7 @@ static Result<ObjectAsset> bakeSurfaceSince(TriangleMesh mesh, const ObjectBakeS
   ObjectAsset asset;
   asset.name = name;
   asset.materialName = s.material.name;
+  asset.contactSpreadFraction = s.contactSpreadFraction;
   BakeRecord& rec = asset.bake;
   rec.sourceMesh = s.sourceName.empty() ? s.meshPath.filename().string() : s.sourceName;
   rec.targetTets = s.tetMesh.targetTets;

@@ -69,7 +69,9 @@ Status contactStage(const ImpactJob& job, Flow& flow, ImpactWorkspace& ws, Impac
   auto contact = computeHertzContact(hi);
   if (!contact) return contact.error();
   result.contact = contact.value();
-  result.loadRadiusM = contactLoadRadius(body, site.value(), result.contact.patchRadiusM, job.settings->contactSpreadFraction);
+  // The larger of the World's spread and the object's own (ObjectAsset::contactSpreadFraction).
+  const double spread = std::max(job.settings->contactSpreadFraction, body.asset.contactSpreadFraction);
+  result.loadRadiusM = contactLoadRadius(body, site.value(), result.contact.patchRadiusM, spread);
   contactLoadWeights(body, site.value(), flow.normalLocal, result.loadRadiusM, result.loadWeights, ws.contactFaces);
   return Ok{};
 }

@@ -116,6 +116,7 @@ ObjectAsset makeObject(const std::string& name, const Material& material, int nx
   b.targetTets = 1000 + static_cast<int64_t>(seed);
   b.cellSizeM = bits.uniform(1e-3, 1e-2);
   b.thinStretch = 1.0 + 0.75 * static_cast<double>(seed % 3);  // not a draw: the draws after it stay as they were
+  o.contactSpreadFraction = 0.05 * static_cast<double>(seed % 3);  // nor this one
   b.requestedModes = modeCount;
   b.lumpedMass = (seed % 2) == 0;
   b.repaired = (seed % 2) == 1;
@@ -216,6 +217,7 @@ void expectSamePack(const Pack& a, const Pack& b) {
     EXPECT_EQ(x.bake.targetTets, y.bake.targetTets);
     expectSameDouble(x.bake.cellSizeM, y.bake.cellSizeM, "cellSizeM");
     expectSameDouble(x.bake.thinStretch, y.bake.thinStretch, "thinStretch");
+    expectSameDouble(x.contactSpreadFraction, y.contactSpreadFraction, "contactSpreadFraction");
     EXPECT_EQ(x.bake.requestedModes, y.bake.requestedModes);
     EXPECT_EQ(x.bake.lumpedMass, y.bake.lumpedMass);
     EXPECT_EQ(x.bake.repaired, y.bake.repaired);
@@ -612,6 +614,35 @@ TEST_F(PackTest, AThinStretchIsKeptAndAPackWithoutOneReadsAsNotStretched) {
   read = readPack(mPath);
   ASSERT_TRUE(read) << read.error().message;
   EXPECT_EQ(read.value().objects[1].bake.thinStretch, 1.0);
+}
+
+TEST_F(PackTest, AnObjectsContactSpreadIsKeptAndAPackWithoutOneReadsAsNone) {
+  // The optional contact_spread_fraction (PACK_SCHEMA.md): read back as written, refused outside
+  // [0, 1) by the reader (PackCorrupt, by name) and the writer, and a pack from before it reads 0.
+  Pack pack = makePack();
+  pack.objects[0].contactSpreadFraction = 0.0;
+  pack.objects[1].contactSpreadFraction = 0.15;
+  ASSERT_TRUE(writePack(pack, mPath).ok());
+  auto read = readPack(mPath);
+  ASSERT_TRUE(read) << read.error().message;
+  EXPECT_EQ(read.value().objects[0].contactSpreadFraction, 0.0);
+  EXPECT_EQ(read.value().objects[1].contactSpreadFraction, 0.15);
+  for (const double bad : {-0.1, 1.0, std::nan("")}) {
+    ASSERT_TRUE(writePack(pack, mPath).ok());
+    editPack(mPath, [&](hid_t f) { writeElement<double>(f, "/objects/contact_spread_fraction", H5T_NATIVE_DOUBLE, {1}, bad); });
+    expectReadError(ErrorCode::PackCorrupt, "/objects/contact_spread_fraction");
+    Pack wrong = pack;
+    wrong.objects[1].contactSpreadFraction = bad;
+    const Status s = writePack(wrong, mPath);
+    ASSERT_FALSE(s.ok()) << bad;
+    EXPECT_EQ(s.error().code, ErrorCode::InvalidArgument);
+    EXPECT_NE(s.error().message.find("contactSpreadFraction"), std::string::npos) << s.error().message;
+  }
+  ASSERT_TRUE(writePack(pack, mPath).ok());
+  editPack(mPath, [](hid_t f) { ASSERT_GE(H5Ldelete(f, "/objects/contact_spread_fraction", H5P_DEFAULT), 0); });
+  read = readPack(mPath);
+  ASSERT_TRUE(read) << read.error().message;
+  EXPECT_EQ(read.value().objects[1].contactSpreadFraction, 0.0);
 }
 
 TEST_F(PackTest, MissingDataset) {

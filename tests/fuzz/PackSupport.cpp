@@ -87,6 +87,7 @@ Pack makeSeedPack() {
   const auto dofs = static_cast<int>(pack.objects[1].modal.modes.rows());
   pack.objects[1].eliminationOrder = Eigen::VectorXi::LinSpaced(dofs, dofs - 1, 0);
   pack.objects[1].bake.thinStretch = 2.0;  // the optional bake/thin_stretch, present and not 1
+  pack.objects[1].contactSpreadFraction = 0.15;  // the optional contact_spread_fraction, not 0
 
   FragmentDatabase& db = pack.database;
   db.referenceMaterial = makeMaterial("reference", 7.0e10, 0.2);

@@ -151,6 +151,20 @@ TEST_F(BakePipelineTest, ManifestLoadsAndRejectsTypos) {
     std::ofstream(dir / "nostretch.json") << R"({"objects": [{"mesh": "cube.off", "material": "glass", "stretch": )" << bad << "}]}";
     EXPECT_EQ(loadBakeManifest(dir / "nostretch.json").error().code, ErrorCode::ParseError) << bad;
   }
+  EXPECT_EQ(ok.value()[0].contactSpreadFraction, 0.0);
+  std::ofstream(dir / "spread.json") << R"({"objects": [{"mesh": "cube.off", "material": "glass", "contact_spread": 0.15}]})";
+  auto spread = loadBakeManifest(dir / "spread.json");
+  ASSERT_TRUE(spread.ok()) << spread.error().message;
+  EXPECT_EQ(spread.value()[0].contactSpreadFraction, 0.15);
+  for (const char* bad : {"-0.1", "1", "\"0.1\""}) {
+    std::ofstream(dir / "nospread.json") << R"({"objects": [{"mesh": "cube.off", "material": "glass", "contact_spread": )" << bad << "}]}";
+    EXPECT_EQ(loadBakeManifest(dir / "nospread.json").error().code, ErrorCode::ParseError) << bad;
+  }
+  ObjectBakeSettings outside = spread.value()[0];
+  outside.contactSpreadFraction = 1.0;
+  const auto refused = bakeObject(outside);
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().code, ErrorCode::InvalidArgument);
 }
 
 }  // namespace

@@ -252,6 +252,23 @@ TEST(ContactLoad, AResolvedPatchGivesHertzsEdgeTension) {
   EXPECT_GT(fe[3], 0.0);
 }
 
+TEST(ContactLoad, AnObjectsOwnSpreadAndTheWorldsTheLargerWins) {
+  // ρ = max(a, the object's own spread × D, the World's × D, the ring): on a plate whose ring
+  // (2.3 cm) is under 0.08 D, each of the two sets ρ where it is the larger.
+  Pack pack = testing::makeGlassPlatePack(1000, 4, 0.3, ElementOrder::P2).value();
+  const double d = diagonal(pack.objects[0].tetMesh);
+  const double top = pack.objects[0].tetMesh.nodes.col(2).maxCoeff();
+  for (const auto& [own, world, expected] : {std::tuple{0.0, 0.08, 0.08}, std::tuple{0.12, 0.05, 0.12}, std::tuple{0.08, 0.1, 0.1}}) {
+    pack.objects[0].contactSpreadFraction = own;
+    WorldSettings s;
+    s.fracture.contactSpreadFraction = world;
+    World w = World::create(Pack(pack), s).value();
+    auto r = w.impact(ballOnPlate(w.addObject({.asset = "plate"}).value(), Eigen::Vector3d(0.15, 0.13, top), 1.0));
+    ASSERT_TRUE(r) << r.error().message;
+    EXPECT_NEAR(r.value().loadRadiusM, expected * d, 1e-12 * d) << own << " " << world;
+  }
+}
+
 TEST(ContactLoad, SpreadOutsideZeroToOneIsATypedError) {
   const Pack pack = testing::makeGlassPlatePack(300, 4, 0.1).value();
   for (const double bad : {-0.1, 1.0, std::nan("")}) {
@@ -290,8 +307,9 @@ TEST(ContactLoad, CorrectedPeakAgreesOnThreeMeshSizes) {
 
 TEST(ContactLoad, TheDefaultSolidsCorrectedPeaksAgreeOnThreeMeshSizes) {
   // The main job's brick corner drop (10 m/s) and stone-ball ground drop (15 m/s) on three P2
-  // meshes of each (the default manifest's objects, 12 modes), the load spread over 0.15 D (the
-  // brick 3.7 cm, the ball 5.2 cm: above every mesh's ring, so the same pressure on each). The
+  // meshes of each (the default manifest's objects, 12 modes), the load spread over their own
+  // 0.15 D (the manifest's "contact_spread"; the brick 3.7 cm, the ball 5.2 cm: above every mesh's
+  // ring, so the same pressure on each) with the World's default 0.05. The
   // corrected peak is read at P2 corners as nodal means (CornerStressMeans); each element's own
   // corners gave 18/22/30/12 MPa (brick) and 59/60/37/46 (ball) on 0.8k–6.4k tets, the peak next to
   // the load and moving from element to element. Measured (40 modes within 1 % of these): brick
@@ -315,6 +333,7 @@ TEST(ContactLoad, TheDefaultSolidsCorrectedPeaksAgreeOnThreeMeshSizes) {
                                        [&](const ObjectBakeSettings& o) { return o.name == drop.object; });
     ASSERT_NE(settings, manifest.value().end());
     ASSERT_EQ(settings->elementOrder, ElementOrder::P2);
+    ASSERT_EQ(settings->contactSpreadFraction, 0.15);
     std::vector<double> peaks;
     for (const int64_t tets : drop.tets) {
       ObjectBakeSettings o = *settings;
@@ -325,9 +344,7 @@ TEST(ContactLoad, TheDefaultSolidsCorrectedPeaksAgreeOnThreeMeshSizes) {
       Pack pack;
       pack.materials.push_back(o.material);
       pack.objects.push_back(std::move(asset).value());
-      WorldSettings s;
-      s.fracture.contactSpreadFraction = 0.15;
-      World world = World::create(Pack(pack), s).value();
+      World world = World::create(Pack(pack), WorldSettings{}).value();
       ImpactDesc d;
       d.object = world.addObject({.asset = drop.object}).value();
       d.pointWorld = drop.point;

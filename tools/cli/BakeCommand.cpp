@@ -31,6 +31,7 @@ struct BakeOptions {
   double sliverBound = 5.0;
   int meshingRuns = TetMeshSettings{}.meshingRuns;
   double stretch = 1.0;
+  double contactSpread = 0.0;
   std::string factorization = "cholmod";
   uint64_t seed = 1;
   bool quiet = false;
@@ -76,6 +77,12 @@ Runner addBakeCommand(CLI::App& app) {
             return end != v.c_str() && *end == '\0' && isThinStretch(k) ? "" : "must be a number in [1, 16]";
           },
           "[1 - 16]"));
+  cmd->add_option("--contact-spread", o->contactSpread,
+                  "The object's own floor on the contact load's spread, a fraction of its bounding-box diagonal that its "
+                  "mesh resolves; the runtime spreads a hit over the larger of this and its own setting (0: the runtime's alone; "
+                  "docs/realtime.md, \"Contact loads\")")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.99));
   cmd->add_option("--element", o->element,
                   "Finite element: p1 (4-node tets) or p2 (10-node tets; thin parts, which lock in bending with p1)")
       ->check(CLI::IsMember({"p1", "p2"}))->capture_default_str();
@@ -89,7 +96,7 @@ Runner addBakeCommand(CLI::App& app) {
   cmd->get_option("--cell-size")->excludes(cmd->get_option("--tets"));
   // A manifest carries its own per-object settings: refuse options it would silently override.
   for (const char* perObject : {"--material", "--name", "--tets", "--cell-size", "--modes", "--repair", "--repair-voxel",
-                                "--element", "--lumped-mass", "--no-sharp-features", "--sliver-bound", "--meshing-runs", "--stretch", "--seed"}) {
+                                "--element", "--lumped-mass", "--no-sharp-features", "--sliver-bound", "--meshing-runs", "--stretch", "--contact-spread", "--seed"}) {
     cmd->get_option(perObject)->excludes(manifest);
   }
 
@@ -123,6 +130,7 @@ Runner addBakeCommand(CLI::App& app) {
       s.tetMesh.sliverBoundDeg = o->sliverBound;
       s.tetMesh.meshingRuns = o->meshingRuns;
       s.tetMesh.thinStretch = o->stretch;
+      s.contactSpreadFraction = o->contactSpread;
       s.modal.modeCount = o->modes;
       s.modal.seed = o->seed;
       s.repair = o->repair;

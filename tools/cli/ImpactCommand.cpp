@@ -83,8 +83,8 @@ Runner addImpactCommand(CLI::App& app) {
                   "... in linear (p1) or quadratic (p2) tets: p2 removes the linear tets' locking from the check, ~10x the cost")
       ->capture_default_str()->check(CLI::IsMember({"p1", "p2"}));
   cmd->add_option("--contact-spread", o->contactSpread,
-                  "Spread the contact load over at least this fraction of the object's bounding-box diagonal "
-                  "(0: the mesh's nearest ring only; see docs/realtime.md, \"Contact loads\")")
+                  "Spread the contact load over at least this fraction of the object's bounding-box diagonal, or the "
+                  "object's own where its pack gives a larger one (0: the mesh's nearest ring only; see docs/realtime.md, \"Contact loads\")")
       ->capture_default_str()->check(CLI::Range(0.0, 0.99));
   cmd->add_option("--debris", o->debris, "Fragments below this volume fraction are rigid debris")->capture_default_str()->check(CLI::Range(0.0, 0.99));
   cmd->add_option("--descriptor", o->descriptor, "Descriptor used to match fragments")

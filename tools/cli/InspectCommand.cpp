@@ -100,6 +100,7 @@ nlohmann::json inspectJson(const Pack& pack) {
                  {"min_tet_volume_m3", q.minTetVolumeM3},
                  // The factorisation's elimination order: baked (METIS, less fill) or the runtime's AMD.
                  {"elimination_order", o.eliminationOrder.size() > 0 ? "baked" : "amd"}};
+    j["contact_spread_fraction"] = o.contactSpreadFraction;
     j["mass_properties"] = {{"mass_kg", mp.massKg},
                             {"volume_m3", mp.volumeM3},
                             {"center_of_mass_m", vec3(mp.centerOfMassM)},
@@ -155,6 +156,9 @@ void printInspection(const Pack& pack, std::ostream& out) {
         << " tets (" << o.modal.modes.rows() / 3 << " FEM nodes), " << q.surfaceFaceCount << " surface faces; dihedral " << q.minDihedralDeg << "-" << q.maxDihedralDeg << " deg, radius-edge max "
         << q.maxRadiusEdgeRatio << " (mean " << q.meanRadiusEdgeRatio << "); elimination order "
         << (o.eliminationOrder.size() > 0 ? "baked (METIS)" : "AMD at runtime") << "\n";
+    if (o.contactSpreadFraction > 0.0) {
+      out << "  contact       loads spread over at least " << o.contactSpreadFraction << " of the diagonal\n";
+    }
     out << "  mass          " << mp.massKg << " kg, volume " << mp.volumeM3 << " m3, centre of mass ("
         << mp.centerOfMassM.x() << ", " << mp.centerOfMassM.y() << ", " << mp.centerOfMassM.z() << ") m\n";
     out << "  inertia       diag (" << mp.inertiaKgM2(0, 0) << ", " << mp.inertiaKgM2(1, 1) << ", "

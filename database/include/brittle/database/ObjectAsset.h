@@ -108,8 +108,19 @@ struct ObjectAsset {
   /// (FillOrdering.h); the runtime's static correction factorises in it. Pack: the optional
   /// dataset /objects/elimination_order.
   Eigen::VectorXi eliminationOrder;
+  /// The object's own floor on the contact load's spread, as a fraction of its bounding-box
+  /// diagonal D, in [0, 1): the runtime spreads a hit over ρ = max(a, this × D, the World's
+  /// FractureSettings::contactSpreadFraction × D, the ring at the contact). A length the object's
+  /// mesh resolves, chosen with it (the manifest's "contact_spread"): the brick's and the stone
+  /// ball's default meshes have rings wider than the World's 0.05 D, and their corrected peaks
+  /// agree across meshes at 0.15 D (docs/decisions.md, "Contact loads"). 0: the World's alone.
+  /// Pack: the optional dataset /objects/contact_spread_fraction (absent: 0).
+  double contactSpreadFraction = 0.0;
   BakeRecord bake;
 };
+
+/// Whether `fraction` is a valid ObjectAsset::contactSpreadFraction: finite, in [0, 1).
+inline bool isContactSpreadFraction(double fraction) { return fraction >= 0.0 && fraction < 1.0; }
 
 /// Whether `order` holds each of 0..n−1 exactly once.
 bool isPermutation(const Eigen::VectorXi& order, Eigen::Index n);

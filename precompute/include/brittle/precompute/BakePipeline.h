@@ -29,6 +29,9 @@ struct ObjectBakeSettings {
   ElementOrder elementOrder = ElementOrder::P1;
   FemSettings fem;
   ModalSettings modal;               ///< shiftRad2PerS2 == 0 means defaultShift()
+  /// ObjectAsset::contactSpreadFraction: the object's own floor on the contact load's spread, a
+  /// fraction of its bounding-box diagonal that its mesh resolves (0: the World's setting alone).
+  double contactSpreadFraction = 0.0;
   /// Bake an elimination order for the runtime's factorisation (FillOrdering.h). Database entries
   /// go without: the pack does not store theirs, and a database bakes thousands of them.
   bool fillOrdering = true;

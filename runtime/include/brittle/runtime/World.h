@@ -90,6 +90,8 @@ struct FractureSettings {
   /// object, not of its mesh, so the stresses near the contact converge as the mesh is refined;
   /// finer detail under the contact (Hertzian cone cracks) is not modelled. 0: the mesh's ring
   /// only, which makes the contact stress a property of the mesh (docs/realtime.md, "Contact loads").
+  /// An object whose pack gives its own (ObjectAsset::contactSpreadFraction: the brick and the
+  /// stone ball of the default pack, 0.15) is spread over the larger of the two.
   double contactSpreadFraction = 0.05;
   CrackSettings crack;             ///< crack.seed is combined with the world seed and an impact counter
   double debrisVolumeFraction = 0.01;  ///< fragments below this fraction of the broken body are rigid debris

@@ -21,6 +21,7 @@ inline void expectSameBakedData(const ObjectAsset& x, const ObjectAsset& y) {
   EXPECT_EQ(x.quality.minDihedralDeg, y.quality.minDihedralDeg);
   EXPECT_EQ(x.bake.cellSizeM, y.bake.cellSizeM);
   EXPECT_EQ(x.bake.thinStretch, y.bake.thinStretch);
+  EXPECT_EQ(x.contactSpreadFraction, y.contactSpreadFraction);
   EXPECT_EQ(x.bake.shift, y.bake.shift);
 }
 
