@@ -10,8 +10,8 @@
 // (docs/results/accuracy.md). `brittle bench elements` charts the brick's convergence in both orders.
 //
 // The vase is the exception, on purpose: P1 (+49 %), because P2 (6.6k tets, +0.8 %) takes its impact
-// from 8.5–9 ms to 20–25 ms, past the 10 ms goal (docs/results/accuracy.md; 41–44 ms against 9.5–10
-// at 8.1k tets on a slower machine); the test says so, so that the day it changes is noticed.
+// from 4.4–6.0 ms to 10.2–11.4 ms, past the 10 ms goal (docs/results/accuracy.md, stop 63; 20–25 ms
+// against 8.5–9 earlier); the test says so, so that the day it changes is noticed.
 #include <gtest/gtest.h>
 
 #include <map>
