@@ -10,6 +10,7 @@
 #include <immintrin.h>
 #endif
 #include <atomic>
+#include <bit>
 #include <algorithm>
 #include <limits>
 #include <cmath>
@@ -475,6 +476,15 @@ StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::Vect
   b.groupCentres.resize(6 * groups, modes);
   b.groupRadii.resize(groups);
   b.groupScales.resize(groups);
+  b.groupUniform.assign(static_cast<size_t>(groups), 0);
+  for (Eigen::Index g = 0; g < groups; ++g) {
+    const int32_t* first = b.groupPoints.data() + b.groupStart[static_cast<size_t>(g)];
+    const int32_t* last = b.groupPoints.data() + b.groupStart[static_cast<size_t>(g) + 1];
+    b.groupUniform[static_cast<size_t>(g)] = std::all_of(first + 1, last, [&](int32_t e) {
+      return std::equal(s.row(6 * *first).data(), s.row(6 * *first).data() + 6 * s.cols(), s.row(6 * e).data(),
+                        [](double x, double y) { return std::bit_cast<uint64_t>(x) == std::bit_cast<uint64_t>(y); });
+    });
+  }
   Eigen::Matrix<double, 6, Eigen::Dynamic> centre(6, modes);
   for (Eigen::Index g = 0; g < groups; ++g) {
     const int32_t* first = b.groupPoints.data() + b.groupStart[static_cast<size_t>(g)];
@@ -500,8 +510,21 @@ StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::Vect
 }
 
 Voigt StressField::atPoint(Eigen::Index point) const {
-  Voigt s = detail::elementStress(*stressModes, point, q.data(), q.size(), lanes);
-  if (staticStress && staticStress->size() > 0) s += staticStress->segment<6>(6 * point) * forceN;
+  auto compute = [&] {
+    Voigt s = detail::elementStress(*stressModes, point, q.data(), q.size(), lanes);
+    if (staticStress && staticStress->size() > 0) s += staticStress->segment<6>(6 * point) * forceN;
+    return s;
+  };
+  if (!nodeMemo) return compute();
+  const auto node = static_cast<size_t>((*corners)(point / pointsPerElement, point % pointsPerElement));
+  std::atomic_ref<char> state(nodeMemo->state[node]);
+  char known = state.load(std::memory_order_acquire);
+  if (known == 2) return nodeMemo->stress[node];
+  const Voigt s = compute();
+  if (known == 0 && state.compare_exchange_strong(known, 1, std::memory_order_acquire)) {
+    nodeMemo->stress[node] = s;
+    state.store(2, std::memory_order_release);
+  }
   return s;
 }
 
@@ -791,6 +814,15 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
       }
       Eigen::Map<Voigt>(w.groupStaticCentre.data() + 6 * g) = centre;
       w.groupStaticRadius[static_cast<size_t>(g)] = staticRadius;
+      bool same = bounds.groupUniform[static_cast<size_t>(g)] != 0;
+      if (same && correction) {
+        const double* a = staticStress.data() + 6 * *from;
+        same = std::all_of(from + 1, to, [&](int32_t e) {
+          return std::equal(a, a + 6, staticStress.data() + 6 * e,
+                            [](double x, double y) { return std::bit_cast<uint64_t>(x) == std::bit_cast<uint64_t>(y); });
+        });
+      }
+      w.groupSame[static_cast<size_t>(g)] = same ? 1 : 0;
       w.groupMargin[static_cast<size_t>(g)] =
           1e-4 * bounds.groupScales[g] * qNormMax +
           1e-9 * (bounds.groupRadii[g] * qNormMax + (kD.cwiseProduct(centre).norm() + staticRadius) * forceMax);
@@ -834,6 +866,12 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
         if (heapBegin != heapEnd) prefetchRows(bounds.groupCentres, 6 * heapBegin->second, 6);
         const int32_t* from = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g)];
         const int32_t* to = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g) + 1];
+        if (w.groupSame[static_cast<size_t>(g)]) {
+          // Its points' stresses are the same bits: the lowest one stands for all (on a tie the
+          // lowest point is the one reported), and its own tests are cheaper than the group's bounds.
+          if (w.elementBound[*from] >= out.best) visitPoint(*from, nullptr, out);
+          continue;
+        }
         const double* at = nullptr;
         if (std::count_if(from, to, [&](int32_t e) { return w.elementBound[e] >= out.best; }) >= kGroupVisit) {
           groupBounds(g);
@@ -873,6 +911,7 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
       w.groupStaticCentre.resize(static_cast<size_t>(6 * groups));
       w.groupStaticRadius.resize(static_cast<size_t>(groups));
       w.groupMargin.resize(static_cast<size_t>(groups));
+      w.groupSame.resize(static_cast<size_t>(groups));
       // F_k at the float q's padded rows, zero past the last instant (the group bounds read whole registers).
       if (correction) {
         w.forceLanes.assign(static_cast<size_t>(w.qFloat.rows()), 0.0);
@@ -1071,6 +1110,8 @@ void CrackWorkspace::reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index
   cutBy.reserve(c * t);
   seedNormals.reserve(c);
   for (auto* v : {&parent, &labelOfRoot, &size, &low, &root, &shared, &head, &tail, &touched, &next, &fill}) v->reserve(n);
+  nodeMemo.stress.reserve(n);
+  nodeMemo.state.reserve(n);
   start.reserve(n + 1);
   incident.reserve(2 * static_cast<size_t>(edges));
   stuck.reserve(n);

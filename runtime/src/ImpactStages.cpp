@@ -165,6 +165,11 @@ Status crackStage(const ImpactJob& job, const Flow& flow, ImpactWorkspace& ws, I
   field.q = ws.q.row(scan.peakInstant).transpose();
   field.forceN = ws.force[static_cast<size_t>(scan.peakInstant)];
   if (flow.correction) field.staticStress = &ws.staticStress;
+  if (body.asset.elementOrder == ElementOrder::P2) {  // corner stresses are nodal means (makeBody): one per node
+    ws.crack.nodeMemo.reset(body.asset.tetMesh.nodes.rows());
+    field.corners = &body.asset.tetMesh.tets;
+    field.nodeMemo = &ws.crack.nodeMemo;
+  }
   const double energy = 0.5 * (body.omega.array().square() * field.q.array().square()).sum() +
                         0.5 * field.forceN * field.forceN * flow.complianceMPerN;
   CrackSettings cs = job.settings->crack;

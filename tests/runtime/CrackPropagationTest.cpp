@@ -11,10 +11,13 @@
 #include <cstdint>
 #include <initializer_list>
 #include <limits>
+#include <map>
+#include <numeric>
 #include <random>
 #include <tuple>
 #include <cstring>
 
+#include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 
 #include "brittle/testing/Fixtures.h"
@@ -308,6 +311,108 @@ TEST(CrackPropagation, GroupedScanEqualsTheFullScanAndItsGroupBoundsHold) {
   EXPECT_GT(checked, 100);
   // Tight groups: a group's bound is near its best point's σ₁, so few reach the peak.
   EXPECT_LT(tightLive, tightGroups / 4) << tightLive << " of " << tightGroups;
+}
+
+TEST(CrackPropagation, GroupsOfEqualPointsAreSearchedByTheirLowestPointWithTheFullScansAnswer) {
+  // P2 corners read as nodal means (CornerStressMeans) make every point of a node's group the same
+  // rows, bit for bit, and the static correction too: the peak search then evaluates each such
+  // group's lowest point only. Its peak, element, instant and seeds are the full scan's and those of
+  // the same search told the groups differ; it evaluates fewer. A static correction that differs
+  // on a group's points keeps that group searched point by point.
+  for (uint64_t rngSeed : {31u, 32u, 33u}) {
+    SCOPED_TRACE(::testing::Message() << "seed " << rngSeed);
+    std::mt19937_64 rng(rngSeed);
+    std::normal_distribution<double> g(0.0, 1.0);
+    const int modes = 8, instants = 29;
+    std::vector<int32_t> keys;
+    std::vector<Eigen::MatrixXd> blocks;
+    groupedBlocks(rng, g, modes, 240, 12, 0.0, [](int32_t group) { return group; }, blocks, keys);
+    std::vector<size_t> order(keys.size());
+    std::iota(order.begin(), order.end(), size_t{0});
+    std::shuffle(order.begin(), order.end(), rng);
+    const auto points = static_cast<Eigen::Index>(keys.size());
+    MatrixXdRow stressModes(6 * points, modes);
+    std::vector<int32_t> pointKeys(keys.size());
+    for (Eigen::Index e = 0; e < points; ++e) {
+      stressModes.middleRows(6 * e, 6) = blocks[order[static_cast<size_t>(e)]];
+      pointKeys[static_cast<size_t>(e)] = keys[order[static_cast<size_t>(e)]];
+    }
+    auto [q, staticStress, force] = randomHit(rng, g, points, modes, instants, true);
+    std::map<int32_t, Eigen::Index> firstOf;  // the static correction equal on each group's points
+    for (Eigen::Index e = 0; e < points; ++e) {
+      const auto [it, fresh] = firstOf.emplace(pointKeys[static_cast<size_t>(e)], e);
+      if (!fresh) staticStress.segment<6>(6 * e) = staticStress.segment<6>(6 * it->second);
+    }
+    const Eigen::VectorXd scales = Eigen::VectorXd::LinSpaced(modes, 1, modes).cwiseInverse();
+    const StressBounds bounds = stressModeBounds(stressModes, modes, scales, pointKeys);
+    EXPECT_TRUE(std::all_of(bounds.groupUniform.begin(), bounds.groupUniform.end(), [](char u) { return u == 1; }));
+    StressBounds told = bounds;
+    std::fill(told.groupUniform.begin(), told.groupUniform.end(), 0);
+    const double threshold = 2.0e6;
+    const StressScan full = scanStresses(stressModes, bounds, q, staticStress, force, threshold, false);
+    StressScanWorkspace wa, wb;
+    StressScan same, apart;
+    scanStresses(stressModes, bounds, q, staticStress, force, threshold, true, wa, same);
+    scanStresses(stressModes, told, q, staticStress, force, threshold, true, wb, apart);
+    for (const StressScan* s : {&same, &apart}) {
+      EXPECT_EQ(s->peakPrincipalPa, full.peakPrincipalPa);
+      EXPECT_EQ(s->peakElement, full.peakElement);
+      EXPECT_EQ(s->peakInstant, full.peakInstant);
+      StressField field{&stressModes, q.row(full.peakInstant).transpose(), &staticStress, force[static_cast<size_t>(full.peakInstant)]};
+      EXPECT_EQ(orderedSeeds(*s, field), full.seeds);
+    }
+    EXPECT_LT(same.evaluations, apart.evaluations);
+    // One point's static correction moved: its group is searched point by point again.
+    Eigen::VectorXd moved = staticStress;
+    moved[6 * full.peakElement] *= 1.5;
+    StressScan movedScan;
+    scanStresses(stressModes, bounds, q, moved, force, threshold, true, wa, movedScan);
+    const StressScan movedFull = scanStresses(stressModes, bounds, q, moved, force, threshold, false);
+    EXPECT_EQ(movedScan.peakPrincipalPa, movedFull.peakPrincipalPa);
+    EXPECT_EQ(movedScan.peakElement, movedFull.peakElement);
+    EXPECT_EQ(movedScan.peakInstant, movedFull.peakInstant);
+  }
+}
+
+TEST(CrackPropagation, ANodeMemoGivesTheSameStressesFromAnyThread) {
+  // StressField::nodeMemo: P2 corners whose rows are their node's (as nodal means make them)
+  // computed once per node, from two threads at once, are the same bits as computed every time.
+  std::mt19937_64 rng(41);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const int modes = 12, nodes = 60, elements = 200;
+  Tetrahedra corners(elements, 4);
+  for (Eigen::Index i = 0; i < corners.size(); ++i) corners.data()[i] = static_cast<int32_t>(rng() % nodes);
+  MatrixXdRow nodeRows(6 * nodes, modes);
+  for (Eigen::Index i = 0; i < nodeRows.size(); ++i) nodeRows.data()[i] = 1e6 * g(rng);
+  Eigen::VectorXd nodeStatic(6 * nodes);
+  for (Eigen::Index i = 0; i < nodeStatic.size(); ++i) nodeStatic[i] = 1e3 * g(rng);
+  MatrixXdRow stressModes(24 * elements, modes);
+  Eigen::VectorXd staticStress(24 * elements);
+  for (Eigen::Index e = 0; e < elements; ++e) {
+    for (int c = 0; c < 4; ++c) {
+      stressModes.middleRows(6 * (4 * e + c), 6) = nodeRows.middleRows(6 * corners(e, c), 6);
+      staticStress.segment<6>(6 * (4 * e + c)) = nodeStatic.segment<6>(6 * corners(e, c));
+    }
+  }
+  Eigen::VectorXd q(modes);
+  for (Eigen::Index j = 0; j < modes; ++j) q[j] = g(rng);
+  StressField plain{&stressModes, q, &staticStress, 250.0};
+  plain.pointsPerElement = 4;
+  NodeStressMemo memo;
+  memo.reset(nodes);
+  StressField memoised = plain;
+  memoised.corners = &corners;
+  memoised.nodeMemo = &memo;
+  std::vector<Voigt> got(static_cast<size_t>(elements));
+  tbb::parallel_for(0, 2 * elements, [&](int i) {  // every element twice, on whichever threads
+    const Voigt s = memoised.at(i % elements);
+    if (i >= elements) got[static_cast<size_t>(i - elements)] = s;
+  });
+  for (int32_t e = 0; e < elements; ++e) {
+    const Voigt expected = plain.at(e);
+    EXPECT_EQ(std::memcmp(got[static_cast<size_t>(e)].data(), expected.data(), sizeof(Voigt)), 0) << e;
+  }
+  EXPECT_TRUE(std::all_of(memo.state.begin(), memo.state.end(), [](char s) { return s == 0 || s == 2; }));
 }
 
 TEST(CrackPropagation, OnePreparationServesBothScansOfAnImpactWithScanStressesBits) {

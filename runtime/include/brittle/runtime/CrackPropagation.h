@@ -69,6 +69,10 @@ struct StressBounds {
   MatrixXfRow groupCentres;          ///< 6G by modes: S_c, in float (the radii are measured from it)
   Eigen::VectorXd groupRadii;        ///< G: ρ_G
   Eigen::VectorXd groupScales;       ///< G: ‖D S_c W‖_F ≥ ‖D S_c W‖₂, the scale of the centre's rounding
+  /// G: 1 where every point of the group has the same rows of stressModes, bit for bit (a P2 node's
+  /// corners as nodal means, CornerStressMeans): with a static correction equal on them too, the
+  /// peak search evaluates only the group's lowest point, which the tie rule would report anyway.
+  std::vector<char> groupUniform;
 };
 
 /// The bounds of every stress point over the first `modes` modes of stressModes (6PT by ≥ modes).
@@ -149,6 +153,7 @@ struct StressScanWorkspace {
   std::vector<double> seedGroupBound;          ///< G: each group's bound at the peak instant (empty: no groups)
   /// Per group: the static correction's centre (6G), radius and the bound's margin (G each).
   std::vector<double> groupStaticCentre, groupStaticRadius, groupMargin;
+  std::vector<char> groupSame;  ///< G: groupUniform, and the static correction equal on the group's points
   std::vector<double> groupBoundAt;
   Eigen::MatrixXf qFloat;                      ///< K (padded to a multiple of 8) by r: q in float
   std::vector<double> forceLanes;              ///< F_k at qFloat's rows, zero past K (the group bounds' loads)
@@ -224,6 +229,21 @@ struct FractureState {
   }
 };
 
+/// The stresses of a P2 field's corner nodes, each computed once (StressField::nodeMemo). A body's
+/// P2 corner stresses are nodal means (CornerStressMeans), so every element at a node reads the
+/// same rows there: the same bits from whichever point computes them first. Safe for the crack
+/// stage's two threads: a node is claimed (state 0 → 1) before its stress is written and marked
+/// known (2); a thread that finds it claimed computes it for itself.
+struct NodeStressMemo {
+  std::vector<Voigt> stress;  ///< per node
+  std::vector<char> state;    ///< per node: 0 unknown, 1 being written, 2 known
+  /// Every node unknown (no allocation within the reserved size).
+  void reset(Eigen::Index nodes) {
+    stress.resize(static_cast<size_t>(nodes));
+    state.assign(static_cast<size_t>(nodes), 0);
+  }
+};
+
 /// The stress field at one instant: σ_e = S_e q (+ σ̂_e F).
 struct StressField {
   const MatrixXdRow* stressModes = nullptr;  ///< 6PT by ≥ r
@@ -232,6 +252,11 @@ struct StressField {
   double forceN = 0.0;
   int pointsPerElement = 1;                  ///< P: 1 (P1) or 4 (P2, the corners)
   Lanes lanes = widestLanes();               ///< the registers of its sums (the same bits in either)
+  /// P2 only, and only where every point of a node has the same rows (a body's nodal means): the
+  /// tets' corners and a memo per corner node, so that each node's stress is computed once
+  /// (null: every point computed). Values are the same bits either way.
+  const Tetrahedra* corners = nullptr;
+  NodeStressMemo* nodeMemo = nullptr;
   /// The element's stress: at its point of largest σ₁, the first of equals (the one point of a P1 element).
   Voigt at(int32_t element) const;
   /// The stress at one stress point (row block `point` of stressModes).
@@ -307,6 +332,7 @@ struct CrackWorkspace {
   std::vector<double> phi;               ///< cracks × #N: each crack's nodal level set
   std::vector<char> cutBy;               ///< cracks × #T
   std::vector<Eigen::Vector3d> seedNormals;
+  NodeStressMemo nodeMemo;               ///< #N: a P2 field's corner stresses (StressField::nodeMemo)
   /// Storage for the next FractureState's two arrays, which have no capacity of their own: the
   /// runtime puts a reused result's old arrays here before it clears the result (recycle), and a
   /// growth whose state is empty takes them, so that it does not allocate them again.
