@@ -89,6 +89,10 @@ Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& 
                                                      ") has modes of " + std::to_string(asset.modal.modes.rows()) +
                                                      " rows, expected " + std::to_string(3 * femNodes));
   }
+  if (!isContactSpreadFraction(asset.contactSpreadFraction)) {
+    return makeError(ErrorCode::InvalidArgument, "object '" + asset.name + "': contactSpreadFraction " +
+                                                     std::to_string(asset.contactSpreadFraction) + " is outside [0, 1)");
+  }
   if (asset.elementOrder == ElementOrder::P2) {
     // The pack holds each element's own corner stresses; the runtime reads their nodal means
     // (CornerStressMeans, FemAssembly.h), as the static correction's recovery does.

@@ -14,7 +14,9 @@
 // of its load). Weights sum to 1.
 //
 // ρ = max(a, s·D, h) (contactLoadRadius): Hertz's patch radius a; a length of the object,
-// s = FractureSettings::contactSpreadFraction (0.05) of its bounding-box diagonal D; and the
+// s = the larger of FractureSettings::contactSpreadFraction (0.05) and the object's own
+// ObjectAsset::contactSpreadFraction (a fragment inherits its parent's as a length), of its
+// bounding-box diagonal D; and the
 // longest surface edge h at the contact face's corners, so that the load reaches at least the
 // nearest ring of nodes. Why: a mesh of edge h cannot represent stresses that vary over less than
 // about h. A load on fewer nodes does not make the answer more exact: it makes the stresses next

@@ -613,6 +613,7 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
     prepareStressScan(bounds, q, prune, w);
   }
   const bool correction = staticStress.size() > 0;
+  w.groupSame.clear();  // made again below by a grouped search: never a previous scan's
   scan.peakPrincipalPa = 0.0;
   scan.peakElement = scan.peakInstant = -1;
   scan.seeds.clear();

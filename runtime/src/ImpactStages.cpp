@@ -165,7 +165,14 @@ Status crackStage(const ImpactJob& job, const Flow& flow, ImpactWorkspace& ws, I
   field.q = ws.q.row(scan.peakInstant).transpose();
   field.forceN = ws.force[static_cast<size_t>(scan.peakInstant)];
   if (flow.correction) field.staticStress = &ws.staticStress;
-  if (body.asset.elementOrder == ElementOrder::P2) {  // corner stresses are nodal means (makeBody): one per node
+  // A P2 body's corner stresses are nodal means (makeBody): each node's computed once, where the
+  // scan found every node's points bit-equal, static correction included (StressBounds::groupUniform,
+  // StressScanWorkspace::groupSame); else each point is computed, as before.
+  const StressBounds& bounds = body.stressBounds();
+  const std::vector<char>& same = ws.scanBuffers.groupSame;
+  auto all = [](const std::vector<char>& v) { return std::all_of(v.begin(), v.end(), [](char c) { return c != 0; }); };
+  if (body.asset.elementOrder == ElementOrder::P2 && job.settings->pruneStresses && !bounds.groupUniform.empty() &&
+      same.size() == bounds.groupUniform.size() && all(bounds.groupUniform) && all(same)) {
     ws.crack.nodeMemo.reset(body.asset.tetMesh.nodes.rows());
     field.corners = &body.asset.tetMesh.tets;
     field.nodeMemo = &ws.crack.nodeMemo;
@@ -244,6 +251,18 @@ struct MeshCheck {
   ElementOrder order = ElementOrder::P1;
 };
 
+// A fragment keeps its parent's spread as a length (ObjectAsset::contactSpreadFraction times the
+// parent's diagonal: what the parent's mesh resolves), as a fraction of its own diagonal, below 1.
+// The exact path's sub-mesh is the parent's own elements; an entry's mesh is no finer than that.
+void inheritContactSpread(const Body& parent, ObjectAsset& fragment) {
+  if (!(parent.asset.contactSpreadFraction > 0.0)) return;
+  const Points& x = fragment.tetMesh.nodes;
+  if (x.rows() == 0) return;
+  const double diagonal = (x.colwise().maxCoeff() - x.colwise().minCoeff()).norm();
+  if (!(diagonal > 0.0)) return;
+  fragment.contactSpreadFraction = std::min(0.99, parent.asset.contactSpreadFraction * parent.sizeM / diagonal);
+}
+
 // A matched entry placed on its fragment (ScalingLaws.h) and, with degree > 0, ringing at the
 // fragment's own frequencies (PolynomialModes.h: from the fragment's surface; the entry keeps its
 // shapes and stress modes), the lowest kMeshRatioModes of them corrected by the fragment's own
@@ -258,6 +277,7 @@ struct MeshCheck {
 Result<ObjectAsset> placeEntry(const EntryCache& cache, const FragmentMatch& m, const Material& material, const TriangleMesh& surface,
                                int degree, const MeshCheck& check, Eigen::VectorXd& entryEigenvalues) {
   auto placed = cache.place(m.entry, material, m.queryFrame);
+  if (placed && check.parent) inheritContactSpread(*check.parent->body, placed.value());
   if (placed && degree > 0) {
     auto own = polynomialModes(surface, material, degree, /*withShapes=*/false, placed.value().modal.eigenvaluesRad2PerS2.size());
     if (own) {
@@ -366,6 +386,7 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
       ExactModesFactor factor;  // its modal analysis's factorisation: the static correction's too
       auto asset = exactFragmentAsset(mesh.value(), material, es, name, correct ? &factor : nullptr);
       if (!asset) return asset.error();
+      inheritContactSpread(body, asset.value());
       return makeBody(std::move(asset).value(), material, modeCount, &factor);
     };
     Result<std::shared_ptr<const Body>> made = own();

@@ -269,6 +269,36 @@ TEST(ContactLoad, AnObjectsOwnSpreadAndTheWorldsTheLargerWins) {
   }
 }
 
+TEST(ContactLoad, AFragmentKeepsItsParentsSpreadAsALength) {
+  // A fragment made an object (here by the exact path: no database) carries its parent's own
+  // spread as the same length, a larger fraction of its own smaller diagonal (below 1).
+  Pack pack = testing::makeGlassPlatePack(1000, 8, 0.3).value();
+  pack.objects[0].contactSpreadFraction = 0.08;
+  const double length = 0.08 * diagonal(pack.objects[0].tetMesh);
+  WorldSettings s;  // every piece by the exact path
+  s.fracture.exactModesMaxTets = 100000;
+  s.fracture.exactModesMaxDof = 0;
+  s.fracture.exactModesBudgetDof = 0;
+  World world = World::create(Pack(pack), s).value();
+  const double top = pack.objects[0].tetMesh.nodes.col(2).maxCoeff();
+  ImpactDesc d = ballOnPlate(world.addObject({.asset = "plate"}).value(), Eigen::Vector3d(0.15, 0.13, top), 20.0);
+  d.impactorMassKg = 0.5;
+  auto r = world.impact(d);
+  ASSERT_TRUE(r) << r.error().message;
+  ASSERT_TRUE(r.value().broken);
+  int checked = 0;
+  for (const FragmentResult& f : r.value().fragments) {
+    if (!f.object.valid()) continue;
+    auto asset = world.objectAsset(f.object);
+    ASSERT_TRUE(asset) << asset.error().message;
+    const double own = diagonal(asset.value()->tetMesh);
+    EXPECT_NEAR(asset.value()->contactSpreadFraction, std::min(0.99, length / own), 1e-12) << f.reason;
+    EXPECT_GT(asset.value()->contactSpreadFraction, 0.08);
+    ++checked;
+  }
+  EXPECT_GT(checked, 0);
+}
+
 TEST(ContactLoad, SpreadOutsideZeroToOneIsATypedError) {
   const Pack pack = testing::makeGlassPlatePack(300, 4, 0.1).value();
   for (const double bad : {-0.1, 1.0, std::nan("")}) {

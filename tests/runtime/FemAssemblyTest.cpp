@@ -310,6 +310,62 @@ TEST(FemAssemblyP2, QuadraticFieldIsRepresentedExactly) {
   }
 }
 
+TEST(FemAssemblyP2, CornerStressMeansAreVolumeWeightedAndKeepALinearStrainExact) {
+  // CornerStressMeans: every corner of a node becomes the volume-weighted mean of the node's
+  // corners (checked by hand on random rows); a quadratic displacement's stress, linear and so
+  // already equal at each node, comes out unchanged; a tet without volume is a typed error.
+  const TetMesh mesh = testing::makeBoxTetMesh(0.3, 0.2, 0.1, 3, 2, 2);
+  const auto means = CornerStressMeans::make(mesh);
+  ASSERT_TRUE(means) << means.error().message;
+  EXPECT_EQ(means.value().elementCount(), mesh.tets.rows());
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const Eigen::Index t = mesh.tets.rows(), cols = 3;
+  MatrixXdRow rows(24 * t, cols);
+  for (Eigen::Index i = 0; i < rows.size(); ++i) rows.data()[i] = g(rng);
+  MatrixXdRow expected = rows;
+  for (Eigen::Index v = 0; v < mesh.nodes.rows(); ++v) {
+    Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(6, cols);
+    double volume = 0.0;
+    for (Eigen::Index e = 0; e < t; ++e) {
+      for (int c = 0; c < 4; ++c) {
+        if (mesh.tets(e, c) != v) continue;
+        const Eigen::Vector3d p0 = mesh.nodes.row(mesh.tets(e, 0)), p1 = mesh.nodes.row(mesh.tets(e, 1)),
+                              p2 = mesh.nodes.row(mesh.tets(e, 2)), p3 = mesh.nodes.row(mesh.tets(e, 3));
+        const double ve = std::abs((p1 - p0).cross(p2 - p0).dot(p3 - p0)) / 6.0;
+        sum += ve * rows.middleRows(6 * (4 * e + c), 6);
+        volume += ve;
+      }
+    }
+    for (Eigen::Index e = 0; e < t; ++e) {
+      for (int c = 0; c < 4; ++c) {
+        if (mesh.tets(e, c) == v) expected.middleRows(6 * (4 * e + c), 6) = sum / volume;
+      }
+    }
+  }
+  MatrixXdRow averaged = rows;
+  means.value().apply(averaged.data(), cols);
+  EXPECT_LT((averaged - expected).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_GT((averaged - rows).cwiseAbs().maxCoeff(), 0.1);  // random corners do differ at a node
+
+  const Material m = presetGlass();
+  const FemMesh fem = makeFemMesh(mesh, ElementOrder::P2).value();
+  const MatrixXdRow u = nodalField(fem.nodes(), [](const Eigen::Vector3d& x) {
+    return Eigen::Vector3d(1e-3 * x.x() * x.x() - 2e-3 * x.y() * x.z(), 3e-3 * x.x() * x.y() + 1e-3 * x.z(), -2e-3 * x.z() * x.z());
+  });
+  const MatrixXdRow own = computeStressModes(fem, m, u);
+  MatrixXdRow mean = own;
+  means.value().apply(mean.data(), mean.cols());
+  EXPECT_LE((mean - own).cwiseAbs().maxCoeff(), 1e-9 * own.cwiseAbs().maxCoeff());
+
+  TetMesh flat = mesh;
+  flat.nodes.row(flat.tets(0, 3)) = flat.nodes.row(flat.tets(0, 0));  // tet 0 loses its volume
+  const auto refused = CornerStressMeans::make(flat);
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().code, ErrorCode::InvalidArgument);
+  EXPECT_NE(refused.error().message.find("no volume"), std::string::npos) << refused.error().message;
+}
+
 TEST(FemAssemblyP2, ElementStressesRecoverTheStressModesOfAnyDisplacementAtEitherOrder) {
   // The static correction's and the full-FEM reference's stress recovery equals the bake's stress
   // modes for the same displacement, point by point (P2: both as nodal means, as a body reads its

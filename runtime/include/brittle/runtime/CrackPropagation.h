@@ -153,7 +153,7 @@ struct StressScanWorkspace {
   std::vector<double> seedGroupBound;          ///< G: each group's bound at the peak instant (empty: no groups)
   /// Per group: the static correction's centre (6G), radius and the bound's margin (G each).
   std::vector<double> groupStaticCentre, groupStaticRadius, groupMargin;
-  std::vector<char> groupSame;  ///< G: groupUniform, and the static correction equal on the group's points
+  std::vector<char> groupSame;  ///< G: groupUniform, and the static correction equal on the group's points (empty after an ungrouped scan)
   std::vector<double> groupBoundAt;
   Eigen::MatrixXf qFloat;                      ///< K (padded to a multiple of 8) by r: q in float
   std::vector<double> forceLanes;              ///< F_k at qFloat's rows, zero past K (the group bounds' loads)
@@ -252,9 +252,11 @@ struct StressField {
   double forceN = 0.0;
   int pointsPerElement = 1;                  ///< P: 1 (P1) or 4 (P2, the corners)
   Lanes lanes = widestLanes();               ///< the registers of its sums (the same bits in either)
-  /// P2 only, and only where every point of a node has the same rows (a body's nodal means): the
-  /// tets' corners and a memo per corner node, so that each node's stress is computed once
-  /// (null: every point computed). Values are the same bits either way.
+  /// P2 only, and only where every point of a node has the same rows of stressModes and of
+  /// staticStress, bit for bit (a body's nodal means; the crack stage sets it where the scan found
+  /// so, StressBounds::groupUniform and StressScanWorkspace::groupSame): the tets' corners and a memo
+  /// per corner node, so that each node's stress is computed once (null: every point computed).
+  /// Values are the same bits either way.
   const Tetrahedra* corners = nullptr;
   NodeStressMemo* nodeMemo = nullptr;
   /// The element's stress: at its point of largest σ₁, the first of equals (the one point of a P1 element).

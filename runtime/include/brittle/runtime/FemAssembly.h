@@ -118,7 +118,8 @@ MatrixXdRow computeStressModes(const FemMesh& mesh, const Material& material, co
 /// extrapolated to a vertex) and jumps from element to element. Next to a contact load those jumps
 /// set the peak: the stone ball's and the brick's corrected peaks, with the load spread over the
 /// same 0.15 D on four meshes of 0.8k–6.4k tets, read 59/60/37/46 and 18/22/30/12 MPa at the raw
-/// corners, and 13/11/12/11 and 14/12/11/11 as nodal means (docs/decisions.md, "Contact loads").
+/// corners, and 11.8/12.3/11.0/11.2 and 14.2/11.4/11.2/10.5 as nodal means (docs/decisions.md,
+/// "Contact loads").
 /// The mean keeps every field P2 represents exactly (a linear strain agrees at a node already),
 /// and a thin part's bending, linear through its thickness, keeps its surface value (the default
 /// plate's hit 74.9 → 70.3 MPa), where the element centroid would read its mid-plane (41.8). The

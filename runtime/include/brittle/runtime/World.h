@@ -321,7 +321,7 @@ struct ImpactResult {
   /// object's frame). What the offline full-FEM reference (brittle/precompute/FullFemReference.h) needs
   /// to solve the same impact.
   std::vector<std::pair<int32_t, double>> loadWeights;
-  double loadRadiusM = 0.0;            ///< ρ, the radius the load was spread over (FractureSettings::contactSpreadFraction)
+  double loadRadiusM = 0.0;            ///< ρ, the radius the load was spread over (FractureSettings::contactSpreadFraction, or the object's own where larger)
   Eigen::Vector3d forceDirectionLocal = Eigen::Vector3d::Zero();
   double ringDownS = 0.0;              ///< the window simulated after the contact
   int64_t stressEvaluations = 0;
