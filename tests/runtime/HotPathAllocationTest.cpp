@@ -76,9 +76,18 @@ class HotPathAllocationTest : public ::testing::Test {
     auto plate = testing::makeGlassPlatePack(1500, 20);
     ASSERT_TRUE(plate) << plate.error().message;
     sPack = new Pack(std::move(plate).value());
+    // The same plate in P2: its corner stresses as nodal means, the scan's equal-point groups and
+    // crack growth's node memo (CornerStressMeans, StressBounds::groupUniform, StressField::nodeMemo).
+    auto quadratic = testing::makeGlassPlatePack(1500, 20, 0.3, ElementOrder::P2);
+    ASSERT_TRUE(quadratic) << quadratic.error().message;
+    sPackP2 = new Pack(std::move(quadratic).value());
   }
-  static void TearDownTestSuite() { delete sPack; }
+  static void TearDownTestSuite() {
+    delete sPack;
+    delete sPackP2;
+  }
   static Pack* sPack;
+  static Pack* sPackP2;
 
   // Impacts below the breaking speed, at different points, speeds and impactors (load patches of
   // different sizes): one round warms up, the next must not allocate.
@@ -99,9 +108,9 @@ class HotPathAllocationTest : public ::testing::Test {
     return out;
   }
 
-  static void expectNoAllocationAfterWarmUp(const WorldSettings& settings) {
+  static void expectNoAllocationAfterWarmUp(const WorldSettings& settings, const Pack* pack = nullptr) {
     if (!BRITTLE_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";
-    auto world = World::create(*sPack, settings);
+    auto world = World::create(pack ? *pack : *sPack, settings);
     ASSERT_TRUE(world) << world.error().message;
     auto id = world.value().addObject({.asset = "plate"});
     ASSERT_TRUE(id) << id.error().message;
@@ -137,8 +146,11 @@ class HotPathAllocationTest : public ::testing::Test {
   }
 };
 Pack* HotPathAllocationTest::sPack = nullptr;
+Pack* HotPathAllocationTest::sPackP2 = nullptr;
 
 TEST_F(HotPathAllocationTest, DefaultSettingsAllocateNothingAfterWarmUp) { expectNoAllocationAfterWarmUp({}); }
+
+TEST_F(HotPathAllocationTest, AQuadraticPlateAllocatesNothingAfterWarmUp) { expectNoAllocationAfterWarmUp({}, sPackP2); }
 
 TEST_F(HotPathAllocationTest, WithoutStaticCorrectionOrPruningAllocateNothingEither) {
   WorldSettings s;
@@ -159,43 +171,47 @@ TEST_F(HotPathAllocationTest, ReportingTheUncorrectedPeakAllocatesNothing) {
 // arrays and its reason text. The fracture state's two arrays reuse the storage of those the
 // reused result held (CrackWorkspace::recycle). Fragments here stay surfaces (no
 // database, no exact path), so no body is made on the workers while allocations are counted.
+// On the P1 plate and on its P2 twin (nodal means, equal-point groups, the node memo).
 TEST_F(HotPathAllocationTest, BreakingImpactsAllocateOnlyWhatTheyHandOver) {
   if (!BRITTLE_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";
-  WorldSettings settings;
-  settings.prepareInBackground = false;  // nothing runs on the workers meanwhile
-  settings.fracture.matchFragments = false;
-  auto world = World::create(*sPack, settings);
-  ASSERT_TRUE(world) << world.error().message;
-  ImpactDesc hit;
-  hit.pointWorld = Eigen::Vector3d(0.16, 0.13, 0.01);  // on the top face, near its centre
-  hit.speedMps = 60.0;
-  hit.impactorMassKg = 0.1;
-  hit.impactorRadiusM = 0.02;
-  ImpactResult result;
-  long counted = 0;
-  size_t fragments = 0, elements = 0;
-  // Round 0 warms up with a harder hit, which cuts more elements and makes more fragments than the
-  // counted rounds (each round's crack seed differs), so no workspace grows after it.
-  for (int round = 0; round < 3; ++round) {
-    hit.speedMps = round == 0 ? 120.0 : 60.0;
-    auto id = world.value().addObject({.asset = "plate"});
-    ASSERT_TRUE(id) << id.error().message;
-    hit.object = id.value();
-    const long before = gAllocations.load();
-    const Status st = world.value().impact(hit, result);
-    const long made = gAllocations.load() - before;
-    ASSERT_TRUE(st) << st.error().message;
-    ASSERT_TRUE(result.broken) << "the impact must break the plate";
-    ASSERT_GE(result.fragments.size(), 2u);
-    if (round == 0) continue;
-    counted += made;
-    fragments += result.fragments.size();
-    elements += result.fracture.cutElements.size();
-    EXPECT_LE(made, 3 * static_cast<long>(result.fragments.size()))
-        << result.fragments.size() << " fragments, " << result.fracture.cutElements.size() << " cut elements";
+  for (const Pack* pack : {sPack, sPackP2}) {
+    SCOPED_TRACE(elementOrderName(pack->objects[0].elementOrder));
+    WorldSettings settings;
+    settings.prepareInBackground = false;  // nothing runs on the workers meanwhile
+    settings.fracture.matchFragments = false;
+    auto world = World::create(*pack, settings);
+    ASSERT_TRUE(world) << world.error().message;
+    ImpactDesc hit;
+    hit.pointWorld = Eigen::Vector3d(0.16, 0.13, 0.01);  // on the top face, near its centre
+    hit.speedMps = 60.0;
+    hit.impactorMassKg = 0.1;
+    hit.impactorRadiusM = 0.02;
+    ImpactResult result;
+    long counted = 0;
+    size_t fragments = 0, elements = 0;
+    // Round 0 warms up with a harder hit, which cuts more elements and makes more fragments than the
+    // counted rounds (each round's crack seed differs), so no workspace grows after it.
+    for (int round = 0; round < 3; ++round) {
+      hit.speedMps = round == 0 ? 120.0 : 60.0;
+      auto id = world.value().addObject({.asset = "plate"});
+      ASSERT_TRUE(id) << id.error().message;
+      hit.object = id.value();
+      const long before = gAllocations.load();
+      const Status st = world.value().impact(hit, result);
+      const long made = gAllocations.load() - before;
+      ASSERT_TRUE(st) << st.error().message;
+      ASSERT_TRUE(result.broken) << "the impact must break the plate";
+      ASSERT_GE(result.fragments.size(), 2u);
+      if (round == 0) continue;
+      counted += made;
+      fragments += result.fragments.size();
+      elements += result.fracture.cutElements.size();
+      EXPECT_LE(made, 3 * static_cast<long>(result.fragments.size()))
+          << result.fragments.size() << " fragments, " << result.fracture.cutElements.size() << " cut elements";
+    }
+    EXPECT_GT(counted, 0) << "the surfaces handed over are allocated: the counter is live";
+    EXPECT_GT(elements, fragments) << "more elements are cut than fragments made: the bound is not trivial";
   }
-  EXPECT_GT(counted, 0) << "the surfaces handed over are allocated: the counter is live";
-  EXPECT_GT(elements, fragments) << "more elements are cut than fragments made: the bound is not trivial";
 }
 
 // With the exact path on, the pieces it takes are handed over as BodySources, and everything the
