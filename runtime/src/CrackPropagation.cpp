@@ -10,7 +10,6 @@
 #include <immintrin.h>
 #endif
 #include <atomic>
-#include <bit>
 #include <algorithm>
 #include <limits>
 #include <cmath>
@@ -305,6 +304,9 @@ inline void spinPause() {
 #endif
 }
 
+// Whether n doubles are the same bits (−0 and 0 differ; a NaN equals its own bits).
+bool sameBits(const double* a, const double* b, Eigen::Index n) { return std::memcmp(a, b, sizeof(double) * static_cast<size_t>(n)) == 0; }
+
 bool crosses(const Eigen::Vector4d& d) { return d.maxCoeff() > 0.0 && d.minCoeff() < 0.0; }
 
 // Area of the section of the tet where the nodal values d change sign, projected on n: a triangle
@@ -480,10 +482,8 @@ StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::Vect
   for (Eigen::Index g = 0; g < groups; ++g) {
     const int32_t* first = b.groupPoints.data() + b.groupStart[static_cast<size_t>(g)];
     const int32_t* last = b.groupPoints.data() + b.groupStart[static_cast<size_t>(g) + 1];
-    b.groupUniform[static_cast<size_t>(g)] = std::all_of(first + 1, last, [&](int32_t e) {
-      return std::equal(s.row(6 * *first).data(), s.row(6 * *first).data() + 6 * s.cols(), s.row(6 * e).data(),
-                        [](double x, double y) { return std::bit_cast<uint64_t>(x) == std::bit_cast<uint64_t>(y); });
-    });
+    b.groupUniform[static_cast<size_t>(g)] =
+        std::all_of(first + 1, last, [&](int32_t e) { return sameBits(s.row(6 * *first).data(), s.row(6 * e).data(), 6 * s.cols()); });
   }
   Eigen::Matrix<double, 6, Eigen::Dynamic> centre(6, modes);
   for (Eigen::Index g = 0; g < groups; ++g) {
@@ -817,11 +817,7 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
       w.groupStaticRadius[static_cast<size_t>(g)] = staticRadius;
       bool same = bounds.groupUniform[static_cast<size_t>(g)] != 0;
       if (same && correction) {
-        const double* a = staticStress.data() + 6 * *from;
-        same = std::all_of(from + 1, to, [&](int32_t e) {
-          return std::equal(a, a + 6, staticStress.data() + 6 * e,
-                            [](double x, double y) { return std::bit_cast<uint64_t>(x) == std::bit_cast<uint64_t>(y); });
-        });
+        same = std::all_of(from + 1, to, [&](int32_t e) { return sameBits(staticStress.data() + 6 * *from, staticStress.data() + 6 * e, 6); });
       }
       w.groupSame[static_cast<size_t>(g)] = same ? 1 : 0;
       w.groupMargin[static_cast<size_t>(g)] =

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "FixedRanges.h"
+#include "brittle/descriptors/MassProperties.h"
 #include "brittle/runtime/QuadraticTetMesh.h"
 
 namespace brittle {
@@ -455,7 +456,7 @@ Result<CornerStressMeans> CornerStressMeans::make(const TetMesh& mesh) {
       if (v < 0 || v >= n) return makeError(ErrorCode::InvalidArgument, "corner stress means: tet " + std::to_string(e) + " has a node out of range");
       p[c] = mesh.nodes.row(v).transpose();
     }
-    const double v = std::abs((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0])) / 6.0;
+    const double v = std::abs(signedTetVolume(p[0], p[1], p[2], p[3]));
     if (!(v > 0.0)) return makeError(ErrorCode::InvalidArgument, "corner stress means: tet " + std::to_string(e) + " has no volume");
     volume[static_cast<size_t>(e)] = v;
     for (int c = 0; c < 4; ++c) {

@@ -66,6 +66,22 @@ void groupedBlocks(std::mt19937_64& rng, std::normal_distribution<double>& g, in
   }
 }
 
+// The blocks as stress modes in a shuffled order (a group's points are not next to each other in
+// the rows, as a node's corners are not), with each point's key.
+void shuffledPoints(std::mt19937_64& rng, int modes, const std::vector<Eigen::MatrixXd>& blocks, const std::vector<int32_t>& keys,
+                    MatrixXdRow& stressModes, std::vector<int32_t>& pointKeys) {
+  std::vector<size_t> order(keys.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::shuffle(order.begin(), order.end(), rng);
+  const auto points = static_cast<Eigen::Index>(keys.size());
+  stressModes.resize(6 * points, modes);
+  pointKeys.resize(keys.size());
+  for (Eigen::Index e = 0; e < points; ++e) {
+    stressModes.middleRows(6 * e, 6) = blocks[order[static_cast<size_t>(e)]];
+    pointKeys[static_cast<size_t>(e)] = keys[order[static_cast<size_t>(e)]];
+  }
+}
+
 // The definition, as it was first written: relabel the whole mesh after every merge.
 int mergeCrumbsByRelabelling(const TetTopology& topo, int minNodes, Eigen::VectorXd& edgeCuts, Eigen::VectorXi& labels,
                              int& fragmentCount) {
@@ -246,16 +262,10 @@ TEST(CrackPropagation, GroupedScanEqualsTheFullScanAndItsGroupBoundsHold) {
       groupedBlocks(rng, g, modes, 240, 12, spread,
                     [&](int32_t group) { return trial == 5 ? static_cast<int32_t>(rng() % 17) : group; }, blocks, keys);
       // The points of a group are not next to each other in the stress modes' rows.
-      std::vector<size_t> order(keys.size());
-      std::iota(order.begin(), order.end(), size_t{0});
-      std::shuffle(order.begin(), order.end(), rng);
+      MatrixXdRow stressModes;
+      std::vector<int32_t> pointKeys;
+      shuffledPoints(rng, modes, blocks, keys, stressModes, pointKeys);
       const auto points = static_cast<Eigen::Index>(keys.size());
-      MatrixXdRow stressModes(6 * points, modes);
-      std::vector<int32_t> pointKeys(keys.size());
-      for (Eigen::Index e = 0; e < points; ++e) {
-        stressModes.middleRows(6 * e, 6) = blocks[order[static_cast<size_t>(e)]];
-        pointKeys[static_cast<size_t>(e)] = keys[order[static_cast<size_t>(e)]];
-      }
       const bool correction = trial % 2 == 0;
       const auto [q, staticStress, force] = randomHit(rng, g, points, modes, instants, correction);
       const Eigen::VectorXd scales = Eigen::VectorXd::LinSpaced(modes, 1, modes).cwiseInverse();
@@ -327,16 +337,10 @@ TEST(CrackPropagation, GroupsOfEqualPointsAreSearchedByTheirLowestPointWithTheFu
     std::vector<int32_t> keys;
     std::vector<Eigen::MatrixXd> blocks;
     groupedBlocks(rng, g, modes, 240, 12, 0.0, [](int32_t group) { return group; }, blocks, keys);
-    std::vector<size_t> order(keys.size());
-    std::iota(order.begin(), order.end(), size_t{0});
-    std::shuffle(order.begin(), order.end(), rng);
+    MatrixXdRow stressModes;
+    std::vector<int32_t> pointKeys;
+    shuffledPoints(rng, modes, blocks, keys, stressModes, pointKeys);
     const auto points = static_cast<Eigen::Index>(keys.size());
-    MatrixXdRow stressModes(6 * points, modes);
-    std::vector<int32_t> pointKeys(keys.size());
-    for (Eigen::Index e = 0; e < points; ++e) {
-      stressModes.middleRows(6 * e, 6) = blocks[order[static_cast<size_t>(e)]];
-      pointKeys[static_cast<size_t>(e)] = keys[order[static_cast<size_t>(e)]];
-    }
     auto [q, staticStress, force] = randomHit(rng, g, points, modes, instants, true);
     std::map<int32_t, Eigen::Index> firstOf;  // the static correction equal on each group's points
     for (Eigen::Index e = 0; e < points; ++e) {
