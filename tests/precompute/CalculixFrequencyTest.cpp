@@ -261,13 +261,14 @@ TEST(CalculixFrequency, DISABLED_DefaultPlate) {
   }
 }
 
-// Not run by default (~10 min): the converged references of DefaultObjectsFrequencyTest (the vase,
-// the brick and the stone ball, each baked from the default manifest at the finest mesh its
-// reference came from) through ccx with its own C3D10 mass, against brittle's P2 on the same mesh:
-// issue 17's "converge it with the project's own P2 solver, and check it once with CalculiX". Run
-// with the filter above. On meshes this fine ccx's 4-point mass moves the first mode by ~3e-7 (the
-// plate, above), so the two agree to 1e-5 or one of them is wrong.
-// Measured: see docs/results/accuracy.md, "P1 against P2".
+// Not run by default (a few minutes): the converged references of DefaultObjectsFrequencyTest (the
+// vase, the brick and the stone ball, each baked from the default manifest at about the size its
+// reference came from) through ccx C3D10 with the exact mass, against brittle's P2 on the same
+// mesh: issue 17's "converge it with the project's own P2 solver, and check it once with
+// CalculiX". Run with the filter above. With ccx's own 4-point mass the two differed by 4.4e-6,
+// 1.5e-6 and 2.0e-5 (vase, brick, ball): that mass's error, not the solver's.
+// Measured (3.3 min, ccx 94 / 27 / 29 s): the vase at 18 516 P2 tets 3 680.0376 Hz in both (−4.5e-13),
+// the brick at 8 176 tets 4 267.0205 Hz (8.9e-14), the ball at 8 125 tets 12 045.0771 Hz (1.7e-13).
 TEST(CalculixFrequency, DISABLED_DefaultSolidsConvergedReferences) {
   auto manifest = loadBakeManifest(testing::sourceDir() / "assets" / "default-pack.json");
   ASSERT_TRUE(manifest) << manifest.error().message;
@@ -280,18 +281,23 @@ TEST(CalculixFrequency, DISABLED_DefaultSolidsConvergedReferences) {
     const auto [target, referenceHz] = references.at(o.name);
     o.elementOrder = ElementOrder::P2;
     o.tetMesh.targetTets = target;
-    o.modal.modeCount = 4;
+    // Several modes from both: the ball's lowest is one of five nearly equal (its l = 2 cluster),
+    // and a solver asked for one of them may converge to another (ccx asked for one gave 1.1e-5
+    // above brittle).
+    o.modal.modeCount = 6;
     auto asset = bakeObject(o);
     ASSERT_TRUE(asset) << o.name << ": " << asset.error().message;
     const double ours = asset.value().modal.frequenciesHz(0);
     const QuadraticTetMesh mesh = makeQuadraticTetMesh(asset.value().tetMesh).value();
-    const std::vector<double> ccx = ccxFrequencies(mesh, o.material, false, o.name, 1);
-    ASSERT_EQ(ccx.size(), 1u) << o.name;
+    const std::vector<double> ccx = ccxFrequencies(mesh, o.material, true, o.name, 6);
+    ASSERT_EQ(ccx.size(), 6u) << o.name;
     std::printf("%s, %lld P2 tets: brittle %.4f Hz, ccx C3D10 %.4f Hz (%.2e), the reference %.1f Hz\n", o.name.c_str(),
                 static_cast<long long>(mesh.tets.rows()), ours, ccx[0], ours / ccx[0] - 1.0, referenceHz);
     std::fflush(stdout);
-    EXPECT_NEAR(ours, ccx[0], 1e-5 * ccx[0]) << o.name;
-    EXPECT_NEAR(ours, referenceHz, 0.05) << o.name << ": the reference was measured on this mesh";
+    EXPECT_NEAR(ours, ccx[0], 1e-6 * ccx[0]) << o.name;
+    // Mesh_3 gives a slightly different mesh at the reference's target than the one it was
+    // measured on (the vase 18 516 tets against 19 030): the reference holds to its convergence.
+    EXPECT_NEAR(ours, referenceHz, 1e-3 * referenceHz) << o.name;
     ++checked;
   }
   EXPECT_EQ(checked, 3);
