@@ -191,6 +191,26 @@ bool searchesByGroups(const StressBounds& bounds, Eigen::Index points, Eigen::In
   return bounds.groupStart.size() >= 2 && bounds.groupStart.back() == points && bounds.groupCentres.cols() >= r;
 }
 
+// Each stress point's representative for what reads its modal rows alone: the first (lowest)
+// point of its group where the group is uniform (StressBounds::groupUniform), else itself.
+class UniformPoints {
+ public:
+  UniformPoints(const StressBounds& bounds, Eigen::Index points, Eigen::Index r)
+      : mBounds(bounds),
+        mAny(searchesByGroups(bounds, points, r) && bounds.groupUniform.size() + 1 == bounds.groupStart.size() &&
+             std::any_of(bounds.groupUniform.begin(), bounds.groupUniform.end(), [](char u) { return u != 0; })) {}
+  bool any() const { return mAny; }
+  Eigen::Index representative(Eigen::Index e) const {
+    if (!mAny) return e;
+    const auto g = static_cast<size_t>(mBounds.groupOf[static_cast<size_t>(e)]);
+    return mBounds.groupUniform[g] ? mBounds.groupPoints[static_cast<size_t>(mBounds.groupStart[g])] : e;
+  }
+
+ private:
+  const StressBounds& mBounds;
+  bool mAny;
+};
+
 void centreSumsNarrow(const float* c, Eigen::Index stride, const Eigen::MatrixXf& q, Eigen::Index k, float (*sums)[8]) {
   centreSumsInLanes<4>(c, stride, q, k, sums);
 }
@@ -579,11 +599,17 @@ void prepareStressScan(const StressBounds& bounds, const Eigen::MatrixXd& q, boo
   for (Eigen::Index k = 0; k < steps; ++k) w.qNorm[k] = w.qT.col(k).cwiseQuotient(bounds.modeScales.head(r)).norm();
   const double qNormMax = steps > 0 ? w.qNorm.maxCoeff() : 0.0;
   // Each point's modal terms of B_e (scanPreparedStresses adds the static ones): the pass over
-  // every point's bound rows, the scan's largest read (two rows of r doubles a point).
+  // every point's bound rows, the scan's largest read (two rows of r doubles a point). The points
+  // of a uniform group (StressBounds::groupUniform: a P2 node's corners as nodal means, ~13 of
+  // them on the default vase) have the same rows bit for bit: the group's first point computes
+  // them, and the others copy its values, which are the bits each would have computed. The P2
+  // vase's pass read 17 MB, beside the correction's forward solve, which it slowed.
   w.modalPressure.resize(t);
   w.modalDeviator.resize(t);
+  const UniformPoints uniform(bounds, t, r);
   detail::forFixedRanges(t, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index e = begin; e < end; ++e) {
+      if (uniform.representative(e) != e) continue;
       const double* pe = bounds.pressureModes.row(e).data();
       const double* de = bounds.deviatorNorms.row(e).data();
       double pressure = 0.0, deviator = 0.0;
@@ -595,6 +621,15 @@ void prepareStressScan(const StressBounds& bounds, const Eigen::MatrixXd& q, boo
       w.modalDeviator[e] = std::min(deviator, bounds.deviatorSpectralNorms[e] * qNormMax);
     }
   });
+  if (uniform.any()) {
+    detail::forFixedRanges(t, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
+      for (Eigen::Index e = begin; e < end; ++e) {
+        const Eigen::Index from = uniform.representative(e);
+        w.modalPressure[e] = w.modalPressure[from];
+        w.modalDeviator[e] = w.modalDeviator[from];
+      }
+    });
+  }
   if (searchesByGroups(bounds, t, r)) {
     w.qFloat.setZero((steps + kInstantPad - 1) / kInstantPad * kInstantPad, r);
     w.qFloat.topRows(steps) = q.cast<float>();
@@ -969,13 +1004,35 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
   w.seeds.clear();
   w.rangeSeeds.resize(kScanRanges);
   w.rangeEvaluations.assign(kScanRanges, 0);
+  // A group whose points are the same bits, static correction included (groupSame), has one test
+  // and one bound for all of them: made once, at its first point, before the ranges read them
+  // (NaN: no seed), instead of each point reading the same two rows of bounds.
+  const bool sameGroups = prune && k >= 0 && !w.seedGroupBound.empty() && w.groupSame.size() == w.seedGroupBound.size();
+  if (sameGroups) {
+    const auto groupCount = static_cast<Eigen::Index>(w.groupSame.size());
+    w.seedGroupValue.resize(static_cast<size_t>(groupCount));
+    detail::forFixedRanges(groupCount, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
+      for (Eigen::Index g = begin; g < end; ++g) {
+        double& value = w.seedGroupValue[static_cast<size_t>(g)];
+        value = std::numeric_limits<double>::quiet_NaN();
+        if (!w.groupSame[static_cast<size_t>(g)] || w.seedGroupBound[static_cast<size_t>(g)] < threshold) continue;
+        const int32_t first = bounds.groupPoints[static_cast<size_t>(bounds.groupStart[static_cast<size_t>(g)])];
+        if (mayReach(first, k, threshold)) value = seedBound(first, k);
+      }
+    });
+  }
   auto seedRange = [&](int c, Eigen::Index begin, Eigen::Index end) {
     std::vector<std::pair<double, int32_t>>& out = w.rangeSeeds[static_cast<size_t>(c)];
     out.clear();
     if (k < 0) return;
     for (Eigen::Index e = begin; e < end; ++e) {
       if (prune) {
-        if (!w.seedGroupBound.empty() && w.seedGroupBound[bounds.groupOf[static_cast<size_t>(e)]] < threshold) continue;
+        const auto g = w.seedGroupBound.empty() ? size_t{0} : static_cast<size_t>(bounds.groupOf[static_cast<size_t>(e)]);
+        if (!w.seedGroupBound.empty() && w.seedGroupBound[g] < threshold) continue;
+        if (sameGroups && w.groupSame[g]) {
+          if (!std::isnan(w.seedGroupValue[g])) out.emplace_back(w.seedGroupValue[g], static_cast<int32_t>(e));
+          continue;
+        }
         if (!mayReach(e, k, threshold)) continue;
         out.emplace_back(seedBound(e, k), static_cast<int32_t>(e));
         continue;

@@ -326,9 +326,10 @@ TEST(CrackPropagation, GroupedScanEqualsTheFullScanAndItsGroupBoundsHold) {
 TEST(CrackPropagation, GroupsOfEqualPointsAreSearchedByTheirLowestPointWithTheFullScansAnswer) {
   // P2 corners read as nodal means (CornerStressMeans) make every point of a node's group the same
   // rows, bit for bit, and the static correction too: the peak search then evaluates each such
-  // group's lowest point only. Its peak, element, instant and seeds are the full scan's and those of
-  // the same search told the groups differ; it evaluates fewer. A static correction that differs
-  // on a group's points keeps that group searched point by point.
+  // group's lowest point only, and its preparation and seed candidates take each group's once. Its
+  // peak, element, instant and seeds are the full scan's and those of the same search told the
+  // groups differ; it evaluates fewer. A static correction that differs on a group's points keeps
+  // that group searched point by point.
   for (uint64_t rngSeed : {31u, 32u, 33u}) {
     SCOPED_TRACE(::testing::Message() << "seed " << rngSeed);
     std::mt19937_64 rng(rngSeed);
@@ -366,6 +367,12 @@ TEST(CrackPropagation, GroupsOfEqualPointsAreSearchedByTheirLowestPointWithTheFu
       EXPECT_EQ(orderedSeeds(*s, field), full.seeds);
     }
     EXPECT_LT(same.evaluations, apart.evaluations);
+    // What the scan prepares, and the seed candidates, are the same bits whether each uniform
+    // group's terms and seed bound are computed once, at its first point, or at every point.
+    EXPECT_TRUE(wa.modalPressure == wb.modalPressure);
+    EXPECT_TRUE(wa.modalDeviator == wb.modalDeviator);
+    EXPECT_FALSE(same.seedCandidates.empty());
+    EXPECT_EQ(same.seedCandidates, apart.seedCandidates);
     // One point's static correction moved: its group is searched point by point again.
     Eigen::VectorXd moved = staticStress;
     moved[6 * full.peakElement] *= 1.5;

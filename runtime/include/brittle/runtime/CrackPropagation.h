@@ -151,6 +151,7 @@ struct StressScanWorkspace {
   // and over all of them, for the groups whose bounds the last scan made (NaN for the others).
   Eigen::VectorXd groupBound;
   std::vector<double> seedGroupBound;          ///< G: each group's bound at the peak instant (empty: no groups)
+  std::vector<double> seedGroupValue;          ///< G: a groupSame group's seed bound at the peak instant (NaN: none)
   /// Per group: the static correction's centre (6G), radius and the bound's margin (G each).
   std::vector<double> groupStaticCentre, groupStaticRadius, groupMargin;
   std::vector<char> groupSame;  ///< G: groupUniform, and the static correction equal on the group's points (empty after an ungrouped scan)
