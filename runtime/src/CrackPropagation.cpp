@@ -740,6 +740,57 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
     // B_e = min(‖D S_e W‖₂ max‖W⁻¹q_k‖ + ‖Dσ̂_e‖ max|F|,
     //           Σ|P_e,j| max|q_j| + |p̂_e| max|F| + √(2/3) (min(Σ‖s_e,j‖ max|q_j|, ‖s_e W‖₂ max‖W⁻¹q_k‖) + ‖ŝ_e‖ max|F|)),
     // and the scale of the rounding in a point's mean stress, Σ|P_e,j| max|q_j| + |p̂_e| max|F|.
+    const bool grouped = searchesByGroups(bounds, t, r);
+    const Eigen::Index groups = grouped ? static_cast<Eigen::Index>(bounds.groupStart.size()) - 1 : 0;
+    // The static correction's centre of group g (its points' mean) and radius, and the margin of
+    // the group's bound, into the workspace, once an impact for every group (the search reads them
+    // for the groups it bounds, the seeds' test for all). The centre's float sums
+    // (centreSplitBounds) move its split bound by at most 2√6 (r + 2) 2⁻²⁴ ‖D S_c W‖_F ‖W⁻¹q_k‖,
+    // under 1e-4 of the scale for r < 4000.
+    auto groupStatic = [&](Eigen::Index g) {
+      const int32_t* from = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g)];
+      const int32_t* to = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g) + 1];
+      Voigt centre = Voigt::Zero();
+      double staticRadius = 0.0;
+      if (correction) {
+        for (const int32_t* e = from; e != to; ++e) centre += staticStress.segment<6>(6 * *e);
+        centre /= static_cast<double>(to - from);
+        for (const int32_t* e = from; e != to; ++e) {
+          staticRadius = std::max(staticRadius, kD.cwiseProduct(staticStress.segment<6>(6 * *e) - centre).norm());
+        }
+      }
+      Eigen::Map<Voigt>(w.groupStaticCentre.data() + 6 * g) = centre;
+      w.groupStaticRadius[static_cast<size_t>(g)] = staticRadius;
+      bool same = bounds.groupUniform[static_cast<size_t>(g)] != 0;
+      if (same && correction) {
+        same = std::all_of(from + 1, to, [&](int32_t e) { return sameBits(staticStress.data() + 6 * *from, staticStress.data() + 6 * e, 6); });
+      }
+      w.groupSame[static_cast<size_t>(g)] = same ? 1 : 0;
+      w.groupMargin[static_cast<size_t>(g)] =
+          1e-4 * bounds.groupScales[g] * qNormMax +
+          1e-9 * (bounds.groupRadii[g] * qNormMax + (kD.cwiseProduct(centre).norm() + staticRadius) * forceMax);
+    };
+    if (grouped) {
+      w.groupStaticCentre.resize(static_cast<size_t>(6 * groups));
+      w.groupStaticRadius.resize(static_cast<size_t>(groups));
+      w.groupMargin.resize(static_cast<size_t>(groups));
+      w.groupSame.resize(static_cast<size_t>(groups));
+      // F_k at the float q's padded rows, zero past the last instant (the group bounds read whole registers).
+      if (correction) {
+        w.forceLanes.assign(static_cast<size_t>(w.qFloat.rows()), 0.0);
+        std::copy_n(forceN.begin(), steps, w.forceLanes.begin());
+      }
+      detail::forFixedRanges(groups, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
+        for (Eigen::Index g = begin; g < end; ++g) groupStatic(g);
+      });
+    }
+    // A point of a group whose points are the same bits, static correction included (groupSame),
+    // has its group's first point's bounds: made there and copied (the same bits).
+    auto sameAs = [&](Eigen::Index e) -> Eigen::Index {
+      if (!grouped) return e;
+      const auto g = static_cast<size_t>(bounds.groupOf[static_cast<size_t>(e)]);
+      return w.groupSame[g] ? bounds.groupPoints[static_cast<size_t>(bounds.groupStart[g])] : e;
+    };
     w.elementBound.resize(t);
     w.pressureScale.resize(t);
     w.staticNorm.resize(t);
@@ -747,6 +798,7 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
     w.staticDeviator.resize(t);
     detail::forFixedRanges(t, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
       for (Eigen::Index e = begin; e < end; ++e) {
+        if (sameAs(e) != e) continue;
         // The static correction's norms at e, here with the bounds that read them (on the
         // plate's 29.8k points this was 0.5 ms on one thread before the bounds).
         if (correction) {
@@ -767,14 +819,25 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
                                      pressure + kDeviatorShare * deviator) * (1.0 + 1e-9);
       }
     });
+    if (grouped && std::any_of(w.groupSame.begin(), w.groupSame.end(), [](char c) { return c != 0; })) {
+      detail::forFixedRanges(t, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
+        for (Eigen::Index e = begin; e < end; ++e) {
+          const Eigen::Index from = sameAs(e);
+          if (from == e) continue;
+          w.staticNorm[e] = w.staticNorm[from];
+          w.staticPressure[e] = w.staticPressure[from];
+          w.staticDeviator[e] = w.staticDeviator[from];
+          w.pressureScale[e] = w.pressureScale[from];
+          w.elementBound[e] = w.elementBound[from];
+        }
+      });
+    }
     // The search runs in 16 fixed ranges of points (of groups, below) on the arena's threads, each
     // over a max-heap of its own points. Every range starts from the same lower bound, the largest
     // of the ranges' floors (each the peak over all instants of the range's point with the largest
     // B_e), so that ranges without the peak still prune and none has to climb to it alone; each
     // finds its exact maximum above that, and the ranges' maxima are combined in range order with
     // the same tie rule. The answer, and the evaluation count, are the same on any number of threads.
-    const bool grouped = searchesByGroups(bounds, t, r);
-    const Eigen::Index groups = grouped ? static_cast<Eigen::Index>(bounds.groupStart.size()) - 1 : 0;
     auto rangeSpan = [&](int c) {  // positions [lo, hi) of range c's points (in groupPoints, if grouped)
       if (!grouped) return std::pair<size_t, size_t>(static_cast<size_t>(t * c / kScanRanges), static_cast<size_t>(t * (c + 1) / kScanRanges));
       return std::pair<size_t, size_t>(static_cast<size_t>(bounds.groupStart[static_cast<size_t>(groups * c / kScanRanges)]),
@@ -831,34 +894,6 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
     // A centre's bounds cost 6r products an instant, a point's tests r to 3r: with fewer than three
     // points left, a group's points are tested as they are (a choice, not tuned).
     constexpr int kGroupVisit = 3;
-    // The static correction's centre of group g (its points' mean) and radius, and the margin of
-    // the group's bound, into the workspace, once an impact for every group (the search reads them
-    // for the groups it bounds, the seeds' test for all). The centre's float sums
-    // (centreSplitBounds) move its split bound by at most 2√6 (r + 2) 2⁻²⁴ ‖D S_c W‖_F ‖W⁻¹q_k‖,
-    // under 1e-4 of the scale for r < 4000.
-    auto groupStatic = [&](Eigen::Index g) {
-      const int32_t* from = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g)];
-      const int32_t* to = bounds.groupPoints.data() + bounds.groupStart[static_cast<size_t>(g) + 1];
-      Voigt centre = Voigt::Zero();
-      double staticRadius = 0.0;
-      if (correction) {
-        for (const int32_t* e = from; e != to; ++e) centre += staticStress.segment<6>(6 * *e);
-        centre /= static_cast<double>(to - from);
-        for (const int32_t* e = from; e != to; ++e) {
-          staticRadius = std::max(staticRadius, kD.cwiseProduct(staticStress.segment<6>(6 * *e) - centre).norm());
-        }
-      }
-      Eigen::Map<Voigt>(w.groupStaticCentre.data() + 6 * g) = centre;
-      w.groupStaticRadius[static_cast<size_t>(g)] = staticRadius;
-      bool same = bounds.groupUniform[static_cast<size_t>(g)] != 0;
-      if (same && correction) {
-        same = std::all_of(from + 1, to, [&](int32_t e) { return sameBits(staticStress.data() + 6 * *from, staticStress.data() + 6 * e, 6); });
-      }
-      w.groupSame[static_cast<size_t>(g)] = same ? 1 : 0;
-      w.groupMargin[static_cast<size_t>(g)] =
-          1e-4 * bounds.groupScales[g] * qNormMax +
-          1e-9 * (bounds.groupRadii[g] * qNormMax + (kD.cwiseProduct(centre).norm() + staticRadius) * forceMax);
-    };
     auto staticCentreOf = [&](Eigen::Index g) { return Eigen::Map<const Voigt>(w.groupStaticCentre.data() + 6 * g); };
     // Group g's bound at every instant into groupBoundAt, and their maximum.
     auto groupBounds = [&](Eigen::Index g) {
@@ -940,18 +975,6 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
     };
     w.heap.resize(static_cast<size_t>(t));  // points, or groups (fewer)
     if (grouped) {
-      w.groupStaticCentre.resize(static_cast<size_t>(6 * groups));
-      w.groupStaticRadius.resize(static_cast<size_t>(groups));
-      w.groupMargin.resize(static_cast<size_t>(groups));
-      w.groupSame.resize(static_cast<size_t>(groups));
-      // F_k at the float q's padded rows, zero past the last instant (the group bounds read whole registers).
-      if (correction) {
-        w.forceLanes.assign(static_cast<size_t>(w.qFloat.rows()), 0.0);
-        std::copy_n(forceN.begin(), steps, w.forceLanes.begin());
-      }
-      detail::forFixedRanges(groups, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
-        for (Eigen::Index g = begin; g < end; ++g) groupStatic(g);
-      });
       w.groupBound.resize(groups);
       w.groupBoundAt.resize(static_cast<size_t>(groups * steps));
       tbb::parallel_for(0, kScanRanges, searchGroups);

@@ -326,10 +326,10 @@ TEST(CrackPropagation, GroupedScanEqualsTheFullScanAndItsGroupBoundsHold) {
 TEST(CrackPropagation, GroupsOfEqualPointsAreSearchedByTheirLowestPointWithTheFullScansAnswer) {
   // P2 corners read as nodal means (CornerStressMeans) make every point of a node's group the same
   // rows, bit for bit, and the static correction too: the peak search then evaluates each such
-  // group's lowest point only, and its preparation and seed candidates take each group's once. Its
-  // peak, element, instant and seeds are the full scan's and those of the same search told the
-  // groups differ; it evaluates fewer. A static correction that differs on a group's points keeps
-  // that group searched point by point.
+  // group's lowest point only, and its preparation, per-point bounds and seed candidates take each
+  // group's once. Its peak, element, instant and seeds are the full scan's and those of the same
+  // search told the groups differ; it evaluates fewer. A static correction that differs on a
+  // group's points keeps that group searched point by point.
   for (uint64_t rngSeed : {31u, 32u, 33u}) {
     SCOPED_TRACE(::testing::Message() << "seed " << rngSeed);
     std::mt19937_64 rng(rngSeed);
@@ -371,6 +371,9 @@ TEST(CrackPropagation, GroupsOfEqualPointsAreSearchedByTheirLowestPointWithTheFu
     // group's terms and seed bound are computed once, at its first point, or at every point.
     EXPECT_TRUE(wa.modalPressure == wb.modalPressure);
     EXPECT_TRUE(wa.modalDeviator == wb.modalDeviator);
+    EXPECT_TRUE(wa.elementBound == wb.elementBound);
+    EXPECT_TRUE(wa.pressureScale == wb.pressureScale);
+    EXPECT_TRUE(wa.staticDeviator == wb.staticDeviator);
     EXPECT_FALSE(same.seedCandidates.empty());
     EXPECT_EQ(same.seedCandidates, apart.seedCandidates);
     // One point's static correction moved: its group is searched point by point again.
