@@ -191,23 +191,27 @@ bool searchesByGroups(const StressBounds& bounds, Eigen::Index points, Eigen::In
   return bounds.groupStart.size() >= 2 && bounds.groupStart.back() == points && bounds.groupCentres.cols() >= r;
 }
 
-// Each stress point's representative for what reads its modal rows alone: the first (lowest)
-// point of its group where the group is uniform (StressBounds::groupUniform), else itself.
-class UniformPoints {
+// Each stress point's representative where a per-group flag says the group's points are the same
+// bits (StressBounds::groupUniform for what reads the modal rows alone, StressScanWorkspace::groupSame
+// for what reads the static correction too): the group's first (lowest) point; else the point.
+// What reads a point computes it at its representative alone and copies it to the others.
+class GroupRepresentatives {
  public:
-  UniformPoints(const StressBounds& bounds, Eigen::Index points, Eigen::Index r)
+  GroupRepresentatives(const StressBounds& bounds, const std::vector<char>& flags, bool grouped)
       : mBounds(bounds),
-        mAny(searchesByGroups(bounds, points, r) && bounds.groupUniform.size() + 1 == bounds.groupStart.size() &&
-             std::any_of(bounds.groupUniform.begin(), bounds.groupUniform.end(), [](char u) { return u != 0; })) {}
+        mFlags(flags),
+        mAny(grouped && flags.size() + 1 == bounds.groupStart.size() &&
+             std::any_of(flags.begin(), flags.end(), [](char f) { return f != 0; })) {}
   bool any() const { return mAny; }
-  Eigen::Index representative(Eigen::Index e) const {
+  Eigen::Index of(Eigen::Index e) const {
     if (!mAny) return e;
     const auto g = static_cast<size_t>(mBounds.groupOf[static_cast<size_t>(e)]);
-    return mBounds.groupUniform[g] ? mBounds.groupPoints[static_cast<size_t>(mBounds.groupStart[g])] : e;
+    return mFlags[g] ? mBounds.groupPoints[static_cast<size_t>(mBounds.groupStart[g])] : e;
   }
 
  private:
   const StressBounds& mBounds;
+  const std::vector<char>& mFlags;
   bool mAny;
 };
 
@@ -606,10 +610,10 @@ void prepareStressScan(const StressBounds& bounds, const Eigen::MatrixXd& q, boo
   // vase's pass read 17 MB, beside the correction's forward solve, which it slowed.
   w.modalPressure.resize(t);
   w.modalDeviator.resize(t);
-  const UniformPoints uniform(bounds, t, r);
+  const GroupRepresentatives uniform(bounds, bounds.groupUniform, searchesByGroups(bounds, t, r));
   detail::forFixedRanges(t, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index e = begin; e < end; ++e) {
-      if (uniform.representative(e) != e) continue;
+      if (uniform.of(e) != e) continue;
       const double* pe = bounds.pressureModes.row(e).data();
       const double* de = bounds.deviatorNorms.row(e).data();
       double pressure = 0.0, deviator = 0.0;
@@ -624,7 +628,7 @@ void prepareStressScan(const StressBounds& bounds, const Eigen::MatrixXd& q, boo
   if (uniform.any()) {
     detail::forFixedRanges(t, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
       for (Eigen::Index e = begin; e < end; ++e) {
-        const Eigen::Index from = uniform.representative(e);
+        const Eigen::Index from = uniform.of(e);
         w.modalPressure[e] = w.modalPressure[from];
         w.modalDeviator[e] = w.modalDeviator[from];
       }
@@ -786,11 +790,7 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
     }
     // A point of a group whose points are the same bits, static correction included (groupSame),
     // has its group's first point's bounds: made there and copied (the same bits).
-    auto sameAs = [&](Eigen::Index e) -> Eigen::Index {
-      if (!grouped) return e;
-      const auto g = static_cast<size_t>(bounds.groupOf[static_cast<size_t>(e)]);
-      return w.groupSame[g] ? bounds.groupPoints[static_cast<size_t>(bounds.groupStart[g])] : e;
-    };
+    const GroupRepresentatives same(bounds, w.groupSame, grouped);
     w.elementBound.resize(t);
     w.pressureScale.resize(t);
     w.staticNorm.resize(t);
@@ -798,7 +798,7 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
     w.staticDeviator.resize(t);
     detail::forFixedRanges(t, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
       for (Eigen::Index e = begin; e < end; ++e) {
-        if (sameAs(e) != e) continue;
+        if (same.of(e) != e) continue;
         // The static correction's norms at e, here with the bounds that read them (on the
         // plate's 29.8k points this was 0.5 ms on one thread before the bounds).
         if (correction) {
@@ -819,10 +819,10 @@ void scanPreparedStresses(const MatrixXdRow& S, const StressBounds& bounds, cons
                                      pressure + kDeviatorShare * deviator) * (1.0 + 1e-9);
       }
     });
-    if (grouped && std::any_of(w.groupSame.begin(), w.groupSame.end(), [](char c) { return c != 0; })) {
+    if (same.any()) {
       detail::forFixedRanges(t, kScanRanges, [&](int, Eigen::Index begin, Eigen::Index end) {
         for (Eigen::Index e = begin; e < end; ++e) {
-          const Eigen::Index from = sameAs(e);
+          const Eigen::Index from = same.of(e);
           if (from == e) continue;
           w.staticNorm[e] = w.staticNorm[from];
           w.staticPressure[e] = w.staticPressure[from];

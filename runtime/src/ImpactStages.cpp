@@ -166,13 +166,13 @@ Status crackStage(const ImpactJob& job, const Flow& flow, ImpactWorkspace& ws, I
   field.forceN = ws.force[static_cast<size_t>(scan.peakInstant)];
   if (flow.correction) field.staticStress = &ws.staticStress;
   // A P2 body's corner stresses are nodal means (makeBody): each node's computed once, where the
-  // scan found every node's points bit-equal, static correction included (StressBounds::groupUniform,
-  // StressScanWorkspace::groupSame); else each point is computed, as before.
-  const StressBounds& bounds = body.stressBounds();
+  // scan found every node's points bit-equal, static correction included
+  // (StressScanWorkspace::groupSame, which is StressBounds::groupUniform and more); else each point
+  // is computed, as before.
   const std::vector<char>& same = ws.scanBuffers.groupSame;
-  auto all = [](const std::vector<char>& v) { return std::all_of(v.begin(), v.end(), [](char c) { return c != 0; }); };
-  if (body.asset.elementOrder == ElementOrder::P2 && job.settings->pruneStresses && !bounds.groupUniform.empty() &&
-      same.size() == bounds.groupUniform.size() && all(bounds.groupUniform) && all(same)) {
+  if (body.asset.elementOrder == ElementOrder::P2 && job.settings->pruneStresses && !same.empty() &&
+      same.size() == body.stressBounds().groupUniform.size() &&
+      std::all_of(same.begin(), same.end(), [](char c) { return c != 0; })) {
     ws.crack.nodeMemo.reset(body.asset.tetMesh.nodes.rows());
     field.corners = &body.asset.tetMesh.tets;
     field.nodeMemo = &ws.crack.nodeMemo;
