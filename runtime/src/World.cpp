@@ -1,5 +1,6 @@
 #include "brittle/runtime/World.h"
 
+#include <oneapi/tbb/info.h>
 #include <oneapi/tbb/task_arena.h>
 #include <oneapi/tbb/task_group.h>
 
@@ -12,6 +13,7 @@
 #include <set>
 #include <string>
 
+#include "BackgroundThreads.h"
 #include "Body.h"
 #include "ImpactStages.h"
 #include "brittle/core/EigenBlocking.h"
@@ -77,13 +79,14 @@ struct World::Impl {
   detail::ImpactWorkspace work;  // the synchronous impact()'s buffers
   std::vector<std::shared_ptr<const BodySource>> born;
   // Asynchronous work: submitted impacts by ticket, spare workspaces, background preparation.
-  // Impacts and background work (placement, the fragments' new bodies) run in two arenas over the
-  // same worker threads: a worker takes an impact's work before background work (arena
-  // priorities), and a host waiting for an impact helps with impacts only, never with a
-  // background task, which would hold it for as long as that task runs (a fragment's modal
-  // analysis, a placed object's factorisation). Each arena has workerThreads' concurrency.
-  std::unique_ptr<tbb::task_arena> arena, backgroundArena;
-  tbb::task_group background;
+  // Impacts run in a oneTBB arena of workerThreads' concurrency (one slot the host's, for a
+  // synchronous impact's parallel loops); background work (placement, the fragments' new bodies)
+  // on threads of the World's own at idle priority (BackgroundThreads.h), so that it takes the
+  // cores impacts and the host leave. A host waiting for an impact helps with impacts only, never
+  // with a background job, which would hold it for as long as that job runs (a fragment's modal
+  // analysis, a placed object's factorisation).
+  std::unique_ptr<tbb::task_arena> arena;
+  std::unique_ptr<detail::BackgroundThreads> backgroundThreads;
   std::map<uint64_t, std::unique_ptr<PendingImpact>> pending;
   std::vector<std::unique_ptr<detail::ImpactWorkspace>> spareWorkspaces;
   uint64_t nextTicket = 1;
@@ -95,13 +98,9 @@ struct World::Impl {
         for (auto& [ticket, p] : pending) p->group.wait();
       });
     }
-    // Background work not started yet is not needed any more (its results die with the World).
-    if (backgroundArena) {
-      backgroundArena->execute([&] {
-        background.cancel();
-        background.wait();
-      });
-    }
+    // Background work not started yet is not needed any more (its results die with the World);
+    // the jobs running are waited for.
+    backgroundThreads.reset();
   }
 
   static std::unique_ptr<tbb::task_arena> makeArena(int32_t threads, tbb::task_arena::priority priority) {
@@ -113,10 +112,14 @@ struct World::Impl {
     if (!arena) arena = makeArena(settings.workerThreads, tbb::task_arena::priority::high);
     return *arena;
   }
-  // Placement and the fragments' new bodies.
-  tbb::task_arena& backgroundWorkers() {
-    if (!backgroundArena) backgroundArena = makeArena(settings.workerThreads, tbb::task_arena::priority::low);
-    return *backgroundArena;
+  // Placement and the fragments' new bodies: workerThreads threads (0: one per core; 1: none, the
+  // work runs when the host waits for it or needs it).
+  detail::BackgroundThreads& background() {
+    if (!backgroundThreads) {
+      const int threads = settings.workerThreads > 0 ? int{settings.workerThreads} : tbb::info::default_concurrency();
+      backgroundThreads = std::make_unique<detail::BackgroundThreads>(threads > 1 ? threads : 0);
+    }
+    return *backgroundThreads;
   }
 
   Result<Slot*> slot(ObjectId id) {
@@ -211,17 +214,15 @@ struct World::Impl {
     }
     // The fragments' modal data, stress bounds and (where scheduled) static corrections are made on
     // the workers from now on (an impact or objectAsset that needs one first makes or waits for it).
-    backgroundWorkers().execute([&] {
-      for (auto& source : newBodies) {
-        if (!source) continue;
-        background.run([source] {
-          const auto& body = source->get();
-          if (!body) return;
-          (void)body.value()->stressBounds();
-          if (body.value()->staticCorrectionScheduled()) (void)body.value()->staticCorrection();
-        });
-      }
-    });
+    for (auto& source : newBodies) {
+      if (!source) continue;
+      background().submit([source] {
+        const auto& body = source->get();
+        if (!body) return;
+        (void)body.value()->stressBounds();
+        if (body.value()->staticCorrectionScheduled()) (void)body.value()->staticCorrection();
+      });
+    }
     newBodies.clear();
     return Ok{};
   }
@@ -320,27 +321,25 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
       const bool correct = w.settings.fracture.staticCorrection;
       if (w.settings.prepareInBackground) {
         if (correct) made->scheduleStaticCorrection();
-        w.backgroundWorkers().execute([&] {
-          w.background.run([made, correct] {
-            (void)made->stressBounds();
-            (void)made->tetMoments();
-            if (correct) (void)made->staticCorrection();
-          });
-          if (correct && w.entryCorrections && w.entryCorrectionsScheduled.insert(mat->name).second) {
-            // the database's first entries, in entry order, once per material
-            const auto entries = std::min(w.pack.database.entries.size(),
-                                          static_cast<size_t>(w.settings.prepareEntryCorrections));
-            const int modeCount = w.settings.fracture.modeCount;
-            for (size_t e = 0; e < entries; ++e) {
-              // its frequencies: the entry's arrays may not be read yet (EntryReading::OnDemand)
-              const auto stored = static_cast<int>(w.pack.database.entries[e].asset.modal.frequenciesHz.size());
-              const int modes = detail::keptModeCount(modeCount, stored);  // the matched body's, as makeBody keeps them
-              w.background.run([ec = w.entryCorrections.get(), e, material = *mat, modes] {
-                (void)ec->get(static_cast<int32_t>(e), material, modes);
-              });
-            }
-          }
+        w.background().submit([made, correct] {
+          (void)made->stressBounds();
+          (void)made->tetMoments();
+          if (correct) (void)made->staticCorrection();
         });
+        if (correct && w.entryCorrections && w.entryCorrectionsScheduled.insert(mat->name).second) {
+          // the database's first entries, in entry order, once per material
+          const auto entries = std::min(w.pack.database.entries.size(),
+                                        static_cast<size_t>(w.settings.prepareEntryCorrections));
+          const int modeCount = w.settings.fracture.modeCount;
+          for (size_t e = 0; e < entries; ++e) {
+            // its frequencies: the entry's arrays may not be read yet (EntryReading::OnDemand)
+            const auto stored = static_cast<int>(w.pack.database.entries[e].asset.modal.frequenciesHz.size());
+            const int modes = detail::keptModeCount(modeCount, stored);  // the matched body's, as makeBody keeps them
+            w.background().submit([ec = w.entryCorrections.get(), e, material = *mat, modes] {
+              (void)ec->get(static_cast<int32_t>(e), material, modes);
+            });
+          }
+        }
       } else {
         (void)made->stressBounds();
         (void)made->tetMoments();
@@ -482,7 +481,7 @@ int32_t World::entryCorrectionsBuilt() const {
 Status World::waitUntilPrepared() {
   try {
     Impl& w = *mImpl;
-    if (w.backgroundArena) w.backgroundArena->execute([&] { w.background.wait(); });
+    if (w.backgroundThreads) w.backgroundThreads->wait();
     for (const auto& source : w.packBodies) {
       if (!source) continue;
       const std::shared_ptr<const Body>& body = source->get().value();  // pack bodies are made when placed

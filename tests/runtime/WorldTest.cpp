@@ -920,7 +920,7 @@ TEST_F(WorldTest, SubmittedImpactsGiveTheSameFractureAsImpactOnAnyWorkerCount) {
     }
   }
   ASSERT_TRUE(sync.ids[0].size() >= 2 && sync.ids[2].size() >= 2);
-  for (int workers : {1, 2}) {
+  for (int workers : {1, 2, 3}) {
     WorldSettings settings;
     settings.workerThreads = workers;
     World world = makeWorld(settings);

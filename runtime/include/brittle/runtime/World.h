@@ -181,15 +181,20 @@ struct WorldSettings {
   uint64_t seed = 1;
   /// Impacts submitted and not yet collected, at most.
   int32_t maxPendingImpacts = 64;
-  /// Worker threads for submitted impacts, and as many for background preparation (two oneTBB
-  /// arenas over the process's workers); 0: one per core (oneTBB's default). 1: the work runs
-  /// when the host waits for it or needs it. Results do not depend on it.
+  /// Threads for the World's work; 0: one per core. Submitted impacts run in a oneTBB arena of this
+  /// concurrency, one slot of it the host's (oneTBB starts a worker fewer than the cores). Background
+  /// preparation (placement, the fragments' new bodies) runs on as many threads of the World's own
+  /// at idle priority (Linux SCHED_IDLE), which take only the cores that impacts and the host
+  /// leave: a host that sleeps between its frames lends them its core, and a synchronous impact
+  /// keeps both of its threads (docs/realtime.md, "Background threads at idle priority"). 1: no
+  /// worker and no background thread; the work runs when the host waits for it or needs it.
+  /// Results do not depend on it.
   int32_t workerThreads = 0;
   /// Placing the first instance of a pack object starts the factorisation of its K (the static
-  /// correction) on a worker and returns at once; the object's first impact waits for it if it
-  /// is not done. false: addObject factorises on the caller's thread and returns its errors. The
-  /// same holds for a matched fragment's body: true, its K is factorised on a worker right after
-  /// the body is made; false, on its first impact.
+  /// correction) on a background thread and returns at once; the object's first impact waits for
+  /// it if it is not done. false: addObject factorises on the caller's thread and returns its
+  /// errors. The same holds for a matched fragment's body: true, its K is factorised on a
+  /// background thread right after the body is made; false, on its first impact.
   bool prepareInBackground = true;
   /// A matched fragment's static correction is its database entry's, factorised once per entry
   /// and material on first use and placed onto the fragment (StaticCorrection::placed: exact, the
@@ -350,7 +355,7 @@ class World {
 
   /// Places an instance of a pack object. The first instance of each pack object builds what
   /// impacts need (topology, stress bounds) and starts the factorisation of its K for the static
-  /// correction: on a worker (prepareInBackground, the default; an error there is returned by the
+  /// correction: on a background thread (prepareInBackground, the default; an error there is returned by the
   /// object's first impact) or here.
   /// Errors: InvalidArgument (unknown asset name, a rotation
   /// that is not orthonormal with det +1, non-finite values), CapacityExceeded (no free slot:

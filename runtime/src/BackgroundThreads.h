@@ -1,0 +1,59 @@
+// BackgroundThreads.h — the World's background work (placement, the fragments' new bodies) on
+// threads of its own, at the operating system's lowest priority. Private to the runtime.
+//
+// Why not oneTBB's workers: oneTBB starts one worker fewer than the cores, counting the host's
+// thread, and that one worker also runs the impacts. A host that sleeps between its frames (the
+// paced player) left its core idle while fragments waited for their bodies on the one worker: the
+// pane scene's frames waited up to 10–15 ms for them. More oneTBB workers would use that core, but
+// they also compete with a host's synchronous impact() for the two cores (the slab's impact in
+// `bench impact`: 3.75 → 4.96 ms median, p99 6 → 10–13 ms, with two workers). Threads at idle
+// priority (Linux SCHED_IDLE; elsewhere the normal priority) run only on a core nothing else
+// wants: a sleeping host's, or a worker's between impacts. An impact that needs a body being made
+// here waits for it (std::call_once), which frees its own core for the maker.
+//
+// Jobs run in submission order as threads free up; what they compute does not depend on which
+// thread runs them or when (each writes only its own result), so fractures are the same bits.
+#pragma once
+
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace brittle::detail {
+
+class BackgroundThreads {
+ public:
+  /// `threads` threads (0: none; jobs then run only when the host waits for them, in wait()).
+  explicit BackgroundThreads(int threads);
+  /// Drops the jobs not started, waits for those running, joins the threads.
+  ~BackgroundThreads();
+  BackgroundThreads(const BackgroundThreads&) = delete;
+  BackgroundThreads& operator=(const BackgroundThreads&) = delete;
+
+  void submit(std::function<void()> job);
+  /// Runs queued jobs on the calling thread too (a host waiting on a loading screen helps), until
+  /// none is queued or running. Rethrows the first exception a job threw since the last wait.
+  void wait();
+  /// Whether the threads run at idle priority (false where the system refused or has none).
+  bool idlePriority() const { return mIdle; }
+  int threadCount() const { return static_cast<int>(mThreads.size()); }
+
+ private:
+  void run();
+  void execute(std::function<void()>& job);  // runs it, keeps its exception, counts it done
+
+  std::mutex mMutex;
+  std::condition_variable mWork, mIdleWait;
+  std::deque<std::function<void()>> mQueue;
+  int mRunning = 0;
+  bool mStop = false;
+  bool mIdle = false;
+  std::exception_ptr mError;
+  std::vector<std::thread> mThreads;
+};
+
+}  // namespace brittle::detail

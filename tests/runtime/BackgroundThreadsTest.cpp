@@ -1,0 +1,123 @@
+// The World's background threads (runtime/src/BackgroundThreads.h): jobs run beside the host at
+// idle priority on threads named brittle-bg, all of them at once when there are threads for them; without threads, only when
+// the host waits; a job's exception reaches the waiting host once; jobs not started are dropped.
+#include "BackgroundThreads.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#if defined(__linux__)
+#include <sched.h>
+#include <sys/prctl.h>
+
+#include <cstring>
+#endif
+
+namespace brittle::detail {
+namespace {
+
+// Each of `count` jobs waits until all have started: they can only all return if they run at the
+// same time. The timeout turns a pool that runs them one by one into a failure, not a hang.
+TEST(BackgroundThreads, RunsAJobPerThreadAtOnceOffTheHostsThreadAtIdlePriority) {
+  constexpr int kThreads = 3;
+  BackgroundThreads pool(kThreads);
+  EXPECT_EQ(pool.threadCount(), kThreads);
+  std::mutex m;
+  std::condition_variable cv;
+  int started = 0;
+  std::atomic<int> together{0}, offHost{0}, idle{0}, named{0};
+  const std::thread::id host = std::this_thread::get_id();
+  for (int i = 0; i < kThreads; ++i) {
+    pool.submit([&] {
+      if (std::this_thread::get_id() != host) ++offHost;
+#if defined(__linux__) && defined(SCHED_IDLE)
+      if (sched_getscheduler(0) == SCHED_IDLE) ++idle;
+      char name[16] = {};
+      prctl(PR_GET_NAME, name, 0, 0, 0);
+      if (std::strcmp(name, "brittle-bg") == 0) ++named;
+#endif
+      std::unique_lock lock(m);
+      ++started;
+      cv.notify_all();
+      if (cv.wait_for(lock, std::chrono::seconds(20), [&] { return started == kThreads; })) ++together;
+    });
+  }
+  // Not helped by the host: the jobs must meet on the pool's own threads before it waits.
+  {
+    std::unique_lock lock(m);
+    EXPECT_TRUE(cv.wait_for(lock, std::chrono::seconds(20), [&] { return started == kThreads; }));
+  }
+  pool.wait();
+  EXPECT_EQ(together.load(), kThreads);
+  EXPECT_EQ(offHost.load(), kThreads);
+#if defined(__linux__) && defined(SCHED_IDLE)
+  EXPECT_TRUE(pool.idlePriority());
+  EXPECT_EQ(idle.load(), kThreads);
+  EXPECT_EQ(named.load(), kThreads);  // what profilers show, and how HotPathAllocationTest tells them apart
+#endif
+}
+
+TEST(BackgroundThreads, WithoutThreadsJobsRunWhenTheHostWaitsOnItsThread) {
+  BackgroundThreads pool(0);
+  const std::thread::id host = std::this_thread::get_id();
+  std::atomic<int> ran{0}, onHost{0};
+  for (int i = 0; i < 4; ++i) {
+    pool.submit([&] {
+      ++ran;
+      if (std::this_thread::get_id() == host) ++onHost;
+    });
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_EQ(ran.load(), 0);
+  pool.wait();
+  EXPECT_EQ(ran.load(), 4);
+  EXPECT_EQ(onHost.load(), 4);
+}
+
+TEST(BackgroundThreads, AJobsExceptionReachesTheWaitingHostOnce) {
+  for (int threads : {0, 2}) {
+    BackgroundThreads pool(threads);
+    std::atomic<int> others{0};
+    pool.submit([] { throw std::runtime_error("a failing job"); });
+    for (int i = 0; i < 3; ++i) pool.submit([&] { ++others; });
+    EXPECT_THROW(pool.wait(), std::runtime_error) << threads << " threads";
+    pool.wait();  // reported once
+    EXPECT_EQ(others.load(), 3) << threads << " threads";  // the other jobs ran all the same
+  }
+}
+
+TEST(BackgroundThreads, JobsNotStartedAreDroppedWithThePool) {
+  std::atomic<int> ran{0};
+  {
+    BackgroundThreads pool(0);
+    for (int i = 0; i < 3; ++i) pool.submit([&] { ++ran; });
+  }
+  EXPECT_EQ(ran.load(), 0);
+  // A running job is waited for; the one behind it is dropped.
+  std::atomic<bool> release{false}, running{false};
+  {
+    BackgroundThreads pool(1);
+    pool.submit([&] {
+      running = true;
+      while (!release) std::this_thread::yield();
+      ++ran;
+    });
+    while (!running) std::this_thread::yield();
+    pool.submit([&] { ran += 10; });
+    std::thread releaser([&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      release = true;
+    });
+    releaser.detach();
+  }
+  EXPECT_EQ(ran.load(), 1);
+}
+
+}  // namespace
+}  // namespace brittle::detail
