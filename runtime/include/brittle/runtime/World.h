@@ -145,14 +145,16 @@ struct FractureSettings {
   /// a tet or prism where one crack crosses it: FragmentModes.h, CutCells::Prisms) has at most this
   /// many degrees of freedom: each Ritz value times the ratio of that mesh's own frequency to the
   /// polynomial fields' on it (meshFrequencyRatios). It finds the hinges and flaps no polynomial
-  /// follows. On the default objects' pieces (chart 5, 169 fragments) the Ritz values are 18 % off
-  /// (median) and 158 % (p90); corrected at every size, 10 % and 45 %. It costs 5.7 ms a piece
-  /// (median; p90 15.3) on the workers; the default keeps it to the pieces it costs least (71 of
-  /// the 169, each within 6.4 ms: 13 % and 137 %), since a piece that rings lower breaks again more
-  /// readily, and at 900 the pane's scene breaks 14 times instead of 9 and waits up to 26 ms in a
-  /// frame for bodies, at 1 500 35 ms (docs/results/speed-accuracy.md, "The fragment's own mesh
-  /// checks the polynomials"). 0: never.
-  int meshRatioMaxDof = 800;
+  /// follows. A check costs ~7 ms a piece (median; ~11 ms at 1 500 DOF, ~70 ms at 5.6k) on the
+  /// World's background threads, and an impact on a piece whose body is not made yet waits for it.
+  /// On the current default pack's pieces (chart 5, 128 fragments; docs/results/speed-accuracy.md,
+  /// "Every piece checked") the Ritz values are 31.6 % off (median; p90 400 %), checked up to 800
+  /// DOF (the default until stop 65) 20.1 % (388 %), up to 1 500 14.0 % (190 %: 91 pieces), every
+  /// piece 12.6 % (83 %). 1 500 keeps a check within a third of the player's 33 ms latency: with
+  /// every piece checked the pane scene's pieces, struck soon after their birth, waited for their
+  /// bodies in 3 of 8 paced runs (up to 17 ms; over the 33 ms frame goal in 8 of 26 runs this
+  /// stop, against 1 of 31 at 800 and 1 of 17 at 1 500). 0: never.
+  int meshRatioMaxDof = 1500;
   /// The check's element (meshRatioMaxDof still counts its mesh's linear DOF). P2 removes the
   /// linear tets' locking from the check: on chart 5's 169 pieces, checked every one, 1.4 % off
   /// (median) and 6 % (p90) against 10.3 % and 45 % with P1, which meets the matching targets
