@@ -103,13 +103,12 @@ struct World::Impl {
     backgroundThreads.reset();
   }
 
-  static std::unique_ptr<tbb::task_arena> makeArena(int32_t threads, tbb::task_arena::priority priority) {
-    const int concurrency = threads > 0 ? int{threads} : int{tbb::task_arena::automatic};
-    return std::make_unique<tbb::task_arena>(concurrency, 1, priority);
-  }
-  // Submitted impacts (and the parallel loops of any impact).
+  // Submitted impacts (and the parallel loops of any impact), ahead of the host's own arenas.
   tbb::task_arena& workers() {
-    if (!arena) arena = makeArena(settings.workerThreads, tbb::task_arena::priority::high);
+    if (!arena) {
+      const int concurrency = settings.workerThreads > 0 ? int{settings.workerThreads} : int{tbb::task_arena::automatic};
+      arena = std::make_unique<tbb::task_arena>(concurrency, 1, tbb::task_arena::priority::high);
+    }
     return *arena;
   }
   // Placement and the fragments' new bodies: workerThreads threads (0: one per core; 1: none, the
