@@ -204,6 +204,9 @@ struct World::Impl {
                                                         std::to_string(settings.maxObjects) +
                                                         " (the object is left unbroken)");
     }
+    // The background threads, started (if this is the first break) before the world changes: a
+    // failure to start them leaves it as it was.
+    detail::BackgroundThreads& makers = background();
     remove(object);
     for (size_t i = 0; i < newBodies.size(); ++i) {
       if (!newBodies[i]) continue;
@@ -215,7 +218,7 @@ struct World::Impl {
     // the workers from now on (an impact or objectAsset that needs one first makes or waits for it).
     for (auto& source : newBodies) {
       if (!source) continue;
-      background().submit([source] {
+      makers.submit([source] {
         const auto& body = source->get();
         if (!body) return;
         (void)body.value()->stressBounds();
