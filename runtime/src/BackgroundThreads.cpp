@@ -31,17 +31,16 @@ bool becomeBackgroundThread() {
 }  // namespace
 
 BackgroundThreads::BackgroundThreads(int threads) {
-  std::atomic<int> idle{0};
-  std::atomic<int> started{0};
   for (int i = 0; i < threads; ++i) {
-    mThreads.emplace_back([this, &idle, &started] {
-      if (becomeBackgroundThread()) ++idle;
-      ++started;
+    mThreads.emplace_back([this] {
+      if (becomeBackgroundThread()) ++mIdleThreads;
       run();
     });
   }
-  while (started.load() < threads) std::this_thread::yield();
-  mIdle = threads > 0 && idle.load() == threads;
+}
+
+bool BackgroundThreads::idlePriority() const {
+  return !mThreads.empty() && mIdleThreads.load() == static_cast<int>(mThreads.size());
 }
 
 BackgroundThreads::~BackgroundThreads() {

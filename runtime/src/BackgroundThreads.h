@@ -15,6 +15,7 @@
 // thread runs them or when (each writes only its own result), so fractures are the same bits.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <exception>
@@ -38,8 +39,9 @@ class BackgroundThreads {
   /// Runs queued jobs on the calling thread too (a host waiting on a loading screen helps), until
   /// none is queued or running. Rethrows the first exception a job threw since the last wait.
   void wait();
-  /// Whether the threads run at idle priority (false where the system refused or has none).
-  bool idlePriority() const { return mIdle; }
+  /// Whether every thread has lowered itself to idle priority (false where the system refused or
+  /// has none, and until each has started).
+  bool idlePriority() const;
   int threadCount() const { return static_cast<int>(mThreads.size()); }
 
  private:
@@ -51,7 +53,7 @@ class BackgroundThreads {
   std::deque<std::function<void()>> mQueue;
   int mRunning = 0;
   bool mStop = false;
-  bool mIdle = false;
+  std::atomic<int> mIdleThreads{0};
   std::exception_ptr mError;
   std::vector<std::thread> mThreads;
 };

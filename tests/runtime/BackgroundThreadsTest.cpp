@@ -101,6 +101,7 @@ TEST(BackgroundThreads, JobsNotStartedAreDroppedWithThePool) {
   EXPECT_EQ(ran.load(), 0);
   // A running job is waited for; the one behind it is dropped.
   std::atomic<bool> release{false}, running{false};
+  std::thread releaser;
   {
     BackgroundThreads pool(1);
     pool.submit([&] {
@@ -110,12 +111,13 @@ TEST(BackgroundThreads, JobsNotStartedAreDroppedWithThePool) {
     });
     while (!running) std::this_thread::yield();
     pool.submit([&] { ran += 10; });
-    std::thread releaser([&] {
+    // Released only once the pool's destructor has dropped the second job and waits for the first.
+    releaser = std::thread([&] {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
       release = true;
     });
-    releaser.detach();
   }
+  releaser.join();
   EXPECT_EQ(ran.load(), 1);
 }
 

@@ -373,6 +373,8 @@ TEST(CrackPropagation, GroupsOfEqualPointsAreSearchedByTheirLowestPointWithTheFu
     EXPECT_TRUE(wa.modalDeviator == wb.modalDeviator);
     EXPECT_TRUE(wa.elementBound == wb.elementBound);
     EXPECT_TRUE(wa.pressureScale == wb.pressureScale);
+    EXPECT_TRUE(wa.staticNorm == wb.staticNorm);
+    EXPECT_TRUE(wa.staticPressure == wb.staticPressure);
     EXPECT_TRUE(wa.staticDeviator == wb.staticDeviator);
     EXPECT_FALSE(same.seedCandidates.empty());
     EXPECT_EQ(same.seedCandidates, apart.seedCandidates);
