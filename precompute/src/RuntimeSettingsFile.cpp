@@ -2,6 +2,7 @@
 // the runtime (World.h's settings structs), so the fuzz targets build it without the runtime.
 #include "brittle/precompute/RuntimeSettingsFile.h"
 
+#include <cmath>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -81,6 +82,14 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
       }
     } else if (key == "mesh_ratio_max_dof") {
       if (Status st = integer(key, s.meshRatioMaxDof); !st) return st.error();
+    } else if (key == "mesh_ratio_late_max_dof") {
+      if (Status st = integer(key, s.meshRatioLateMaxDof); !st) return st.error();
+    } else if (key == "mesh_ratio_late_delay_s") {
+      if (!value.is_number()) return settingsFileError(sourceName, "\"mesh_ratio_late_delay_s\" must be a number");
+      s.meshRatioLateDelayS = value.get<double>();
+      if (!(s.meshRatioLateDelayS >= 0.0) || !std::isfinite(s.meshRatioLateDelayS)) {
+        return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"mesh_ratio_late_delay_s\" must be finite and ≥ 0");
+      }
     } else if (key == "mesh_ratio_element") {
       if (!value.is_string()) return settingsFileError(sourceName, "\"mesh_ratio_element\" must be a string");
       const auto order = parseElementOrder(value.get<std::string>());
@@ -114,6 +123,8 @@ std::string runtimeSettingsJson(const FractureSettings& s) {
                               {"match_error_target", s.matchErrorTarget},
                               {"polynomial_mode_degree", s.polynomialModeDegree},
                               {"mesh_ratio_max_dof", s.meshRatioMaxDof},
+                              {"mesh_ratio_late_max_dof", s.meshRatioLateMaxDof},
+                              {"mesh_ratio_late_delay_s", s.meshRatioLateDelayS},
                               {"mesh_ratio_element", elementOrderName(s.meshRatioElement)},
                               {"modes", s.modeCount}};
   return doc.dump(2) + "\n";

@@ -58,6 +58,20 @@ std::shared_ptr<const BodySource> BodySource::deferred(Maker make) {
   return source;
 }
 
+std::shared_ptr<const BodySource> BodySource::deferred(Maker make, LateMaker late, double lateDueS) {
+  auto source = std::make_shared<BodySource>();
+  source->mMake = std::move(make);
+  auto later = std::make_shared<BodySource>();
+  later->mMake = [base = std::weak_ptr<const BodySource>(source), late = std::move(late)]() -> Result<std::shared_ptr<const Body>> {
+    const auto held = base.lock();
+    if (!held) return makeError(ErrorCode::InvalidArgument, "the body's earlier version is gone");
+    return late(held->get());
+  };
+  source->mLate = std::move(later);
+  source->mLateDueS = lateDueS;
+  return source;
+}
+
 const Result<std::shared_ptr<const Body>>& BodySource::get() const {
   std::call_once(mOnce, [this] {
     try {

@@ -92,6 +92,14 @@ class BodySource {
   using Maker = std::function<Result<std::shared_ptr<const Body>>()>;
   static std::shared_ptr<const BodySource> ready(std::shared_ptr<const Body> body);
   static std::shared_ptr<const BodySource> deferred(Maker make);
+  /// A deferred body with a later version (FractureSettings::meshRatioLateMaxDof): `late` makes
+  /// it from this body's result (it may hand that back unchanged), and impacts at a host time of
+  /// at least `lateDueS` use it (at). The later version holds this one weakly: no cycle.
+  using LateMaker = std::function<Result<std::shared_ptr<const Body>>(const Result<std::shared_ptr<const Body>>& base)>;
+  static std::shared_ptr<const BodySource> deferred(Maker make, LateMaker late, double lateDueS);
+  /// The later version, null if none; its due time (host seconds).
+  const std::shared_ptr<const BodySource>& late() const { return mLate; }
+  double lateDueS() const { return mLateDueS; }
   /// The body, made now if it was not; its errors are the maker's.
   const Result<std::shared_ptr<const Body>>& get() const;
   bool isMade() const { return mMade.load(std::memory_order_acquire); }
@@ -101,7 +109,15 @@ class BodySource {
   mutable std::atomic<bool> mMade{false};
   mutable Maker mMake;  // released once made
   mutable std::optional<Result<std::shared_ptr<const Body>>> mBody;
+  std::shared_ptr<const BodySource> mLate;
+  double mLateDueS = 0.0;
 };
+
+/// The version of `source` an impact at host time `timeS` uses: its later one from its due time on
+/// (a NaN time never reaches it), else itself.
+inline const std::shared_ptr<const BodySource>& sourceAt(const std::shared_ptr<const BodySource>& source, double timeS) {
+  return source && source->late() && timeS >= source->lateDueS() ? source->late() : source;
+}
 
 /// The modes a body keeps of `available`: the first `requested`, or all of them when requested ≤ 0.
 inline int keptModeCount(int requested, int available) { return requested > 0 ? std::min(requested, available) : available; }

@@ -335,11 +335,12 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
   const bool correct = job.settings->staticCorrection && job.prepareFragments;
   const int degree = job.settings->polynomialModeDegree;
   TriangleMesh surface = degree > 0 ? fr.surface : TriangleMesh{};  // for the worker: two allocations
-  const MeshCheck check{parent, static_cast<int>(i), job.settings->meshRatioMaxDof, job.settings->meshRatioElement};
+  const FractureSettings& fs = *job.settings;
+  const MeshCheck check{parent, static_cast<int>(i), fs.meshRatioMaxDof, fs.meshRatioElement};
   const EntryCache* cache = job.entryCache;
-  return BodySource::deferred([cache, shared, m, material, modeCount, correct, degree, check,
-                               surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
-    auto made = matchedBody(*cache, m, material, modeCount, surface, degree, check);
+  auto make = [cache, shared, m, material, modeCount, correct, degree](const TriangleMesh& own,
+                                                                      const MeshCheck& limit) -> Result<std::shared_ptr<const Body>> {
+    auto made = matchedBody(*cache, m, material, modeCount, own, degree, limit);
     if (made && correct && shared) {
       // The entry's correction placed as instantiateEntry placed the entry: x = L Rᵀ_frame x̂ + t.
       const auto entry = shared->get(m.entry, material, made.value()->modes);
@@ -349,7 +350,27 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
       }
     }
     return withCorrectionScheduled(std::move(made), correct);
-  });
+  };
+  // The later check (FractureSettings::meshRatioLateMaxDof) when the break has a time: the same
+  // body, checked up to the later limit; a piece within the first limit, or over the later one,
+  // keeps its body (the later version is then the same).
+  const bool late = degree > 0 && fs.meshRatioLateMaxDof > fs.meshRatioMaxDof && std::isfinite(job.desc.timeS);
+  if (!late) {
+    return BodySource::deferred([make, check, surface = std::move(surface)] { return make(surface, check); });
+  }
+  const MeshCheck lateCheck{parent, static_cast<int>(i), fs.meshRatioLateMaxDof, fs.meshRatioElement};
+  fr.lateCheckDueS = job.desc.timeS + fs.meshRatioLateDelayS;
+  auto shared_surface = std::make_shared<const TriangleMesh>(std::move(surface));
+  return BodySource::deferred(
+      [make, check, shared_surface] { return make(*shared_surface, check); },
+      [make, check, lateCheck, shared_surface](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
+        const Body& parentBody = *check.parent->body;
+        const int64_t dof = fragmentCutDof(parentBody.asset.tetMesh, parentBody.topology, check.parent->nodeLabels, check.label,
+                                           ElementOrder::P1, CutCells::Prisms);
+        if (!base || dof <= check.maxDof || dof > lateCheck.maxDof) return base;
+        return make(*shared_surface, lateCheck);
+      },
+      fr.lateCheckDueS);
 }
 
 // The exact path, all of it on the workers (BodySource): the fragment's own solid cut out of its

@@ -43,6 +43,7 @@ Status validateImpactDesc(const ImpactDesc& desc) {
     return invalidArgument("impact: the point must be finite and the normal a finite unit vector");
   }
   if (!(desc.speedMps > 0.0) || !std::isfinite(desc.speedMps)) return invalidArgument("impact: speed must be finite and > 0");
+  if (std::isinf(desc.timeS)) return invalidArgument("impact: timeS must be finite or NaN (no time)");
   if (!(desc.bodyRadiusM >= 0.0) || !(desc.pointToleranceM >= 0.0) || !(desc.flatPairRadiusM >= 0.0) ||
       !std::isfinite(desc.flatPairRadiusM)) {
     return invalidArgument("impact: bodyRadiusM and pointToleranceM must be ≥ 0, flatPairRadiusM finite and ≥ 0");
@@ -176,7 +177,7 @@ struct World::Impl {
     if (s.pending) return invalidArgument("impact: an impact on this object is pending (collect it first)");
     if (Status st = validateImpactDesc(desc); !st) return st.error();
     detail::ImpactJob job;
-    job.source = s.source;
+    job.source = detail::sourceAt(s.source, desc.timeS);
     job.rotation = s.rotation;
     job.translation = s.translation;
     job.desc = desc;
@@ -216,15 +217,19 @@ struct World::Impl {
     }
     // The fragments' modal data, stress bounds and (where scheduled) static corrections are made on
     // the workers from now on (an impact or objectAsset that needs one first makes or waits for it).
-    for (auto& source : newBodies) {
-      if (!source) continue;
-      makers.submit([source] {
+    // Later versions (FractureSettings::meshRatioLateMaxDof) after every first one.
+    auto prepare = [&makers](std::shared_ptr<const BodySource> source) {
+      makers.submit([source = std::move(source)] {
         const auto& body = source->get();
         if (!body) return;
         (void)body.value()->stressBounds();
         if (body.value()->staticCorrectionScheduled()) (void)body.value()->staticCorrection();
       });
-    }
+    };
+    for (auto& source : newBodies)
+      if (source) prepare(source);
+    for (auto& source : newBodies)
+      if (source && source->late()) prepare(source->late());
     newBodies.clear();
     return Ok{};
   }
@@ -254,9 +259,10 @@ Status validateWorldSettings(const WorldSettings& s) {
       !(f.contactSpreadFraction >= 0.0 && f.contactSpreadFraction < 1.0) ||
       f.exactModesMaxTets < 0 || f.exactModesMaxDof < 0 || f.exactModesBudgetDof < 0 || f.exactModeCount < 1 ||
       !(f.matchErrorTarget >= 0.0 && std::isfinite(f.matchErrorTarget)) || f.polynomialModeDegree < 0 ||
-      f.polynomialModeDegree > kMaxPolynomialModeDegree || f.meshRatioMaxDof < 0) {
+      f.polynomialModeDegree > kMaxPolynomialModeDegree || f.meshRatioMaxDof < 0 || f.meshRatioLateMaxDof < 0 ||
+      !(f.meshRatioLateDelayS >= 0.0) || !std::isfinite(f.meshRatioLateDelayS)) {
     return invalidArgument("FractureSettings: modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0, ringDownPeriods ≥ 0 and finite, "
-               "debrisVolumeFraction and contactSpreadFraction in [0, 1), exactModesMaxTets ≥ 0, exactModesMaxDof ≥ 0, exactModesBudgetDof ≥ 0, exactModeCount ≥ 1, matchErrorTarget finite and ≥ 0, polynomialModeDegree in [0, 5], meshRatioMaxDof ≥ 0");
+               "debrisVolumeFraction and contactSpreadFraction in [0, 1), exactModesMaxTets ≥ 0, exactModesMaxDof ≥ 0, exactModesBudgetDof ≥ 0, exactModeCount ≥ 1, matchErrorTarget finite and ≥ 0, polynomialModeDegree in [0, 5], meshRatioMaxDof ≥ 0, meshRatioLateMaxDof ≥ 0, meshRatioLateDelayS finite and ≥ 0");
   }
   if (f.crack.maxCracks < 0 || std::isnan(f.crack.propagationStressRatio) || !(f.crack.directionBlend >= 0.0) ||
       !(f.crack.directionBlend <= 1.0) || !(f.crack.noiseRad >= 0.0) || !std::isfinite(f.crack.noiseRad)) {
@@ -372,6 +378,14 @@ Result<const ObjectAsset*> World::objectAsset(ObjectId id) const {
   auto s = mImpl->slot(id);
   if (!s) return s.error();
   const auto& body = s.value()->source->get();
+  if (!body) return body.error();
+  return &body.value()->asset;
+}
+
+Result<const ObjectAsset*> World::objectAsset(ObjectId id, double timeS) const {
+  auto s = mImpl->slot(id);
+  if (!s) return s.error();
+  const auto& body = detail::sourceAt(s.value()->source, timeS)->get();
   if (!body) return body.error();
   return &body.value()->asset;
 }

@@ -19,6 +19,8 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   s.exactModeCount = 12;
   s.polynomialModeDegree = 3;
   s.meshRatioMaxDof = 2345;
+  s.meshRatioLateMaxDof = 6789;
+  s.meshRatioLateDelayS = 0.75;
   s.meshRatioElement = ElementOrder::P2;
   s.modeCount = 15;
   const auto dir = testing::makeTempDir("runtime-settings");
@@ -32,6 +34,8 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   EXPECT_EQ(back.value().exactModeCount, 12);
   EXPECT_EQ(back.value().polynomialModeDegree, 3);
   EXPECT_EQ(back.value().meshRatioMaxDof, 2345);
+  EXPECT_EQ(back.value().meshRatioLateMaxDof, 6789);
+  EXPECT_EQ(back.value().meshRatioLateDelayS, 0.75);
   EXPECT_EQ(back.value().meshRatioElement, ElementOrder::P2);
   EXPECT_EQ(back.value().modeCount, 15);
 }

@@ -451,6 +451,97 @@ TEST_F(WorldTest, MatchedBodiesRingAtTheirFragmentsOwnFrequencies) {
   EXPECT_TRUE(again.value().broken);
 }
 
+// A later check (FractureSettings::meshRatioLateMaxDof): the pieces over meshRatioMaxDof keep their
+// Ritz values for impacts before the break's time plus meshRatioLateDelayS and have them checked
+// from then on, bit for bit what a world checking them at birth gives; a break without a time has
+// no later version. Which version an impact sees depends on the host's times alone.
+TEST_F(WorldTest, ALaterCheckAppliesFromItsDueTime) {
+  auto makeSettings = [](int first, int later) {
+    WorldSettings s;
+    s.fracture.meshRatioMaxDof = first;
+    s.fracture.meshRatioLateMaxDof = later;
+    s.fracture.meshRatioLateDelayS = 0.5;
+    return s;
+  };
+  World world = makeWorld(makeSettings(2000, 100000));
+  World unchecked = makeWorld(makeSettings(2000, 0));
+  World checked = makeWorld(makeSettings(100000, 0));
+  ImpactDesc hit = ball(world.addObject({.asset = "plate"}).value(), 60.0);
+  hit.timeS = 2.0;
+  auto broken = world.impact(hit);
+  ASSERT_TRUE(broken && broken.value().broken);
+  ImpactDesc same = ball(unchecked.addObject({.asset = "plate"}).value(), 60.0);
+  same.timeS = 2.0;
+  auto brokenUnchecked = unchecked.impact(same);
+  same.object = checked.addObject({.asset = "plate"}).value();
+  auto brokenChecked = checked.impact(same);
+  ASSERT_TRUE(brokenUnchecked && brokenChecked);
+  ASSERT_EQ(hashFragments(brokenUnchecked.value()), hashFragments(broken.value()));
+  ASSERT_EQ(hashFragments(brokenChecked.value()), hashFragments(broken.value()));
+  int later = 0, matched = 0;
+  for (size_t i = 0; i < broken.value().fragments.size(); ++i) {
+    const FragmentResult& f = broken.value().fragments[i];
+    if (f.path != FragmentPath::Matched) {
+      EXPECT_TRUE(std::isnan(f.lateCheckDueS));
+      continue;
+    }
+    ++matched;
+    EXPECT_EQ(f.lateCheckDueS, 2.5);
+    EXPECT_TRUE(std::isnan(brokenUnchecked.value().fragments[i].lateCheckDueS));
+    const ObjectAsset* before = world.objectAsset(f.object, 2.49).value();
+    const ObjectAsset* after = world.objectAsset(f.object, 2.5).value();
+    EXPECT_EQ(before, world.objectAsset(f.object).value());
+    EXPECT_EQ(before, world.objectAsset(f.object, std::numeric_limits<double>::quiet_NaN()).value());
+    EXPECT_EQ(before->modal.frequenciesHz, unchecked.objectAsset(brokenUnchecked.value().fragments[i].object).value()->modal.frequenciesHz);
+    EXPECT_EQ(after->modal.frequenciesHz, checked.objectAsset(brokenChecked.value().fragments[i].object).value()->modal.frequenciesHz);
+    if (before != after) {
+      ++later;
+      EXPECT_NE(before->modal.frequenciesHz, after->modal.frequenciesHz);
+      EXPECT_LT(after->modal.frequenciesHz[0], before->modal.frequenciesHz[0]);  // a check only lowers them
+    }
+  }
+  std::printf("%d matched fragments, %d checked later\n", matched, later);
+  EXPECT_GE(later, 1);
+  EXPECT_LT(later, matched);  // the small ones were checked at birth
+  // An impact before the due time is the unchecked world's, one at it the checked world's.
+  ImpactDesc soft = softHitOnTheLargestMatched(world, broken.value());
+  ImpactDesc softUnchecked = softHitOnTheLargestMatched(unchecked, brokenUnchecked.value());
+  ImpactDesc softChecked = softHitOnTheLargestMatched(checked, brokenChecked.value());
+  ASSERT_TRUE(soft.object.valid() && softUnchecked.object.valid() && softChecked.object.valid());
+  soft.timeS = softUnchecked.timeS = 2.2;
+  auto early = world.impact(soft);
+  auto earlyReference = unchecked.impact(softUnchecked);
+  soft.timeS = softChecked.timeS = 3.0;
+  auto late = world.impact(soft);
+  auto lateReference = checked.impact(softChecked);
+  ASSERT_TRUE(early && earlyReference && late && lateReference);
+  EXPECT_EQ(early.value().peakPrincipalStressPa, earlyReference.value().peakPrincipalStressPa);
+  EXPECT_EQ(late.value().peakPrincipalStressPa, lateReference.value().peakPrincipalStressPa);
+  EXPECT_NE(early.value().peakPrincipalStressPa, late.value().peakPrincipalStressPa);
+  // Without a time the break has no later version.
+  World untimed = makeWorld(makeSettings(2000, 100000));
+  auto plain = untimed.impact(ball(untimed.addObject({.asset = "plate"}).value(), 60.0));
+  ASSERT_TRUE(plain && plain.value().broken);
+  for (const FragmentResult& f : plain.value().fragments) {
+    EXPECT_TRUE(std::isnan(f.lateCheckDueS));
+    if (f.object.valid()) {
+      EXPECT_EQ(untimed.objectAsset(f.object, 100.0).value(), untimed.objectAsset(f.object).value());
+    }
+  }
+  // Typed errors: an infinite time, a negative or infinite delay, a negative limit.
+  ImpactDesc infinite = ball(untimed.addObject({.asset = "plate"}).value(), 1.0);
+  infinite.timeS = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(untimed.impact(infinite).error().code, ErrorCode::InvalidArgument);
+  for (double delay : {-0.1, std::numeric_limits<double>::infinity()}) {
+    WorldSettings wrong;
+    wrong.fracture.meshRatioLateDelayS = delay;
+    EXPECT_EQ(World::create(Pack(*sPack), wrong).error().code, ErrorCode::InvalidArgument) << delay;
+  }
+  WorldSettings negative;
+  negative.fracture.meshRatioLateMaxDof = -1;
+  EXPECT_EQ(World::create(Pack(*sPack), negative).error().code, ErrorCode::InvalidArgument);
+}
+
 // The same in quadratic tets (FractureSettings::meshRatioElement): every checked piece's lowest
 // three are its Ritz values times the P2 check's ratios, bit for bit as the API computes them.
 TEST_F(WorldTest, AQuadraticCheckGivesTheApisValues) {

@@ -120,6 +120,7 @@ bool Simulation::impact(const Candidate& c, int64_t frame, double timeS, bool fa
   d.pointToleranceM = mSettings.pointToleranceFraction * b.sizeM;
   d.flatPairRadiusM = b.sizeM;  // an edge or corner of the body's size meets the flat
   d.fast = fast;
+  d.timeS = timeS;  // the scene's clock: a piece's later mesh check applies at a fixed time after its break
   const Material* otherMaterial = &mFloorMaterial;
   if (c.other >= 0) {
     const Body& o = mBodies[static_cast<size_t>(c.other)];
