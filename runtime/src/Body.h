@@ -94,7 +94,7 @@ class BodySource {
   static std::shared_ptr<const BodySource> deferred(Maker make);
   /// A deferred body with a later version (FractureSettings::meshRatioLateMaxDof): `late` makes
   /// it from this body's result (it may hand that back unchanged), and impacts at a host time of
-  /// at least `lateDueS` use it (at). The later version holds this one weakly: no cycle.
+  /// at least `lateDueS` use it (sourceAt). The later version holds this one weakly: no cycle.
   using LateMaker = std::function<Result<std::shared_ptr<const Body>>(const Result<std::shared_ptr<const Body>>& base)>;
   static std::shared_ptr<const BodySource> deferred(Maker make, LateMaker late, double lateDueS);
   /// The later version, null if none; its due time (host seconds).

@@ -360,15 +360,15 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
   }
   const MeshCheck lateCheck{parent, static_cast<int>(i), fs.meshRatioLateMaxDof, fs.meshRatioElement};
   fr.lateCheckDueS = job.desc.timeS + fs.meshRatioLateDelayS;
-  auto shared_surface = std::make_shared<const TriangleMesh>(std::move(surface));
+  auto sharedSurface = std::make_shared<const TriangleMesh>(std::move(surface));
   return BodySource::deferred(
-      [make, check, shared_surface] { return make(*shared_surface, check); },
-      [make, check, lateCheck, shared_surface](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
+      [make, check, sharedSurface] { return make(*sharedSurface, check); },
+      [make, check, lateCheck, sharedSurface](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
         const Body& parentBody = *check.parent->body;
         const int64_t dof = fragmentCutDof(parentBody.asset.tetMesh, parentBody.topology, check.parent->nodeLabels, check.label,
                                            ElementOrder::P1, CutCells::Prisms);
         if (!base || dof <= check.maxDof || dof > lateCheck.maxDof) return base;
-        return make(*shared_surface, lateCheck);
+        return make(*sharedSurface, lateCheck);
       },
       fr.lateCheckDueS);
 }
