@@ -93,6 +93,8 @@ Status validateFragmentDatabase(const FragmentDatabase& db) {
       return invalid(std::string(descriptorKindName(kind)) + " " + st.error().message);
     }
   }
+  for (const MatchErrorModel* m : {&db.frequencyErrors.ritz, &db.frequencyErrors.checked})
+    if (Status st = validateMatchErrorModel(*m); !st) return invalid("frequency " + st.error().message);
   return Ok{};
 }
 

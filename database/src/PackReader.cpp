@@ -590,16 +590,21 @@ FragmentDatabase readDatabase(FileReader& r, int64_t version, Handle* onDemand, 
     is.targetPrecision = static_cast<float>(precision[k]);
     is.seed = static_cast<uint64_t>(indexSeeds[k]);
   }
-  for (DescriptorKind kind : kAllDescriptorKinds) {
-    const std::string group = std::string("/database/match_errors/") + descriptorKindName(kind);
-    if (!r.exists(group)) continue;  // optional: packs baked before the calibration have none
-    MatchErrorModel& m = db.matchErrors[static_cast<size_t>(kind)];
+  // A binned error model (MatchErrors.h); optional: packs baked before its calibration have none.
+  auto readModel = [&](const std::string& group, MatchErrorModel& m) {
+    if (!r.exists(group)) return;
     m.distance = r.f64(group + "/distance", {kAny}).values;
     const hsize_t bins = m.distance.size();
     m.medianError = r.f64(group + "/median_error", {bins}).values;
     m.p90Error = r.f64(group + "/p90_error", {bins}).values;
     m.samples = r.i64(group + "/samples", {1}).values[0];
     if (Status st = validateMatchErrorModel(m); !st) fail(ErrorCode::PackCorrupt, group + ": " + st.error().message);
+  };
+  for (DescriptorKind kind : kAllDescriptorKinds)
+    readModel(std::string("/database/match_errors/") + descriptorKindName(kind), db.matchErrors[static_cast<size_t>(kind)]);
+  if (r.exists("/database/frequency_errors")) {  // packs before it have none (brittle calibrate-errors adds it)
+    readModel("/database/frequency_errors/ritz", db.frequencyErrors.ritz);
+    readModel("/database/frequency_errors/checked", db.frequencyErrors.checked);
   }
 
   db.entries.resize(count);

@@ -486,19 +486,25 @@ void writeDatabase(FileWriter& w, const FragmentDatabase& db) {
     w.f64("/database/index/target_precision", precision, {k}, "1");
     w.i64("/database/index/seed", seeds, {k});
   }
+  // A binned error model (MatchErrors.h) in its own group; an empty one is not written.
+  auto writeModel = [&](const MatchErrorModel& m, const std::string& path) {
+    if (m.empty()) return;
+    Handle modelGroup = w.createGroup(path);
+    const hsize_t bins = m.distance.size();
+    w.f64(path + "/distance", m.distance, {bins}, "1");
+    w.f64(path + "/median_error", m.medianError, {bins}, "1");
+    w.f64(path + "/p90_error", m.p90Error, {bins}, "1");
+    w.i64(path + "/samples", {m.samples}, {1});
+  };
   {
     Handle errors = w.createGroup("/database/match_errors");
-    for (DescriptorKind kind : kAllDescriptorKinds) {
-      const MatchErrorModel& m = db.matchErrors[static_cast<size_t>(kind)];
-      if (m.empty()) continue;
-      const std::string kindPath = std::string("/database/match_errors/") + descriptorKindName(kind);
-      Handle kindGroup = w.createGroup(kindPath);
-      const hsize_t bins = m.distance.size();
-      w.f64(kindPath + "/distance", m.distance, {bins}, "1");
-      w.f64(kindPath + "/median_error", m.medianError, {bins}, "1");
-      w.f64(kindPath + "/p90_error", m.p90Error, {bins}, "1");
-      w.i64(kindPath + "/samples", {m.samples}, {1});
-    }
+    for (DescriptorKind kind : kAllDescriptorKinds)
+      writeModel(db.matchErrors[static_cast<size_t>(kind)], std::string("/database/match_errors/") + descriptorKindName(kind));
+  }
+  if (!db.frequencyErrors.empty()) {
+    Handle errors = w.createGroup("/database/frequency_errors");
+    writeModel(db.frequencyErrors.ritz, "/database/frequency_errors/ritz");
+    writeModel(db.frequencyErrors.checked, "/database/frequency_errors/checked");
   }
 }
 

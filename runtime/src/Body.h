@@ -26,6 +26,7 @@
 #include "brittle/runtime/FragmentSurfaces.h"
 #include "brittle/runtime/StaticCorrection.h"
 #include "brittle/runtime/TetTopology.h"
+#include "brittle/runtime/World.h"
 #include "TriangleBoxTree.h"
 
 namespace brittle::detail {
@@ -47,6 +48,9 @@ struct Body {
   /// frequencies keeps its entry's here (its shapes are the entry's), so that the correction it
   /// builds equals the entry's shared one (ImpactStages.cpp: placeEntry).
   Eigen::VectorXd correctionEigenvalues;
+  /// Where its frequencies come from and their predicted error (World::frequencyError): Own for
+  /// a pack object and the exact path; a matched body's maker sets it before handing the body out.
+  FrequencyErrorPrediction frequencyError;
 
   /// The stress scan's bounds per stress point over `modes` modes, weighted by 1/ω
   /// (CrackPropagation.h: stressModeBounds); made on first use, as the static correction (the

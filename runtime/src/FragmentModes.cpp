@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 
@@ -628,6 +629,11 @@ void applyMeshRatios(Eigen::VectorXd& frequenciesHz, const MeshFrequencyRatios& 
   const Eigen::Index k = std::min(frequenciesHz.size(), ratios.ratios.size());
   frequenciesHz.head(k) = frequenciesHz.head(k).cwiseProduct(ratios.ratios.head(k));
   std::sort(frequenciesHz.data(), frequenciesHz.data() + k);
+}
+
+double meshGain(const MeshFrequencyRatios& ratios) {
+  if (ratios.ratios.size() == 0) return std::numeric_limits<double>::quiet_NaN();
+  return std::max(0.0, 1.0 - ratios.ratios.minCoeff());
 }
 
 Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Material& material,

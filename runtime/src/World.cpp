@@ -245,6 +245,16 @@ std::string_view fragmentPathName(FragmentPath path) {
   return "unknown";
 }
 
+std::string_view frequencySourceName(FrequencySource source) {
+  switch (source) {
+    case FrequencySource::Own: return "own";
+    case FrequencySource::Entry: return "entry";
+    case FrequencySource::Ritz: return "ritz";
+    case FrequencySource::Checked: return "checked";
+  }
+  return "unknown";
+}
+
 Status validateWorldSettings(const WorldSettings& s) {
   const FractureSettings& f = s.fracture;
   if (s.maxObjects < 1) return invalidArgument("WorldSettings: maxObjects must be ≥ 1");
@@ -388,6 +398,14 @@ Result<const ObjectAsset*> World::objectAsset(ObjectId id, double timeS) const {
   const auto& body = detail::sourceAt(s.value()->source, timeS)->get();
   if (!body) return body.error();
   return &body.value()->asset;
+}
+
+Result<FrequencyErrorPrediction> World::frequencyError(ObjectId id, double timeS) const {
+  auto s = mImpl->slot(id);
+  if (!s) return s.error();
+  const auto& body = detail::sourceAt(s.value()->source, timeS)->get();
+  if (!body) return body.error();
+  return body.value()->frequencyError;
 }
 
 Result<ObjectDesc> World::objectPose(ObjectId id) const {

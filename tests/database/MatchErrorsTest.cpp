@@ -156,6 +156,10 @@ TEST(MatchErrors, RoundTripsThroughAPackAndADamagedOneIsRefused) {
   for (DescriptorKind kind : kAllDescriptorKinds)
     db.descriptors[static_cast<size_t>(kind)] = DescriptorMatrix::Zero(4, descriptorSize(kind, db.descriptorSettings));
   db.matchErrors[0] = calibrateMatchErrors(pairedDatabase(), DescriptorKind::Moment).value();
+  // The bodies' frequency-error models: a Ritz one and none for checked bodies.
+  db.frequencyErrors.ritz = fitMatchErrors({{0.01, 0.05}, {0.02, 0.04}, {0.05, 0.2}, {0.1, 0.3}, {0.2, 0.9}, {0.3, 0.5}, {0.4, 1.2}, {0.5, 2.0}},
+                                           MatchErrorSettings{.bins = 2})
+                                .value();
   const Status written = writePack(pack, dir / "db.h5");
   ASSERT_TRUE(written) << written.error().message;
   auto read = readPack(dir / "db.h5");
@@ -169,6 +173,13 @@ TEST(MatchErrors, RoundTripsThroughAPackAndADamagedOneIsRefused) {
     EXPECT_EQ(a.samples, b.samples);
   }
   EXPECT_FALSE(read.value().database.matchErrors[0].empty());
+  const FrequencyErrorModels& bodies = read.value().database.frequencyErrors;
+  EXPECT_EQ(bodies.ritz.distance, db.frequencyErrors.ritz.distance);
+  EXPECT_EQ(bodies.ritz.medianError, db.frequencyErrors.ritz.medianError);
+  EXPECT_EQ(bodies.ritz.p90Error, db.frequencyErrors.ritz.p90Error);
+  EXPECT_EQ(bodies.ritz.samples, 8);
+  EXPECT_EQ(bodies.ritz.medianError.size(), 2u);
+  EXPECT_TRUE(bodies.checked.empty());  // an empty model is not written, and reads as none
 
   const hid_t f = H5Fopen((dir / "db.h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
   ASSERT_GE(f, 0);
@@ -182,6 +193,21 @@ TEST(MatchErrors, RoundTripsThroughAPackAndADamagedOneIsRefused) {
   auto damaged = readPack(dir / "db.h5");
   ASSERT_FALSE(damaged);
   EXPECT_NE(damaged.error().message.find("/database/match_errors/moment"), std::string::npos) << damaged.error().message;
+
+  // A Ritz model whose 90th percentile falls below its median is PackCorrupt too.
+  ASSERT_TRUE(writePack(pack, dir / "db2.h5"));
+  const hid_t f2 = H5Fopen((dir / "db2.h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(f2, 0);
+  const hid_t d2 = H5Dopen2(f2, "/database/frequency_errors/ritz/p90_error", H5P_DEFAULT);
+  ASSERT_GE(d2, 0);
+  const std::vector<double> below(2, 0.0);
+  ASSERT_GE(H5Dwrite(d2, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, below.data()), 0);
+  H5Dclose(d2);
+  H5Fclose(f2);
+  auto damagedRitz = readPack(dir / "db2.h5");
+  ASSERT_FALSE(damagedRitz);
+  EXPECT_EQ(damagedRitz.error().code, ErrorCode::PackCorrupt);
+  EXPECT_NE(damagedRitz.error().message.find("/database/frequency_errors/ritz"), std::string::npos) << damagedRitz.error().message;
 }
 
 }  // namespace

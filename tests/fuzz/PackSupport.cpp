@@ -122,6 +122,9 @@ Pack makeSeedPack() {
   errors.medianError = {0.05, 0.1};
   errors.p90Error = {0.1, 0.3};
   errors.samples = 4;
+  // And the bodies' frequency-error models, so the fuzzers reach theirs.
+  db.frequencyErrors.ritz = errors;
+  db.frequencyErrors.checked = errors;
   return pack;
 }
 

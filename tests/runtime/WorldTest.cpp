@@ -542,6 +542,105 @@ TEST_F(WorldTest, ALaterCheckAppliesFromItsDueTime) {
   EXPECT_EQ(World::create(Pack(*sPack), negative).error().code, ErrorCode::InvalidArgument);
 }
 
+// Each body says where its frequencies come from and how far off the pack's calibration predicts
+// them (World::frequencyError): a pack object its own; a matched piece its Ritz values, read at
+// their convergence from degree 3 to 5, or, once checked (at birth, or from its later check's due
+// time), the checked values at the mesh's gain; with polynomialModeDegree 0 the entry's, at the
+// match's distance. A pack without the calibration predicts nothing but still says the source.
+TEST_F(WorldTest, BodiesSayWhereTheirFrequenciesComeFromAndTheirPredictedError) {
+  Pack calibrated = *sPack;
+  // Synthetic models: error twice the indicator, p90 three times (two bins each).
+  std::vector<std::pair<double, double>> samples;
+  for (int k = 1; k <= 8; ++k) samples.emplace_back(0.05 * k, 0.1 * k);
+  calibrated.database.frequencyErrors.ritz = fitMatchErrors(samples, MatchErrorSettings{.bins = 2}).value();
+  calibrated.database.frequencyErrors.checked = fitMatchErrors(samples, MatchErrorSettings{.bins = 4}).value();
+  const FrequencyErrorModels& models = calibrated.database.frequencyErrors;
+  WorldSettings settings;
+  settings.fracture.meshRatioMaxDof = 2000;
+  settings.fracture.meshRatioLateMaxDof = 100000;
+  World world = World::create(Pack(calibrated), settings).value();
+  World uncalibrated = makeWorld(settings);
+  const ObjectId plateId = world.addObject({.asset = "plate"}).value();
+  auto own = world.frequencyError(plateId);
+  ASSERT_TRUE(own);
+  EXPECT_EQ(own.value().source, FrequencySource::Own);
+  EXPECT_TRUE(std::isnan(own.value().indicator) && std::isnan(own.value().median) && std::isnan(own.value().p90));
+  ImpactDesc hit = ball(plateId, 60.0);
+  hit.timeS = 2.0;
+  auto broken = world.impact(hit);
+  ASSERT_TRUE(broken && broken.value().broken);
+  EXPECT_EQ(world.frequencyError(plateId).error().code, ErrorCode::InvalidArgument);  // stale
+  hit.object = uncalibrated.addObject({.asset = "plate"}).value();
+  auto same = uncalibrated.impact(hit);
+  ASSERT_TRUE(same && same.value().broken);
+  const Material glass = sPack->materials.front();
+  int ritz = 0, checkedAtBirth = 0, checkedLater = 0;
+  for (size_t i = 0; i < broken.value().fragments.size(); ++i) {
+    const FragmentResult& f = broken.value().fragments[i];
+    if (f.path != FragmentPath::Matched) continue;
+    auto early = world.frequencyError(f.object, 2.2);
+    auto late = world.frequencyError(f.object, 2.5);
+    ASSERT_TRUE(early && late);
+    const FrequencyErrorPrediction& e = early.value();
+    const FrequencyErrorPrediction& l = late.value();
+    EXPECT_EQ(world.frequencyError(f.object).value().source, e.source);  // no time: the first body
+    const auto entryModes = world.objectAsset(f.object).value()->modal.eigenvaluesRad2PerS2.size();
+    if (e.source == FrequencySource::Ritz) {
+      ++ritz;
+      // The indicator as the API computes it: degree 3 against degree 5, from the fragment's surface.
+      auto five = polynomialModes(f.surface, glass, 5, /*withShapes=*/false, entryModes);
+      auto three = polynomialModes(f.surface, glass, 3, /*withShapes=*/false, kMeshRatioModes);
+      ASSERT_TRUE(five && three);
+      const double expected = ritzConvergence(three.value().frequenciesHz, five.value().frequenciesHz);
+      EXPECT_NEAR(e.indicator, expected, 1e-9 * expected + 1e-12) << "fragment " << i;
+      EXPECT_GE(e.indicator, 0.0);
+      const MatchErrorPrediction p = predictMatchError(models.ritz, e.indicator);
+      EXPECT_EQ(e.median, p.median);
+      EXPECT_EQ(e.p90, p.p90);
+      EXPECT_EQ(e.beyondRange, p.beyondRange);
+      if (l.source == FrequencySource::Checked) ++checkedLater;
+    } else {
+      ASSERT_EQ(e.source, FrequencySource::Checked) << "fragment " << i;
+      ++checkedAtBirth;
+      EXPECT_EQ(l.source, FrequencySource::Checked);
+    }
+    if (l.source == FrequencySource::Checked) {
+      EXPECT_GT(l.indicator, 0.0);
+      EXPECT_LT(l.indicator, 1.0);
+      const MatchErrorPrediction p = predictMatchError(models.checked, l.indicator);
+      EXPECT_EQ(l.median, p.median);
+      EXPECT_EQ(l.p90, p.p90);
+    }
+    // The same break without the calibration: the same sources and indicators, no prediction.
+    auto bare = uncalibrated.frequencyError(same.value().fragments[i].object, 2.5);
+    ASSERT_TRUE(bare);
+    EXPECT_EQ(bare.value().source, l.source);
+    EXPECT_EQ(bare.value().indicator, l.indicator);
+    EXPECT_TRUE(std::isnan(bare.value().median) && std::isnan(bare.value().p90));
+  }
+  std::printf("%d Ritz bodies (%d checked later), %d checked at birth\n", ritz, checkedLater, checkedAtBirth);
+  EXPECT_GE(ritz, 1);
+  EXPECT_GE(checkedLater, 1);
+  EXPECT_GE(checkedAtBirth, 1);
+  // The entry's own frequencies: the match's distance and predicted error.
+  WorldSettings entries;
+  entries.fracture.polynomialModeDegree = 0;
+  World entryWorld = World::create(Pack(calibrated), entries).value();
+  auto plain = entryWorld.impact(ball(entryWorld.addObject({.asset = "plate"}).value(), 60.0));
+  ASSERT_TRUE(plain && plain.value().broken);
+  int entryBodies = 0;
+  for (const FragmentResult& f : plain.value().fragments) {
+    if (f.path != FragmentPath::Matched) continue;
+    ++entryBodies;
+    const FrequencyErrorPrediction p = entryWorld.frequencyError(f.object).value();
+    EXPECT_EQ(p.source, FrequencySource::Entry);
+    EXPECT_EQ(p.indicator, f.matchDistance);
+    EXPECT_TRUE(std::isnan(f.predictedMatchError) ? std::isnan(p.median) : p.median == f.predictedMatchError);
+  }
+  EXPECT_GE(entryBodies, 1);
+  EXPECT_EQ(frequencySourceName(FrequencySource::Checked), "checked");
+}
+
 // The same in quadratic tets (FractureSettings::meshRatioElement): every checked piece's lowest
 // three are its Ritz values times the P2 check's ratios, bit for bit as the API computes them.
 TEST_F(WorldTest, AQuadraticCheckGivesTheApisValues) {

@@ -7,34 +7,18 @@
 #include <fstream>
 #include <limits>
 #include <map>
-#include <random>
 #include <string>
 
 #include "brittle/core/Timing.h"
 #include "brittle/database/FragmentMatcher.h"
 #include "brittle/database/ScalingLaws.h"
+#include "brittle/precompute/FrequencyErrorCalibration.h"
 #include "brittle/runtime/FragmentModes.h"
 #include "brittle/runtime/PolynomialModes.h"
 #include "brittle/runtime/World.h"
 
 namespace brittle::bench {
 namespace {
-
-// A steel ball on the centroid of a boundary face drawn by the seed, along the face's normal.
-ImpactDesc impactFor(const ObjectAsset& a, ObjectId id, uint64_t seed, double speed) {
-  std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 11);
-  const Eigen::Index f = static_cast<Eigen::Index>(rng() % static_cast<uint64_t>(a.surfaceFaces.rows()));
-  const Eigen::Vector3d p0 = a.tetMesh.nodes.row(a.surfaceFaces(f, 0)), p1 = a.tetMesh.nodes.row(a.surfaceFaces(f, 1)),
-                        p2 = a.tetMesh.nodes.row(a.surfaceFaces(f, 2));
-  ImpactDesc d;
-  d.object = id;
-  d.pointWorld = (p0 + p1 + p2) / 3.0;
-  d.normalWorld = (p1 - p0).cross(p2 - p0).normalized();
-  d.speedMps = speed;
-  d.impactorMassKg = 0.2 * a.massProperties.massKg;
-  d.impactorRadiusM = 0.05 * (a.tetMesh.nodes.colwise().maxCoeff() - a.tetMesh.nodes.colwise().minCoeff()).norm();
-  return d;
-}
 
 // Each tet split into eight (edge midpoints, shared by the tets around an edge; the inner
 // octahedron along its m02–m13 diagonal): the same solid at half the element size.
@@ -113,7 +97,8 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
   csv << "object,speed_mps,seed,fragment,volume_fraction,parent_tets,sub_tets,dropped_volume_fraction,modes,match_s,exact_s,"
          "reference_s,match_distance,match_freq_err,exact_freq_err,reference_f1_hz,exact_f1_hz,match_f1_hz,"
          "predicted_err_median,predicted_err_p90,predicted_beyond_range,polynomial3_freq_err,polynomial4_freq_err,polynomial5_freq_err,"
-         "polynomial5_f1_hz,polynomial3_s,polynomial4_s,polynomial5_s,mesh_ratio_freq_err,mesh_ratio_f1_hz,mesh_ratio_s,p1_dof,check_dof,mesh_ratio_p2_freq_err,mesh_ratio_p2_s,database_entries\n";
+         "polynomial5_f1_hz,polynomial3_s,polynomial4_s,polynomial5_s,mesh_ratio_freq_err,mesh_ratio_f1_hz,mesh_ratio_s,p1_dof,check_dof,mesh_ratio_p2_freq_err,mesh_ratio_p2_s,database_entries,"
+         "ritz_indicator,ritz_predicted_median,ritz_predicted_p90,check_indicator,check_predicted_median,check_predicted_p90\n";
   csv.precision(9);
   for (const std::string& name : objects) {
     const ObjectAsset& asset = *std::find_if(p.objects.begin(), p.objects.end(), [&](const ObjectAsset& a) { return a.name == name; });
@@ -133,7 +118,7 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
         if (!world) return world.error();
         auto id = world.value().addObject({.asset = name});
         if (!id) return id.error();
-        auto hit = world.value().impact(impactFor(asset, id.value(), static_cast<uint64_t>(seed), speed));
+        auto hit = world.value().impact(seededImpact(asset, id.value(), static_cast<uint64_t>(seed), speed));
         if (!hit) return hit.error();
         if (!hit.value().broken) continue;
         const ImpactResult& r = hit.value();
@@ -194,6 +179,7 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
           // The degree-5 values times the fragment's own mesh's ratios (meshFrequencyRatios), as the
           // World takes them: its own cut (CutCells::Prisms) and the ratios, timed together.
           Eigen::VectorXd meshRatioHz;
+          double checkIndicator = std::numeric_limits<double>::quiet_NaN();
           const int64_t p1Dof = fragmentCutDof(asset.tetMesh, topology.value(), r.fracture.nodeLabels, static_cast<int>(i), ElementOrder::P1);
           const int64_t checkDof = fragmentCutDof(asset.tetMesh, topology.value(), r.fracture.nodeLabels, static_cast<int>(i), ElementOrder::P1,
                                                   CutCells::Prisms);
@@ -203,7 +189,13 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
             auto ratios = check ? meshFrequencyRatios(check.value(), material, 5, kMeshRatioModes) : Result<MeshFrequencyRatios>(check.error());
             meshRatioHz = polynomial[2];
             if (ratios && meshRatioHz.size()) applyMeshRatios(meshRatioHz, ratios.value());
+            if (ratios) checkIndicator = meshGain(ratios.value());
           });
+          // The bodies' predicted errors (World::frequencyError): the pack's models at the indicators.
+          const FrequencyErrorModels& bodyModels = p.database.frequencyErrors;
+          const double ritzIndicator = ritzConvergence(polynomial[0], polynomial[2], kMeshRatioModes);  // degree 3 to 5, as the World
+          const MatchErrorPrediction ritzPredicted = predictMatchError(bodyModels.ritz, ritzIndicator);
+          const MatchErrorPrediction checkPredicted = predictMatchError(bodyModels.checked, checkIndicator);
           // The same check in quadratic tets (FractureSettings::meshRatioElement = P2).
           Eigen::VectorXd meshRatioP2Hz;
           const double meshRatioP2S = medianSeconds(s.repeats, [&] {
@@ -244,7 +236,8 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
                 << (reference && meshRatioHz.size() >= 3 ? matchFrequencyError(meshRatioHz, refHz) : nan) << ","
                 << (meshRatioHz.size() ? meshRatioHz[0] : nan) << "," << meshRatioS << "," << p1Dof << "," << checkDof << ","
                 << (reference && meshRatioP2Hz.size() >= 3 ? matchFrequencyError(meshRatioP2Hz, refHz) : nan) << "," << meshRatioP2S << ","
-                << entryCounts[m] << "\n";
+                << entryCounts[m] << "," << ritzIndicator << "," << ritzPredicted.median << "," << ritzPredicted.p90 << ","
+                << checkIndicator << "," << checkPredicted.median << "," << checkPredicted.p90 << "\n";
           }
           if (!s.quiet) {
             std::fprintf(stderr, "%s v=%g seed=%d fragment %zu: %ld tets, match %.2f ms, exact %.2f ms%s%s\n", name.c_str(), speed,

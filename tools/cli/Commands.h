@@ -16,6 +16,7 @@ Runner addQueryCommand(CLI::App& app);
 Runner addBenchCommand(CLI::App& app);
 Runner addImpactCommand(CLI::App& app);
 Runner addCalibrateCommand(CLI::App& app);
+Runner addCalibrateErrorsCommand(CLI::App& app);
 Runner addSizeCommand(CLI::App& app);
 Runner addPlayCommand(CLI::App& app);
 Runner addViewCommand(CLI::App& app);

@@ -251,6 +251,12 @@ Runner addImpactCommand(CLI::App& app) {
       return made && made.value()->modal.frequenciesHz.size() > 0 ? made.value()->modal.frequenciesHz[0]
                                                                   : std::numeric_limits<double>::quiet_NaN();
     };
+    // Where a new object's frequencies come from and their predicted error (World::frequencyError;
+    // the pack's calibration, brittle calibrate-errors). Asks for the body as firstHz does.
+    auto bodyError = [&](const FragmentResult& f) {
+      auto p = f.object.valid() ? world.value().frequencyError(f.object) : Result<FrequencyErrorPrediction>(makeError(ErrorCode::InvalidArgument, "no object"));
+      return p ? p.value() : FrequencyErrorPrediction{};
+    };
     std::map<std::string, int> paths;
     for (FragmentPath p : {FragmentPath::Debris, FragmentPath::ExactModes, FragmentPath::Matched, FragmentPath::SurfaceOnly})
       paths[std::string(fragmentPathName(p))] = 0;
@@ -265,6 +271,13 @@ Runner addImpactCommand(CLI::App& app) {
                                   {"predicted_match_error", orNull(f.predictedMatchError)},
                                   {"predicted_match_error_p90", orNull(f.predictedMatchErrorP90)},
                                   {"frequency_hz", orNull(firstHz(f))}, {"reason", f.reason}});
+      if (f.object.valid()) {
+        const FrequencyErrorPrediction b = bodyError(f);
+        doc["fragments"].back()["frequency_source"] = frequencySourceName(b.source);
+        doc["fragments"].back()["frequency_indicator"] = orNull(b.indicator);
+        doc["fragments"].back()["predicted_frequency_error"] = orNull(b.median);
+        doc["fragments"].back()["predicted_frequency_error_p90"] = orNull(b.p90);
+      }
     }
     doc["fragment_paths"] = paths;
     doc["fingerprint"] = fingerprintHex(fingerprint(r));  // every computed value; times aside
@@ -303,11 +316,13 @@ Runner addImpactCommand(CLI::App& app) {
             std::cout << ", predicted frequency error " << std::lround(100 * f.predictedMatchError) << " %, p90 "
                       << std::lround(100 * f.predictedMatchErrorP90) << " %";
           std::cout << "), f1 " << firstHz(f) << " Hz";
-          if (settings.fracture.polynomialModeDegree > 0) {
-            std::cout << " (the fragment's own, polynomial Ritz";
-            if (settings.fracture.meshRatioMaxDof > 0) std::cout << "; checked on its mesh if ≤ " << settings.fracture.meshRatioMaxDof << " DOF";
-            std::cout << ")";
-          }
+          const FrequencyErrorPrediction b = bodyError(f);
+          std::cout << " (" << (b.source == FrequencySource::Ritz      ? "the fragment's own, polynomial Ritz"
+                                : b.source == FrequencySource::Checked ? "the fragment's own, checked on its mesh"
+                                                                       : "the entry's");
+          if (!std::isnan(b.p90) && b.source != FrequencySource::Entry)
+            std::cout << "; predicted error " << std::lround(100 * b.median) << " %, p90 " << std::lround(100 * b.p90) << " %";
+          std::cout << ")";
         }
         else std::cout << "unmatched: " << f.reason;
         std::cout << "\n";

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   add("bench", brittle::cli::addBenchCommand(app));
   add("impact", brittle::cli::addImpactCommand(app));
   add("calibrate", brittle::cli::addCalibrateCommand(app));
+  add("calibrate-errors", brittle::cli::addCalibrateErrorsCommand(app));
   add("size", brittle::cli::addSizeCommand(app));
   add("play", brittle::cli::addPlayCommand(app));
   add("view", brittle::cli::addViewCommand(app));

@@ -69,6 +69,9 @@ struct FragmentDatabase {
   /// Per kind: the match error against the descriptor distance, calibrated when the database was
   /// baked with physics (MatchErrors.h); empty without physics and in packs baked before it.
   std::array<MatchErrorModel, kDescriptorKindCount> matchErrors;
+  /// A matched body's own frequencies' error against the runtime's indicators (MatchErrors.h),
+  /// calibrated on the pack's objects' runtime fragments; empty when not calibrated.
+  FrequencyErrorModels frequencyErrors;
   /// Null: `entries` are whole. Set: the pack was read with EntryReading::OnDemand, `entries` hold
   /// every field but the arrays (asset.tetMesh, asset.surfaceFaces, asset.modal.modes,
   /// asset.stressModes, asset.eliminationOrder, surface), `descriptors` are empty (0 rows), and

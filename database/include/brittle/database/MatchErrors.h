@@ -47,6 +47,22 @@ struct MatchErrorModel {
   bool empty() const { return distance.empty(); }
 };
 
+/// How far a matched body's own frequencies are from its fragment's (the runtime's
+/// FractureSettings::polynomialModeDegree and meshRatioMaxDof), against an indicator the runtime
+/// computes with them, in place of the descriptor distance (the same binned model):
+/// - `ritz`: the Ritz values' own convergence, max over j = 1..3 of (f_j at degree p − 2 − f_j at
+///   p) / f_j at p (ritzConvergence, PolynomialModes.h): a fragment whose frequencies still move
+///   from one degree to the next has a part the polynomials do not follow yet;
+/// - `checked`: the fragment's mesh's gain over the polynomials, 1 − min over j of its ratio
+///   (meshGain, FragmentModes.h), for a body whose Ritz values its mesh corrected.
+/// The truth is the fragment's own solid in quadratic tets; calibrated by breaking the pack's own
+/// objects (brittle/precompute/FrequencyErrorCalibration.h). Empty models: not calibrated.
+struct FrequencyErrorModels {
+  MatchErrorModel ritz;
+  MatchErrorModel checked;
+  bool empty() const { return ritz.empty() && checked.empty(); }
+};
+
 struct MatchErrorPrediction {
   double median = std::numeric_limits<double>::quiet_NaN();  ///< NaN: the database has no model
   double p90 = std::numeric_limits<double>::quiet_NaN();

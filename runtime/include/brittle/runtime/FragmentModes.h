@@ -140,4 +140,9 @@ Result<MeshFrequencyRatios> meshFrequencyRatios(const FragmentSubMesh& sub, cons
 /// least the highest of those scaled, since the ratios are at most 1.
 void applyMeshRatios(Eigen::VectorXd& frequenciesHz, const MeshFrequencyRatios& ratios);
 
+/// What the mesh gained over the polynomials: 1 − the smallest ratio, in [0, 1). The indicator of a
+/// checked body's error (FrequencyErrorModels::checked, MatchErrors.h): on the default objects'
+/// pieces its rank correlation with the checked frequencies' error is 0.72. NaN without ratios.
+double meshGain(const MeshFrequencyRatios& ratios);
+
 }  // namespace brittle

@@ -299,6 +299,33 @@ enum class FragmentPath : uint8_t {
 /// Stable snake_case name of a path: "debris", "exact_modes", "matched", "surface_only".
 std::string_view fragmentPathName(FragmentPath path);
 
+/// Where a body's lowest frequencies come from (World::frequencyError).
+enum class FrequencySource : uint8_t {
+  Own,      ///< its own modal analysis: a pack object, or a fragment on the exact path
+  Entry,    ///< its database entry's, placed on it (polynomialModeDegree 0, or the Ritz analysis failed)
+  Ritz,     ///< the fragment's polynomial Ritz values (polynomialModeDegree)
+  Checked,  ///< those, the lowest three corrected by the fragment's own mesh (meshRatioMaxDof or the later check)
+};
+
+/// Stable snake_case name: "own", "entry", "ritz", "checked".
+std::string_view frequencySourceName(FrequencySource source);
+
+/// How far a body's first three frequencies are predicted to be from its solid's own (the largest
+/// relative error of the three, as chart 5 measures it against the fragment's P2 modes): the
+/// pack's calibrated model for the body's source (MatchErrors.h), at the body's indicator.
+struct FrequencyErrorPrediction {
+  FrequencySource source = FrequencySource::Own;
+  /// What the prediction is read at: Entry, the match's descriptor distance; Ritz, the Ritz values'
+  /// convergence from degree p − 2 to p (ritzConvergence); Checked, the mesh's gain over the
+  /// polynomials (meshGain); Own, NaN.
+  double indicator = std::numeric_limits<double>::quiet_NaN();
+  /// Median and 90th percentile; NaN without a model: Own (nothing to predict), or a pack whose
+  /// database has no calibration for the source (brittle calibrate-errors adds one).
+  double median = std::numeric_limits<double>::quiet_NaN();
+  double p90 = std::numeric_limits<double>::quiet_NaN();
+  bool beyondRange = false;  ///< the indicator is beyond every calibrated one (the last bin's errors)
+};
+
 struct FragmentResult {
   /// The new breakable object; invalid for debris and unmatched fragments. Its modal data are made
   /// after the impact (see above); should that fail, its impacts and objectAsset return the error
@@ -396,6 +423,11 @@ class World {
   /// objectAsset(id) before it or for a NaN time.
   Result<const ObjectAsset*> objectAsset(ObjectId id, double timeS) const;
   Result<ObjectDesc> objectPose(ObjectId id) const;
+  /// How the asset an impact at host time `timeS` uses got its frequencies, and how far off they
+  /// are predicted to be (FrequencyErrorPrediction); for a fragment, known once its body is made
+  /// (made now, or waited for, as objectAsset). A matched piece's prediction at its lateCheckDueS
+  /// and after is its checked body's. Errors: InvalidArgument (stale id), those of the body's making.
+  Result<FrequencyErrorPrediction> frequencyError(ObjectId id, double timeS = std::numeric_limits<double>::quiet_NaN()) const;
 
   /// Computes the fracture of one impact. When the body breaks, its id becomes stale and each
   /// matched fragment is a new object (same pose). Errors: InvalidArgument (stale id, non-finite

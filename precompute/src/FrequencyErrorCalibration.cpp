@@ -1,0 +1,163 @@
+#include "brittle/precompute/FrequencyErrorCalibration.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "brittle/runtime/FragmentModes.h"
+#include "brittle/runtime/PolynomialModes.h"
+
+namespace brittle {
+namespace {
+
+Error calibrationError(const std::string& message) { return makeError(ErrorCode::InvalidArgument, "frequency errors: " + message); }
+
+Status validateCalibration(const FrequencyErrorCalibrationSettings& s) {
+  if (s.speedsMps.empty() || std::any_of(s.speedsMps.begin(), s.speedsMps.end(), [](double v) { return !(v > 0.0) || !std::isfinite(v); }))
+    return calibrationError("speeds must be finite and > 0, at least one");
+  if (s.seeds < 1 || s.maxFragmentsPerImpact < 1) return calibrationError("seeds and max fragments must be ≥ 1");
+  if (s.degree < 3 || s.degree > kMaxPolynomialModeDegree)
+    return calibrationError("degree " + std::to_string(s.degree) + " is outside [3, " + std::to_string(kMaxPolynomialModeDegree) + "]");
+  if (s.checkMaxDof < 0 || s.referenceMaxTets < 1) return calibrationError("check max DOF must be ≥ 0 and reference max tets ≥ 1");
+  if (s.bins.bins < 1) return calibrationError("bins must be ≥ 1");
+  return Ok{};
+}
+
+// The fragments that are not debris, the largest first, at most `count` spread over their sizes.
+std::vector<size_t> spreadPieces(const ImpactResult& r, int count) {
+  std::vector<size_t> order;
+  for (size_t i = 0; i < r.fragments.size(); ++i)
+    if (!r.fragments[i].debris) order.push_back(i);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return r.fragments[a].massProperties.volumeM3 > r.fragments[b].massProperties.volumeM3;
+  });
+  const auto k = static_cast<size_t>(count);
+  if (order.size() <= k) return order;
+  std::vector<size_t> spread;
+  const size_t n = order.size();
+  for (size_t j = 0; j < k; ++j) spread.push_back(order[k == 1 ? 0 : j * (n - 1) / (k - 1)]);
+  return spread;
+}
+
+// One fragment's sample; false when it has no truth (too large, or its analysis failed) or no
+// Ritz values.
+bool measureFragment(const ObjectAsset& asset, const TetTopology& topology, const Material& material, const FractureState& fracture,
+             const FragmentResult& fr, int label, const FrequencyErrorCalibrationSettings& s, FrequencyErrorSample& out) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto sub = fragmentSubMesh(asset.tetMesh, topology, fracture.nodeLabels, fracture.edgeCuts, label);
+  if (!sub || sub.value().mesh.tets.rows() > s.referenceMaxTets) return false;
+  ExactModesSettings rs;
+  rs.modeCount = kMeshRatioModes;
+  rs.elementOrder = ElementOrder::P2;
+  auto truth = exactFragmentAsset(sub.value(), material, rs, asset.name + ".f" + std::to_string(label) + ".truth");
+  if (!truth || truth.value().modal.frequenciesHz.size() < kMeshRatioModes) return false;
+  const Eigen::VectorXd& truthHz = truth.value().modal.frequenciesHz;
+  // As the World: the Ritz values from the surface's moments, degree p and p − 2 (ImpactStages.cpp, placeEntry).
+  auto high = polynomialModes(fr.surface, material, s.degree, /*withShapes=*/false, kMeshRatioModes);
+  auto low = polynomialModes(fr.surface, material, s.degree - 2, /*withShapes=*/false, kMeshRatioModes);
+  if (!high || !low) return false;
+  out.fragment = label;
+  out.truthF1Hz = truthHz[0];
+  out.ritzIndicator = ritzConvergence(low.value().frequenciesHz, high.value().frequenciesHz, kMeshRatioModes);
+  out.ritzError = matchFrequencyError(high.value().frequenciesHz, truthHz);
+  out.checkDof = fragmentCutDof(asset.tetMesh, topology, fracture.nodeLabels, label, ElementOrder::P1, CutCells::Prisms);
+  out.checkIndicator = out.checkError = nan;
+  if (out.checkDof > 0 && out.checkDof <= s.checkMaxDof) {
+    auto check = fragmentSubMesh(asset.tetMesh, topology, fracture.nodeLabels, fracture.edgeCuts, label, CutCells::Prisms);
+    auto ratios = check ? meshFrequencyRatios(check.value(), material, s.degree, kMeshRatioModes, s.checkOrder)
+                        : Result<MeshFrequencyRatios>(check.error());
+    if (ratios) {
+      Eigen::VectorXd checked = high.value().frequenciesHz;
+      applyMeshRatios(checked, ratios.value());
+      out.checkIndicator = meshGain(ratios.value());
+      out.checkError = matchFrequencyError(checked, truthHz);
+    }
+  }
+  return std::isfinite(out.ritzIndicator) && std::isfinite(out.ritzError);
+}
+
+}  // namespace
+
+ImpactDesc seededImpact(const ObjectAsset& a, ObjectId id, uint64_t seed, double speedMps) {
+  std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 11);
+  const Eigen::Index f = static_cast<Eigen::Index>(rng() % static_cast<uint64_t>(a.surfaceFaces.rows()));
+  const Eigen::Vector3d p0 = a.tetMesh.nodes.row(a.surfaceFaces(f, 0)), p1 = a.tetMesh.nodes.row(a.surfaceFaces(f, 1)),
+                        p2 = a.tetMesh.nodes.row(a.surfaceFaces(f, 2));
+  ImpactDesc d;
+  d.object = id;
+  d.pointWorld = (p0 + p1 + p2) / 3.0;
+  d.normalWorld = (p1 - p0).cross(p2 - p0).normalized();
+  d.speedMps = speedMps;
+  d.impactorMassKg = 0.2 * a.massProperties.massKg;
+  d.impactorRadiusM = 0.05 * (a.tetMesh.nodes.colwise().maxCoeff() - a.tetMesh.nodes.colwise().minCoeff()).norm();
+  return d;
+}
+
+Result<FrequencyErrorCalibration> calibrateFrequencyErrors(const Pack& pack, const FrequencyErrorCalibrationSettings& s,
+                                                           ProgressSink* progress) {
+  if (Status st = validateCalibration(s); !st) return st.error();
+  if (pack.objects.empty()) return calibrationError("the pack has no object");
+  std::vector<const ObjectAsset*> objects;
+  for (const ObjectAsset& a : pack.objects)
+    if (s.objects.empty() || std::find(s.objects.begin(), s.objects.end(), a.name) != s.objects.end()) objects.push_back(&a);
+  for (const std::string& name : s.objects)
+    if (std::none_of(pack.objects.begin(), pack.objects.end(), [&](const ObjectAsset& a) { return a.name == name; }))
+      return calibrationError("no object '" + name + "' in the pack");
+  FrequencyErrorCalibration out;
+  const size_t impacts = objects.size() * s.speedsMps.size() * static_cast<size_t>(s.seeds);
+  size_t done = 0;
+  for (const ObjectAsset* asset : objects) {
+    auto material = std::find_if(pack.materials.begin(), pack.materials.end(), [&](const Material& m) { return m.name == asset->materialName; });
+    if (material == pack.materials.end()) return calibrationError("object '" + asset->name + "' names no material of the pack");
+    auto topology = buildTetTopology(asset->tetMesh);
+    if (!topology) return topology.error();
+    for (double speed : s.speedsMps) {
+      for (int k = 0; k < s.seeds; ++k, ++done) {
+        reportProgress(progress, "frequency errors", static_cast<double>(done) / static_cast<double>(impacts));
+        if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "frequency errors: interrupted");
+        const uint64_t seed = s.firstSeed + static_cast<uint64_t>(k);
+        WorldSettings ws;
+        ws.seed = seed;
+        ws.fracture.matchFragments = false;  // the fragments alone: their bodies are measured here
+        Pack one;
+        one.materials = {*material};
+        one.objects = {*asset};
+        auto world = World::create(std::move(one), ws);
+        if (!world) return world.error();
+        auto id = world.value().addObject({.asset = asset->name});
+        if (!id) return id.error();
+        auto hit = world.value().impact(seededImpact(*asset, id.value(), seed, speed));
+        if (!hit) return hit.error();
+        if (!hit.value().broken) continue;
+        const ImpactResult& r = hit.value();
+        for (size_t i : spreadPieces(r, s.maxFragmentsPerImpact)) {
+          FrequencyErrorSample sample;
+          sample.object = asset->name;
+          sample.speedMps = speed;
+          sample.seed = seed;
+          if (measureFragment(*asset, topology.value(), *material, r.fracture, r.fragments[i], static_cast<int>(i), s, sample))
+            out.samples.push_back(std::move(sample));
+        }
+      }
+    }
+  }
+  reportProgress(progress, "frequency errors", 1.0);
+  std::vector<std::pair<double, double>> ritz, checked;
+  for (const FrequencyErrorSample& x : out.samples) {
+    ritz.emplace_back(x.ritzIndicator, x.ritzError);
+    if (std::isfinite(x.checkIndicator) && std::isfinite(x.checkError)) checked.emplace_back(x.checkIndicator, x.checkError);
+  }
+  if (ritz.empty()) return calibrationError("no fragment to calibrate on (no impact broke an object, or none had a truth): more speeds or seeds");
+  auto ritzModel = fitMatchErrors(std::move(ritz), s.bins);
+  if (!ritzModel) return ritzModel.error();
+  out.models.ritz = std::move(ritzModel).value();
+  if (!checked.empty()) {
+    auto checkedModel = fitMatchErrors(std::move(checked), s.bins);
+    if (!checkedModel) return checkedModel.error();
+    out.models.checked = std::move(checkedModel).value();
+  }
+  return out;
+}
+
+}  // namespace brittle
