@@ -93,7 +93,7 @@ Status validateFragmentDatabase(const FragmentDatabase& db) {
       return invalid(std::string(descriptorKindName(kind)) + " " + st.error().message);
     }
   }
-  for (const MatchErrorModel* m : {&db.frequencyErrors.ritz, &db.frequencyErrors.checked})
+  for (const MatchErrorModel* m : {&db.frequencyErrors.ritz, &db.frequencyErrors.checked, &db.frequencyErrors.checkedP2})
     if (Status st = validateMatchErrorModel(*m); !st) return invalid("frequency " + st.error().message);
   return Ok{};
 }

@@ -605,6 +605,7 @@ FragmentDatabase readDatabase(FileReader& r, int64_t version, Handle* onDemand, 
   if (r.exists("/database/frequency_errors")) {  // packs before it have none (brittle calibrate-errors adds it)
     readModel("/database/frequency_errors/ritz", db.frequencyErrors.ritz);
     readModel("/database/frequency_errors/checked", db.frequencyErrors.checked);
+    readModel("/database/frequency_errors/checked_p2", db.frequencyErrors.checkedP2);
   }
 
   db.entries.resize(count);

@@ -505,6 +505,7 @@ void writeDatabase(FileWriter& w, const FragmentDatabase& db) {
     Handle errors = w.createGroup("/database/frequency_errors");
     writeModel(db.frequencyErrors.ritz, "/database/frequency_errors/ritz");
     writeModel(db.frequencyErrors.checked, "/database/frequency_errors/checked");
+    writeModel(db.frequencyErrors.checkedP2, "/database/frequency_errors/checked_p2");
   }
 }
 

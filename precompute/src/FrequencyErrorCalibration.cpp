@@ -62,17 +62,20 @@ bool measureFragment(const ObjectAsset& asset, const TetTopology& topology, cons
   out.ritzIndicator = ritzConvergence(low.value().frequenciesHz, high.value().frequenciesHz, kMeshRatioModes);
   out.ritzError = matchFrequencyError(high.value().frequenciesHz, truthHz);
   out.checkDof = fragmentCutDof(asset.tetMesh, topology, fracture.nodeLabels, label, ElementOrder::P1, CutCells::Prisms);
-  out.checkIndicator = out.checkError = nan;
+  out.checkIndicator = out.checkError = out.checkP2Indicator = out.checkP2Error = nan;
   if (out.checkDof > 0 && out.checkDof <= s.checkMaxDof) {
     auto check = fragmentSubMesh(asset.tetMesh, topology, fracture.nodeLabels, fracture.edgeCuts, label, CutCells::Prisms);
-    auto ratios = check ? meshFrequencyRatios(check.value(), material, s.degree, kMeshRatioModes, s.checkOrder)
-                        : Result<MeshFrequencyRatios>(check.error());
-    if (ratios) {
+    auto checkIn = [&](ElementOrder order, double& indicator, double& error) {
+      auto ratios = check ? meshFrequencyRatios(check.value(), material, s.degree, kMeshRatioModes, order)
+                          : Result<MeshFrequencyRatios>(check.error());
+      if (!ratios) return;
       Eigen::VectorXd checked = high.value().frequenciesHz;
       applyMeshRatios(checked, ratios.value());
-      out.checkIndicator = meshGain(ratios.value());
-      out.checkError = matchFrequencyError(checked, truthHz);
-    }
+      indicator = meshGain(ratios.value());
+      error = matchFrequencyError(checked, truthHz);
+    };
+    checkIn(ElementOrder::P1, out.checkIndicator, out.checkError);
+    if (s.p2Checks) checkIn(ElementOrder::P2, out.checkP2Indicator, out.checkP2Error);
   }
   return std::isfinite(out.ritzIndicator) && std::isfinite(out.ritzError);
 }
@@ -143,19 +146,21 @@ Result<FrequencyErrorCalibration> calibrateFrequencyErrors(const Pack& pack, con
     }
   }
   reportProgress(progress, "frequency errors", 1.0);
-  std::vector<std::pair<double, double>> ritz, checked;
+  std::vector<std::pair<double, double>> ritz, checked, checkedP2;
   for (const FrequencyErrorSample& x : out.samples) {
     ritz.emplace_back(x.ritzIndicator, x.ritzError);
     if (std::isfinite(x.checkIndicator) && std::isfinite(x.checkError)) checked.emplace_back(x.checkIndicator, x.checkError);
+    if (std::isfinite(x.checkP2Indicator) && std::isfinite(x.checkP2Error)) checkedP2.emplace_back(x.checkP2Indicator, x.checkP2Error);
   }
   if (ritz.empty()) return calibrationError("no fragment to calibrate on (no impact broke an object, or none had a truth): more speeds or seeds");
   auto ritzModel = fitMatchErrors(std::move(ritz), s.bins);
   if (!ritzModel) return ritzModel.error();
   out.models.ritz = std::move(ritzModel).value();
-  if (!checked.empty()) {
-    auto checkedModel = fitMatchErrors(std::move(checked), s.bins);
-    if (!checkedModel) return checkedModel.error();
-    out.models.checked = std::move(checkedModel).value();
+  for (auto [pairs, model] : {std::pair{&checked, &out.models.checked}, std::pair{&checkedP2, &out.models.checkedP2}}) {
+    if (pairs->empty()) continue;
+    auto fitted = fitMatchErrors(std::move(*pairs), s.bins);
+    if (!fitted) return fitted.error();
+    *model = std::move(fitted).value();
   }
   return out;
 }

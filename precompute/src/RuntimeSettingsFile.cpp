@@ -39,6 +39,16 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
     out = static_cast<int>(x);
     return Ok{};
   };
+  auto finite = [&](const std::string& key, double& out) -> Status {  // finite and ≥ 0
+    const auto& v = doc[key];
+    if (!v.is_number()) return settingsFileError(sourceName, "\"" + key + "\" must be a number");
+    const double x = v.get<double>();
+    if (!(x >= 0.0) || !std::isfinite(x)) {
+      return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"" + key + "\" must be finite and ≥ 0");
+    }
+    out = x;
+    return Ok{};
+  };
   auto fraction = [&](const std::string& key, double& out) -> Status {  // a share in [0, 1)
     const auto& v = doc[key];
     if (!v.is_number()) return settingsFileError(sourceName, "\"" + key + "\" must be a number");
@@ -85,11 +95,11 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
     } else if (key == "mesh_ratio_late_max_dof") {
       if (Status st = integer(key, s.meshRatioLateMaxDof); !st) return st.error();
     } else if (key == "mesh_ratio_late_delay_s") {
-      if (!value.is_number()) return settingsFileError(sourceName, "\"mesh_ratio_late_delay_s\" must be a number");
-      s.meshRatioLateDelayS = value.get<double>();
-      if (!(s.meshRatioLateDelayS >= 0.0) || !std::isfinite(s.meshRatioLateDelayS)) {
-        return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"mesh_ratio_late_delay_s\" must be finite and ≥ 0");
-      }
+      if (Status st = finite(key, s.meshRatioLateDelayS); !st) return st.error();
+    } else if (key == "frequency_error_target") {
+      if (Status st = finite(key, s.frequencyErrorTarget); !st) return st.error();
+    } else if (key == "mesh_ratio_escalation_delay_s") {
+      if (Status st = finite(key, s.meshRatioEscalationDelayS); !st) return st.error();
     } else if (key == "mesh_ratio_element") {
       if (!value.is_string()) return settingsFileError(sourceName, "\"mesh_ratio_element\" must be a string");
       const auto order = parseElementOrder(value.get<std::string>());
@@ -125,6 +135,8 @@ std::string runtimeSettingsJson(const FractureSettings& s) {
                               {"mesh_ratio_max_dof", s.meshRatioMaxDof},
                               {"mesh_ratio_late_max_dof", s.meshRatioLateMaxDof},
                               {"mesh_ratio_late_delay_s", s.meshRatioLateDelayS},
+                              {"frequency_error_target", s.frequencyErrorTarget},
+                              {"mesh_ratio_escalation_delay_s", s.meshRatioEscalationDelayS},
                               {"mesh_ratio_element", elementOrderName(s.meshRatioElement)},
                               {"modes", s.modeCount}};
   return doc.dump(2) + "\n";

@@ -59,16 +59,28 @@ std::shared_ptr<const BodySource> BodySource::deferred(Maker make) {
 }
 
 std::shared_ptr<const BodySource> BodySource::deferred(Maker make, LateMaker late, double lateDueS) {
+  std::vector<Later> laters;
+  laters.push_back({std::move(late), lateDueS});
+  return deferred(std::move(make), std::move(laters));
+}
+
+std::shared_ptr<const BodySource> BodySource::deferred(Maker make, std::vector<Later> laters) {
   auto source = std::make_shared<BodySource>();
   source->mMake = std::move(make);
-  auto later = std::make_shared<BodySource>();
-  later->mMake = [base = std::weak_ptr<const BodySource>(source), late = std::move(late)]() -> Result<std::shared_ptr<const Body>> {
-    const auto held = base.lock();
-    if (!held) return makeError(ErrorCode::InvalidArgument, "the body's earlier version is gone");
-    return late(held->get());
-  };
-  source->mLate = std::move(later);
-  source->mLateDueS = lateDueS;
+  BodySource* previous = source.get();
+  std::weak_ptr<const BodySource> base = source;
+  for (Later& l : laters) {
+    auto later = std::make_shared<BodySource>();
+    later->mMake = [base, late = std::move(l.make)]() -> Result<std::shared_ptr<const Body>> {
+      const auto held = base.lock();
+      if (!held) return makeError(ErrorCode::InvalidArgument, "the body's earlier version is gone");
+      return late(held->get());
+    };
+    previous->mLate = later;
+    previous->mLateDueS = l.dueS;
+    previous = later.get();
+    base = later;
+  }
   return source;
 }
 

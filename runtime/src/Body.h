@@ -101,6 +101,13 @@ class BodySource {
   /// at least `lateDueS` use it (sourceAt). The later version holds this one weakly: no cycle.
   using LateMaker = std::function<Result<std::shared_ptr<const Body>>(const Result<std::shared_ptr<const Body>>& base)>;
   static std::shared_ptr<const BodySource> deferred(Maker make, LateMaker late, double lateDueS);
+  /// A chain of later versions (FractureSettings::frequencyErrorTarget's escalation after the
+  /// later check), due times ascending: each is made from the one before it, which it holds weakly.
+  struct Later {
+    LateMaker make;
+    double dueS = 0.0;
+  };
+  static std::shared_ptr<const BodySource> deferred(Maker make, std::vector<Later> laters);
   /// The later version, null if none; its due time (host seconds).
   const std::shared_ptr<const BodySource>& late() const { return mLate; }
   double lateDueS() const { return mLateDueS; }
@@ -117,10 +124,10 @@ class BodySource {
   double mLateDueS = 0.0;
 };
 
-/// The version of `source` an impact at host time `timeS` uses: its later one from its due time on
-/// (a NaN time never reaches it), else itself.
+/// The version of `source` an impact at host time `timeS` uses: the last of its chain whose due
+/// time has come (a NaN time never reaches one), else itself.
 inline const std::shared_ptr<const BodySource>& sourceAt(const std::shared_ptr<const BodySource>& source, double timeS) {
-  return source && source->late() && timeS >= source->lateDueS() ? source->late() : source;
+  return source && source->late() && timeS >= source->lateDueS() ? sourceAt(source->late(), timeS) : source;
 }
 
 /// The modes a body keeps of `available`: the first `requested`, or all of them when requested ≤ 0.

@@ -310,7 +310,7 @@ Result<ObjectAsset> placeEntry(const EntryCache& cache, const FragmentMatch& m, 
                         : Result<MeshFrequencyRatios>(sub.error());
       if (ratios) {
         applyMeshRatios(own.value().frequenciesHz, ratios.value());
-        source = FrequencySource::Checked;
+        source = check.order == ElementOrder::P2 ? FrequencySource::CheckedP2 : FrequencySource::Checked;
         indicator = meshGain(ratios.value());
       }
     }
@@ -318,7 +318,9 @@ Result<ObjectAsset> placeEntry(const EntryCache& cache, const FragmentMatch& m, 
   Eigen::VectorXd entry = placed.value().modal.eigenvaluesRad2PerS2;
   if (adoptPolynomialFrequencies(placed.value(), own.value())) {
     entryEigenvalues = std::move(entry);
-    const MatchErrorModel& model = source == FrequencySource::Checked ? models.checked : models.ritz;
+    const MatchErrorModel& model = source == FrequencySource::Checked     ? models.checked
+                                   : source == FrequencySource::CheckedP2 ? models.checkedP2
+                                                                          : models.ritz;
     predicted(source, indicator, predictMatchError(model, indicator));
   }
   return placed;
@@ -391,16 +393,39 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
   const MeshCheck lateCheck{parent, static_cast<int>(i), fs.meshRatioLateMaxDof, fs.meshRatioElement};
   fr.lateCheckDueS = job.desc.timeS + fs.meshRatioLateDelayS;
   auto sharedSurface = std::make_shared<const TriangleMesh>(std::move(surface));
-  return BodySource::deferred(
-      [make, check, sharedSurface] { return make(*sharedSurface, check); },
-      [make, check, lateCheck, sharedSurface](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
-        const Body& parentBody = *check.parent->body;
-        const int64_t dof = fragmentCutDof(parentBody.asset.tetMesh, parentBody.topology, check.parent->nodeLabels, check.label,
-                                           ElementOrder::P1, CutCells::Prisms);
-        if (!base || dof <= check.maxDof || dof > lateCheck.maxDof) return base;
-        return make(*sharedSurface, lateCheck);
-      },
-      fr.lateCheckDueS);
+  // The piece's check's size in linear DOF, as placeEntry counts it.
+  auto checkDof = [check] {
+    const Body& parentBody = *check.parent->body;
+    return fragmentCutDof(parentBody.asset.tetMesh, parentBody.topology, check.parent->nodeLabels, check.label, ElementOrder::P1,
+                          CutCells::Prisms);
+  };
+  std::vector<BodySource::Later> laters;
+  laters.push_back({[make, check, lateCheck, sharedSurface, checkDof](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
+                      const int64_t dof = checkDof();
+                      if (!base || dof <= check.maxDof || dof > lateCheck.maxDof) return base;
+                      return make(*sharedSurface, lateCheck);
+                    },
+                    fr.lateCheckDueS});
+  // The escalation (FractureSettings::frequencyErrorTarget): the later body, when the pack
+  // predicts it over the target, checked again in quadratic tets. Decided from the later body's
+  // own prediction, a pure function of the break: a replay escalates the same pieces.
+  if (fs.frequencyErrorTarget > 0.0 && fs.meshRatioElement == ElementOrder::P1) {
+    const MeshCheck escalated{parent, static_cast<int>(i), fs.meshRatioLateMaxDof, ElementOrder::P2};
+    const double target = fs.frequencyErrorTarget;
+    fr.escalationDueS = job.desc.timeS + fs.meshRatioEscalationDelayS;
+    laters.push_back({[make, escalated, sharedSurface, checkDof, target](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
+                        if (!base) return base;
+                        const FrequencyErrorPrediction& p = base.value()->frequencyError;
+                        const bool fromMesh = p.source == FrequencySource::Ritz || p.source == FrequencySource::Checked;
+                        if (!fromMesh || !(p.p90 > target) || checkDof() > escalated.maxDof) return base;
+                        auto made = make(*sharedSurface, escalated);
+                        // A P2 check that failed leaves the Ritz values: the later body is better.
+                        if (!made || made.value()->frequencyError.source != FrequencySource::CheckedP2) return base;
+                        return made;
+                      },
+                      fr.escalationDueS});
+  }
+  return BodySource::deferred([make, check, sharedSurface] { return make(*sharedSurface, check); }, std::move(laters));
 }
 
 // The exact path, all of it on the workers (BodySource): the fragment's own solid cut out of its

@@ -217,7 +217,7 @@ struct World::Impl {
     }
     // The fragments' modal data, stress bounds and (where scheduled) static corrections are made on
     // the workers from now on (an impact or objectAsset that needs one first makes or waits for it).
-    // Later versions (FractureSettings::meshRatioLateMaxDof) after every first one.
+    // Later versions (FractureSettings::meshRatioLateMaxDof, frequencyErrorTarget) after every first one.
     auto prepare = [&makers](std::shared_ptr<const BodySource> source) {
       makers.submit([source = std::move(source)] {
         const auto& body = source->get();
@@ -226,10 +226,16 @@ struct World::Impl {
         if (body.value()->staticCorrectionScheduled()) (void)body.value()->staticCorrection();
       });
     };
-    for (auto& source : newBodies)
-      if (source) prepare(source);
-    for (auto& source : newBodies)
-      if (source && source->late()) prepare(source->late());
+    // Each version of the chain after every one before it (escalations last).
+    for (bool any = true; any;) {
+      any = false;
+      for (auto& source : newBodies) {
+        if (!source) continue;
+        prepare(source);
+        source = source->late();
+        any = any || source != nullptr;
+      }
+    }
     newBodies.clear();
     return Ok{};
   }
@@ -251,6 +257,7 @@ std::string_view frequencySourceName(FrequencySource source) {
     case FrequencySource::Entry: return "entry";
     case FrequencySource::Ritz: return "ritz";
     case FrequencySource::Checked: return "checked";
+    case FrequencySource::CheckedP2: return "checked_p2";
   }
   return "unknown";
 }
@@ -270,9 +277,11 @@ Status validateWorldSettings(const WorldSettings& s) {
       f.exactModesMaxTets < 0 || f.exactModesMaxDof < 0 || f.exactModesBudgetDof < 0 || f.exactModeCount < 1 ||
       !(f.matchErrorTarget >= 0.0 && std::isfinite(f.matchErrorTarget)) || f.polynomialModeDegree < 0 ||
       f.polynomialModeDegree > kMaxPolynomialModeDegree || f.meshRatioMaxDof < 0 || f.meshRatioLateMaxDof < 0 ||
-      !(f.meshRatioLateDelayS >= 0.0) || !std::isfinite(f.meshRatioLateDelayS)) {
+      !(f.meshRatioLateDelayS >= 0.0) || !std::isfinite(f.meshRatioLateDelayS) || !(f.frequencyErrorTarget >= 0.0) ||
+      !std::isfinite(f.frequencyErrorTarget) || !(f.meshRatioEscalationDelayS >= f.meshRatioLateDelayS) ||
+      !std::isfinite(f.meshRatioEscalationDelayS)) {
     return invalidArgument("FractureSettings: modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0, ringDownPeriods ≥ 0 and finite, "
-               "debrisVolumeFraction and contactSpreadFraction in [0, 1), exactModesMaxTets ≥ 0, exactModesMaxDof ≥ 0, exactModesBudgetDof ≥ 0, exactModeCount ≥ 1, matchErrorTarget finite and ≥ 0, polynomialModeDegree in [0, 5], meshRatioMaxDof ≥ 0, meshRatioLateMaxDof ≥ 0, meshRatioLateDelayS finite and ≥ 0");
+               "debrisVolumeFraction and contactSpreadFraction in [0, 1), exactModesMaxTets ≥ 0, exactModesMaxDof ≥ 0, exactModesBudgetDof ≥ 0, exactModeCount ≥ 1, matchErrorTarget finite and ≥ 0, polynomialModeDegree in [0, 5], meshRatioMaxDof ≥ 0, meshRatioLateMaxDof ≥ 0, meshRatioLateDelayS finite and ≥ 0, frequencyErrorTarget finite and ≥ 0, meshRatioEscalationDelayS finite and ≥ meshRatioLateDelayS");
   }
   if (f.crack.maxCracks < 0 || std::isnan(f.crack.propagationStressRatio) || !(f.crack.directionBlend >= 0.0) ||
       !(f.crack.directionBlend <= 1.0) || !(f.crack.noiseRad >= 0.0) || !std::isfinite(f.crack.noiseRad)) {

@@ -125,6 +125,7 @@ Pack makeSeedPack() {
   // And the bodies' frequency-error models, so the fuzzers reach theirs.
   db.frequencyErrors.ritz = errors;
   db.frequencyErrors.checked = errors;
+  db.frequencyErrors.checkedP2 = errors;
   return pack;
 }
 

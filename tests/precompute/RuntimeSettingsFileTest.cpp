@@ -21,6 +21,8 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   s.meshRatioMaxDof = 2345;
   s.meshRatioLateMaxDof = 6789;
   s.meshRatioLateDelayS = 0.75;
+  s.frequencyErrorTarget = 0.2;
+  s.meshRatioEscalationDelayS = 3.5;
   s.meshRatioElement = ElementOrder::P2;
   s.modeCount = 15;
   const auto dir = testing::makeTempDir("runtime-settings");
@@ -36,6 +38,8 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   EXPECT_EQ(back.value().meshRatioMaxDof, 2345);
   EXPECT_EQ(back.value().meshRatioLateMaxDof, 6789);
   EXPECT_EQ(back.value().meshRatioLateDelayS, 0.75);
+  EXPECT_EQ(back.value().frequencyErrorTarget, 0.2);
+  EXPECT_EQ(back.value().meshRatioEscalationDelayS, 3.5);
   EXPECT_EQ(back.value().meshRatioElement, ElementOrder::P2);
   EXPECT_EQ(back.value().modeCount, 15);
 }
@@ -73,6 +77,10 @@ TEST(RuntimeSettingsFile, BadFilesGiveTypedErrors) {
   EXPECT_EQ(code(R"({ "contact_spread_fraction": [0.1] })"), "parse_error");
   EXPECT_EQ(code(R"({ "contact_spread_fraction": 0 })"), "ok");
   EXPECT_EQ(code(R"({ "exact_mode_count": 0 })"), "invalid_argument");
+  EXPECT_EQ(code(R"({ "frequency_error_target": -0.1 })"), "invalid_argument");
+  EXPECT_EQ(code(R"({ "frequency_error_target": "high" })"), "parse_error");
+  EXPECT_EQ(code(R"({ "mesh_ratio_escalation_delay_s": -1 })"), "invalid_argument");
+  EXPECT_EQ(code(R"({ "mesh_ratio_late_delay_s": -1 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "exact_modes_max_tets": 0 })"), "ok");
   EXPECT_EQ(code(R"({ "polynomial_mode_degree": 6 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "polynomial_mode_degree": -1 })"), "invalid_argument");

@@ -641,6 +641,73 @@ TEST_F(WorldTest, BodiesSayWhereTheirFrequenciesComeFromAndTheirPredictedError) 
   EXPECT_EQ(frequencySourceName(FrequencySource::Checked), "checked");
 }
 
+// The escalation (FractureSettings::frequencyErrorTarget): a piece whose later body the pack
+// predicts over the target is checked again in quadratic tets, and its impacts from the break's
+// time plus meshRatioEscalationDelayS on use that body: bit for bit the body a world checking every
+// piece in P2 at birth makes. Within the target, the later body stays.
+TEST_F(WorldTest, AnEscalationChecksInQuadraticTetsWhatIsPredictedOverTheTarget) {
+  Pack calibrated = *sPack;
+  std::vector<std::pair<double, double>> samples;
+  for (int k = 1; k <= 8; ++k) samples.emplace_back(0.05 * k, 0.1 * k);
+  FrequencyErrorModels& models = calibrated.database.frequencyErrors;
+  models.ritz = models.checked = models.checkedP2 = fitMatchErrors(samples, MatchErrorSettings{.bins = 2}).value();
+  auto makeSettings = [](double target) {
+    WorldSettings s;
+    s.fracture.meshRatioMaxDof = 2000;
+    s.fracture.meshRatioLateMaxDof = 100000;
+    s.fracture.frequencyErrorTarget = target;
+    return s;
+  };
+  WorldSettings quadratic;
+  quadratic.fracture.meshRatioMaxDof = 100000;
+  quadratic.fracture.meshRatioElement = ElementOrder::P2;
+  World escalating = World::create(Pack(calibrated), makeSettings(1e-9)).value();  // every prediction is over it
+  World within = World::create(Pack(calibrated), makeSettings(1e9)).value();      // none is
+  World atBirth = World::create(Pack(calibrated), quadratic).value();
+  ImpactDesc hit = ball(escalating.addObject({.asset = "plate"}).value(), 60.0);
+  hit.timeS = 2.0;
+  auto broken = escalating.impact(hit);
+  hit.object = within.addObject({.asset = "plate"}).value();
+  auto brokenWithin = within.impact(hit);
+  hit.object = atBirth.addObject({.asset = "plate"}).value();
+  auto brokenAtBirth = atBirth.impact(hit);
+  ASSERT_TRUE(broken && brokenWithin && brokenAtBirth && broken.value().broken);
+  ASSERT_EQ(hashFragments(broken.value()), hashFragments(brokenAtBirth.value()));
+  int escalated = 0;
+  for (size_t i = 0; i < broken.value().fragments.size(); ++i) {
+    const FragmentResult& f = broken.value().fragments[i];
+    if (f.path != FragmentPath::Matched) continue;
+    EXPECT_EQ(f.escalationDueS, 4.0);  // the break's time plus meshRatioEscalationDelayS (2 s)
+    EXPECT_TRUE(std::isnan(brokenAtBirth.value().fragments[i].escalationDueS));
+    const ObjectAsset* later = escalating.objectAsset(f.object, 3.99).value();
+    const ObjectAsset* last = escalating.objectAsset(f.object, 4.0).value();
+    const FrequencyErrorPrediction p = escalating.frequencyError(f.object, 4.0).value();
+    const ObjectAsset* reference = atBirth.objectAsset(brokenAtBirth.value().fragments[i].object).value();
+    if (p.source == FrequencySource::CheckedP2) {
+      ++escalated;
+      EXPECT_NE(later, last);
+      EXPECT_EQ(last->modal.frequenciesHz, reference->modal.frequenciesHz) << "fragment " << i;
+      EXPECT_EQ(p.p90, predictMatchError(models.checkedP2, p.indicator).p90);
+      EXPECT_EQ(atBirth.frequencyError(brokenAtBirth.value().fragments[i].object).value().source, FrequencySource::CheckedP2);
+    }
+    // Within the target the last version is the later body itself.
+    const FragmentResult& w = brokenWithin.value().fragments[i];
+    EXPECT_EQ(within.objectAsset(w.object, 10.0).value(), within.objectAsset(w.object, 3.0).value());
+    EXPECT_NE(within.frequencyError(w.object, 10.0).value().source, FrequencySource::CheckedP2);
+  }
+  std::printf("%d pieces escalated\n", escalated);
+  EXPECT_GE(escalated, 2);
+  // Typed errors: a negative or infinite target, an escalation before the later check.
+  for (double target : {-0.1, std::numeric_limits<double>::infinity()}) {
+    WorldSettings wrong;
+    wrong.fracture.frequencyErrorTarget = target;
+    EXPECT_EQ(World::create(Pack(*sPack), wrong).error().code, ErrorCode::InvalidArgument) << target;
+  }
+  WorldSettings early;
+  early.fracture.meshRatioEscalationDelayS = 0.25;  // before meshRatioLateDelayS (0.5)
+  EXPECT_EQ(World::create(Pack(*sPack), early).error().code, ErrorCode::InvalidArgument);
+}
+
 // The same in quadratic tets (FractureSettings::meshRatioElement): every checked piece's lowest
 // three are its Ritz values times the P2 check's ratios, bit for bit as the API computes them.
 TEST_F(WorldTest, AQuadraticCheckGivesTheApisValues) {

@@ -336,19 +336,32 @@ TEST_F(CliTest, ExactModesBenchComparesTheMatchWithTheFragmentsOwnModes) {
                                        R"(", "only": ["box", "plate"], "entries": 6, "tets": 300, "modes": 6 } })";
   const CliRun bake = run("bake --manifest " + path("m.json") + " --quiet --out " + path("p.h5"));
   ASSERT_EQ(bake.exitCode, 0) << bake.out;
+  // The bodies' frequency errors calibrated on the tile's own pieces, stored in the pack.
+  const CliRun calibrate = run("calibrate-errors " + path("p.h5") + " --speeds 40 --seeds 2 --max-fragments 4 --bins 2 --quiet --csv " +
+                               path("cal.csv") + " --json");
+  ASSERT_EQ(calibrate.exitCode, 0) << calibrate.out;
+  const auto calibrated = nlohmann::json::parse(calibrate.out);
+  EXPECT_GE(calibrated["database"]["frequency_errors"]["ritz"]["samples"].get<int>(), 2);
+  EXPECT_TRUE(calibrated["database"]["frequency_errors"].contains("checked_p2"));
+  EXPECT_EQ(readCsv(dir / "cal.csv").rows.size(), calibrated["database"]["frequency_errors"]["ritz"]["samples"].get<size_t>());
+  EXPECT_EQ(run("calibrate-errors " + path("tile.h5") + " --quiet").exitCode, 2);  // no database: InvalidArgument
   // Each fragment against the first 3 entries and against all 6: a row for each.
   const CliRun bench = run("bench exact-modes " + path("p.h5") + " --speeds 40 --seeds 1 --max-fragments 3 --exact-modes 6 "
                            "--repeats 1 --entries 3,0 --quiet --csv " + path("x.csv"));
   ASSERT_EQ(bench.exitCode, 0) << bench.out;
   const Csv csv = readCsv(dir / "x.csv");
   EXPECT_EQ(csv.header.substr(0, 62), "object,speed_mps,seed,fragment,volume_fraction,parent_tets,sub");
-  EXPECT_EQ(csv.header.substr(csv.header.size() - 17), ",database_entries");
+  EXPECT_NE(csv.header.find(",database_entries,ritz_indicator,"), std::string::npos);
+  EXPECT_EQ(csv.header.substr(csv.header.size() - 20), ",check_predicted_p90");
   EXPECT_NE(csv.header.find(",polynomial5_freq_err,"), std::string::npos);
+  const auto entriesColumn = static_cast<size_t>(std::count(csv.header.begin(), csv.header.begin() + static_cast<std::ptrdiff_t>(csv.header.find(",database_entries")), ',') + 1);
   std::map<std::string, int> perSize;
-  for (const std::string& line : csv.lines) {
+  for (size_t k = 0; k < csv.lines.size(); ++k) {
+    const std::string& line = csv.lines[k];
     EXPECT_EQ(line.substr(0, 8), "tile,40,") << line;
-    EXPECT_EQ(line.find("nan"), std::string::npos) << line;  // both paths, the polynomial Ritz and the reference ran
-    ++perSize[line.substr(line.rfind(',') + 1)];
+    // Both paths, the polynomial Ritz, the reference and the bodies' predictions (the calibrated pack) ran.
+    EXPECT_EQ(line.find("nan"), std::string::npos) << line;
+    ++perSize[csv.rows[k][entriesColumn]];
   }
   ASSERT_EQ(perSize.size(), 2u);
   EXPECT_EQ(perSize["3"], perSize["6"]);

@@ -1,3 +1,4 @@
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -68,6 +69,13 @@ nlohmann::json databaseJson(const FragmentDatabase& db) {
     }
     j["descriptors"][descriptorKindName(kind)] = k;
   }
+  // The bodies' frequency-error models (brittle calibrate-errors), against their indicators.
+  auto model = [](const MatchErrorModel& m) {
+    return nlohmann::json{{"samples", m.samples}, {"indicator", m.distance}, {"median_error", m.medianError}, {"p90_error", m.p90Error}};
+  };
+  if (!db.frequencyErrors.ritz.empty()) j["frequency_errors"]["ritz"] = model(db.frequencyErrors.ritz);
+  if (!db.frequencyErrors.checked.empty()) j["frequency_errors"]["checked"] = model(db.frequencyErrors.checked);
+  if (!db.frequencyErrors.checkedP2.empty()) j["frequency_errors"]["checked_p2"] = model(db.frequencyErrors.checkedP2);
   return j;
 }
 
@@ -195,6 +203,19 @@ void printInspection(const Pack& pack, std::ostream& out) {
           << ")";
     }
     out << "\n";
+    const FrequencyErrorModels& f = pack.database.frequencyErrors;
+    if (!f.empty()) {
+      out << "  frequency errors  calibrated on " << f.ritz.samples << " runtime fragments; median (p90) from the lowest to the highest indicator:";
+      auto range = [&](const char* what, const MatchErrorModel& m) {
+        if (m.empty()) return;
+        out << " " << what << " " << std::lround(100 * m.medianError.front()) << " (" << std::lround(100 * m.p90Error.front()) << ") to "
+            << std::lround(100 * m.medianError.back()) << " (" << std::lround(100 * m.p90Error.back()) << ") %";
+      };
+      range("Ritz", f.ritz);
+      range(", checked", f.checked);
+      range(", checked in P2", f.checkedP2);
+      out << "\n";
+    }
   }
 }
 

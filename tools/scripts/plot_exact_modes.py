@@ -11,7 +11,9 @@ When the CSV has the match's predicted error (packs from version 4: the database
 calibration, MatchErrors.h), it also writes <csv name>_calibration.png: the predicted median and
 90th percentile against the measured error of each match, and prints how well they are calibrated
 (the share of measured errors within each: 0.5 and 0.9 if calibrated) and the rank correlation of
-predicted and measured errors."""
+predicted and measured errors. The same for the bodies' own frequencies when the pack has their
+calibration (brittle calibrate-errors): <csv name>_ritz_calibration.png (the Ritz values) and
+<csv name>_checked_calibration.png (checked on the fragment's mesh)."""
 import argparse
 import csv
 import math
@@ -139,8 +141,14 @@ def main():
     crossing = math.exp((math.log(args.budget_ms) - fit[1]) / fit[0])
     print(f"exact time ~ tets^{fit[0]:.2f}; the fit crosses {args.budget_ms:g} ms at {crossing:.0f} tets "
           f"(largest fragment within the budget: {max(within) if within else 0} tets)")
+    stem = Path(args.csv).stem
     if "predicted_err_p90" in rows[0]:
-        calibration(rows, Path(args.csv).with_name(Path(args.csv).stem + "_calibration.png"))
+        calibration(rows, Path(args.csv).with_name(stem + "_calibration.png"))
+    if "ritz_predicted_p90" in rows[0]:  # the bodies' own frequencies (World::frequencyError)
+        calibration(rows, Path(args.csv).with_name(stem + "_ritz_calibration.png"), "ritz_predicted_median", "ritz_predicted_p90",
+                    "polynomial5_freq_err", "Ritz values (degree 5)")
+        calibration(rows, Path(args.csv).with_name(stem + "_checked_calibration.png"), "check_predicted_median", "check_predicted_p90",
+                    "mesh_ratio_freq_err", "Ritz values checked on the fragment's mesh")
 
 
 def ranks(values):
@@ -150,13 +158,15 @@ def ranks(values):
     return r
 
 
-def calibration(rows, out):
-    """Predicted against measured match error, on the fragments with both."""
-    pts = [(number(r["predicted_err_median"]), number(r["predicted_err_p90"]), number(r["match_freq_err"]),
-            r["object"], r["predicted_beyond_range"] == "1") for r in rows]
+def calibration(rows, out, median_column="predicted_err_median", p90_column="predicted_err_p90", measured_column="match_freq_err",
+                what="Match"):
+    """Predicted against measured error (the match's, by default; or a body's own frequencies'),
+    on the fragments with both."""
+    pts = [(number(r[median_column]), number(r[p90_column]), number(r[measured_column]),
+            r["object"], r.get("predicted_beyond_range") == "1" and median_column == "predicted_err_median") for r in rows]
     pts = [p for p in pts if all(math.isfinite(x) for x in p[:3])]
     if not pts:
-        print("match error calibration: no fragment has both a predicted and a measured error")
+        print(f"{what} error calibration: no fragment has both a predicted and a measured error")
         return
     median, p90, measured = (np.array([p[i] for p in pts]) for i in range(3))
     fig, ax = plt.subplots(figsize=(6, 5.5))
@@ -168,10 +178,10 @@ def calibration(rows, out):
     ax.plot([0.1, top], [0.1, top], "k--", lw=1, label="measured = predicted")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("predicted error of the match (%)")
-    ax.set_ylabel("measured error of the match, f1..f3 vs reference (%)")
+    ax.set_xlabel(f"predicted error: {what} (%)")
+    ax.set_ylabel("measured error, f1..f3 vs reference (%)")
     within50, within90 = float(np.mean(measured <= median)), float(np.mean(measured <= p90))
-    ax.set_title(f"Match error: predicted against measured ({len(pts)} fragments)\n"
+    ax.set_title(f"{what}: error predicted against measured ({len(pts)} fragments)\n"
                  f"measured within the median {within50:.2f} (0.5 if calibrated), within p90 {within90:.2f} (0.9)",
                  fontsize=9)
     ax.legend(fontsize=7)
@@ -180,7 +190,7 @@ def calibration(rows, out):
     fig.savefig(out, dpi=100)
     rho = float(np.corrcoef(ranks(p90), ranks(measured))[0, 1]) if len(pts) > 2 else math.nan
     beyond = sum(1 for p in pts if p[4])
-    print(f"match error calibration ({len(pts)} fragments, {beyond} beyond the calibrated distances): "
+    print(f"{what} error calibration ({len(pts)} fragments, {beyond} beyond the calibrated distances): "
           f"measured within the predicted median {within50:.2f}, within the predicted p90 {within90:.2f}; "
           f"median predicted p90 {100 * float(np.median(p90)):.1f} %, median measured {100 * float(np.median(measured)):.1f} %; "
           f"rank correlation {rho:.2f}")

@@ -54,13 +54,16 @@ struct MatchErrorModel {
 ///   p) / f_j at p (ritzConvergence, PolynomialModes.h): a fragment whose frequencies still move
 ///   from one degree to the next has a part the polynomials do not follow yet;
 /// - `checked`: the fragment's mesh's gain over the polynomials, 1 − min over j of its ratio
-///   (meshGain, FragmentModes.h), for a body whose Ritz values its mesh corrected.
+///   (meshGain, FragmentModes.h), for a body whose Ritz values its mesh corrected in linear tets;
+/// - `checkedP2`: the same for a check in quadratic tets (FractureSettings::meshRatioElement, or
+///   frequencyErrorTarget's escalation).
 /// The truth is the fragment's own solid in quadratic tets; calibrated by breaking the pack's own
 /// objects (brittle/precompute/FrequencyErrorCalibration.h). Empty models: not calibrated.
 struct FrequencyErrorModels {
   MatchErrorModel ritz;
   MatchErrorModel checked;
-  bool empty() const { return ritz.empty() && checked.empty(); }
+  MatchErrorModel checkedP2;
+  bool empty() const { return ritz.empty() && checked.empty() && checkedP2.empty(); }
 };
 
 struct MatchErrorPrediction {

@@ -174,6 +174,18 @@ struct FractureSettings {
   /// ... how long after its break (host seconds) a piece's later check applies: long enough for
   /// the background threads to have done it (the impact waits for it otherwise).
   double meshRatioLateDelayS = 0.5;
+  /// The scene's target for a matched body's frequencies: the 90th percentile of its f1–f3 error as
+  /// the pack predicts it (World::frequencyError; a pack calibrated by brittle calibrate-errors).
+  /// Above 0, with the later check on (a break with a time, meshRatioElement P1): a piece whose later
+  /// body is still predicted over the target gets a third version, checked in quadratic tets (up to
+  /// meshRatioLateMaxDof linear DOF), used from meshRatioEscalationDelayS after its break. On chart 5's
+  /// held-back pieces at 0.25: 73 of 128 pieces escalate, and from then on the bodies are 4.7 % off
+  /// (median, p90 17 %: the matching targets met) where the later check alone gives 12.6 % (85 %);
+  /// the P2 checks take ~80 ms a piece (median) of idle background time (docs/results/speed-accuracy.md,
+  /// "Escalation by prediction"). 0: off; a pack without the calibration escalates nothing.
+  double frequencyErrorTarget = 0.0;
+  /// ... when an escalated piece's P2 body applies (host seconds after its break), ≥ meshRatioLateDelayS.
+  double meshRatioEscalationDelayS = 2.0;
   DescriptorKind descriptor = DescriptorKind::Moment;
 };
 
@@ -305,9 +317,10 @@ enum class FrequencySource : uint8_t {
   Entry,    ///< its database entry's, placed on it (polynomialModeDegree 0, or the Ritz analysis failed)
   Ritz,     ///< the fragment's polynomial Ritz values (polynomialModeDegree)
   Checked,  ///< those, the lowest three corrected by the fragment's own mesh (meshRatioMaxDof or the later check)
+  CheckedP2,  ///< the same check in quadratic tets (meshRatioElement P2, or frequencyErrorTarget's escalation)
 };
 
-/// Stable snake_case name: "own", "entry", "ritz", "checked".
+/// Stable snake_case name: "own", "entry", "ritz", "checked", "checked_p2".
 std::string_view frequencySourceName(FrequencySource source);
 
 /// How far a body's first three frequencies are predicted to be from its solid's own (the largest
@@ -350,6 +363,10 @@ struct FragmentResult {
   /// timeS of at least this use the body with every check applied, World::objectAsset(id, timeS)
   /// shows it. NaN: none (the break had no time, or the later check is off).
   double lateCheckDueS = std::numeric_limits<double>::quiet_NaN();
+  /// Its escalation (FractureSettings::frequencyErrorTarget): from this host time on, its impacts
+  /// use the body checked in quadratic tets if its later body was predicted over the target (the
+  /// later body otherwise). NaN: none.
+  double escalationDueS = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct StageTimes {
