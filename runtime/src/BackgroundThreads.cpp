@@ -48,21 +48,33 @@ BackgroundThreads::~BackgroundThreads() {
     std::unique_lock lock(mMutex);
     mStop = true;
     mQueue.clear();  // not needed any more: their results die with the World
+    mLaterQueue.clear();
   }
   mWork.notify_all();
   for (std::thread& t : mThreads) t.join();
 }
 
-void BackgroundThreads::submit(std::function<void()> job) {
+void BackgroundThreads::submit(std::function<void()> job, Urgency urgency) {
   {
     std::lock_guard lock(mMutex);
-    mQueue.push_back(std::move(job));
+    (urgency == Urgency::Now ? mQueue : mLaterQueue).push_back(std::move(job));
   }
   mWork.notify_one();
   mIdleWait.notify_all();  // a host in wait() takes it too
 }
 
-void BackgroundThreads::execute(std::function<void()>& job) {
+bool BackgroundThreads::take(std::function<void()>& job, bool& later, bool host) {
+  later = mQueue.empty();
+  if (later && (mLaterQueue.empty() || (!host && mRunningLater >= laterThreads()))) return false;
+  std::deque<std::function<void()>>& queue = later ? mLaterQueue : mQueue;
+  job = std::move(queue.front());
+  queue.pop_front();
+  ++mRunning;
+  if (later) ++mRunningLater;
+  return true;
+}
+
+void BackgroundThreads::execute(std::function<void()>& job, bool later) {
   std::exception_ptr error;
   try {
     job();
@@ -73,40 +85,38 @@ void BackgroundThreads::execute(std::function<void()>& job) {
     std::lock_guard lock(mMutex);
     if (error && !mError) mError = error;
     --mRunning;
+    if (later) --mRunningLater;
   }
+  if (later) mWork.notify_one();  // a Later job waiting for a thread may start
   mIdleWait.notify_all();
 }
 
 void BackgroundThreads::run() {
   for (;;) {
     std::function<void()> job;
+    bool later = false;
     {
       std::unique_lock lock(mMutex);
-      mWork.wait(lock, [&] { return mStop || !mQueue.empty(); });
+      mWork.wait(lock, [&] { return mStop || take(job, later, /*host=*/false); });
       if (mStop) return;
-      job = std::move(mQueue.front());
-      mQueue.pop_front();
-      ++mRunning;
     }
-    execute(job);
+    execute(job, later);
   }
 }
 
 void BackgroundThreads::wait() {
   for (;;) {
     std::function<void()> job;
+    bool later = false;
     {
       std::unique_lock lock(mMutex);
-      mIdleWait.wait(lock, [&] { return !mQueue.empty() || mRunning == 0; });
-      if (mQueue.empty()) {  // and nothing running: done
+      mIdleWait.wait(lock, [&] { return !mQueue.empty() || !mLaterQueue.empty() || mRunning == 0; });
+      if (!take(job, later, /*host=*/true)) {  // nothing queued and nothing running: done
         if (mError) std::rethrow_exception(std::exchange(mError, nullptr));
         return;
       }
-      job = std::move(mQueue.front());
-      mQueue.pop_front();
-      ++mRunning;
     }
-    execute(job);
+    execute(job, later);
   }
 }
 

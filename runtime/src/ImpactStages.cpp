@@ -409,7 +409,7 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
   // The escalation (FractureSettings::frequencyErrorTarget): the later body, when the pack
   // predicts it over the target, checked again in quadratic tets. Decided from the later body's
   // own prediction, a pure function of the break: a replay escalates the same pieces.
-  if (fs.frequencyErrorTarget > 0.0 && fs.meshRatioElement == ElementOrder::P1) {
+  if (fs.frequencyErrorTarget > 0.0 && fs.meshRatioElement == ElementOrder::P1 && !models->empty()) {
     const MeshCheck escalated{parent, static_cast<int>(i), fs.meshRatioLateMaxDof, ElementOrder::P2};
     const double target = fs.frequencyErrorTarget;
     fr.escalationDueS = job.desc.timeS + fs.meshRatioEscalationDelayS;

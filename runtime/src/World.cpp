@@ -218,23 +218,27 @@ struct World::Impl {
     // The fragments' modal data, stress bounds and (where scheduled) static corrections are made on
     // the workers from now on (an impact or objectAsset that needs one first makes or waits for it).
     // Later versions (FractureSettings::meshRatioLateMaxDof, frequencyErrorTarget) after every first one.
-    auto prepare = [&makers](std::shared_ptr<const BodySource> source) {
-      makers.submit([source = std::move(source)] {
-        const auto& body = source->get();
-        if (!body) return;
-        (void)body.value()->stressBounds();
-        if (body.value()->staticCorrectionScheduled()) (void)body.value()->staticCorrection();
-      });
+    auto prepare = [&makers](std::shared_ptr<const BodySource> source, detail::BackgroundThreads::Urgency urgency) {
+      makers.submit(
+          [source = std::move(source)] {
+            const auto& body = source->get();
+            if (!body) return;
+            (void)body.value()->stressBounds();
+            if (body.value()->staticCorrectionScheduled()) (void)body.value()->staticCorrection();
+          },
+          urgency);
     };
-    // Each version of the chain after every one before it (escalations last).
-    for (bool any = true; any;) {
-      any = false;
+    // Each version of the chain after every one before it (escalations last); the later ones can
+    // wait behind the next break's first bodies (BackgroundThreads::Urgency).
+    for (auto urgency = detail::BackgroundThreads::Urgency::Now; true; urgency = detail::BackgroundThreads::Urgency::Later) {
+      bool any = false;
       for (auto& source : newBodies) {
         if (!source) continue;
-        prepare(source);
+        prepare(source, urgency);
         source = source->late();
         any = any || source != nullptr;
       }
+      if (!any) break;
     }
     newBodies.clear();
     return Ok{};

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -90,6 +91,46 @@ TEST(BackgroundThreads, AJobsExceptionReachesTheWaitingHostOnce) {
     pool.wait();  // reported once
     EXPECT_EQ(others.load(), 3) << threads << " threads";  // the other jobs ran all the same
   }
+}
+
+// Later jobs (a piece's later check and escalation) run on all threads but one: with two threads
+// and two long Later jobs queued, a Now job still starts at once, and the second Later job waits
+// until the first is done.
+TEST(BackgroundThreads, LaterJobsLeaveAThreadForTheJobsOfNow) {
+  BackgroundThreads pool(2);
+  std::mutex m;
+  std::condition_variable cv;
+  int laterRunning = 0, laterMost = 0;
+  bool release = false, nowRan = false;
+  auto later = [&] {
+    std::unique_lock lock(m);
+    laterMost = std::max(laterMost, ++laterRunning);
+    cv.notify_all();
+    cv.wait_for(lock, std::chrono::seconds(20), [&] { return release; });
+    --laterRunning;
+  };
+  pool.submit(later, BackgroundThreads::Urgency::Later);
+  pool.submit(later, BackgroundThreads::Urgency::Later);
+  {
+    std::unique_lock lock(m);
+    ASSERT_TRUE(cv.wait_for(lock, std::chrono::seconds(20), [&] { return laterRunning == 1; }));
+  }
+  pool.submit([&] {
+    std::lock_guard lock(m);
+    nowRan = true;
+    cv.notify_all();
+  });
+  {
+    std::unique_lock lock(m);
+    EXPECT_TRUE(cv.wait_for(lock, std::chrono::seconds(20), [&] { return nowRan; }));  // beside the running Later job
+    EXPECT_EQ(laterRunning, 1);  // the second Later job has not started
+    EXPECT_EQ(laterMost, 1);
+    release = true;
+    cv.notify_all();
+  }
+  pool.wait();  // the host, waiting, may take the second beside the first: no limit for it
+  EXPECT_EQ(laterRunning, 0);
+  EXPECT_TRUE(nowRan);
 }
 
 TEST(BackgroundThreads, JobsNotStartedAreDroppedWithThePool) {

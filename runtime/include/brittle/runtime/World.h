@@ -179,11 +179,13 @@ struct FractureSettings {
   /// Above 0, with the later check on (a break with a time, meshRatioElement P1): a piece whose later
   /// body is still predicted over the target gets a third version, checked in quadratic tets (up to
   /// meshRatioLateMaxDof linear DOF), used from meshRatioEscalationDelayS after its break. On chart 5's
-  /// held-back pieces at 0.25: 73 of 128 pieces escalate, and from then on the bodies are 4.7 % off
-  /// (median, p90 17 %: the matching targets met) where the later check alone gives 12.6 % (85 %);
-  /// the P2 checks take ~80 ms a piece (median) of idle background time (docs/results/speed-accuracy.md,
-  /// "Escalation by prediction"). 0: off; a pack without the calibration escalates nothing.
-  double frequencyErrorTarget = 0.0;
+  /// held-back pieces at 0.25 (the matching target): 73 of 128 pieces escalate, and from then on
+  /// the bodies are 4.7 % off (median, p90 14.5 %: the targets met) where the later check alone gives
+  /// 12.6 % (82 %); the P2 checks take ~70 ms a piece (median) of idle background time, queued
+  /// behind every first body (the pane scene's frames as without it: max 1.1–2.7 ms). See
+  /// docs/results/speed-accuracy.md, "Escalation by prediction". 0: off; a pack without the
+  /// calibration escalates nothing (and its pieces report no escalationDueS).
+  double frequencyErrorTarget = 0.25;
   /// ... when an escalated piece's P2 body applies (host seconds after its break), ≥ meshRatioLateDelayS.
   double meshRatioEscalationDelayS = 2.0;
   DescriptorKind descriptor = DescriptorKind::Moment;
