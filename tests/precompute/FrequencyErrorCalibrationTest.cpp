@@ -49,9 +49,9 @@ TEST(FrequencyErrorCalibration, FitsTheRuntimesFragmentsAndRepeatsBitForBit) {
       EXPECT_LE(x.checkDof, small().checkMaxDof);
       checked.emplace_back(x.checkIndicator, x.checkError);
     }
-    std::printf("seed %llu fragment %d: %lld DOF, Ritz %.3f (indicator %.3f), checked %.3f (gain %.3f), truth f1 %.1f Hz\n",
+    std::printf("seed %llu fragment %d: %lld DOF, Ritz %.3f (indicator %.3f), checked %.3f (gain %.3f), in P2 %.3f, truth f1 %.1f Hz\n",
                 static_cast<unsigned long long>(x.seed), x.fragment, static_cast<long long>(x.checkDof), x.ritzError,
-                x.ritzIndicator, x.checkError, x.checkIndicator, x.truthF1Hz);
+                x.ritzIndicator, x.checkError, x.checkIndicator, x.checkP2Error, x.truthF1Hz);
   }
   // The models are the samples' own fit.
   const MatchErrorModel expectedRitz = fitMatchErrors(ritz, small().bins).value();
@@ -67,8 +67,14 @@ TEST(FrequencyErrorCalibration, FitsTheRuntimesFragmentsAndRepeatsBitForBit) {
                                       [](const auto& a, const auto& b) { return a.ritzError < b.ritzError; });
   ASSERT_TRUE(std::isfinite(worst->checkError));
   EXPECT_LT(worst->checkError, worst->ritzError);
-  // The same pack and seeds: the same bits.
-  auto again = calibrateFrequencyErrors(plate(), small());
+  ASSERT_FALSE(c.models.checkedP2.empty());
+  EXPECT_TRUE(validateMatchErrorModel(c.models.checkedP2));
+  for (const FrequencyErrorSample& x : c.samples)  // P2 removes the linear tets' locking: closer than P1 where both ran
+    if (std::isfinite(x.checkP2Error) && x.checkError > 0.15) EXPECT_LT(x.checkP2Error, x.checkError) << x.fragment;
+  // The same pack and seeds: the same bits (without the P2 checks, to save the time).
+  FrequencyErrorCalibrationSettings linearOnly = small();
+  linearOnly.p2Checks = false;
+  auto again = calibrateFrequencyErrors(plate(), linearOnly);
   ASSERT_TRUE(again);
   ASSERT_EQ(again.value().samples.size(), c.samples.size());
   for (size_t i = 0; i < c.samples.size(); ++i) {
@@ -76,7 +82,9 @@ TEST(FrequencyErrorCalibration, FitsTheRuntimesFragmentsAndRepeatsBitForBit) {
     EXPECT_EQ(again.value().samples[i].ritzIndicator, c.samples[i].ritzIndicator);
     EXPECT_TRUE(again.value().samples[i].checkError == c.samples[i].checkError ||
                 (std::isnan(again.value().samples[i].checkError) && std::isnan(c.samples[i].checkError)));
+    EXPECT_TRUE(std::isnan(again.value().samples[i].checkP2Error));
   }
+  EXPECT_TRUE(again.value().models.checkedP2.empty());
 }
 
 TEST(FrequencyErrorCalibration, BadSettingsAreTypedErrors) {
