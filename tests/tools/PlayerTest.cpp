@@ -97,6 +97,15 @@ TEST_P(PlayerTest, BreaksDeterministicallyAboveTheFloorWithoutGainingEnergy) {
   EXPECT_EQ(a.bodiesAtEnd, b.bodiesAtEnd);
   EXPECT_EQ(a.impacts, b.impacts);
   EXPECT_GT(a.bodiesAtEnd, static_cast<int32_t>(s.objects.size() + s.impactors.size()));
+  // Every live breakable body counted once by the source of its frequencies; the same in both runs.
+  int32_t sources = 0, breakable = 0;
+  for (const auto& [name, count] : a.frequencySourcesAtEnd) sources += count;
+  for (const BodyState& body : a.bodies)
+    if ((body.kind == BodyKind::Object || body.kind == BodyKind::Fragment) && body.lastFrame < 0) ++breakable;
+  EXPECT_EQ(a.frequencySourcesAtEnd.size(), 5u);
+  EXPECT_EQ(a.frequencySourcesAtEnd, b.frequencySourcesAtEnd);
+  EXPECT_GT(sources, 0);
+  EXPECT_LE(sources, breakable);
 
   // No tunnelling: every body, alive or broken, ends above the floor (less Bullet's penetration
   // slop and the collision margin).

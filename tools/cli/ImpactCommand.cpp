@@ -313,7 +313,7 @@ Runner addImpactCommand(CLI::App& app) {
         else if (f.matchedEntry >= 0) {
           std::cout << "entry " << f.matchedEntry << " (distance " << f.matchDistance;
           if (!std::isnan(f.predictedMatchErrorP90))
-            std::cout << ", predicted frequency error " << std::lround(100 * f.predictedMatchError) << " %, p90 "
+            std::cout << "; the entry's frequencies predicted " << std::lround(100 * f.predictedMatchError) << " % off, p90 "
                       << std::lround(100 * f.predictedMatchErrorP90) << " %";
           std::cout << "), f1 " << firstHz(f) << " Hz";
           const FrequencyErrorPrediction b = bodyError(f);

@@ -39,6 +39,7 @@ nlohmann::json playReportJson(const PlayResult& r, int framesEvery) {
                     {"bodies_at_end", r.bodiesAtEnd},
                     {"bodies_max", maxBodies(r)},
                     {"pose_hash", fingerprintHex(r.poseHash)},
+                    {"frequency_sources_at_end", r.frequencySourcesAtEnd},
                     {"frame_time_s", {{"median", t.medianS}, {"p99", t.p99S}, {"max", t.maxS}}},
                     {"bullet_s", t.bulletS},
                     {"fracture_s", t.fractureS},
@@ -126,7 +127,13 @@ void printPlaySummary(const PlayResult& r, std::ostream& out) {
         << " impacts simplified (no factorisation of K) after waiting\n";
   }
   out << "  bodies: " << (r.frameStats.empty() ? 0 : r.frameStats.front().bodies) << " at start, " << maxBodies(r)
-      << " at most, " << r.bodiesAtEnd << " at end\n";
+      << " at most, " << r.bodiesAtEnd << " at end";
+  if (!r.frequencySourcesAtEnd.empty()) {
+    out << "; breakable ones' frequencies at the end:";
+    for (const auto& [source, count] : r.frequencySourcesAtEnd)
+      if (count > 0) out << " " << source << " " << count;
+  }
+  out << "\n";
   out << "  frame time (ms): median " << 1e3 * t.medianS << ", p99 " << 1e3 * t.p99S << ", max " << 1e3 * t.maxS
       << "; Bullet " << t.bulletS << " s, fracture " << t.fractureS << " s ("
       << (total > 0.0 ? 100.0 * t.fractureS / total : 0.0) << " % fracture); load " << r.loadS << " s\n";

@@ -221,6 +221,13 @@ PlayResult Simulation::finish() {
     for (int i = 0; i < 4; ++i) hash.add(static_cast<double>(q[i]));
   }
   out.poseHash = hash.value();
+  for (const FrequencySource s : {FrequencySource::Own, FrequencySource::Entry, FrequencySource::Ritz, FrequencySource::Checked,
+                                  FrequencySource::CheckedP2})
+    out.frequencySourcesAtEnd[std::string(frequencySourceName(s))] = 0;
+  for (const Body& b : mBodies) {
+    if (!b.alive || !b.object.valid()) continue;
+    if (auto p = mWorld.frequencyError(b.object, timeS())) ++out.frequencySourcesAtEnd[std::string(frequencySourceName(p.value().source))];
+  }
   for (Body& b : mBodies) {
     if (b.alive && !mSettings.recordTracks) recordPose(b);
     if (b.alive) b.state.lowestPointM = lowestPoint(b);

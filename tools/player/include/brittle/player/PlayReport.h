@@ -4,7 +4,9 @@
 //   { "scene", "frame_count", "time_step_s", "load_s",
 //     "summary": { "impacts", "breaks", "deferred_impacts", "budget_deferred_impacts",
 //                  "simplified_impacts", "failed_impacts", "bodies_at_end",
-//                  "bodies_max", "pose_hash" (16 hex digits),
+//                  "bodies_max", "pose_hash" (16 hex digits), "frequency_sources_at_end" ({"own": n,
+//                  "entry", "ritz", "checked", "checked_p2"}: live breakable bodies by the source of
+//                  their frequencies at the scene's end, World::frequencyError),
 //                  "frame_time_s": { "median", "p99", "max" }, "bullet_s", "fracture_s",
 //                  "fracture_share" (fracture / (bullet + fracture)) },
 //     "events": [ { "time_s", "frame", "body", "object", "other_body" (−1: the floor), "speed_mps",

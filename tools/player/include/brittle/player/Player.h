@@ -44,6 +44,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -185,6 +186,10 @@ struct PlayResult {
   int64_t simplifiedImpacts = 0; ///< impacts run fast after waiting maxBudgetWaits steps
   int64_t failedImpacts = 0;     ///< refused by the runtime (events with an error)
   int32_t bodiesAtEnd = 0;
+  /// The breakable bodies alive at the end by where the frequencies an impact at the scene's last
+  /// time would use come from (frequencySourceName: "own", "entry", "ritz", "checked",
+  /// "checked_p2"; World::frequencyError), made if they were not: after the timed frames.
+  std::map<std::string, int32_t> frequencySourcesAtEnd;
   uint64_t poseHash = 0;         ///< FNV-1a over the final poses of live bodies, by index
   double loadS = 0.0;            ///< building the World and the bodies
 };
