@@ -1,4 +1,5 @@
 #include "brittle/database/FragmentDatabase.h"
+#include "brittle/descriptors/VolumeMoments.h"
 
 #include <algorithm>
 #include <cmath>
@@ -95,6 +96,11 @@ Status validateFragmentDatabase(const FragmentDatabase& db) {
   }
   for (const MatchErrorModel* m : {&db.frequencyErrors.ritz, &db.frequencyErrors.checked, &db.frequencyErrors.checkedP2})
     if (Status st = validateMatchErrorModel(*m); !st) return invalid("frequency " + st.error().message);
+  // The Ritz indicator compares degrees p − 2 and p, p at most what the moments allow.
+  if (!db.frequencyErrors.empty() && (db.frequencyErrors.degree < 3 || db.frequencyErrors.degree > kMaxMomentOrder / 2)) {
+    return invalid("frequency errors: calibrated at degree " + std::to_string(db.frequencyErrors.degree) + ", outside [3, " +
+                   std::to_string(kMaxMomentOrder / 2) + "]");
+  }
   return Ok{};
 }
 

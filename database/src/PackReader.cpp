@@ -22,6 +22,7 @@
 #include "Hdf5Reader.h"
 #include "PackSchema.h"
 #include "brittle/database/Pack.h"
+#include "brittle/descriptors/VolumeMoments.h"
 
 namespace brittle {
 namespace {
@@ -606,6 +607,9 @@ FragmentDatabase readDatabase(FileReader& r, int64_t version, Handle* onDemand, 
     readModel("/database/frequency_errors/ritz", db.frequencyErrors.ritz);
     readModel("/database/frequency_errors/checked", db.frequencyErrors.checked);
     readModel("/database/frequency_errors/checked_p2", db.frequencyErrors.checkedP2);
+    const int64_t degree = r.i64("/database/frequency_errors/degree", {1}).values[0];
+    if (degree < 3 || degree > kMaxMomentOrder / 2) fail(ErrorCode::PackCorrupt, "/database/frequency_errors/degree: " + std::to_string(degree));
+    db.frequencyErrors.degree = static_cast<int>(degree);
   }
 
   db.entries.resize(count);

@@ -506,6 +506,7 @@ void writeDatabase(FileWriter& w, const FragmentDatabase& db) {
     writeModel(db.frequencyErrors.ritz, "/database/frequency_errors/ritz");
     writeModel(db.frequencyErrors.checked, "/database/frequency_errors/checked");
     writeModel(db.frequencyErrors.checkedP2, "/database/frequency_errors/checked_p2");
+    w.i64("/database/frequency_errors/degree", {db.frequencyErrors.degree}, {1});
   }
 }
 

@@ -123,6 +123,7 @@ Result<FrequencyErrorCalibration> calibrateFrequencyErrors(const Pack& pack, con
         WorldSettings ws;
         ws.seed = seed;
         ws.fracture.matchFragments = false;  // the fragments alone: their bodies are measured here
+        ws.fracture.exactModesMaxTets = 0;   // nor their own analyses, made on the workers and dropped
         Pack one;
         one.materials = {*material};
         one.objects = {*asset};
@@ -156,6 +157,7 @@ Result<FrequencyErrorCalibration> calibrateFrequencyErrors(const Pack& pack, con
   auto ritzModel = fitMatchErrors(std::move(ritz), s.bins);
   if (!ritzModel) return ritzModel.error();
   out.models.ritz = std::move(ritzModel).value();
+  out.models.degree = s.degree;
   for (auto [pairs, model] : {std::pair{&checked, &out.models.checked}, std::pair{&checkedP2, &out.models.checkedP2}}) {
     if (pairs->empty()) continue;
     auto fitted = fitMatchErrors(std::move(*pairs), s.bins);

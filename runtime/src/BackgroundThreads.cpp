@@ -70,6 +70,7 @@ bool BackgroundThreads::take(std::function<void()>& job, bool& later, bool host)
   job = std::move(queue.front());
   queue.pop_front();
   ++mRunning;
+  later = later && !host;  // the host's own are not the threads' to count
   if (later) ++mRunningLater;
   return true;
 }

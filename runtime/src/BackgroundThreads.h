@@ -61,6 +61,7 @@ class BackgroundThreads {
   int mRunningLater = 0;  // of mRunning, Later jobs; at most laterThreads() on the threads
   int laterThreads() const { return std::max(1, static_cast<int>(mThreads.size()) - 1); }
   // The next job a thread (or the host in wait(), with no limit) takes, under mMutex; false if none.
+  // `later`: a Later job taken by a thread (counted in mRunningLater).
   bool take(std::function<void()>& job, bool& later, bool host);
   bool mStop = false;
   std::atomic<int> mIdleThreads{0};

@@ -369,7 +369,10 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
   const FractureSettings& fs = *job.settings;
   const MeshCheck check{parent, static_cast<int>(i), fs.meshRatioMaxDof, fs.meshRatioElement};
   const EntryCache* cache = job.entryCache;
-  const FrequencyErrorModels* models = &job.matcher->database().frequencyErrors;
+  // The pack's models, where calibrated at this degree (the indicators move with it).
+  static const FrequencyErrorModels kNoModels;
+  const FrequencyErrorModels& packModels = job.matcher->database().frequencyErrors;
+  const FrequencyErrorModels* models = packModels.degree == degree ? &packModels : &kNoModels;
   auto make = [cache, shared, m, material, modeCount, correct, degree, models](const TriangleMesh& own,
                                                                               const MeshCheck& limit) -> Result<std::shared_ptr<const Body>> {
     auto made = matchedBody(*cache, m, material, modeCount, own, degree, limit, *models);
@@ -386,7 +389,8 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
   // The later check (FractureSettings::meshRatioLateMaxDof) when the break has a time: the same
   // body, checked up to the later limit; a piece within the first limit, or over the later one,
   // keeps its body (the later version is then the same).
-  const bool late = degree > 0 && fs.meshRatioLateMaxDof > fs.meshRatioMaxDof && std::isfinite(job.desc.timeS);
+  // (A check needs the broken parent: without one, nothing to check later either.)
+  const bool late = degree > 0 && fs.meshRatioLateMaxDof > fs.meshRatioMaxDof && std::isfinite(job.desc.timeS) && parent;
   if (!late) {
     return BodySource::deferred([make, check, surface = std::move(surface)] { return make(surface, check); });
   }
@@ -470,7 +474,9 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
     auto match = matcher->match(surface, kind, 1);
     if (!match) return made.error();
     const FragmentMatch& m = match.value().front();
-    auto matched = matchedBody(*cache, m, material, modeCount, surface, degree, check, matcher->database().frequencyErrors);
+    static const FrequencyErrorModels kNoModels;
+    const FrequencyErrorModels& models = matcher->database().frequencyErrors;
+    auto matched = matchedBody(*cache, m, material, modeCount, surface, degree, check, models.degree == degree ? models : kNoModels);
     if (!matched) return made.error();
     return withCorrectionScheduled(std::move(matched), scheduleMatch);
   });
@@ -547,6 +553,7 @@ void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResul
       born[i] = nullptr;
       fr.matchedEntry = -1;
       fr.matchDistance = 0.0;
+      fr.lateCheckDueS = fr.escalationDueS = std::numeric_limits<double>::quiet_NaN();  // the exact path has no later versions
       if (!std::isnan(fr.predictedMatchErrorP90)) {
         fr.reason = "match predicted at " + percent(fr.predictedMatchErrorP90) + " (p90), over the target " +
                     percent(target) + ": the exact path";

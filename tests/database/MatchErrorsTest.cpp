@@ -160,6 +160,7 @@ TEST(MatchErrors, RoundTripsThroughAPackAndADamagedOneIsRefused) {
   db.frequencyErrors.ritz = fitMatchErrors({{0.01, 0.05}, {0.02, 0.04}, {0.05, 0.2}, {0.1, 0.3}, {0.2, 0.9}, {0.3, 0.5}, {0.4, 1.2}, {0.5, 2.0}},
                                            MatchErrorSettings{.bins = 2})
                                 .value();
+  db.frequencyErrors.degree = 5;
   const Status written = writePack(pack, dir / "db.h5");
   ASSERT_TRUE(written) << written.error().message;
   auto read = readPack(dir / "db.h5");
@@ -180,6 +181,11 @@ TEST(MatchErrors, RoundTripsThroughAPackAndADamagedOneIsRefused) {
   EXPECT_EQ(bodies.ritz.samples, 8);
   EXPECT_EQ(bodies.ritz.medianError.size(), 2u);
   EXPECT_TRUE(bodies.checked.empty());  // an empty model is not written, and reads as none
+  EXPECT_EQ(bodies.degree, 5);
+  // Models without the degree they were calibrated at are refused.
+  Pack noDegree = pack;
+  noDegree.database.frequencyErrors.degree = 0;
+  EXPECT_EQ(writePack(noDegree, dir / "none.h5").error().code, ErrorCode::InvalidArgument);
 
   const hid_t f = H5Fopen((dir / "db.h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
   ASSERT_GE(f, 0);

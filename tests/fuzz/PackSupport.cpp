@@ -126,6 +126,7 @@ Pack makeSeedPack() {
   db.frequencyErrors.ritz = errors;
   db.frequencyErrors.checked = errors;
   db.frequencyErrors.checkedP2 = errors;
+  db.frequencyErrors.degree = 5;
   return pack;
 }
 

@@ -69,8 +69,12 @@ TEST(FrequencyErrorCalibration, FitsTheRuntimesFragmentsAndRepeatsBitForBit) {
   EXPECT_LT(worst->checkError, worst->ritzError);
   ASSERT_FALSE(c.models.checkedP2.empty());
   EXPECT_TRUE(validateMatchErrorModel(c.models.checkedP2));
-  for (const FrequencyErrorSample& x : c.samples)  // P2 removes the linear tets' locking: closer than P1 where both ran
-    if (std::isfinite(x.checkP2Error) && x.checkError > 0.15) EXPECT_LT(x.checkP2Error, x.checkError) << x.fragment;
+  for (const FrequencyErrorSample& x : c.samples) {  // P2 removes the linear tets' locking: closer than P1 where both ran
+    if (std::isfinite(x.checkP2Error) && x.checkError > 0.15) {
+      EXPECT_LT(x.checkP2Error, x.checkError) << x.fragment;
+    }
+  }
+  EXPECT_EQ(c.models.degree, small().degree);
   // The same pack and seeds: the same bits (without the P2 checks, to save the time).
   FrequencyErrorCalibrationSettings linearOnly = small();
   linearOnly.p2Checks = false;

@@ -554,6 +554,7 @@ TEST_F(WorldTest, BodiesSayWhereTheirFrequenciesComeFromAndTheirPredictedError) 
   for (int k = 1; k <= 8; ++k) samples.emplace_back(0.05 * k, 0.1 * k);
   calibrated.database.frequencyErrors.ritz = fitMatchErrors(samples, MatchErrorSettings{.bins = 2}).value();
   calibrated.database.frequencyErrors.checked = fitMatchErrors(samples, MatchErrorSettings{.bins = 4}).value();
+  calibrated.database.frequencyErrors.degree = 5;  // the runtime's default polynomialModeDegree
   const FrequencyErrorModels& models = calibrated.database.frequencyErrors;
   WorldSettings settings;
   settings.fracture.meshRatioMaxDof = 2000;
@@ -639,6 +640,19 @@ TEST_F(WorldTest, BodiesSayWhereTheirFrequenciesComeFromAndTheirPredictedError) 
   }
   EXPECT_GE(entryBodies, 1);
   EXPECT_EQ(frequencySourceName(FrequencySource::Checked), "checked");
+  // Models calibrated at another degree are not used: the indicators move with it.
+  WorldSettings degree4;
+  degree4.fracture.polynomialModeDegree = 4;
+  World other = World::create(Pack(calibrated), degree4).value();
+  auto four = other.impact(ball(other.addObject({.asset = "plate"}).value(), 60.0));
+  ASSERT_TRUE(four && four.value().broken);
+  for (const FragmentResult& f : four.value().fragments) {
+    if (f.path != FragmentPath::Matched) continue;
+    const FrequencyErrorPrediction p = other.frequencyError(f.object).value();
+    EXPECT_NE(p.source, FrequencySource::Entry);
+    EXPECT_TRUE(std::isfinite(p.indicator));
+    EXPECT_TRUE(std::isnan(p.median) && std::isnan(p.p90));
+  }
 }
 
 // The escalation (FractureSettings::frequencyErrorTarget): a piece whose later body the pack
@@ -651,6 +665,7 @@ TEST_F(WorldTest, AnEscalationChecksInQuadraticTetsWhatIsPredictedOverTheTarget)
   for (int k = 1; k <= 8; ++k) samples.emplace_back(0.05 * k, 0.1 * k);
   FrequencyErrorModels& models = calibrated.database.frequencyErrors;
   models.ritz = models.checked = models.checkedP2 = fitMatchErrors(samples, MatchErrorSettings{.bins = 2}).value();
+  models.degree = 5;
   auto makeSettings = [](double target) {
     WorldSettings s;
     s.fracture.meshRatioMaxDof = 2000;

@@ -317,9 +317,15 @@ Runner addImpactCommand(CLI::App& app) {
                       << std::lround(100 * f.predictedMatchErrorP90) << " %";
           std::cout << "), f1 " << firstHz(f) << " Hz";
           const FrequencyErrorPrediction b = bodyError(f);
-          std::cout << " (" << (b.source == FrequencySource::Ritz      ? "the fragment's own, polynomial Ritz"
-                                : b.source == FrequencySource::Checked ? "the fragment's own, checked on its mesh"
-                                                                       : "the entry's");
+          const char* source = "unknown (the body failed)";
+          switch (b.source) {
+            case FrequencySource::Entry: source = "the entry's"; break;
+            case FrequencySource::Ritz: source = "the fragment's own, polynomial Ritz"; break;
+            case FrequencySource::Checked: source = "the fragment's own, checked on its mesh"; break;
+            case FrequencySource::CheckedP2: source = "the fragment's own, checked on its mesh in P2 tets"; break;
+            case FrequencySource::Own: break;  // a matched body is never its own: bodyError's fallback
+          }
+          std::cout << " (" << source;
           if (!std::isnan(b.p90) && b.source != FrequencySource::Entry)
             std::cout << "; predicted error " << std::lround(100 * b.median) << " %, p90 " << std::lround(100 * b.p90) << " %";
           std::cout << ")";

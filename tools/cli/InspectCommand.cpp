@@ -76,6 +76,7 @@ nlohmann::json databaseJson(const FragmentDatabase& db) {
   if (!db.frequencyErrors.ritz.empty()) j["frequency_errors"]["ritz"] = model(db.frequencyErrors.ritz);
   if (!db.frequencyErrors.checked.empty()) j["frequency_errors"]["checked"] = model(db.frequencyErrors.checked);
   if (!db.frequencyErrors.checkedP2.empty()) j["frequency_errors"]["checked_p2"] = model(db.frequencyErrors.checkedP2);
+  if (!db.frequencyErrors.empty()) j["frequency_errors"]["degree"] = db.frequencyErrors.degree;
   return j;
 }
 

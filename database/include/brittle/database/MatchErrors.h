@@ -63,6 +63,9 @@ struct FrequencyErrorModels {
   MatchErrorModel ritz;
   MatchErrorModel checked;
   MatchErrorModel checkedP2;
+  /// The polynomial degree the models were calibrated at: the runtime uses them only at that
+  /// polynomialModeDegree (the indicators move with it). 0 with no models.
+  int degree = 0;
   bool empty() const { return ritz.empty() && checked.empty() && checkedP2.empty(); }
 };
 

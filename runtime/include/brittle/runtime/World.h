@@ -186,7 +186,8 @@ struct FractureSettings {
   /// docs/results/speed-accuracy.md, "Escalation by prediction". 0: off; a pack without the
   /// calibration escalates nothing (and its pieces report no escalationDueS).
   double frequencyErrorTarget = 0.25;
-  /// ... when an escalated piece's P2 body applies (host seconds after its break), ≥ meshRatioLateDelayS.
+  /// ... when an escalated piece's P2 body applies (host seconds after its break), ≥ meshRatioLateDelayS
+  /// when frequencyErrorTarget is above 0.
   double meshRatioEscalationDelayS = 2.0;
   DescriptorKind descriptor = DescriptorKind::Moment;
 };
@@ -445,7 +446,8 @@ class World {
   /// How the asset an impact at host time `timeS` uses got its frequencies, and how far off they
   /// are predicted to be (FrequencyErrorPrediction); for a fragment, known once its body is made
   /// (made now, or waited for, as objectAsset). A matched piece's prediction at its lateCheckDueS
-  /// and after is its checked body's. Errors: InvalidArgument (stale id), those of the body's making.
+  /// and after is its checked body's, at its escalationDueS and after its escalated body's (the
+  /// P2 check's, or the later body's where it was within the target). Errors: InvalidArgument (stale id), those of the body's making.
   Result<FrequencyErrorPrediction> frequencyError(ObjectId id, double timeS = std::numeric_limits<double>::quiet_NaN()) const;
 
   /// Computes the fracture of one impact. When the body breaks, its id becomes stale and each
