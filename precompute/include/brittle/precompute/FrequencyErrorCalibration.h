@@ -38,7 +38,7 @@ namespace brittle {
 struct FrequencyErrorCalibrationSettings {
   std::vector<std::string> objects;  ///< empty: every object of the pack
   std::vector<double> speedsMps = {10, 30};
-  int seeds = 4;                     ///< 4: ~110 fragments of the default objects, 1.5 min (2: 61, whose p90 covered 0.79 of held-back Ritz errors)
+  int seeds = 4;                     ///< 4: 113 pieces of the default objects, ~2 min (2: 61, whose p90 covered 0.79 of held-back Ritz errors)
   uint64_t firstSeed = 1001;
   int maxFragmentsPerImpact = 8;
   int degree = 5;                    ///< the runtime's polynomialModeDegree (≥ 3: degree − 2 is the indicator's)
