@@ -24,22 +24,6 @@ Status validateCalibration(const FrequencyErrorCalibrationSettings& s) {
   return Ok{};
 }
 
-// The fragments that are not debris, the largest first, at most `count` spread over their sizes.
-std::vector<size_t> spreadPieces(const ImpactResult& r, int count) {
-  std::vector<size_t> order;
-  for (size_t i = 0; i < r.fragments.size(); ++i)
-    if (!r.fragments[i].debris) order.push_back(i);
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return r.fragments[a].massProperties.volumeM3 > r.fragments[b].massProperties.volumeM3;
-  });
-  const auto k = static_cast<size_t>(count);
-  if (order.size() <= k) return order;
-  std::vector<size_t> spread;
-  const size_t n = order.size();
-  for (size_t j = 0; j < k; ++j) spread.push_back(order[k == 1 ? 0 : j * (n - 1) / (k - 1)]);
-  return spread;
-}
-
 // One fragment's sample; false when it has no truth (too large, or its analysis failed) or no
 // Ritz values.
 bool measureFragment(const ObjectAsset& asset, const TetTopology& topology, const Material& material, const FractureState& fracture,
@@ -59,7 +43,7 @@ bool measureFragment(const ObjectAsset& asset, const TetTopology& topology, cons
   if (!high || !low) return false;
   out.fragment = label;
   out.truthF1Hz = truthHz[0];
-  out.ritzIndicator = ritzConvergence(low.value().frequenciesHz, high.value().frequenciesHz, kMeshRatioModes);
+  out.ritzIndicator = matchFrequencyError(low.value().frequenciesHz, high.value().frequenciesHz);  // as placeEntry
   out.ritzError = matchFrequencyError(high.value().frequenciesHz, truthHz);
   out.checkDof = fragmentCutDof(asset.tetMesh, topology, fracture.nodeLabels, label, ElementOrder::P1, CutCells::Prisms);
   out.checkIndicator = out.checkError = out.checkP2Indicator = out.checkP2Error = nan;
@@ -81,6 +65,21 @@ bool measureFragment(const ObjectAsset& asset, const TetTopology& topology, cons
 }
 
 }  // namespace
+
+std::vector<size_t> piecesSpreadOverSizes(const ImpactResult& r, int count) {
+  std::vector<size_t> order;
+  for (size_t i = 0; i < r.fragments.size(); ++i)
+    if (!r.fragments[i].debris) order.push_back(i);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return r.fragments[a].massProperties.volumeM3 > r.fragments[b].massProperties.volumeM3;
+  });
+  const auto k = static_cast<size_t>(count);
+  if (order.size() <= k) return order;
+  std::vector<size_t> spread;
+  const size_t n = order.size();
+  for (size_t j = 0; j < k; ++j) spread.push_back(order[k == 1 ? 0 : j * (n - 1) / (k - 1)]);
+  return spread;
+}
 
 ImpactDesc seededImpact(const ObjectAsset& a, ObjectId id, uint64_t seed, double speedMps) {
   std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 11);
@@ -135,7 +134,7 @@ Result<FrequencyErrorCalibration> calibrateFrequencyErrors(const Pack& pack, con
         if (!hit) return hit.error();
         if (!hit.value().broken) continue;
         const ImpactResult& r = hit.value();
-        for (size_t i : spreadPieces(r, s.maxFragmentsPerImpact)) {
+        for (size_t i : piecesSpreadOverSizes(r, s.maxFragmentsPerImpact)) {
           FrequencyErrorSample sample;
           sample.object = asset->name;
           sample.speedMps = speed;

@@ -39,25 +39,20 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
     out = static_cast<int>(x);
     return Ok{};
   };
-  auto finite = [&](const std::string& key, double& out) -> Status {  // finite and ≥ 0
+  // A number in [0, upper) (NaN refused), `range` naming it in the error.
+  auto number = [&](const std::string& key, double& out, double upper, const char* range) -> Status {
     const auto& v = doc[key];
     if (!v.is_number()) return settingsFileError(sourceName, "\"" + key + "\" must be a number");
     const double x = v.get<double>();
-    if (!(x >= 0.0) || !std::isfinite(x)) {
-      return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"" + key + "\" must be finite and ≥ 0");
+    if (!(x >= 0.0 && x < upper)) {
+      return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"" + key + "\" must be " + range);
     }
     out = x;
     return Ok{};
   };
-  auto fraction = [&](const std::string& key, double& out) -> Status {  // a share in [0, 1)
-    const auto& v = doc[key];
-    if (!v.is_number()) return settingsFileError(sourceName, "\"" + key + "\" must be a number");
-    const double f = v.get<double>();
-    if (!(f >= 0.0 && f < 1.0)) {
-      return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"" + key + "\" must be in [0, 1)");
-    }
-    out = f;
-    return Ok{};
+  auto fraction = [&](const std::string& key, double& out) { return number(key, out, 1.0, "in [0, 1)"); };
+  auto finite = [&](const std::string& key, double& out) {
+    return number(key, out, std::numeric_limits<double>::infinity(), "finite and ≥ 0");
   };
   for (const auto& [key, value] : doc.items()) {
     if (key == "descriptor") {
@@ -78,12 +73,8 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
     } else if (key == "exact_mode_count") {
       if (Status st = integer(key, s.exactModeCount); !st) return st.error();
       if (s.exactModeCount < 1) return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"exact_mode_count\" must be ≥ 1");
-    } else if (key == "match_error_target") {
-      if (!value.is_number()) return settingsFileError(sourceName, "\"match_error_target\" must be a number");
-      s.matchErrorTarget = value.get<double>();
-      if (!(s.matchErrorTarget >= 0.0)) {
-        return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"match_error_target\" must be ≥ 0");
-      }
+    } else if (key == "match_error_target") {  // the World refuses an infinite one too
+      if (Status st = finite(key, s.matchErrorTarget); !st) return st.error();
     } else if (key == "polynomial_mode_degree") {
       if (Status st = integer(key, s.polynomialModeDegree); !st) return st.error();
       if (s.polynomialModeDegree > kMaxPolynomialModeDegree) {

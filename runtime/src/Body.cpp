@@ -58,12 +58,6 @@ std::shared_ptr<const BodySource> BodySource::deferred(Maker make) {
   return source;
 }
 
-std::shared_ptr<const BodySource> BodySource::deferred(Maker make, LateMaker late, double lateDueS) {
-  std::vector<Later> laters;
-  laters.push_back({std::move(late), lateDueS});
-  return deferred(std::move(make), std::move(laters));
-}
-
 std::shared_ptr<const BodySource> BodySource::deferred(Maker make, std::vector<Later> laters) {
   auto source = std::make_shared<BodySource>();
   source->mMake = std::move(make);

@@ -96,13 +96,11 @@ class BodySource {
   using Maker = std::function<Result<std::shared_ptr<const Body>>()>;
   static std::shared_ptr<const BodySource> ready(std::shared_ptr<const Body> body);
   static std::shared_ptr<const BodySource> deferred(Maker make);
-  /// A deferred body with a later version (FractureSettings::meshRatioLateMaxDof): `late` makes
-  /// it from this body's result (it may hand that back unchanged), and impacts at a host time of
-  /// at least `lateDueS` use it (sourceAt). The later version holds this one weakly: no cycle.
+  /// A deferred body with a chain of later versions (FractureSettings::meshRatioLateMaxDof's later
+  /// check, then frequencyErrorTarget's escalation), due times ascending: each is made by its
+  /// LateMaker from the result of the one before it (it may hand that back unchanged), which it
+  /// holds weakly (no cycle), and impacts at a host time of at least its due time use it (sourceAt).
   using LateMaker = std::function<Result<std::shared_ptr<const Body>>(const Result<std::shared_ptr<const Body>>& base)>;
-  static std::shared_ptr<const BodySource> deferred(Maker make, LateMaker late, double lateDueS);
-  /// A chain of later versions (FractureSettings::frequencyErrorTarget's escalation after the
-  /// later check), due times ascending: each is made from the one before it, which it holds weakly.
   struct Later {
     LateMaker make;
     double dueS = 0.0;

@@ -291,17 +291,6 @@ Result<Eigen::VectorXd> polynomialFrequenciesOnMesh(const Points& nodes, const F
   return elasticFrequencies(solved.value().values);
 }
 
-double ritzConvergence(const Eigen::VectorXd& lowerHz, const Eigen::VectorXd& higherHz, Eigen::Index count) {
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  if (count < 1 || lowerHz.size() < count || higherHz.size() < count) return nan;
-  double worst = 0.0;
-  for (Eigen::Index j = 0; j < count; ++j) {
-    if (!(higherHz[j] > 0.0) || !std::isfinite(higherHz[j]) || !std::isfinite(lowerHz[j])) return nan;
-    worst = std::max(worst, (lowerHz[j] - higherHz[j]) / higherHz[j]);
-  }
-  return worst;
-}
-
 Status adoptPolynomialFrequencies(ObjectAsset& asset, const PolynomialModes& modes) {
   ModalBasis& basis = asset.modal;
   const Eigen::Index r = basis.eigenvaluesRad2PerS2.size();

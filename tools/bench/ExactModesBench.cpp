@@ -122,19 +122,7 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
         if (!hit) return hit.error();
         if (!hit.value().broken) continue;
         const ImpactResult& r = hit.value();
-        std::vector<size_t> order;
-        for (size_t i = 0; i < r.fragments.size(); ++i)
-          if (!r.fragments[i].debris) order.push_back(i);
-        std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-          return r.fragments[a].massProperties.volumeM3 > r.fragments[b].massProperties.volumeM3;
-        });
-        if (order.size() > static_cast<size_t>(s.maxFragmentsPerImpact)) {  // spread over the sizes
-          std::vector<size_t> spread;
-          const size_t n = order.size(), k = static_cast<size_t>(s.maxFragmentsPerImpact);
-          for (size_t j = 0; j < k; ++j) spread.push_back(order[k == 1 ? 0 : j * (n - 1) / (k - 1)]);
-          order = std::move(spread);
-        }
-        for (size_t i : order) {
+        for (size_t i : piecesSpreadOverSizes(r, s.maxFragmentsPerImpact)) {
           const FragmentResult& fr = r.fragments[i];
           // Exact path.
           ExactModesSettings es;
@@ -193,7 +181,7 @@ Status runExactModesBench(const ExactModesBenchSettings& s) {
           });
           // The bodies' predicted errors (World::frequencyError): the pack's models at the indicators.
           const FrequencyErrorModels& bodyModels = p.database.frequencyErrors;
-          const double ritzIndicator = ritzConvergence(polynomial[0], polynomial[2], kMeshRatioModes);  // degree 3 to 5, as the World
+          const double ritzIndicator = matchFrequencyError(polynomial[0], polynomial[2]);  // degree 3 to 5, as the World
           const MatchErrorPrediction ritzPredicted = predictMatchError(bodyModels.ritz, ritzIndicator);
           const MatchErrorPrediction checkPredicted = predictMatchError(bodyModels.checked, checkIndicator);
           // The same check in quadratic tets (FractureSettings::meshRatioElement = P2).

@@ -254,8 +254,9 @@ Runner addImpactCommand(CLI::App& app) {
     // Where a new object's frequencies come from and their predicted error (World::frequencyError;
     // the pack's calibration, brittle calibrate-errors). Asks for the body as firstHz does.
     auto bodyError = [&](const FragmentResult& f) {
-      auto p = f.object.valid() ? world.value().frequencyError(f.object) : Result<FrequencyErrorPrediction>(makeError(ErrorCode::InvalidArgument, "no object"));
-      return p ? p.value() : FrequencyErrorPrediction{};
+      if (!f.object.valid()) return FrequencyErrorPrediction{};
+      auto p = world.value().frequencyError(f.object);
+      return p ? p.value() : FrequencyErrorPrediction{};  // a body that failed: no prediction
     };
     std::map<std::string, int> paths;
     for (FragmentPath p : {FragmentPath::Debris, FragmentPath::ExactModes, FragmentPath::Matched, FragmentPath::SurfaceOnly})

@@ -50,9 +50,10 @@ struct MatchErrorModel {
 /// How far a matched body's own frequencies are from its fragment's (the runtime's
 /// FractureSettings::polynomialModeDegree and meshRatioMaxDof), against an indicator the runtime
 /// computes with them, in place of the descriptor distance (the same binned model):
-/// - `ritz`: the Ritz values' own convergence, max over j = 1..3 of (f_j at degree p − 2 − f_j at
-///   p) / f_j at p (ritzConvergence, PolynomialModes.h): a fragment whose frequencies still move
-///   from one degree to the next has a part the polynomials do not follow yet;
+/// - `ritz`: the Ritz values' own convergence, matchFrequencyError of the degree-(p − 2) values
+///   against the degree-p ones (PolynomialModes.h; the lower degree's values lie above, its space
+///   being nested in the higher's): a fragment whose frequencies still move from one degree to the
+///   next has a part the polynomials do not follow yet;
 /// - `checked`: the fragment's mesh's gain over the polynomials, 1 − min over j of its ratio
 ///   (meshGain, FragmentModes.h), for a body whose Ritz values its mesh corrected in linear tets;
 /// - `checkedP2`: the same for a check in quadratic tets (FractureSettings::meshRatioElement, or

@@ -6,7 +6,7 @@
 // polynomialModeDegree), the lowest three corrected by the fragment's own mesh when it is small
 // enough (meshRatioMaxDof, meshRatioLateMaxDof). Neither error depends on the descriptor distance;
 // each has an indicator the runtime computes with the frequencies themselves:
-//   * Ritz: the values' own convergence from degree p − 2 to p (ritzConvergence, PolynomialModes.h);
+//   * Ritz: the values' own convergence from degree p − 2 to p (MatchErrors.h, FrequencyErrorModels);
 //   * checked: the mesh's gain over the polynomials (meshGain, FragmentModes.h), for the check in
 //     linear tets (`checked`) and in quadratic ones (`checkedP2`; FractureSettings::meshRatioElement,
 //     and frequencyErrorTarget's escalation).
@@ -55,7 +55,7 @@ struct FrequencyErrorSample {
   uint64_t seed = 0;
   int fragment = -1;
   int64_t checkDof = 0;        ///< its check's linear DOF (CutCells::Prisms)
-  double ritzIndicator = 0.0;  ///< ritzConvergence
+  double ritzIndicator = 0.0;  ///< matchFrequencyError of the degree-(p − 2) values against the degree-p ones
   double ritzError = 0.0;
   double checkIndicator = 0.0; ///< meshGain in linear tets; NaN where the piece was not checked
   double checkError = 0.0;     ///< NaN where not checked
@@ -73,6 +73,10 @@ struct FrequencyErrorCalibration {
 /// object's mass, a twentieth of its diagonal across) on the centroid of a boundary face drawn by
 /// the seed, along the face's normal, at `speedMps`.
 ImpactDesc seededImpact(const ObjectAsset& asset, ObjectId id, uint64_t seed, double speedMps);
+
+/// The pieces of a break the calibration and `bench exact-modes` measure: the fragments that are
+/// not debris, the largest first, at most `count` of them spread evenly over their sizes.
+std::vector<size_t> piecesSpreadOverSizes(const ImpactResult& result, int count);
 
 /// The calibration above. Progress reports "frequency errors" per impact. Errors: InvalidArgument
 /// (settings out of range, an unknown object, a pack without objects), those of World, and of

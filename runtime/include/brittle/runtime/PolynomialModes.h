@@ -80,19 +80,6 @@ Result<PolynomialModes> polynomialModes(const VolumeMoments& moments, const Mate
 Result<PolynomialModes> polynomialModes(const TriangleMesh& surface, const Material& material, int degree,
                                         bool withShapes = true, Eigen::Index count = -1);
 
-/// The Ritz values' own convergence from a lower degree (`lowerHz`) to p (`higherHz`), both
-/// ascending: max over the lowest `count` of (lower_j − higher_j) / higher_j. The lower degree's
-/// space lies in the degree-p one, so each term is ≥ 0 (interlacing; rounding can make it −1e-15).
-/// A solid the polynomials follow barely moves from one degree to the next; one with a part that
-/// swings on a thin neck still falls. The World takes p − 2, not p − 1: a mode of a symmetric
-/// solid lies in one parity class, and one degree more adds monomials of one parity only, so
-/// from 4 to 5 two cubes on a thin neck did not move at all (their lowest three are even). The
-/// indicator of a Ritz body's error (FrequencyErrorModels::ritz, MatchErrors.h): on the default
-/// objects' pieces (chart 5) its rank correlation with the degree-5 values' error is 0.84 from
-/// degree 3 (0.73 from 4), where the descriptor distance's with the match's error is 0.29. NaN
-/// when either has fewer than `count` values or one is not finite and positive.
-double ritzConvergence(const Eigen::VectorXd& lowerHz, const Eigen::VectorXd& higherHz, Eigen::Index count = 3);
-
 /// The same fields on a finite-element model of the solid: interpolated at its nodes (`nodes`, #N
 /// by 3, m) and run through its own K and M (`fem`, 3N by 3N, node-interleaved, FemAssembly.h;
 /// at P2, N counts the edge nodes too). Since the interpolated fields are a subspace of the

@@ -332,7 +332,7 @@ std::string_view frequencySourceName(FrequencySource source);
 struct FrequencyErrorPrediction {
   FrequencySource source = FrequencySource::Own;
   /// What the prediction is read at: Entry, the match's descriptor distance; Ritz, the Ritz values'
-  /// convergence from degree p − 2 to p (ritzConvergence); Checked, the mesh's gain over the
+  /// convergence from degree p − 2 to p (MatchErrors.h); Checked, the mesh's gain over the
   /// polynomials (meshGain); Own, NaN.
   double indicator = std::numeric_limits<double>::quiet_NaN();
   /// Median and 90th percentile; NaN without a model: Own (nothing to predict), or a pack whose
