@@ -5,6 +5,7 @@
 #include <limits>
 #include <random>
 
+#include "brittle/precompute/ModelSizing.h"
 #include "brittle/runtime/FragmentModes.h"
 #include "brittle/runtime/PolynomialModes.h"
 
@@ -14,7 +15,8 @@ namespace {
 Error calibrationError(const std::string& message) { return makeError(ErrorCode::InvalidArgument, "frequency errors: " + message); }
 
 Status validateCalibration(const FrequencyErrorCalibrationSettings& s) {
-  if (s.speedsMps.empty() || std::any_of(s.speedsMps.begin(), s.speedsMps.end(), [](double v) { return !(v > 0.0) || !std::isfinite(v); }))
+  if (s.scene.empty() &&
+      (s.speedsMps.empty() || std::any_of(s.speedsMps.begin(), s.speedsMps.end(), [](double v) { return !(v > 0.0) || !std::isfinite(v); })))
     return calibrationError("speeds must be finite and > 0, at least one");
   if (s.seeds < 1 || s.maxFragmentsPerImpact < 1) return calibrationError("seeds and max fragments must be ≥ 1");
   if (s.degree < 3 || s.degree > kMaxPolynomialModeDegree)
@@ -100,48 +102,85 @@ Result<FrequencyErrorCalibration> calibrateFrequencyErrors(const Pack& pack, con
                                                            ProgressSink* progress) {
   if (Status st = validateCalibration(s); !st) return st.error();
   if (pack.objects.empty()) return calibrationError("the pack has no object");
-  std::vector<const ObjectAsset*> objects;
-  for (const ObjectAsset& a : pack.objects)
-    if (s.objects.empty() || std::find(s.objects.begin(), s.objects.end(), a.name) != s.objects.end()) objects.push_back(&a);
-  for (const std::string& name : s.objects)
-    if (std::none_of(pack.objects.begin(), pack.objects.end(), [&](const ObjectAsset& a) { return a.name == name; }))
-      return calibrationError("no object '" + name + "' in the pack");
+  auto inPack = [&](const std::string& name) {
+    return std::find_if(pack.objects.begin(), pack.objects.end(), [&](const ObjectAsset& a) { return a.name == name; });
+  };
+  auto inScene = [&](const std::string& name) {
+    return std::find_if(s.scene.begin(), s.scene.end(), [&](const SceneObjectRange& r) { return r.name == name; });
+  };
+  for (const std::string& name : s.objects) {
+    if (inPack(name) == pack.objects.end()) return calibrationError("no object '" + name + "' in the pack");
+    if (!s.scene.empty() && inScene(name) == s.scene.end()) return calibrationError("object '" + name + "' is not in the scene");
+  }
+  // Each object's impacts, with the seed of the World that makes each: the steel ball at every
+  // speed and seed, or the scene's own (drawSceneImpacts, its points drawn from firstSeed).
+  struct ObjectImpacts {
+    const ObjectAsset* asset;
+    std::vector<std::pair<ImpactDesc, uint64_t>> impacts;
+  };
+  std::vector<ObjectImpacts> jobs;
+  auto wanted = [&](const std::string& name) { return s.objects.empty() || std::find(s.objects.begin(), s.objects.end(), name) != s.objects.end(); };
+  if (s.scene.empty()) {
+    for (const ObjectAsset& a : pack.objects) {
+      if (!wanted(a.name)) continue;
+      ObjectImpacts job{&a, {}};
+      for (double speed : s.speedsMps)
+        for (int k = 0; k < s.seeds; ++k) {
+          const uint64_t seed = s.firstSeed + static_cast<uint64_t>(k);
+          job.impacts.emplace_back(seededImpact(a, ObjectId{}, seed, speed), seed);
+        }
+      jobs.push_back(std::move(job));
+    }
+  } else {
+    for (const SceneObjectRange& range : s.scene) {
+      if (!wanted(range.name)) continue;
+      const auto a = inPack(range.name);
+      if (a == pack.objects.end()) return calibrationError("the scene's object '" + range.name + "' is not in the pack");
+      if (range.impactors.empty() || !(range.minSpeedMps > 0.0 && range.minSpeedMps <= range.maxSpeedMps) || !std::isfinite(range.maxSpeedMps))
+        return calibrationError("the scene's object '" + range.name + "' needs an impactor and 0 < min speed ≤ max speed");
+      ObjectImpacts job{&*a, {}};
+      const std::vector<ImpactDesc> drawn = drawSceneImpacts(*a, range, s.seeds, s.firstSeed);
+      for (size_t k = 0; k < drawn.size(); ++k) job.impacts.emplace_back(drawn[k], s.firstSeed + k);
+      jobs.push_back(std::move(job));
+    }
+  }
   FrequencyErrorCalibration out;
-  const size_t impacts = objects.size() * s.speedsMps.size() * static_cast<size_t>(s.seeds);
-  size_t done = 0;
-  for (const ObjectAsset* asset : objects) {
+  size_t impacts = 0, done = 0;
+  for (const ObjectImpacts& job : jobs) impacts += job.impacts.size();
+  out.impacts = static_cast<int>(impacts);
+  for (const ObjectImpacts& job : jobs) {
+    const ObjectAsset* asset = job.asset;
     auto material = std::find_if(pack.materials.begin(), pack.materials.end(), [&](const Material& m) { return m.name == asset->materialName; });
     if (material == pack.materials.end()) return calibrationError("object '" + asset->name + "' names no material of the pack");
     auto topology = buildTetTopology(asset->tetMesh);
     if (!topology) return topology.error();
-    for (double speed : s.speedsMps) {
-      for (int k = 0; k < s.seeds; ++k, ++done) {
-        reportProgress(progress, "frequency errors", static_cast<double>(done) / static_cast<double>(impacts));
-        if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "frequency errors: interrupted");
-        const uint64_t seed = s.firstSeed + static_cast<uint64_t>(k);
-        WorldSettings ws;
-        ws.seed = seed;
-        ws.fracture.matchFragments = false;  // the fragments alone: their bodies are measured here
-        ws.fracture.exactModesMaxTets = 0;   // nor their own analyses, made on the workers and dropped
-        Pack one;
-        one.materials = {*material};
-        one.objects = {*asset};
-        auto world = World::create(std::move(one), ws);
-        if (!world) return world.error();
-        auto id = world.value().addObject({.asset = asset->name});
-        if (!id) return id.error();
-        auto hit = world.value().impact(seededImpact(*asset, id.value(), seed, speed));
-        if (!hit) return hit.error();
-        if (!hit.value().broken) continue;
-        const ImpactResult& r = hit.value();
-        for (size_t i : piecesSpreadOverSizes(r, s.maxFragmentsPerImpact)) {
-          FrequencyErrorSample sample;
-          sample.object = asset->name;
-          sample.speedMps = speed;
-          sample.seed = seed;
-          if (measureFragment(*asset, topology.value(), *material, r.fracture, r.fragments[i], static_cast<int>(i), s, sample))
-            out.samples.push_back(std::move(sample));
-        }
+    for (const auto& [desc, seed] : job.impacts) {
+      reportProgress(progress, "frequency errors", static_cast<double>(done++) / static_cast<double>(impacts));
+      if (isInterrupted(progress)) return makeError(ErrorCode::Cancelled, "frequency errors: interrupted");
+      WorldSettings ws;
+      ws.seed = seed;
+      ws.fracture.matchFragments = false;  // the fragments alone: their bodies are measured here
+      ws.fracture.exactModesMaxTets = 0;   // nor their own analyses, made on the workers and dropped
+      Pack one;
+      one.materials = {*material};
+      one.objects = {*asset};
+      auto world = World::create(std::move(one), ws);
+      if (!world) return world.error();
+      auto id = world.value().addObject({.asset = asset->name});
+      if (!id) return id.error();
+      ImpactDesc hitDesc = desc;
+      hitDesc.object = id.value();
+      auto hit = world.value().impact(hitDesc);
+      if (!hit) return hit.error();
+      if (!hit.value().broken) continue;
+      const ImpactResult& r = hit.value();
+      for (size_t i : piecesSpreadOverSizes(r, s.maxFragmentsPerImpact)) {
+        FrequencyErrorSample sample;
+        sample.object = asset->name;
+        sample.speedMps = desc.speedMps;
+        sample.seed = seed;
+        if (measureFragment(*asset, topology.value(), *material, r.fracture, r.fragments[i], static_cast<int>(i), s, sample))
+          out.samples.push_back(std::move(sample));
       }
     }
   }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
@@ -13,6 +14,7 @@
 
 #include "brittle/core/AtomicFile.h"
 #include "brittle/core/Timing.h"
+#include "brittle/precompute/FrequencyErrorCalibration.h"
 #include "brittle/precompute/FullFemReference.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/runtime/World.h"
@@ -217,14 +219,19 @@ ObjectSizing chooseElementOrder(std::vector<ObjectSizing> sizings, const std::ve
   return out;
 }
 
-/// Bakes the objects (and the database, when given) into a pack, written to `path`.
+/// Bakes the objects (and the database, when given) into a pack, written to `path` once `finish`
+/// (when given) has completed it.
 Result<Pack> bakeAndWrite(const std::vector<ObjectBakeSettings>& objects, const FragmentDatabase* database,
-                          const std::filesystem::path& path, ProgressSink* progress, double* seconds, int64_t* bytes) {
+                          const std::filesystem::path& path, ProgressSink* progress, double* seconds, int64_t* bytes,
+                          const std::function<Status(Pack&)>& finish = {}) {
   const auto start = SteadyClock::now();
   auto pack = bakePack(objects, progress);
   if (!pack) return pack.error();
   *seconds = secondsSince(start);
   if (database) pack.value().database = *database;
+  if (finish) {
+    if (Status st = finish(pack.value()); !st) return st.error();
+  }
   if (Status st = writePack(pack.value(), path); !st) return st.error();
   std::error_code ec;
   *bytes = static_cast<int64_t>(std::filesystem::file_size(path, ec));
@@ -239,6 +246,8 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
                                     const SceneRequirements& requirements, const SceneSizingPaths& paths,
                                     const ModelSizingSettings& settings, ProgressSink* progress) {
   if (settings.modeLadder.empty()) return makeError(ErrorCode::InvalidArgument, "model sizing: empty mode ladder");
+  if (settings.frequencyErrorPoints < 0 || settings.frequencyErrorPiecesPerImpact < 1)
+    return makeError(ErrorCode::InvalidArgument, "model sizing: frequency-error points must be ≥ 0 and pieces per impact ≥ 1");
   const std::vector<ElementOrder>& orders = settings.elementOrders;
   for (size_t o = 0; o < orders.size(); ++o) {
     if (std::find(orders.begin() + static_cast<std::ptrdiff_t>(o) + 1, orders.end(), orders[o]) != orders.end()) {
@@ -399,7 +408,38 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
   }
   report.fragmentSizingS = secondsSince(fragmentStart);
   const FragmentDatabase* keep = sizedDb ? &*sizedDb : nullptr;
-  auto sizedPack = bakeAndWrite(sized, keep, paths.sizedPack, progress, &report.sizedBakeS, &report.sizedPackBytes);
+  // The bodies' frequency errors, at the scene's own impacts, before the pack is written (once).
+  auto calibrate = [&](Pack& pack) -> Status {
+    if (!keep || settings.frequencyErrorPoints < 1 || !pack.database.hasPhysics()) return Ok{};
+    const auto start = SteadyClock::now();
+    FrequencyErrorCalibrationSettings fs;
+    fs.scene = requirements.objects;
+    fs.seeds = settings.frequencyErrorPoints;
+    fs.maxFragmentsPerImpact = settings.frequencyErrorPiecesPerImpact;
+    FrequencyErrorSizing& out = report.frequencyErrors.emplace();
+    auto made = calibrateFrequencyErrors(pack, fs, progress);
+    out.seconds = secondsSince(start);
+    // Too few pieces (the scene's impacts break off none with a truth) is a result, not a failure:
+    // the pack then predicts nothing, as one baked without the calibration.
+    if (!made) {
+      if (made.error().code != ErrorCode::InvalidArgument) return made.error();
+      out.note = made.error().message;
+      return Ok{};
+    }
+    for (const SceneObjectRange& r : requirements.objects) {
+      const auto& samples = made.value().samples;
+      out.piecesPerObject.emplace_back(
+          r.name, static_cast<int>(std::count_if(samples.begin(), samples.end(), [&](const FrequencyErrorSample& x) { return x.object == r.name; })));
+    }
+    pack.database.frequencyErrors = made.value().models;
+    out.calibrated = true;
+    out.impacts = made.value().impacts;
+    out.ritzBins = static_cast<int>(made.value().models.ritz.distance.size());
+    out.checkedBins = static_cast<int>(made.value().models.checked.distance.size());
+    out.checkedP2Bins = static_cast<int>(made.value().models.checkedP2.distance.size());
+    return Ok{};
+  };
+  auto sizedPack = bakeAndWrite(sized, keep, paths.sizedPack, progress, &report.sizedBakeS, &report.sizedPackBytes, calibrate);
   if (!sizedPack) return sizedPack.error();
   if (keep) report.sizedBakeS += report.databaseBakeS;
   return report;

@@ -8,8 +8,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "brittle/precompute/FrequencyErrorCalibration.h"
+#include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/runtime/PolynomialModes.h"
 #include "brittle/testing/BakeFixtures.h"
 
@@ -89,6 +91,64 @@ TEST(FrequencyErrorCalibration, FitsTheRuntimesFragmentsAndRepeatsBitForBit) {
     EXPECT_TRUE(std::isnan(again.value().samples[i].checkP2Error));
   }
   EXPECT_TRUE(again.value().models.checkedP2.empty());
+}
+
+// A scene's own impacts (brittle size, calibrate-errors --scene): the objects are the scene's, hit
+// by the sizing's draws (drawSceneImpacts: points × impactors × both speed ends), a dropped plate
+// on its lowest node as well as a ball; the speeds in the settings are not used.
+SceneObjectRange plateScene() {
+  SceneObjectRange r;
+  r.name = "plate";
+  r.minSpeedMps = 20.0;
+  r.maxSpeedMps = 40.0;
+  SceneImpactor ball;
+  ball.massKg = 0.1;
+  ball.radiusM = 0.01;
+  ball.material = materialPreset("steel").value();
+  SceneImpactor ground = ball;  // the ground's material (steel), immovable and flat
+  ground.massKg = ground.radiusM = std::numeric_limits<double>::infinity();
+  r.impactors = {ball, ground};
+  return r;
+}
+
+TEST(FrequencyErrorCalibration, ASceneBreaksItsObjectsWithItsOwnImpacts) {
+  FrequencyErrorCalibrationSettings s = small();
+  s.speedsMps = {-1.0};  // not read with a scene
+  s.seeds = 1;
+  s.maxFragmentsPerImpact = 1;
+  s.p2Checks = false;
+  s.scene = {plateScene()};
+  auto made = calibrateFrequencyErrors(plate(), s);
+  ASSERT_TRUE(made) << made.error().message;
+  const FrequencyErrorCalibration& c = made.value();
+  EXPECT_EQ(c.impacts, 4);  // 1 point × 2 impactors × 2 speeds
+  ASSERT_GE(c.samples.size(), 2u);
+  bool ends[2] = {false, false};
+  for (const FrequencyErrorSample& x : c.samples) {
+    EXPECT_EQ(x.object, "plate");
+    ASSERT_TRUE(x.speedMps == 20.0 || x.speedMps == 40.0) << x.speedMps;
+    ends[x.speedMps == 40.0] = true;
+    EXPECT_GE(x.seed, s.firstSeed);
+    EXPECT_LT(x.seed, s.firstSeed + 4);
+    EXPECT_TRUE(std::isnan(x.checkP2Error));  // no P2 checks asked for
+  }
+  EXPECT_TRUE(ends[1]);
+  EXPECT_EQ(c.models.ritz.samples, static_cast<int64_t>(c.samples.size()));
+  EXPECT_TRUE(c.models.checkedP2.empty());
+  // The scene's errors: an object the pack lacks, an object asked for outside the scene, a range
+  // without an impactor.
+  auto withScene = [&](auto change) {
+    FrequencyErrorCalibrationSettings t = s;
+    change(t);
+    return calibrateFrequencyErrors(plate(), t);
+  };
+  auto vase = withScene([](auto& t) { t.scene[0].name = "vase"; });
+  ASSERT_FALSE(vase);
+  EXPECT_EQ(vase.error().code, ErrorCode::InvalidArgument);
+  EXPECT_NE(vase.error().message.find("vase"), std::string::npos) << vase.error().message;
+  EXPECT_EQ(withScene([](auto& t) { t.objects = {"plate", "brick"}; }).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(withScene([](auto& t) { t.scene[0].impactors.clear(); }).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(withScene([](auto& t) { t.scene[0].minSpeedMps = 0.0; }).error().code, ErrorCode::InvalidArgument);
 }
 
 TEST(FrequencyErrorCalibration, BadSettingsAreTypedErrors) {

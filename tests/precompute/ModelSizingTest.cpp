@@ -9,6 +9,7 @@
 
 #include "brittle/database/Pack.h"
 #include "brittle/precompute/BakeManifest.h"
+#include "brittle/precompute/FrequencyErrorCalibration.h"
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/testing/DatabaseFixtures.h"
 #include "brittle/testing/Fixtures.h"
@@ -327,6 +328,74 @@ TEST(SceneSizingTest, BakesOnlyWhatTheSceneUsesAndReportsTheSavings) {
   EXPECT_EQ(missing.error().code, ErrorCode::InvalidArgument);
   EXPECT_NE(missing.error().message.find("vase"), std::string::npos);
   EXPECT_NE(missing.error().message.find("tile, block"), std::string::npos);
+}
+
+// A scene that refractures keeps the database, and its bodies' frequency errors are calibrated at
+// the scene's own impacts (FrequencyErrorCalibration.h): the sized pack holds exactly the models a
+// calibration of it at those impacts makes. A scene whose impacts break nothing off gets none, and
+// says why, instead of failing.
+TEST(SceneSizingTest, CalibratesTheBodiesFrequencyErrorsAtTheScenesImpacts) {
+  const auto dir = testing::makeTempDir("scene-sizing-errors");
+  writeTileAndBlock(dir / "meshes");
+  const auto manifestPath = writeText(dir, "manifest.json", R"({ "objects": [
+      { "name": "tile", "mesh": "meshes/tile.off", "material": "glass", "tets": 800, "modes": 10 } ] })");
+  auto manifest = loadBakeManifest(manifestPath);
+  ASSERT_TRUE(manifest) << manifest.error().message;
+  auto requirements = parse(R"({ "peak_stress_error": 0.5, "refracture": true, "objects": [
+      { "name": "tile", "speeds_mps": [20, 40], "impactors": [ { "mass_kg": 0.05, "radius_m": 0.01 } ] } ] })");
+  ASSERT_TRUE(requirements);
+  ModelSizingSettings s;
+  s.modeLadder = {5, 10};
+  s.points = 1;
+  s.timingRepeats = 1;
+  s.referenceStepsPerContact = 30;
+  s.elementOrders = {ElementOrder::P1};
+  s.fragmentsPerImpact = 3;
+  s.searchChecks = {0};
+  s.frequencyErrorPoints = 1;
+  s.frequencyErrorPiecesPerImpact = 3;
+  const DatabaseBakeSettings database = testing::shippedShapesDatabase({"box", "plate"}, 8, 300, 6);
+  const auto out = dir / "sized.h5";
+  auto report = sizeScene(manifest.value(), database, requirements.value(), {out, {}}, s);
+  ASSERT_TRUE(report) << report.error().message;
+  ASSERT_TRUE(report.value().frequencyErrors);
+  const FrequencyErrorSizing& f = *report.value().frequencyErrors;
+  ASSERT_TRUE(f.calibrated) << f.note;
+  EXPECT_EQ(f.impacts, 2);  // 1 point × 1 impactor × 2 speeds
+  ASSERT_EQ(f.piecesPerObject.size(), 1u);
+  EXPECT_EQ(f.piecesPerObject[0].first, "tile");
+  EXPECT_GT(f.piecesPerObject[0].second, 0);
+  EXPECT_GT(f.seconds, 0.0);
+  auto sized = readPack(out);
+  ASSERT_TRUE(sized) << sized.error().message;
+  const FrequencyErrorModels stored = sized.value().database.frequencyErrors;
+  EXPECT_EQ(stored.degree, 5);
+  EXPECT_EQ(stored.ritz.samples, f.piecesPerObject[0].second);
+  EXPECT_EQ(static_cast<int>(stored.ritz.distance.size()), f.ritzBins);
+  EXPECT_EQ(static_cast<int>(stored.checkedP2.distance.size()), f.checkedP2Bins);
+  FrequencyErrorCalibrationSettings again;
+  again.scene = requirements.value().objects;
+  again.seeds = s.frequencyErrorPoints;
+  again.maxFragmentsPerImpact = s.frequencyErrorPiecesPerImpact;
+  auto recalibrated = calibrateFrequencyErrors(sized.value(), again);
+  ASSERT_TRUE(recalibrated) << recalibrated.error().message;
+  EXPECT_EQ(recalibrated.value().models.ritz.medianError, stored.ritz.medianError);
+  EXPECT_EQ(recalibrated.value().models.ritz.p90Error, stored.ritz.p90Error);
+  EXPECT_EQ(recalibrated.value().models.checked.distance, stored.checked.distance);
+
+  // Too soft to break: the sizing succeeds, the pack predicts nothing, and the report says why.
+  SceneRequirements soft = requirements.value();
+  soft.objects[0].minSpeedMps = 0.01;
+  soft.objects[0].maxSpeedMps = 0.02;
+  const auto softOut = dir / "soft.h5";
+  auto softReport = sizeScene(manifest.value(), database, soft, {softOut, {}}, s);
+  ASSERT_TRUE(softReport) << softReport.error().message;
+  ASSERT_TRUE(softReport.value().frequencyErrors);
+  EXPECT_FALSE(softReport.value().frequencyErrors->calibrated);
+  EXPECT_NE(softReport.value().frequencyErrors->note.find("no fragment"), std::string::npos) << softReport.value().frequencyErrors->note;
+  auto softPack = readPack(softOut);
+  ASSERT_TRUE(softPack) << softPack.error().message;
+  EXPECT_TRUE(softPack.value().database.frequencyErrors.ritz.empty());
 }
 
 // The element order is one more knob (ModelSizingSettings::elementOrders): each object is sized in

@@ -345,6 +345,18 @@ TEST_F(CliTest, ExactModesBenchComparesTheMatchWithTheFragmentsOwnModes) {
   EXPECT_TRUE(calibrated["database"]["frequency_errors"].contains("checked_p2"));
   EXPECT_EQ(readCsv(dir / "cal.csv").rows.size(), calibrated["database"]["frequency_errors"]["ritz"]["samples"].get<size_t>());
   EXPECT_EQ(run("calibrate-errors " + path("tile.h5") + " --quiet").exitCode, 2);  // no database: InvalidArgument
+  // At a scene's own impacts (a requirements file, as for size): its objects, impactors and speed ends.
+  std::ofstream(dir / "scene.json") << R"({ "objects": [ { "name": "tile", "speeds_mps": [30, 40], "impactors": [ { "mass_kg": 0.05, "radius_m": 0.01 } ] } ] })";
+  const CliRun scene = run("calibrate-errors " + path("p.h5") + " --scene " + path("scene.json") +
+                           " --seeds 1 --max-fragments 2 --bins 2 --no-p2 --quiet --out " + path("scene.h5"));
+  ASSERT_EQ(scene.exitCode, 0) << scene.out;
+  EXPECT_NE(scene.out.find("pieces per object: tile "), std::string::npos) << scene.out;
+  EXPECT_NE(scene.out.find("(2 impacts)"), std::string::npos) << scene.out;
+  std::ofstream(dir / "vase.json") << R"({ "objects": [ { "name": "vase", "speeds_mps": [1, 2], "impactors": [ { "ground": true } ] } ] })";
+  const CliRun vase = run("calibrate-errors " + path("p.h5") + " --scene " + path("vase.json") + " --quiet --out " + path("vase.h5"));
+  EXPECT_EQ(vase.exitCode, 2);
+  EXPECT_NE(vase.out.find("'vase' is not in the pack"), std::string::npos) << vase.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "vase.h5"));
   // Each fragment against the first 3 entries and against all 6: a row for each.
   const CliRun bench = run("bench exact-modes " + path("p.h5") + " --speeds 40 --seeds 1 --max-fragments 3 --exact-modes 6 "
                            "--repeats 1 --entries 3,0 --quiet --csv " + path("x.csv"));
@@ -434,6 +446,7 @@ TEST_F(CliTest, SizeBakesTheSceneObjectsAtTheirModeCountsAndReports) {
   EXPECT_TRUE(chosen == 4 || chosen == 8) << report.dump();
   EXPECT_EQ(report["objects"][0]["trials"].size(), 2u);
   EXPECT_EQ(report["skipped_objects"], nlohmann::json::array({"block"}));
+  EXPECT_TRUE(report["frequency_errors"].is_null());  // no database (the scene does not refracture): nothing to calibrate
   // The sized tile is P2 (below), which stores more than the all-maximum P1 side: the savings at
   // one order are SceneSizingTest's.
   EXPECT_GT(report["sized"]["pack_bytes"].get<int64_t>(), 0);

@@ -10,12 +10,13 @@
 #include "Commands.h"
 #include "brittle/database/Pack.h"
 #include "brittle/precompute/FrequencyErrorCalibration.h"
+#include "brittle/precompute/SceneRequirements.h"
 
 namespace brittle::cli {
 namespace {
 
 struct CalibrateErrorsOptions {
-  std::string pack, out, csv;
+  std::string pack, out, csv, scene;
   FrequencyErrorCalibrationSettings settings;
   bool noP2 = false, json = false, quiet = false;
 };
@@ -39,7 +40,12 @@ Runner addCalibrateErrorsCommand(CLI::App& app) {
   cmd->add_option("--out", o->out, "Output pack, written atomically (default: the input pack, replaced)");
   cmd->add_option("--objects", o->settings.objects, "Break only these pack objects (default: all)")->delimiter(',');
   cmd->add_option("--speeds", o->settings.speedsMps, "Impact speeds (m/s)")->delimiter(',')->capture_default_str();
-  cmd->add_option("--seeds", o->settings.seeds, "Impacts per object and speed")->capture_default_str()->check(CLI::Range(1, 1000));
+  cmd->add_option("--seeds", o->settings.seeds, "Impacts per object and speed (with --scene: surface points per impactor and speed end)")
+      ->capture_default_str()->check(CLI::Range(1, 1000));
+  cmd->add_option("--scene", o->scene,
+                  "Break the objects with a scene's impacts instead (a requirements file, as for size: its objects, impactors and "
+                  "both ends of each speed range; --speeds is then not used)")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--first-seed", o->settings.firstSeed,
                   "Seed of the first impact (default 1001: bench exact-modes' seeds 1.. stay held back)")
       ->capture_default_str();
@@ -62,6 +68,11 @@ Runner addCalibrateErrorsCommand(CLI::App& app) {
       return reportError(makeError(ErrorCode::InvalidArgument, "calibrate-errors: the pack has no fragment database with physics"));
     }
     o->settings.p2Checks = !o->noP2;
+    if (!o->scene.empty()) {
+      auto scene = loadSceneRequirements(o->scene);
+      if (!scene) return reportError(scene.error());
+      o->settings.scene = std::move(scene.value().objects);
+    }
     Result<FrequencyErrorCalibration> calibrated = makeError(ErrorCode::Cancelled, "not run");
     {
       TerminalProgress progress(o->quiet);
@@ -87,10 +98,13 @@ Runner addCalibrateErrorsCommand(CLI::App& app) {
       for (const ObjectAsset& a : pack.value().objects) {
         if (!o->settings.objects.empty() && std::find(o->settings.objects.begin(), o->settings.objects.end(), a.name) == o->settings.objects.end())
           continue;
+        if (!o->settings.scene.empty() && std::none_of(o->settings.scene.begin(), o->settings.scene.end(),
+                                                       [&](const SceneObjectRange& r) { return r.name == a.name; }))
+          continue;
         const auto n = std::count_if(c.samples.begin(), c.samples.end(), [&](const FrequencyErrorSample& x) { return x.object == a.name; });
         std::cout << " " << a.name << " " << n << (n == 0 ? " (none broke into a piece with a truth: faster --speeds?)" : "");
       }
-      std::cout << "\n";
+      std::cout << " (" << c.impacts << " impacts)\n";
       printModel("Ritz values against their convergence from two degrees below", c.models.ritz);
       if (!c.models.checked.empty()) printModel("checked values (linear tets) against the mesh's gain", c.models.checked);
       if (!c.models.checkedP2.empty()) printModel("checked values (quadratic tets) against the mesh's gain", c.models.checkedP2);

@@ -63,12 +63,22 @@ nlohmann::json reportJson(const SceneSizingReport& r) {
               // The sized pack's model of the chosen kind is fitted to these when there are ≥ 8 (MatchErrors.h).
               {"match_error_samples", r.search->distanceErrors.size()}};
   }
+  nlohmann::json frequencyErrors;
+  if (r.frequencyErrors) {
+    const FrequencyErrorSizing& f = *r.frequencyErrors;
+    nlohmann::json pieces = nlohmann::json::object();
+    for (const auto& [name, n] : f.piecesPerObject) pieces[name] = n;
+    frequencyErrors = {{"calibrated", f.calibrated}, {"note", f.note}, {"impacts", f.impacts}, {"pieces", pieces},
+                       {"bins", {{"ritz", f.ritzBins}, {"checked", f.checkedBins}, {"checked_p2", f.checkedP2Bins}}},
+                       {"seconds", f.seconds}};
+  }
   return {{"target_peak_stress_error", r.targetError},
           {"target_frequency_error", r.frequencyTargetError},
           {"target_match_frequency_error", r.matchTargetError},
           {"debris", debris},
           {"debris_volume_fraction", r.debrisVolumeFraction},
           {"search", search},
+          {"frequency_errors", frequencyErrors},
           {"fragment_sizing_s", r.fragmentSizingS},
           {"refracture", r.refracture},
           {"all_met", r.allMet()},
@@ -115,6 +125,16 @@ void printReport(const SceneSizingReport& r) {
     }
   }
   std::printf("database: %s\n", r.refracture ? "kept (fragments break again)" : "dropped (the scene does not refracture)");
+  if (r.frequencyErrors) {
+    const FrequencyErrorSizing& f = *r.frequencyErrors;
+    if (f.calibrated) {
+      std::printf("bodies' frequency errors: calibrated on the scene's impacts (%d, %.1f s), pieces:", f.impacts, f.seconds);
+      for (const auto& [name, n] : f.piecesPerObject) std::printf(" %s %d", name.c_str(), n);
+      std::printf("\n");
+    } else {
+      std::printf("bodies' frequency errors: NOT calibrated (%s); the pack predicts none\n", f.note.c_str());
+    }
+  }
   auto ratio = [](double a, double b) { return b > 0.0 ? a / b : 0.0; };
   std::printf("%-12s %14s %14s %8s\n", "", "all-maximum", "sized", "ratio");
   std::printf("%-12s %12.1f s %12.1f s %8.2f\n", "bake", r.maximumBakeS, r.sizedBakeS, ratio(r.sizedBakeS, r.maximumBakeS));
@@ -152,6 +172,10 @@ Runner addSizeCommand(CLI::App& app) {
   cmd->add_option("--frequency-target", o->settings.frequencyErrorTarget,
                   "First-frequency error allowed when choosing the element order (relative, against p2 on the same tets)")
       ->capture_default_str()->check(CLI::Range(1e-6, 0.999));
+  cmd->add_option("--frequency-error-points", o->settings.frequencyErrorPoints,
+                  "Surface points per impactor and speed end for the bodies' frequency-error calibration at the scene's "
+                  "impacts (0: none; the pack then predicts no body's error)")
+      ->capture_default_str()->check(CLI::Range(0, 1000));
   cmd->add_option("--sized-manifest", o->sizedManifest, "Also write the sized pack's bake manifest here");
   cmd->add_option("--report", o->report, "Also write the report as JSON here");
   cmd->add_option("--settings-out", o->settingsOut,

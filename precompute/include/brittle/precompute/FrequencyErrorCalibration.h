@@ -19,6 +19,12 @@
 //
 // The seeds start at firstSeed (1001), away from those `brittle bench exact-modes` measures (1 to
 // its --seeds), so that the bench's fragments are held back from the calibration.
+//
+// A scene's own impacts instead (`scene`, from a requirements file: `brittle size` and
+// `calibrate-errors --scene`): each scene object is hit by the impacts the sizing measures
+// (drawSceneImpacts: `seeds` surface points × each impactor × both ends of its speed range, a
+// dropped object on its lowest node), so that the prediction is fitted to the pieces the scene
+// makes: a brick dropped on the ground breaks differently from one hit by a ball.
 #pragma once
 
 #include <cstdint>
@@ -29,6 +35,7 @@
 #include "brittle/database/MatchErrors.h"
 #include "brittle/database/Pack.h"
 #include "brittle/precompute/Progress.h"
+#include "brittle/precompute/SceneRequirements.h"
 #include "brittle/runtime/CrackPropagation.h"
 #include "brittle/runtime/TetTopology.h"
 #include "brittle/runtime/World.h"
@@ -36,8 +43,11 @@
 namespace brittle {
 
 struct FrequencyErrorCalibrationSettings {
-  std::vector<std::string> objects;  ///< empty: every object of the pack
-  std::vector<double> speedsMps = {10, 30};
+  std::vector<std::string> objects;  ///< empty: every object of the pack (or of the scene)
+  std::vector<double> speedsMps = {10, 30};  ///< without a scene
+  /// Non-empty: the scene's objects (each must be in the pack), hit by its impacts (above); then
+  /// `speedsMps` is not used, and `objects`, when given, must be among the scene's.
+  std::vector<SceneObjectRange> scene;
   int seeds = 4;                     ///< 4: 113 pieces of the default objects, ~2 min (2: 61, whose p90 covered 0.79 of held-back Ritz errors)
   uint64_t firstSeed = 1001;
   int maxFragmentsPerImpact = 8;
@@ -67,6 +77,7 @@ struct FrequencyErrorSample {
 struct FrequencyErrorCalibration {
   FrequencyErrorModels models;  ///< ritz from every sample, checked and checkedP2 from the checked ones
   std::vector<FrequencyErrorSample> samples;
+  int impacts = 0;  ///< impacts made (an impact that breaks off no piece gives no sample)
 };
 
 /// The impact the calibration and `bench exact-modes` make: a steel ball (a fifth of the
@@ -79,7 +90,7 @@ ImpactDesc seededImpact(const ObjectAsset& asset, ObjectId id, uint64_t seed, do
 std::vector<size_t> piecesSpreadOverSizes(const ImpactResult& result, int count);
 
 /// The calibration above. Progress reports "frequency errors" per impact. Errors: InvalidArgument
-/// (settings out of range, an unknown object, a pack without objects), those of World, and of
+/// (settings out of range, an unknown object, a scene object the pack lacks, a pack without objects), those of World, and of
 /// fitMatchErrors when fewer samples than one per bin (InvalidArgument: too few fragments; more
 /// seeds or speeds give more).
 Result<FrequencyErrorCalibration> calibrateFrequencyErrors(const Pack& pack, const FrequencyErrorCalibrationSettings& settings,

@@ -75,6 +75,17 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
 /// direction. The object id is left unset.
 std::vector<ImpactDesc> drawSceneImpacts(const ObjectAsset& asset, const SceneObjectRange& range, int points, uint64_t seed);
 
+/// The sized pack's frequency-error calibration at the scene's impacts (ModelSizingSettings::
+/// frequencyErrorPoints; FrequencyErrorCalibration.h).
+struct FrequencyErrorSizing {
+  bool calibrated = false;      ///< false: the pack holds no models (`note` says why)
+  std::string note;
+  int impacts = 0;
+  std::vector<std::pair<std::string, int>> piecesPerObject;  ///< the scene's objects, in its order
+  int ritzBins = 0, checkedBins = 0, checkedP2Bins = 0;
+  double seconds = 0.0;
+};
+
 /// A whole scene: what the sized pack saves against the all-maximum one (every manifest object
 /// at the ladder's largest count, and the manifest's database).
 struct SceneSizingReport {
@@ -91,6 +102,7 @@ struct SceneSizingReport {
   std::vector<DebrisSizing> debris;        ///< per scene object
   double debrisVolumeFraction = 0.01;      ///< the scene's: the smallest over its objects
   std::optional<SearchSizing> search;      ///< when the sized pack keeps a database
+  std::optional<FrequencyErrorSizing> frequencyErrors;  ///< when it keeps one and frequencyErrorPoints > 0
   double fragmentSizingS = 0.0;            ///< time spent on sceneFragments and chooseSearch
   bool allMet() const {
     for (const auto& o : objects) {
@@ -106,7 +118,9 @@ struct SceneSizingPaths {
 };
 
 /// Bakes the all-maximum pack, sizes every scene object on it, then bakes the sized pack: the
-/// scene's objects at their chosen counts, plus the database when the scene refractures. Both
+/// scene's objects at their chosen counts, plus the database when the scene refractures, with its
+/// bodies' frequency errors calibrated at the scene's impacts (a scene whose impacts break off no
+/// measurable piece gets none: FrequencyErrorSizing::note). Both
 /// packs are written (writePack, atomic) to measure their size. With several element orders
 /// (ModelSizingSettings::elementOrders), each scene object is also baked and sized in each, and
 /// its cheapest order that meets both targets is the one sized and kept. Errors: InvalidArgument

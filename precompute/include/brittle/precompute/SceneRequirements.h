@@ -76,6 +76,12 @@ struct ModelSizingSettings {
   /// on a timing would make the pack depend on the machine's load.
   std::vector<ElementOrder> elementOrders;
   double frequencyErrorTarget = 0.02;  ///< the first frequency's allowed error (relative)
+  /// The sized pack's bodies' frequency-error models (FrequencyErrorCalibration.h), fitted to the
+  /// pieces of the scene's own impacts, when it keeps a database: `frequencyErrorPoints` surface
+  /// points per impactor, at both ends of each object's speed range (0: not calibrated; the pack
+  /// then predicts no body's error and escalates nothing).
+  int frequencyErrorPoints = 4;
+  int frequencyErrorPiecesPerImpact = 8;  ///< pieces measured per impact, spread over their sizes
 };
 
 }  // namespace brittle
