@@ -3,13 +3,10 @@
 #include <Eigen/Geometry>
 #include <Eigen/Eigenvalues>
 #include <oneapi/tbb/parallel_for.h>
-#include <oneapi/tbb/task_arena.h>
-#include <oneapi/tbb/task_group.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #include <immintrin.h>
 #endif
-#include <atomic>
 #include <algorithm>
 #include <limits>
 #include <cmath>
@@ -321,13 +318,6 @@ void prefetchRows(const Matrix& m, Eigen::Index first, Eigen::Index count) {
   prefetchBytes(m.data() + first * m.cols(), m.data() + (first + count) * m.cols());
 }
 
-// A spin-wait's pause (a hint to the core that this thread only waits).
-inline void spinPause() {
-#if defined(__SSE2__)
-  _mm_pause();
-#endif
-}
-
 // Whether n doubles are the same bits (−0 and 0 differ; a NaN equals its own bits).
 bool sameBits(const double* a, const double* b, Eigen::Index n) { return std::memcmp(a, b, sizeof(double) * static_cast<size_t>(n)) == 0; }
 
@@ -541,15 +531,10 @@ Voigt StressField::atPoint(Eigen::Index point) const {
   };
   if (!nodeMemo) return compute();
   const auto node = static_cast<size_t>((*corners)(point / pointsPerElement, point % pointsPerElement));
-  std::atomic_ref<char> state(nodeMemo->state[node]);
-  char known = state.load(std::memory_order_acquire);
-  if (known == 2) return nodeMemo->stress[node];
-  const Voigt s = compute();
-  if (known == 0 && state.compare_exchange_strong(known, 1, std::memory_order_acquire)) {
-    nodeMemo->stress[node] = s;
-    state.store(2, std::memory_order_release);
-  }
-  return s;
+  if (nodeMemo->known[node]) return nodeMemo->stress[node];
+  nodeMemo->stress[node] = compute();
+  nodeMemo->known[node] = 1;
+  return nodeMemo->stress[node];
 }
 
 void StressField::prefetch(int32_t e) const {
@@ -1181,14 +1166,13 @@ void CrackWorkspace::reserve(Eigen::Index nodes, Eigen::Index tets, Eigen::Index
   seedOrder.taken.reserve(t);
   cut.reserve(t);
   stressKnown.reserve(t);
-  wanted.reserve(1u << 12);
   stressCache.reserve(t);
   phi.reserve(c * n);
   cutBy.reserve(c * t);
   seedNormals.reserve(c);
   for (auto* v : {&parent, &labelOfRoot, &size, &low, &root, &shared, &head, &tail, &touched, &next, &fill}) v->reserve(n);
   nodeMemo.stress.reserve(n);
-  nodeMemo.state.reserve(n);
+  nodeMemo.known.reserve(n);
   start.reserve(n + 1);
   incident.reserve(2 * static_cast<size_t>(edges));
   stuck.reserve(n);
@@ -1242,61 +1226,22 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
   // every edge it crosses is cut at the same point from every element around it.
   // Stresses at the peak instant, each computed once (an element is read by its cut neighbours),
   // with their largest principal value and direction (read when a front reaches the element: once,
-  // where an element met by several cracks or fronts solved it each time). A helper on another
-  // thread of the caller's arena, where there is one, computes ahead the stresses crack growth is
-  // likely to ask for next (the neighbours of each element put on a front), into the same cache.
-  // Each entry is field.at(e) and its maxPrincipalStress whoever computes it, so the fracture is
-  // the same bits with or without the helper, and on any number of threads; the helper only saves
-  // the growth its wait (a P2 element's four corners: 7.7 KB of stress modes and four eigen solves).
-  // Each element's state: 0 unknown, 1 being computed, 2 known.
+  // where an element met by several cracks or fronts solved it each time). Growth computes each as
+  // it needs it, on this thread. (A helper thread that computed ahead the stresses growth would ask
+  // for next was tried, stops 59 to 67: once a P2 node's stress was memoised and an element's rows
+  // summed four at a time it no longer paid. On the default objects the crack stage took 2–10 %
+  // less without it in three interleaved rounds, and on the P1 slab 10 % less: its
+  // hand-over cost more than the stresses it took over, and it kept the other core spinning.)
   w.stressCache.resize(tetCount);
   w.stressKnown.assign(tetCount, 0);
-  // Claims e and computes its entry unless it is known or claimed already (a load first: the
-  // locked compare-exchange only where the entry may still be free).
-  auto claimAndCompute = [&](int32_t e) {
-    std::atomic_ref<char> known(w.stressKnown[static_cast<size_t>(e)]);
-    char expected = known.load(std::memory_order_acquire);
-    if (expected != 0 || !known.compare_exchange_strong(expected, 1, std::memory_order_acquire)) return;
-    CrackWorkspace::Principal& p = w.stressCache[static_cast<size_t>(e)];
-    p.stress = field.at(e);
-    p.value = maxPrincipalStress(p.stress, &p.direction);
-    known.store(2, std::memory_order_release);
-  };
-  auto awaitKnown = [&](int32_t e) -> const CrackWorkspace::Principal& {
-    std::atomic_ref<char> known(w.stressKnown[static_cast<size_t>(e)]);
-    while (known.load(std::memory_order_acquire) != 2) spinPause();  // the helper is on it
-    return w.stressCache[static_cast<size_t>(e)];
-  };
   auto stressAt = [&](int32_t e) -> const CrackWorkspace::Principal& {
-    claimAndCompute(e);
-    return awaitKnown(e);
-  };
-  // The elements wanted ahead, a ring written by growth and read by the helper.
-  constexpr uint32_t kWanted = 1u << 12;
-  w.wanted.resize(kWanted);
-  std::atomic<uint32_t> wantedEnd{0}, wantedTaken{0};
-  std::atomic<bool> growing{true};
-  const bool helped = tbb::this_task_arena::max_concurrency() > 1;
-  auto want = [&](int32_t e) {
-    if (!helped || std::atomic_ref<char>(w.stressKnown[static_cast<size_t>(e)]).load(std::memory_order_relaxed) != 0) return;
-    const uint32_t end = wantedEnd.load(std::memory_order_relaxed);
-    if (end - wantedTaken.load(std::memory_order_acquire) >= kWanted) return;  // full: growth computes it itself
-    w.wanted[end & (kWanted - 1)] = e;
-    wantedEnd.store(end + 1, std::memory_order_release);
-  };
-  auto helper = [&] {
-    for (uint32_t taken = 0; growing.load(std::memory_order_acquire);) {
-      if (taken == wantedEnd.load(std::memory_order_acquire)) {
-        spinPause();
-        continue;
-      }
-      const int32_t e = w.wanted[taken & (kWanted - 1)];
-      wantedTaken.store(++taken, std::memory_order_release);
-      // The next element's rows on their way while this one is computed (its slot is written
-      // before wantedEnd passes it, and is not reused before it is taken).
-      if (taken != wantedEnd.load(std::memory_order_acquire)) field.prefetch(w.wanted[taken & (kWanted - 1)]);
-      claimAndCompute(e);
+    CrackWorkspace::Principal& p = w.stressCache[static_cast<size_t>(e)];
+    if (!w.stressKnown[static_cast<size_t>(e)]) {
+      p.stress = field.at(e);
+      p.value = maxPrincipalStress(p.stress, &p.direction);
+      w.stressKnown[static_cast<size_t>(e)] = 1;
     }
+    return p;
   };
   // Per crack c: φ_c at w.phi[c·#N + node], and whether it cut element e at w.cutBy[c·#T + e]
   // (cracks cross each other, each needs its whole sheet).
@@ -1331,44 +1276,19 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
       const double sCut = d[i] / (d[i] - d[j]);
       state.edgeCuts[edge] = forward ? sCut : 1.0 - sCut;
     }
-    // The neighbours the plane reaches through a face, each a front. Their stresses are read only
-    // once all of them are asked for: those the helper is not on are computed here meanwhile, and
-    // the elements beyond them are wanted first, so that the helper has work while growth waits.
-    int32_t reached[4];
-    int count = 0;
-    const size_t firstPath = w.fronts.size();
+    // The neighbours the plane reaches through a face, each a front, pushed in face order.
     for (int f = 0; f < 4; ++f) {
       const int32_t nb = topo.neighbours(e, f);
       Eigen::Vector3d a, b;
       if (nb < 0 || cutBy(crack, nb) || !faceCut(mesh, e, f, d, a, b)) continue;
-      reached[count++] = nb;
+      const Voigt& sNb = stressAt(nb).stress;
+      w.front.push_back({n.dot(tensor(sNb) * n), nb, static_cast<int32_t>(w.fronts.size())});
       w.fronts.push_back({crack, n, a, b});
-      if (helped) {  // where the crack may go from nb: across the faces the plane it comes on crosses
-        Eigen::Vector4d dNb;
-        for (int i = 0; i < 4; ++i) dNb[i] = n.dot(mesh.nodes.row(mesh.tets(nb, i)).transpose()) - offset;
-        for (int g = 0; g < 4; ++g) {
-          const int32_t next = topo.neighbours(nb, g);
-          if (next < 0 || next == e) continue;
-          const auto local = tetFaceNodes(g);
-          const double d0 = dNb[local[0]], d1 = dNb[local[1]], d2 = dNb[local[2]];
-          if (std::max({d0, d1, d2}) > 0.0 && std::min({d0, d1, d2}) < 0.0) want(next);
-        }
-      }
-    }
-    for (int i = 0; i < count; ++i) claimAndCompute(reached[i]);
-    for (int i = 0; i < count; ++i) {  // pushed in face order, as they were found
-      const Voigt& sNb = awaitKnown(reached[i]).stress;
-      w.front.push_back({n.dot(tensor(sNb) * n), reached[i], static_cast<int32_t>(firstPath + static_cast<size_t>(i))});
       std::push_heap(w.front.begin(), w.front.end(), weaker);
     }
     return true;
   };
 
-  tbb::task_group helping;
-  if (helped) helping.run(helper);
-  // Growth, on this thread; the helper stops with it (and, if no thread took it meanwhile, returns
-  // at once from the wait below).
-  auto grow = [&] {
   // Seeds: strongest first; one crack per seed that is neither cut nor next to a cut element.
   SeedOrder seeds(scan, field, w.seedOrder);
   for (int32_t e = 0; seeds.next(e);) {
@@ -1425,10 +1345,6 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
     if (n.dot(tensor(s) * n) < settings.propagationStressRatio * sigmaT) continue;
     if (!apply(element, n, n.dot(f.point), f.crack)) break;
   }
-  };
-  grow();
-  growing.store(false, std::memory_order_release);
-  helping.wait();
   state.fragmentCount = labelFragments(topo, state.edgeCuts, mesh.nodes.rows(), state.nodeLabels, w);
   state.mergedCrumbs = mergeCrumbs(topo, settings.minFragmentNodes, state.edgeCuts, state.nodeLabels, state.fragmentCount, w);
   return Ok{};

@@ -237,11 +237,11 @@ struct FractureState {
 /// known (2); a thread that finds it claimed computes it for itself.
 struct NodeStressMemo {
   std::vector<Voigt> stress;  ///< per node
-  std::vector<char> state;    ///< per node: 0 unknown, 1 being written, 2 known
+  std::vector<char> known;    ///< per node
   /// Every node unknown (no allocation within the reserved size).
   void reset(Eigen::Index nodes) {
     stress.resize(static_cast<size_t>(nodes));
-    state.assign(static_cast<size_t>(nodes), 0);
+    known.assign(static_cast<size_t>(nodes), 0);
   }
 };
 
@@ -329,8 +329,7 @@ struct CrackWorkspace {
   };
   std::vector<Front> front;              ///< a max-heap
   std::vector<FrontPath> fronts;         ///< every front pushed in this growth, in push order
-  std::vector<char> cut, stressKnown;    ///< #T (stressKnown: 0 unknown, 1 being computed, 2 known)
-  std::vector<int32_t> wanted;           ///< a ring of elements whose stress the helper computes ahead
+  std::vector<char> cut, stressKnown;    ///< #T
   std::vector<Principal> stressCache;    ///< #T
   std::vector<double> phi;               ///< cracks × #N: each crack's nodal level set
   std::vector<char> cutBy;               ///< cracks × #T
