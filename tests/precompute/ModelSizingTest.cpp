@@ -34,6 +34,16 @@ Result<SceneRequirements> parse(const std::string& text) {
   return loadSceneRequirements(writeText(dir, "scene.json", text));
 }
 
+// A scene sizing kept small: the ladder given, one point per impactor, one timing, a coarse reference.
+ModelSizingSettings quickScene(std::vector<int> ladder, int referenceSteps = 30) {
+  ModelSizingSettings s;
+  s.modeLadder = std::move(ladder);
+  s.points = 1;
+  s.timingRepeats = 1;
+  s.referenceStepsPerContact = referenceSteps;
+  return s;
+}
+
 TEST(SceneRequirementsTest, ReadsSpheresTheGroundAndTheTarget) {
   auto r = parse(R"({ "peak_stress_error": 0.1, "refracture": false, "objects": [
       { "name": "plate", "speeds_mps": [2, 10], "impactors": [ { "mass_kg": 0.1, "radius_m": 0.02 } ] },
@@ -283,11 +293,7 @@ TEST(SceneSizingTest, BakesOnlyWhatTheSceneUsesAndReportsTheSavings) {
   auto requirements = parse(R"({ "peak_stress_error": 0.3, "refracture": false, "objects": [
       { "name": "tile", "speeds_mps": [2, 6], "impactors": [ { "mass_kg": 0.05, "radius_m": 0.01 } ] } ] })");
   ASSERT_TRUE(requirements);
-  ModelSizingSettings s;
-  s.modeLadder = {5, 10, 30};
-  s.points = 1;
-  s.timingRepeats = 1;
-  s.referenceStepsPerContact = 30;
+  ModelSizingSettings s = quickScene({5, 10, 30});
   const auto out = dir / "out" / "sized.h5";
   std::filesystem::create_directories(out.parent_path());
   auto report = sizeScene(manifest.value(), std::nullopt, requirements.value(), {out, {}}, s);
@@ -344,11 +350,7 @@ TEST(SceneSizingTest, CalibratesTheBodiesFrequencyErrorsAtTheScenesImpacts) {
   auto requirements = parse(R"({ "peak_stress_error": 0.5, "refracture": true, "objects": [
       { "name": "tile", "speeds_mps": [20, 40], "impactors": [ { "mass_kg": 0.05, "radius_m": 0.01 } ] } ] })");
   ASSERT_TRUE(requirements);
-  ModelSizingSettings s;
-  s.modeLadder = {5, 10};
-  s.points = 1;
-  s.timingRepeats = 1;
-  s.referenceStepsPerContact = 30;
+  ModelSizingSettings s = quickScene({5, 10});
   s.elementOrders = {ElementOrder::P1};
   s.fragmentsPerImpact = 3;
   s.searchChecks = {0};
@@ -414,11 +416,7 @@ TEST(SceneSizingTest, KeepsTheCheaperElementOrderThatMeetsBothTargets) {
       { "name": "tile", "speeds_mps": [3, 3], "impactors": [ { "mass_kg": 0.05, "radius_m": 0.01 } ] },
       { "name": "block", "speeds_mps": [3, 3], "impactors": [ { "mass_kg": 0.05, "radius_m": 0.01 } ] } ] })");
   ASSERT_TRUE(requirements);
-  ModelSizingSettings s;
-  s.modeLadder = {5, 10};
-  s.points = 1;
-  s.timingRepeats = 1;
-  s.referenceStepsPerContact = 20;
+  ModelSizingSettings s = quickScene({5, 10}, 20);
   s.fragmentsPerImpact = 2;
   s.elementOrders = {ElementOrder::P1, ElementOrder::P2};
   s.frequencyErrorTarget = 0.4;
