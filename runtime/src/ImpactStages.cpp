@@ -275,15 +275,19 @@ void inheritContactSpread(const Body& parent, ObjectAsset& fragment) {
 // linear tets have more than six rigid modes), the Ritz values stand. `estimate` says which it
 // was and the error `models` predict for it: the Ritz values' at their convergence from degree
 // p − 2 (the lowest three at p − 2, ~0.2 ms at p = 5), checked ones' at the mesh's gain.
-// The entry is placed by the World's EntryCache (its basis at the material's ν shared).
+// The entry is placed by the World's EntryCache (its basis at the material's ν shared). The body's
+// mass properties are the fragment's own (`mass`, exact: FragmentResult::massProperties), not the
+// entry's rescaled ones, which differ with the shape (inertia 6–13 % off at the median on cut
+// queries, bench search): the contact of its next impact, and objectAsset, see the piece's own.
 Result<ObjectAsset> placeEntry(const EntryCache& cache, const FragmentMatch& m, const Material& material, const TriangleMesh& surface,
-                               int degree, const MeshCheck& check, const FrequencyErrorModels& models,
+                               const MassProperties& mass, int degree, const MeshCheck& check, const FrequencyErrorModels& models,
                                Eigen::VectorXd& entryEigenvalues, FrequencyErrorPrediction& estimate) {
   auto predicted = [&](FrequencySource source, double indicator, const MatchErrorPrediction& p) {
     estimate = FrequencyErrorPrediction{source, indicator, p.median, p.p90, p.beyondRange};
   };
   predicted(FrequencySource::Entry, m.distance, m.predictedError);
   auto placed = cache.place(m.entry, material, m.queryFrame);
+  if (placed) placed.value().massProperties = mass;
   if (placed && check.parent) inheritContactSpread(*check.parent->body, placed.value());
   if (!placed || degree <= 0 || surface.vertices.rows() == 0) return placed;
   // The surface's moments about its vertices' mean, once for both degrees (as polynomialModes
@@ -341,11 +345,11 @@ const FrequencyErrorModels& frequencyModelsAt(const FragmentMatcher& matcher, in
 
 // The matched entry placed (placeEntry) and made a body, its tet connectivity the entry's own.
 Result<std::shared_ptr<const Body>> matchedBody(const EntryCache& cache, const FragmentMatch& m, const Material& material,
-                                                int modeCount, const TriangleMesh& surface, int degree, const MeshCheck& check,
-                                                const FrequencyErrorModels& models) {
+                                                int modeCount, const TriangleMesh& surface, const MassProperties& mass, int degree,
+                                                const MeshCheck& check, const FrequencyErrorModels& models) {
   Eigen::VectorXd entryEigenvalues;
   FrequencyErrorPrediction estimate;
-  auto placed = placeEntry(cache, m, material, surface, degree, check, models, entryEigenvalues, estimate);
+  auto placed = placeEntry(cache, m, material, surface, mass, degree, check, models, entryEigenvalues, estimate);
   if (!placed) return Error{placed.error().code, "entry " + std::to_string(m.entry) + ": " + placed.error().message};
   const auto topology = cache.topology(m.entry);  // held while the body is made
   const TetTopology* sameTets = *topology ? &topology->value() : nullptr;  // else makeBody builds it and reports the error
@@ -383,9 +387,9 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
   const MeshCheck check{parent, static_cast<int>(i), fs.meshRatioMaxDof, fs.meshRatioElement};
   const EntryCache* cache = job.entryCache;
   const FrequencyErrorModels* models = &frequencyModelsAt(*job.matcher, degree);
-  auto make = [cache, shared, m, material, modeCount, correct, degree, models](const TriangleMesh& own,
-                                                                              const MeshCheck& limit) -> Result<std::shared_ptr<const Body>> {
-    auto made = matchedBody(*cache, m, material, modeCount, own, degree, limit, *models);
+  auto make = [cache, shared, m, material, modeCount, correct, degree, models, mass = fr.massProperties](
+                  const TriangleMesh& own, const MeshCheck& limit) -> Result<std::shared_ptr<const Body>> {
+    auto made = matchedBody(*cache, m, material, modeCount, own, mass, degree, limit, *models);
     if (made && correct && shared) {
       // The entry's correction placed as instantiateEntry placed the entry: x = L Rᵀ_frame x̂ + t.
       const auto entry = shared->get(m.entry, material, made.value()->modes);
@@ -466,7 +470,7 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   const MeshCheck check{parent, static_cast<int>(i), fs.meshRatioMaxDof, fs.meshRatioElement};
   const EntryCache* cache = job.entryCache;
   return BodySource::deferred([parent, label = static_cast<int>(i), es, modeCount, correct, scheduleMatch, kind, matcher, cache,
-                               degree, check, name = std::move(name),
+                               degree, check, name = std::move(name), mass = fr.massProperties,
                                surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
     const Material& material = parent->body->material;
     const Body& body = *parent->body;
@@ -484,7 +488,7 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
     auto match = matcher->match(surface, kind, 1);
     if (!match) return made.error();
     const FragmentMatch& m = match.value().front();
-    auto matched = matchedBody(*cache, m, material, modeCount, surface, degree, check, frequencyModelsAt(*matcher, degree));
+    auto matched = matchedBody(*cache, m, material, modeCount, surface, mass, degree, check, frequencyModelsAt(*matcher, degree));
     if (!matched) return made.error();
     return withCorrectionScheduled(std::move(matched), scheduleMatch);
   });
