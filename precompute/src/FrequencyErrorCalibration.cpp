@@ -98,8 +98,8 @@ ImpactDesc seededImpact(const ObjectAsset& a, ObjectId id, uint64_t seed, double
   return d;
 }
 
-Result<FrequencyErrorCalibration> calibrateFrequencyErrors(const Pack& pack, const FrequencyErrorCalibrationSettings& s,
-                                                           ProgressSink* progress) {
+Result<FrequencyErrorCalibration> measureFrequencyErrors(const Pack& pack, const FrequencyErrorCalibrationSettings& s,
+                                                         ProgressSink* progress) {
   if (Status st = validateCalibration(s); !st) return st.error();
   if (pack.objects.empty()) return calibrationError("the pack has no object");
   auto inPack = [&](const std::string& name) {
@@ -185,23 +185,40 @@ Result<FrequencyErrorCalibration> calibrateFrequencyErrors(const Pack& pack, con
     }
   }
   reportProgress(progress, "frequency errors", 1.0);
+  return out;
+}
+
+Result<FrequencyErrorModels> fitFrequencyErrors(const std::vector<FrequencyErrorSample>& samples,
+                                                const FrequencyErrorCalibrationSettings& s) {
+  if (Status st = validateCalibration(s); !st) return st.error();
   std::vector<std::pair<double, double>> ritz, checked, checkedP2;
-  for (const FrequencyErrorSample& x : out.samples) {
+  for (const FrequencyErrorSample& x : samples) {
     ritz.emplace_back(x.ritzIndicator, x.ritzError);
     if (std::isfinite(x.checkIndicator) && std::isfinite(x.checkError)) checked.emplace_back(x.checkIndicator, x.checkError);
     if (std::isfinite(x.checkP2Indicator) && std::isfinite(x.checkP2Error)) checkedP2.emplace_back(x.checkP2Indicator, x.checkP2Error);
   }
   if (ritz.empty()) return calibrationError("no fragment to calibrate on (no impact broke an object, or none had a truth): more speeds or seeds");
+  FrequencyErrorModels models;
   auto ritzModel = fitMatchErrors(std::move(ritz), s.bins);
   if (!ritzModel) return ritzModel.error();
-  out.models.ritz = std::move(ritzModel).value();
-  out.models.degree = s.degree;
-  for (auto [pairs, model] : {std::pair{&checked, &out.models.checked}, std::pair{&checkedP2, &out.models.checkedP2}}) {
+  models.ritz = std::move(ritzModel).value();
+  models.degree = s.degree;
+  for (auto [pairs, model] : {std::pair{&checked, &models.checked}, std::pair{&checkedP2, &models.checkedP2}}) {
     if (pairs->empty()) continue;
     auto fitted = fitMatchErrors(std::move(*pairs), s.bins);
     if (!fitted) return fitted.error();
     *model = std::move(fitted).value();
   }
+  return models;
+}
+
+Result<FrequencyErrorCalibration> calibrateFrequencyErrors(const Pack& pack, const FrequencyErrorCalibrationSettings& s,
+                                                           ProgressSink* progress) {
+  auto out = measureFrequencyErrors(pack, s, progress);
+  if (!out) return out;
+  auto models = fitFrequencyErrors(out.value().samples, s);
+  if (!models) return models.error();
+  out.value().models = std::move(models).value();
   return out;
 }
 

@@ -410,22 +410,31 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
   const FragmentDatabase* keep = sizedDb ? &*sizedDb : nullptr;
   // The bodies' frequency errors, at the scene's own impacts, before the pack is written (once).
   auto calibrate = [&](Pack& pack) -> Status {
-    if (!keep || settings.frequencyErrorPoints < 1 || !pack.database.hasPhysics()) return Ok{};
+    if (!keep || settings.frequencyErrorPoints < 1) return Ok{};
+    if (!pack.database.hasPhysics()) {
+      report.frequencyErrors.emplace().note = "the database has no physics: no body to predict";
+      return Ok{};
+    }
     const auto start = SteadyClock::now();
     FrequencyErrorCalibrationSettings fs;
     fs.scene = requirements.objects;
     fs.seeds = settings.frequencyErrorPoints;
     fs.maxFragmentsPerImpact = settings.frequencyErrorPiecesPerImpact;
     FrequencyErrorSizing& out = report.frequencyErrors.emplace();
-    auto made = calibrateFrequencyErrors(pack, fs, progress);
-    out.seconds = secondsSince(start);
-    // Too few pieces (the scene's impacts break off none with a truth) is a result, not a failure:
-    // the pack then predicts nothing, as one baked without the calibration.
-    if (!made) {
-      if (made.error().code != ErrorCode::InvalidArgument) return made.error();
-      out.note = made.error().message;
+    auto made = measureFrequencyErrors(pack, fs, progress);
+    if (!made) return made.error();
+    out.impacts = made.value().impacts;
+    // No piece (the scene's impacts break off none with a truth) is a result, not a failure: the
+    // pack then predicts nothing, as one baked without the calibration.
+    if (made.value().samples.empty()) {
+      out.seconds = secondsSince(start);
+      out.note = "the scene's " + std::to_string(out.impacts) + " impacts broke off no piece to calibrate on";
       return Ok{};
     }
+    auto models = fitFrequencyErrors(made.value().samples, fs);
+    if (!models) return models.error();
+    made.value().models = std::move(models).value();
+    out.seconds = secondsSince(start);
     for (const SceneObjectRange& r : requirements.objects) {
       const auto& samples = made.value().samples;
       out.piecesPerObject.emplace_back(
@@ -433,7 +442,6 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
     }
     pack.database.frequencyErrors = made.value().models;
     out.calibrated = true;
-    out.impacts = made.value().impacts;
     out.ritzBins = static_cast<int>(made.value().models.ritz.distance.size());
     out.checkedBins = static_cast<int>(made.value().models.checked.distance.size());
     out.checkedP2Bins = static_cast<int>(made.value().models.checkedP2.distance.size());

@@ -394,7 +394,8 @@ TEST(SceneSizingTest, CalibratesTheBodiesFrequencyErrorsAtTheScenesImpacts) {
   ASSERT_TRUE(softReport) << softReport.error().message;
   ASSERT_TRUE(softReport.value().frequencyErrors);
   EXPECT_FALSE(softReport.value().frequencyErrors->calibrated);
-  EXPECT_NE(softReport.value().frequencyErrors->note.find("no fragment"), std::string::npos) << softReport.value().frequencyErrors->note;
+  EXPECT_NE(softReport.value().frequencyErrors->note.find("no piece"), std::string::npos) << softReport.value().frequencyErrors->note;
+  EXPECT_EQ(softReport.value().frequencyErrors->impacts, 2);  // made, and counted
   auto softPack = readPack(softOut);
   ASSERT_TRUE(softPack) << softPack.error().message;
   EXPECT_TRUE(softPack.value().database.frequencyErrors.ritz.empty());

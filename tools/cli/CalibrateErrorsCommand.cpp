@@ -102,7 +102,7 @@ Runner addCalibrateErrorsCommand(CLI::App& app) {
                                                        [&](const SceneObjectRange& r) { return r.name == a.name; }))
           continue;
         const auto n = std::count_if(c.samples.begin(), c.samples.end(), [&](const FrequencyErrorSample& x) { return x.object == a.name; });
-        std::cout << " " << a.name << " " << n << (n == 0 ? " (none broke into a piece with a truth: faster --speeds?)" : "");
+        std::cout << " " << a.name << " " << n << (n == 0 ? " (none broke into a piece with a truth: faster impacts?)" : "");
       }
       std::cout << " (" << c.impacts << " impacts)\n";
       printModel("Ritz values against their convergence from two degrees below", c.models.ritz);

@@ -21,9 +21,9 @@
 // its --seeds), so that the bench's fragments are held back from the calibration.
 //
 // A scene's own impacts instead (`scene`, from a requirements file: `brittle size` and
-// `calibrate-errors --scene`): each scene object is hit by the impacts the sizing measures
-// (drawSceneImpacts: `seeds` surface points × each impactor × both ends of its speed range, a
-// dropped object on its lowest node), so that the prediction is fitted to the pieces the scene
+// `calibrate-errors --scene`): each scene object is hit by impacts drawn as the sizing draws its
+// own (drawSceneImpacts, from firstSeed: `seeds` surface points × each impactor × both ends of its
+// speed range, a dropped object on its lowest node), so that the prediction is fitted to the pieces the scene
 // makes: a brick dropped on the ground breaks differently from one hit by a ball.
 #pragma once
 
@@ -89,7 +89,19 @@ ImpactDesc seededImpact(const ObjectAsset& asset, ObjectId id, uint64_t seed, do
 /// not debris, the largest first, at most `count` of them spread evenly over their sizes.
 std::vector<size_t> piecesSpreadOverSizes(const ImpactResult& result, int count);
 
-/// The calibration above. Progress reports "frequency errors" per impact. Errors: InvalidArgument
+/// The calibration's pieces alone (`models` left empty): every impact made and every piece with a
+/// truth measured; none is not an error here. Errors: those of calibrateFrequencyErrors but the
+/// last.
+Result<FrequencyErrorCalibration> measureFrequencyErrors(const Pack& pack, const FrequencyErrorCalibrationSettings& settings,
+                                                         ProgressSink* progress = nullptr);
+
+/// The models fitted to `samples` (FrequencyErrorModels, at settings.degree). Errors:
+/// InvalidArgument (settings out of range, no sample), those of fitMatchErrors.
+Result<FrequencyErrorModels> fitFrequencyErrors(const std::vector<FrequencyErrorSample>& samples,
+                                                const FrequencyErrorCalibrationSettings& settings);
+
+/// The calibration above: measureFrequencyErrors, then fitFrequencyErrors. Progress reports
+/// "frequency errors" per impact. Errors: InvalidArgument
 /// (settings out of range, an unknown object, a scene object the pack lacks, a pack without objects), those of World, and of
 /// fitMatchErrors when fewer samples than one per bin (InvalidArgument: too few fragments; more
 /// seeds or speeds give more).

@@ -232,9 +232,8 @@ struct FractureState {
 
 /// The stresses of a P2 field's corner nodes, each computed once (StressField::nodeMemo). A body's
 /// P2 corner stresses are nodal means (CornerStressMeans), so every element at a node reads the
-/// same rows there: the same bits from whichever point computes them first. Safe for the crack
-/// stage's two threads: a node is claimed (state 0 → 1) before its stress is written and marked
-/// known (2); a thread that finds it claimed computes it for itself.
+/// same rows there: the same bits from whichever point computes them first. One thread's: crack
+/// growth runs on one thread (StressField::at writes it, const as it is).
 struct NodeStressMemo {
   std::vector<Voigt> stress;  ///< per node
   std::vector<char> known;    ///< per node
