@@ -150,6 +150,7 @@ Result<FrequencyErrorCalibration> measureFrequencyErrors(const Pack& pack, const
   out.impacts = static_cast<int>(impacts);
   for (const ObjectImpacts& job : jobs) {
     const ObjectAsset* asset = job.asset;
+    const size_t before = out.samples.size();
     auto material = std::find_if(pack.materials.begin(), pack.materials.end(), [&](const Material& m) { return m.name == asset->materialName; });
     if (material == pack.materials.end()) return calibrationError("object '" + asset->name + "' names no material of the pack");
     auto topology = buildTetTopology(asset->tetMesh);
@@ -183,6 +184,7 @@ Result<FrequencyErrorCalibration> measureFrequencyErrors(const Pack& pack, const
           out.samples.push_back(std::move(sample));
       }
     }
+    out.piecesPerObject.emplace_back(asset->name, static_cast<int>(out.samples.size() - before));
   }
   reportProgress(progress, "frequency errors", 1.0);
   return out;

@@ -433,18 +433,13 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
     }
     auto models = fitFrequencyErrors(made.value().samples, fs);
     if (!models) return models.error();
-    made.value().models = std::move(models).value();
     out.seconds = secondsSince(start);
-    for (const SceneObjectRange& r : requirements.objects) {
-      const auto& samples = made.value().samples;
-      out.piecesPerObject.emplace_back(
-          r.name, static_cast<int>(std::count_if(samples.begin(), samples.end(), [&](const FrequencyErrorSample& x) { return x.object == r.name; })));
-    }
-    pack.database.frequencyErrors = made.value().models;
+    out.piecesPerObject = made.value().piecesPerObject;  // the scene's objects, in its order
     out.calibrated = true;
-    out.ritzBins = static_cast<int>(made.value().models.ritz.distance.size());
-    out.checkedBins = static_cast<int>(made.value().models.checked.distance.size());
-    out.checkedP2Bins = static_cast<int>(made.value().models.checkedP2.distance.size());
+    out.ritzBins = static_cast<int>(models.value().ritz.distance.size());
+    out.checkedBins = static_cast<int>(models.value().checked.distance.size());
+    out.checkedP2Bins = static_cast<int>(models.value().checkedP2.distance.size());
+    pack.database.frequencyErrors = std::move(models).value();
     return Ok{};
   };
   auto sizedPack = bakeAndWrite(sized, keep, paths.sizedPack, progress, &report.sizedBakeS, &report.sizedPackBytes, calibrate);

@@ -123,6 +123,9 @@ TEST(FrequencyErrorCalibration, ASceneBreaksItsObjectsWithItsOwnImpacts) {
   const FrequencyErrorCalibration& c = made.value();
   EXPECT_EQ(c.impacts, 4);  // 1 point × 2 impactors × 2 speeds
   ASSERT_GE(c.samples.size(), 2u);
+  ASSERT_EQ(c.piecesPerObject.size(), 1u);  // the scene's one object, with every sample
+  EXPECT_EQ(c.piecesPerObject[0].first, "plate");
+  EXPECT_EQ(c.piecesPerObject[0].second, static_cast<int>(c.samples.size()));
   bool ends[2] = {false, false};
   for (const FrequencyErrorSample& x : c.samples) {
     EXPECT_EQ(x.object, "plate");

@@ -1,7 +1,6 @@
 // brittle calibrate-errors — how far a matched body's own frequencies are from its fragment's,
 // calibrated on runtime fragments of the pack's objects, stored in the pack's database
 // (FrequencyErrorCalibration.h; World::frequencyError and `brittle impact` report it).
-#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -95,15 +94,8 @@ Runner addCalibrateErrorsCommand(CLI::App& app) {
     if (!o->json) {
       // Pieces per object: an object no impact broke into a measured piece is not in the models.
       std::cout << "pieces per object:";
-      for (const ObjectAsset& a : pack.value().objects) {
-        if (!o->settings.objects.empty() && std::find(o->settings.objects.begin(), o->settings.objects.end(), a.name) == o->settings.objects.end())
-          continue;
-        if (!o->settings.scene.empty() && std::none_of(o->settings.scene.begin(), o->settings.scene.end(),
-                                                       [&](const SceneObjectRange& r) { return r.name == a.name; }))
-          continue;
-        const auto n = std::count_if(c.samples.begin(), c.samples.end(), [&](const FrequencyErrorSample& x) { return x.object == a.name; });
-        std::cout << " " << a.name << " " << n << (n == 0 ? " (none broke into a piece with a truth: faster impacts?)" : "");
-      }
+      for (const auto& [name, n] : c.piecesPerObject)
+        std::cout << " " << name << " " << n << (n == 0 ? " (none broke into a piece with a truth: faster impacts?)" : "");
       std::cout << " (" << c.impacts << " impacts)\n";
       printModel("Ritz values against their convergence from two degrees below", c.models.ritz);
       if (!c.models.checked.empty()) printModel("checked values (linear tets) against the mesh's gain", c.models.checked);

@@ -29,6 +29,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "brittle/core/Result.h"
@@ -78,6 +79,8 @@ struct FrequencyErrorCalibration {
   FrequencyErrorModels models;  ///< ritz from every sample, checked and checkedP2 from the checked ones
   std::vector<FrequencyErrorSample> samples;
   int impacts = 0;  ///< impacts made (an impact that breaks off no piece gives no sample)
+  /// The samples of each object broken, in the order broken (0: none had a piece with a truth).
+  std::vector<std::pair<std::string, int>> piecesPerObject;
 };
 
 /// The impact the calibration and `bench exact-modes` make: a steel ball (a fifth of the
