@@ -47,7 +47,8 @@ BackgroundThreads::~BackgroundThreads() {
   {
     std::unique_lock lock(mMutex);
     mStop = true;
-    mQueue.clear();  // not needed any more: their results die with the World
+    mFirstQueue.clear();  // not needed any more: their results die with the World
+    mQueue.clear();
     mLaterQueue.clear();
   }
   mWork.notify_all();
@@ -57,16 +58,16 @@ BackgroundThreads::~BackgroundThreads() {
 void BackgroundThreads::submit(std::function<void()> job, Urgency urgency) {
   {
     std::lock_guard lock(mMutex);
-    (urgency == Urgency::Now ? mQueue : mLaterQueue).push_back(std::move(job));
+    (urgency == Urgency::First ? mFirstQueue : urgency == Urgency::Now ? mQueue : mLaterQueue).push_back(std::move(job));
   }
   mWork.notify_one();
   mIdleWait.notify_all();  // a host in wait() takes it too
 }
 
 bool BackgroundThreads::take(std::function<void()>& job, bool& later, bool host) {
-  later = mQueue.empty();
+  later = mFirstQueue.empty() && mQueue.empty();
   if (later && (mLaterQueue.empty() || (!host && mRunningLater >= laterThreads()))) return false;
-  std::deque<std::function<void()>>& queue = later ? mLaterQueue : mQueue;
+  std::deque<std::function<void()>>& queue = later ? mLaterQueue : !mFirstQueue.empty() ? mFirstQueue : mQueue;
   job = std::move(queue.front());
   queue.pop_front();
   ++mRunning;
@@ -111,7 +112,7 @@ void BackgroundThreads::wait() {
     bool later = false;
     {
       std::unique_lock lock(mMutex);
-      mIdleWait.wait(lock, [&] { return !mQueue.empty() || !mLaterQueue.empty() || mRunning == 0; });
+      mIdleWait.wait(lock, [&] { return !mFirstQueue.empty() || !mQueue.empty() || !mLaterQueue.empty() || mRunning == 0; });
       if (!take(job, later, /*host=*/true)) {  // nothing queued and nothing running: done
         if (mError) std::rethrow_exception(std::exchange(mError, nullptr));
         return;

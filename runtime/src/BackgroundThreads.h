@@ -15,7 +15,8 @@
 // later check and escalation) after every other queued one and on all threads but one, so that a
 // new break's first bodies never queue behind them or find every thread busy with them (the pane
 // scene with every later body escalated to a P2 check: max frame 24–31 ms and p99 12–23 ms when
-// they shared one queue). What jobs compute does not depend on which thread runs them or when
+// they shared one queue). Jobs an impact waits for (Urgency::First: the body of a piece struck
+// before it was made, World::submitImpact) go ahead of every other queued one. What jobs compute does not depend on which thread runs them or when
 // (each writes only its own result), so fractures are the same bits.
 #pragma once
 
@@ -40,7 +41,7 @@ class BackgroundThreads {
   BackgroundThreads(const BackgroundThreads&) = delete;
   BackgroundThreads& operator=(const BackgroundThreads&) = delete;
 
-  enum class Urgency { Now, Later };
+  enum class Urgency { First, Now, Later };
   void submit(std::function<void()> job, Urgency urgency = Urgency::Now);
   /// Runs queued jobs on the calling thread too (a host waiting on a loading screen helps), until
   /// none is queued or running. Rethrows the first exception a job threw since the last wait.
@@ -56,7 +57,7 @@ class BackgroundThreads {
 
   std::mutex mMutex;
   std::condition_variable mWork, mIdleWait;
-  std::deque<std::function<void()>> mQueue, mLaterQueue;
+  std::deque<std::function<void()>> mFirstQueue, mQueue, mLaterQueue;
   int mRunning = 0;
   int mRunningLater = 0;  // of mRunning, Later jobs; at most laterThreads() on the threads
   int laterThreads() const { return std::max(1, static_cast<int>(mThreads.size()) - 1); }

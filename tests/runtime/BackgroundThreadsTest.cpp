@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <mutex>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 #if defined(__linux__)
@@ -131,6 +132,20 @@ TEST(BackgroundThreads, LaterJobsLeaveAThreadForTheJobsOfNow) {
   pool.wait();  // the host, waiting, may take the second beside the first: no limit for it
   EXPECT_EQ(laterRunning, 0);
   EXPECT_TRUE(nowRan);
+}
+
+// A job an impact waits for (Urgency::First: the body of a piece struck before it was made) goes
+// ahead of every queued job, Now and Later; each kind keeps its order.
+TEST(BackgroundThreads, FirstJobsGoAheadOfEveryQueuedJob) {
+  BackgroundThreads pool(0);  // no threads: the host runs them in queue order when it waits
+  std::vector<std::string> order;
+  pool.submit([&] { order.push_back("now 1"); });
+  pool.submit([&] { order.push_back("later"); }, BackgroundThreads::Urgency::Later);
+  pool.submit([&] { order.push_back("now 2"); });
+  pool.submit([&] { order.push_back("first 1"); }, BackgroundThreads::Urgency::First);
+  pool.submit([&] { order.push_back("first 2"); }, BackgroundThreads::Urgency::First);
+  pool.wait();
+  EXPECT_EQ(order, (std::vector<std::string>{"first 1", "first 2", "now 1", "now 2", "later"}));
 }
 
 TEST(BackgroundThreads, JobsNotStartedAreDroppedWithThePool) {

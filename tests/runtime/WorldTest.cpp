@@ -1228,6 +1228,58 @@ TEST_F(WorldTest, SubmittedImpactsGiveTheSameFractureAsImpactOnAnyWorkerCount) {
   }
 }
 
+// Every piece of a break struck at once, right after it: most bodies are not made yet, so those
+// impacts wait for their bodies on the background threads (ahead of their queue) before they go to
+// the workers, where impacts on bodies already made do not queue behind them. They break as the
+// same impacts do once every body is made, and a World dropped with them pending ends cleanly.
+TEST_F(WorldTest, PiecesStruckBeforeTheirBodiesAreMadeBreakAsOnceTheyAre) {
+  struct Run {
+    std::vector<uint64_t> hashes;
+    std::vector<double> peaks;
+    int broken = 0;
+  };
+  // prepared: wait for every body before the hits; collect: false drops the World with them pending.
+  auto run = [&](bool prepared, bool collect) {
+    WorldSettings settings;
+    settings.workerThreads = 2;  // two background threads on any machine
+    World world = makeWorld(settings);
+    Run out;
+    auto ticket = world.submitImpact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
+    EXPECT_TRUE(ticket);
+    ImpactResult broken;
+    EXPECT_TRUE(world.collectImpact(ticket.value(), broken));
+    if (prepared) EXPECT_TRUE(world.waitUntilPrepared());
+    std::vector<ImpactTicket> hits;
+    for (const FragmentResult& f : broken.fragments) {
+      if (f.path != FragmentPath::Matched) continue;
+      Eigen::Index top;
+      f.surface.vertices.col(2).maxCoeff(&top);
+      ImpactDesc hit = ball(f.object, 30.0);
+      hit.pointWorld = f.surface.vertices.row(top).transpose();
+      hit.pointToleranceM = 1.0;
+      auto t = world.submitImpact(hit);
+      EXPECT_TRUE(t) << t.error().message;
+      if (t) hits.push_back(t.value());
+    }
+    EXPECT_GE(hits.size(), 3u);
+    if (!collect) return out;
+    ImpactResult r;
+    for (ImpactTicket t : hits) {
+      EXPECT_TRUE(world.collectImpact(t, r));
+      out.hashes.push_back(hashFragments(r));
+      out.peaks.push_back(r.peakPrincipalStressPa);
+      out.broken += r.broken ? 1 : 0;
+    }
+    return out;
+  };
+  const Run made = run(true, true);
+  const Run struckAtOnce = run(false, true);
+  EXPECT_GE(made.broken, 1);
+  EXPECT_EQ(struckAtOnce.hashes, made.hashes);
+  EXPECT_EQ(struckAtOnce.peaks, made.peaks);
+  (void)run(false, false);  // returns: the World waited for its pending impacts and their bodies
+}
+
 TEST_F(WorldTest, APendingObjectStaysAsItWasAndRefusesOtherCalls) {
   World world = makeWorld();
   const ObjectId id = world.addObject({.asset = "plate"}).value();
