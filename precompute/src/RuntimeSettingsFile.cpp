@@ -83,6 +83,8 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
       }
     } else if (key == "mesh_ratio_max_dof") {
       if (Status st = integer(key, s.meshRatioMaxDof); !st) return st.error();
+    } else if (key == "mesh_ratio_delay_s") {
+      if (Status st = finite(key, s.meshRatioDelayS); !st) return st.error();
     } else if (key == "mesh_ratio_late_max_dof") {
       if (Status st = integer(key, s.meshRatioLateMaxDof); !st) return st.error();
     } else if (key == "mesh_ratio_late_delay_s") {
@@ -124,6 +126,7 @@ std::string runtimeSettingsJson(const FractureSettings& s) {
                               {"match_error_target", s.matchErrorTarget},
                               {"polynomial_mode_degree", s.polynomialModeDegree},
                               {"mesh_ratio_max_dof", s.meshRatioMaxDof},
+                              {"mesh_ratio_delay_s", s.meshRatioDelayS},
                               {"mesh_ratio_late_max_dof", s.meshRatioLateMaxDof},
                               {"mesh_ratio_late_delay_s", s.meshRatioLateDelayS},
                               {"frequency_error_target", s.frequencyErrorTarget},

@@ -65,6 +65,7 @@ std::shared_ptr<const BodySource> BodySource::deferred(Maker make, std::vector<L
   std::weak_ptr<const BodySource> base = source;
   for (Later& l : laters) {
     auto later = std::make_shared<BodySource>();
+    later->mWantedSoon = l.soon;
     later->mMake = [base, late = std::move(l.make)]() -> Result<std::shared_ptr<const Body>> {
       const auto held = base.lock();
       if (!held) return makeError(ErrorCode::InvalidArgument, "the body's earlier version is gone");

@@ -104,11 +104,17 @@ class BodySource {
   struct Later {
     LateMaker make;
     double dueS = 0.0;
+    /// Made with the first bodies' urgency (BackgroundThreads::Urgency::Now): cheap and due soon
+    /// (FractureSettings::meshRatioDelayS's check). false: it can wait behind the next break's
+    /// first bodies (Urgency::Later).
+    bool soon = false;
   };
   static std::shared_ptr<const BodySource> deferred(Maker make, std::vector<Later> laters);
   /// The later version, null if none; its due time (host seconds).
   const std::shared_ptr<const BodySource>& late() const { return mLate; }
   double lateDueS() const { return mLateDueS; }
+  /// Whether this version is made with the first bodies' urgency (a first body, or a Later::soon).
+  bool wantedSoon() const { return mWantedSoon; }
   /// The body, made now if it was not; its errors are the maker's.
   const Result<std::shared_ptr<const Body>>& get() const;
   bool isMade() const { return mMade.load(std::memory_order_acquire); }
@@ -120,6 +126,7 @@ class BodySource {
   mutable std::optional<Result<std::shared_ptr<const Body>>> mBody;
   std::shared_ptr<const BodySource> mLate;
   double mLateDueS = 0.0;
+  bool mWantedSoon = true;
 };
 
 /// The version of `source` an impact at host time `timeS` uses: the last of its chain whose due

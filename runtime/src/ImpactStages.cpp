@@ -400,16 +400,19 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
     }
     return withCorrectionScheduled(std::move(made), correct);
   };
-  // The later check (FractureSettings::meshRatioLateMaxDof) when the break has a time: the same
-  // body, checked up to the later limit; a piece within the first limit, or over the later one,
-  // keeps its body (the later version is then the same).
-  // (A check needs the broken parent: without one, nothing to check later either.)
-  const bool late = degree > 0 && fs.meshRatioLateMaxDof > fs.meshRatioMaxDof && std::isfinite(job.desc.timeS) && parent;
-  if (!late) {
+  // When the break has a time (a check needs the broken parent: without one there is nothing to
+  // check later either):
+  // - the check within the first limit after the first body, its Ritz values alone
+  //   (FractureSettings::meshRatioDelayS);
+  // - the later check (meshRatioLateMaxDof): the same body, checked up to the later limit.
+  // A piece outside a version's limits keeps the body before it (that version is then the same).
+  const bool timed = degree > 0 && std::isfinite(job.desc.timeS) && parent;
+  const bool delayed = timed && fs.meshRatioMaxDof > 0 && fs.meshRatioDelayS > 0.0;
+  const bool late = timed && fs.meshRatioLateMaxDof > fs.meshRatioMaxDof;
+  if (!delayed && !late) {
     return BodySource::deferred([make, check, surface = std::move(surface)] { return make(surface, check); });
   }
   const MeshCheck lateCheck{parent, static_cast<int>(i), fs.meshRatioLateMaxDof, fs.meshRatioElement};
-  fr.lateCheckDueS = job.desc.timeS + fs.meshRatioLateDelayS;
   auto sharedSurface = std::make_shared<const TriangleMesh>(std::move(surface));
   // The piece's check's size in linear DOF, as placeEntry counts it.
   auto checkDof = [check] {
@@ -418,16 +421,27 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
                           CutCells::Prisms);
   };
   std::vector<BodySource::Later> laters;
-  laters.push_back({[make, check, lateCheck, sharedSurface, checkDof](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
-                      const int64_t dof = checkDof();
-                      if (!base || dof <= check.maxDof || dof > lateCheck.maxDof) return base;
-                      return make(*sharedSurface, lateCheck);
-                    },
-                    fr.lateCheckDueS});
+  if (delayed) {
+    fr.checkDueS = job.desc.timeS + fs.meshRatioDelayS;
+    laters.push_back({[make, check, sharedSurface, checkDof](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
+                        if (!base || checkDof() > check.maxDof) return base;
+                        return make(*sharedSurface, check);
+                      },
+                      fr.checkDueS, /*soon=*/true});
+  }
+  if (late) {
+    fr.lateCheckDueS = job.desc.timeS + fs.meshRatioLateDelayS;
+    laters.push_back({[make, check, lateCheck, sharedSurface, checkDof](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
+                        const int64_t dof = checkDof();
+                        if (!base || dof <= check.maxDof || dof > lateCheck.maxDof) return base;
+                        return make(*sharedSurface, lateCheck);
+                      },
+                      fr.lateCheckDueS});
+  }
   // The escalation (FractureSettings::frequencyErrorTarget): the later body, when the pack
   // predicts it over the target, checked again in quadratic tets. Decided from the later body's
   // own prediction, a pure function of the break: a replay escalates the same pieces.
-  if (fs.frequencyErrorTarget > 0.0 && fs.meshRatioElement == ElementOrder::P1 && !models->empty()) {
+  if (late && fs.frequencyErrorTarget > 0.0 && fs.meshRatioElement == ElementOrder::P1 && !models->empty()) {
     const MeshCheck escalated{parent, static_cast<int>(i), fs.meshRatioLateMaxDof, ElementOrder::P2};
     const double target = fs.frequencyErrorTarget;
     fr.escalationDueS = job.desc.timeS + fs.meshRatioEscalationDelayS;
@@ -443,7 +457,8 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
                       },
                       fr.escalationDueS});
   }
-  return BodySource::deferred([make, check, sharedSurface] { return make(*sharedSurface, check); }, std::move(laters));
+  const MeshCheck first{parent, static_cast<int>(i), delayed ? 0 : fs.meshRatioMaxDof, fs.meshRatioElement};
+  return BodySource::deferred([make, first, sharedSurface] { return make(*sharedSurface, first); }, std::move(laters));
 }
 
 // The exact path, all of it on the workers (BodySource): the fragment's own solid cut out of its
@@ -565,7 +580,7 @@ void newBodiesStage(const ImpactJob& job, const ImpactWorkspace& ws, ImpactResul
       born[i] = nullptr;
       fr.matchedEntry = -1;
       fr.matchDistance = 0.0;
-      fr.lateCheckDueS = fr.escalationDueS = std::numeric_limits<double>::quiet_NaN();  // the exact path has no later versions
+      fr.checkDueS = fr.lateCheckDueS = fr.escalationDueS = std::numeric_limits<double>::quiet_NaN();  // the exact path has no later versions
       if (!std::isnan(fr.predictedMatchErrorP90)) {
         fr.reason = "match predicted at " + percent(fr.predictedMatchErrorP90) + " (p90), over the target " +
                     percent(target) + ": the exact path";

@@ -226,21 +226,21 @@ struct World::Impl {
     }
     // The fragments' modal data, stress bounds and (where scheduled) static corrections are made on
     // the workers from now on (an impact or objectAsset that needs one first makes or waits for it).
-    // Later versions (FractureSettings::meshRatioLateMaxDof, frequencyErrorTarget) after every first one.
+    // Later versions (FractureSettings::meshRatioDelayS, meshRatioLateMaxDof, frequencyErrorTarget) after every first one.
     auto prepare = [&makers](std::shared_ptr<const BodySource> source, detail::BackgroundThreads::Urgency urgency) {
       makers.submit([source = std::move(source)] { Impl::prepare(*source); }, urgency);
     };
-    // Each version of the chain after every one before it (escalations last); the later ones can
-    // wait behind the next break's first bodies (BackgroundThreads::Urgency).
-    for (auto urgency = detail::BackgroundThreads::Urgency::Now; true; urgency = detail::BackgroundThreads::Urgency::Later) {
-      bool any = false;
+    // Each version of the chain after every one before it (escalations last); all but the first
+    // bodies and the checks due soon can wait behind the next break's first bodies
+    // (BackgroundThreads::Urgency).
+    for (bool any = true; any;) {
+      any = false;
       for (auto& source : newBodies) {
         if (!source) continue;
-        prepare(source, urgency);
+        prepare(source, source->wantedSoon() ? detail::BackgroundThreads::Urgency::Now : detail::BackgroundThreads::Urgency::Later);
         source = source->late();
         any = any || source != nullptr;
       }
-      if (!any) break;
     }
     newBodies.clear();
     return Ok{};
@@ -283,11 +283,12 @@ Status validateWorldSettings(const WorldSettings& s) {
       f.exactModesMaxTets < 0 || f.exactModesMaxDof < 0 || f.exactModesBudgetDof < 0 || f.exactModeCount < 1 ||
       !(f.matchErrorTarget >= 0.0 && std::isfinite(f.matchErrorTarget)) || f.polynomialModeDegree < 0 ||
       f.polynomialModeDegree > kMaxPolynomialModeDegree || f.meshRatioMaxDof < 0 || f.meshRatioLateMaxDof < 0 ||
-      !(f.meshRatioLateDelayS >= 0.0) || !std::isfinite(f.meshRatioLateDelayS) || !(f.frequencyErrorTarget >= 0.0) ||
+      !(f.meshRatioLateDelayS >= 0.0) || !std::isfinite(f.meshRatioLateDelayS) ||
+      !(f.meshRatioDelayS >= 0.0 && f.meshRatioDelayS <= f.meshRatioLateDelayS) || !(f.frequencyErrorTarget >= 0.0) ||
       !std::isfinite(f.frequencyErrorTarget) || !std::isfinite(f.meshRatioEscalationDelayS) ||
       !(f.meshRatioEscalationDelayS >= (f.frequencyErrorTarget > 0.0 ? f.meshRatioLateDelayS : 0.0))) {
     return invalidArgument("FractureSettings: modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0, ringDownPeriods ≥ 0 and finite, "
-               "debrisVolumeFraction and contactSpreadFraction in [0, 1), exactModesMaxTets ≥ 0, exactModesMaxDof ≥ 0, exactModesBudgetDof ≥ 0, exactModeCount ≥ 1, matchErrorTarget finite and ≥ 0, polynomialModeDegree in [0, 5], meshRatioMaxDof ≥ 0, meshRatioLateMaxDof ≥ 0, meshRatioLateDelayS finite and ≥ 0, frequencyErrorTarget finite and ≥ 0, meshRatioEscalationDelayS finite and ≥ 0, and ≥ meshRatioLateDelayS with a frequencyErrorTarget");
+               "debrisVolumeFraction and contactSpreadFraction in [0, 1), exactModesMaxTets ≥ 0, exactModesMaxDof ≥ 0, exactModesBudgetDof ≥ 0, exactModeCount ≥ 1, matchErrorTarget finite and ≥ 0, polynomialModeDegree in [0, 5], meshRatioMaxDof ≥ 0, meshRatioLateMaxDof ≥ 0, meshRatioLateDelayS finite and ≥ 0, meshRatioDelayS in [0, meshRatioLateDelayS], frequencyErrorTarget finite and ≥ 0, meshRatioEscalationDelayS finite and ≥ 0, and ≥ meshRatioLateDelayS with a frequencyErrorTarget");
   }
   if (f.crack.maxCracks < 0 || std::isnan(f.crack.propagationStressRatio) || !(f.crack.directionBlend >= 0.0) ||
       !(f.crack.directionBlend <= 1.0) || !(f.crack.noiseRad >= 0.0) || !std::isfinite(f.crack.noiseRad)) {

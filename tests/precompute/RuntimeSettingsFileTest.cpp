@@ -19,6 +19,7 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   s.exactModeCount = 12;
   s.polynomialModeDegree = 3;
   s.meshRatioMaxDof = 2345;
+  s.meshRatioDelayS = 0.125;
   s.meshRatioLateMaxDof = 6789;
   s.meshRatioLateDelayS = 0.75;
   s.frequencyErrorTarget = 0.2;
@@ -36,6 +37,7 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   EXPECT_EQ(back.value().exactModeCount, 12);
   EXPECT_EQ(back.value().polynomialModeDegree, 3);
   EXPECT_EQ(back.value().meshRatioMaxDof, 2345);
+  EXPECT_EQ(back.value().meshRatioDelayS, 0.125);
   EXPECT_EQ(back.value().meshRatioLateMaxDof, 6789);
   EXPECT_EQ(back.value().meshRatioLateDelayS, 0.75);
   EXPECT_EQ(back.value().frequencyErrorTarget, 0.2);
@@ -81,6 +83,7 @@ TEST(RuntimeSettingsFile, BadFilesGiveTypedErrors) {
   EXPECT_EQ(code(R"({ "frequency_error_target": "high" })"), "parse_error");
   EXPECT_EQ(code(R"({ "mesh_ratio_escalation_delay_s": -1 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "mesh_ratio_late_delay_s": -1 })"), "invalid_argument");
+  EXPECT_EQ(code(R"({ "mesh_ratio_delay_s": -1 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "exact_modes_max_tets": 0 })"), "ok");
   EXPECT_EQ(code(R"({ "polynomial_mode_degree": 6 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "polynomial_mode_degree": -1 })"), "invalid_argument");

@@ -480,6 +480,7 @@ TEST_F(WorldTest, ALaterCheckAppliesFromItsDueTime) {
     s.fracture.meshRatioMaxDof = first;
     s.fracture.meshRatioLateMaxDof = later;
     s.fracture.meshRatioLateDelayS = 0.5;
+    s.fracture.meshRatioDelayS = 0.0;  // the first limit's check at birth (the next test delays it)
     return s;
   };
   World world = makeWorld(makeSettings(2000, 100000));
@@ -561,6 +562,90 @@ TEST_F(WorldTest, ALaterCheckAppliesFromItsDueTime) {
   EXPECT_EQ(World::create(Pack(*sPack), negative).error().code, ErrorCode::InvalidArgument);
 }
 
+// A timed break's pieces get their check (within meshRatioMaxDof) from meshRatioDelayS after the
+// break: their first body has the Ritz values alone, so that an impact within frames of the
+// break never waits for a check, and the checked body is made right after the first bodies.
+// Impacts before the due time are the unchecked world's, from it the world checked at birth; a
+// break without a time is checked at birth.
+TEST_F(WorldTest, ATimedBreaksPiecesAreCheckedFromMeshRatioDelayS) {
+  auto makeSettings = [](int maxDof, double delay) {
+    WorldSettings s;
+    s.fracture.meshRatioMaxDof = maxDof;
+    s.fracture.meshRatioDelayS = delay;
+    s.fracture.meshRatioLateMaxDof = 0;  // no later check: the first limit's alone
+    return s;
+  };
+  World world = makeWorld(makeSettings(100000, 0.25));
+  World unchecked = makeWorld(makeSettings(0, 0.25));
+  World checked = makeWorld(makeSettings(100000, 0.0));
+  std::vector<ImpactResult> breaks;
+  for (World* w : {&world, &unchecked, &checked}) {
+    ImpactDesc hit = ball(w->addObject({.asset = "plate"}).value(), 60.0);
+    hit.timeS = 2.0;
+    auto r = w->impact(hit);
+    ASSERT_TRUE(r && r.value().broken);
+    breaks.push_back(std::move(r).value());
+  }
+  ASSERT_EQ(hashFragments(breaks[1]), hashFragments(breaks[0]));
+  ASSERT_EQ(hashFragments(breaks[2]), hashFragments(breaks[0]));
+  int matched = 0;
+  for (size_t i = 0; i < breaks[0].fragments.size(); ++i) {
+    const FragmentResult& f = breaks[0].fragments[i];
+    EXPECT_TRUE(std::isnan(f.lateCheckDueS));
+    if (f.path != FragmentPath::Matched) {
+      EXPECT_TRUE(std::isnan(f.checkDueS));
+      continue;
+    }
+    ++matched;
+    EXPECT_EQ(f.checkDueS, 2.25);
+    EXPECT_TRUE(std::isnan(breaks[1].fragments[i].checkDueS));  // nothing to check
+    EXPECT_TRUE(std::isnan(breaks[2].fragments[i].checkDueS));  // checked at birth
+    const ObjectAsset* before = world.objectAsset(f.object, 2.24).value();
+    const ObjectAsset* after = world.objectAsset(f.object, 2.25).value();
+    EXPECT_EQ(before, world.objectAsset(f.object).value());
+    EXPECT_EQ(before->modal.frequenciesHz, unchecked.objectAsset(breaks[1].fragments[i].object).value()->modal.frequenciesHz);
+    EXPECT_EQ(after->modal.frequenciesHz, checked.objectAsset(breaks[2].fragments[i].object).value()->modal.frequenciesHz);
+    EXPECT_NE(before->modal.frequenciesHz, after->modal.frequenciesHz);
+    EXPECT_EQ(world.frequencyError(f.object, 2.24).value().source, FrequencySource::Ritz);
+    EXPECT_EQ(world.frequencyError(f.object, 2.25).value().source, FrequencySource::Checked);
+  }
+  EXPECT_GE(matched, 2);
+  // An impact before the due time is the unchecked world's, one at it the checked world's.
+  ImpactDesc soft = softHitOnTheLargestMatched(world, breaks[0]);
+  ImpactDesc softUnchecked = softHitOnTheLargestMatched(unchecked, breaks[1]);
+  ImpactDesc softChecked = softHitOnTheLargestMatched(checked, breaks[2]);
+  ASSERT_TRUE(soft.object.valid() && softUnchecked.object.valid() && softChecked.object.valid());
+  soft.timeS = softUnchecked.timeS = 2.1;
+  auto early = world.impact(soft);
+  auto earlyReference = unchecked.impact(softUnchecked);
+  soft.timeS = softChecked.timeS = 2.25;
+  auto due = world.impact(soft);
+  auto dueReference = checked.impact(softChecked);
+  ASSERT_TRUE(early && earlyReference && due && dueReference);
+  EXPECT_EQ(early.value().peakPrincipalStressPa, earlyReference.value().peakPrincipalStressPa);
+  EXPECT_EQ(due.value().peakPrincipalStressPa, dueReference.value().peakPrincipalStressPa);
+  EXPECT_NE(early.value().peakPrincipalStressPa, due.value().peakPrincipalStressPa);
+  // Without a time the first body is checked, as with no delay.
+  World untimed = makeWorld(makeSettings(100000, 0.25));
+  auto plain = untimed.impact(ball(untimed.addObject({.asset = "plate"}).value(), 60.0));
+  ASSERT_TRUE(plain && plain.value().broken);
+  ASSERT_EQ(hashFragments(plain.value()), hashFragments(breaks[0]));
+  for (size_t i = 0; i < plain.value().fragments.size(); ++i) {
+    const FragmentResult& f = plain.value().fragments[i];
+    EXPECT_TRUE(std::isnan(f.checkDueS));
+    if (f.path != FragmentPath::Matched) continue;
+    EXPECT_EQ(untimed.objectAsset(f.object).value()->modal.frequenciesHz,
+              checked.objectAsset(breaks[2].fragments[i].object).value()->modal.frequenciesHz);
+  }
+  // Typed errors: a negative delay, or one past the later check's.
+  for (double delay : {-0.1, 0.6}) {
+    WorldSettings wrong;
+    wrong.fracture.meshRatioDelayS = delay;
+    wrong.fracture.meshRatioLateDelayS = 0.5;
+    EXPECT_EQ(World::create(Pack(*sPack), wrong).error().code, ErrorCode::InvalidArgument) << delay;
+  }
+}
+
 // Each body says where its frequencies come from and how far off the pack's calibration predicts
 // them (World::frequencyError): a pack object its own; a matched piece its Ritz values, read at
 // their convergence from degree 3 to 5, or, once checked (at birth, or from its later check's due
@@ -571,6 +656,7 @@ TEST_F(WorldTest, BodiesSayWhereTheirFrequenciesComeFromAndTheirPredictedError) 
   const FrequencyErrorModels& models = calibrated.database.frequencyErrors;
   WorldSettings settings;
   settings.fracture.meshRatioMaxDof = 2000;
+  settings.fracture.meshRatioDelayS = 0.0;  // the small pieces checked at birth
   settings.fracture.meshRatioLateMaxDof = 100000;
   World world = World::create(Pack(calibrated), settings).value();
   World uncalibrated = makeWorld(settings);
@@ -685,6 +771,7 @@ TEST_F(WorldTest, AnEscalationChecksInQuadraticTetsWhatIsPredictedOverTheTarget)
   WorldSettings quadratic;
   quadratic.fracture.meshRatioMaxDof = 100000;
   quadratic.fracture.meshRatioElement = ElementOrder::P2;
+  quadratic.fracture.meshRatioDelayS = 0.0;  // checked at birth
   World escalating = World::create(Pack(calibrated), makeSettings(1e-9)).value();  // every prediction is over it
   World within = World::create(Pack(calibrated), makeSettings(1e9)).value();      // none is
   World atBirth = World::create(Pack(calibrated), quadratic).value();

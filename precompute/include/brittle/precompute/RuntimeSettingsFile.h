@@ -14,6 +14,7 @@
 //                                        // (PolynomialModes.h; 0: the entry's own modes)
 //     "mesh_ratio_max_dof": 3000,        // ... corrected by the fragment's own mesh up to this
 //                                        // size in linear-tet DOF (FragmentModes.h; 0: never)
+//     "mesh_ratio_delay_s": 0.25,        // ... from this long after a timed break (0: at birth)
 //     "mesh_ratio_element": "p1",        // ... in linear or quadratic tets (p2: ~10x the cost)
 //     "modes": 0 }                       // modes per impact (0: all the pack stores)
 //

@@ -155,6 +155,16 @@ struct FractureSettings {
   /// bodies in 3 of 8 paced runs (up to 17 ms; over the 33 ms frame goal in 8 of 26 runs this
   /// stop, against 1 of 31 at 800 and 1 of 17 at 1 500). 0: never.
   int meshRatioMaxDof = 1500;
+  /// ... when a timed break's pieces (ImpactDesc::timeS) get that check: their impacts at a host
+  /// time at least this long after the break (s) use the checked body, the earlier ones the Ritz
+  /// values (FragmentResult::checkDueS). The check is made on the background threads right after
+  /// the break's first bodies. Made in the first body instead, it had the pieces struck within
+  /// frames of their birth wait for it: paced, the pane scene waited in most runs (max frame up to
+  /// 40 ms) where the Ritz-valued first bodies kept every frame under 7 ms
+  /// (docs/realtime.md, "The check after the first body"). A break without a time, or 0 here:
+  /// the first body is checked (nothing later can apply to an untimed break). At most
+  /// meshRatioLateDelayS.
+  double meshRatioDelayS = 0.25;
   /// The check's element (meshRatioMaxDof still counts its mesh's linear DOF). P2 removes the
   /// linear tets' locking from the check: on chart 5's 169 pieces, checked every one, 1.4 % off
   /// (median) and 6 % (p90) against 10.3 % and 45 % with P1, which meets the matching targets
@@ -366,6 +376,10 @@ struct FragmentResult {
   /// timeS of at least this use the body with every check applied, World::objectAsset(id, timeS)
   /// shows it. NaN: none (the break had no time, or the later check is off).
   double lateCheckDueS = std::numeric_limits<double>::quiet_NaN();
+  /// A matched piece's check within FractureSettings::meshRatioMaxDof, when its break had a time:
+  /// its impacts at a timeS of at least this use the checked body (FractureSettings::meshRatioDelayS).
+  /// NaN: checked in its first body, or not at all.
+  double checkDueS = std::numeric_limits<double>::quiet_NaN();
   /// Its escalation (FractureSettings::frequencyErrorTarget): from this host time on, its impacts
   /// use the body checked in quadratic tets if its later body was predicted over the target (the
   /// later body otherwise). NaN: none.
