@@ -110,6 +110,31 @@ class WorldTest : public ::testing::Test {
     return soft;
   }
 
+  // A world and the same break in it.
+  struct Broken {
+    World& world;
+    const ImpactResult& result;
+  };
+  // A soft hit on the largest matched piece of `world`'s break: at `earlyS` (before its version's
+  // due time) the same as in `before`, at `lateS` (at or after it) the same as in `after`, and the
+  // two differ.
+  static void expectHitsFollowTheDueTime(Broken world, Broken before, Broken after, double earlyS, double lateS) {
+    ImpactDesc soft = softHitOnTheLargestMatched(world.world, world.result);
+    ImpactDesc softBefore = softHitOnTheLargestMatched(before.world, before.result);
+    ImpactDesc softAfter = softHitOnTheLargestMatched(after.world, after.result);
+    ASSERT_TRUE(soft.object.valid() && softBefore.object.valid() && softAfter.object.valid());
+    soft.timeS = softBefore.timeS = earlyS;
+    auto early = world.world.impact(soft);
+    auto earlyReference = before.world.impact(softBefore);
+    soft.timeS = softAfter.timeS = lateS;
+    auto late = world.world.impact(soft);
+    auto lateReference = after.world.impact(softAfter);
+    ASSERT_TRUE(early && earlyReference && late && lateReference);
+    EXPECT_EQ(early.value().peakPrincipalStressPa, earlyReference.value().peakPrincipalStressPa);
+    EXPECT_EQ(late.value().peakPrincipalStressPa, lateReference.value().peakPrincipalStressPa);
+    EXPECT_NE(early.value().peakPrincipalStressPa, late.value().peakPrincipalStressPa);
+  }
+
   // Lowest speed (to 1 %) that breaks the plate, by bisection on [lo, hi].
   static double breakingSpeed(World& world, const std::function<ImpactDesc(ObjectId, double)>& make) {
     double lo = 0.01, hi = 400.0;
@@ -523,21 +548,7 @@ TEST_F(WorldTest, ALaterCheckAppliesFromItsDueTime) {
   std::printf("%d matched fragments, %d checked later\n", matched, later);
   EXPECT_GE(later, 1);
   EXPECT_LT(later, matched);  // the small ones were checked at birth
-  // An impact before the due time is the unchecked world's, one at it the checked world's.
-  ImpactDesc soft = softHitOnTheLargestMatched(world, broken.value());
-  ImpactDesc softUnchecked = softHitOnTheLargestMatched(unchecked, brokenUnchecked.value());
-  ImpactDesc softChecked = softHitOnTheLargestMatched(checked, brokenChecked.value());
-  ASSERT_TRUE(soft.object.valid() && softUnchecked.object.valid() && softChecked.object.valid());
-  soft.timeS = softUnchecked.timeS = 2.2;
-  auto early = world.impact(soft);
-  auto earlyReference = unchecked.impact(softUnchecked);
-  soft.timeS = softChecked.timeS = 3.0;
-  auto late = world.impact(soft);
-  auto lateReference = checked.impact(softChecked);
-  ASSERT_TRUE(early && earlyReference && late && lateReference);
-  EXPECT_EQ(early.value().peakPrincipalStressPa, earlyReference.value().peakPrincipalStressPa);
-  EXPECT_EQ(late.value().peakPrincipalStressPa, lateReference.value().peakPrincipalStressPa);
-  EXPECT_NE(early.value().peakPrincipalStressPa, late.value().peakPrincipalStressPa);
+  expectHitsFollowTheDueTime({world, broken.value()}, {unchecked, brokenUnchecked.value()}, {checked, brokenChecked.value()}, 2.2, 3.0);
   // Without a time the break has no later version.
   World untimed = makeWorld(makeSettings(2000, 100000));
   auto plain = untimed.impact(ball(untimed.addObject({.asset = "plate"}).value(), 60.0));
@@ -610,21 +621,7 @@ TEST_F(WorldTest, ATimedBreaksPiecesAreCheckedFromMeshRatioDelayS) {
     EXPECT_EQ(world.frequencyError(f.object, 2.25).value().source, FrequencySource::Checked);
   }
   EXPECT_GE(matched, 2);
-  // An impact before the due time is the unchecked world's, one at it the checked world's.
-  ImpactDesc soft = softHitOnTheLargestMatched(world, breaks[0]);
-  ImpactDesc softUnchecked = softHitOnTheLargestMatched(unchecked, breaks[1]);
-  ImpactDesc softChecked = softHitOnTheLargestMatched(checked, breaks[2]);
-  ASSERT_TRUE(soft.object.valid() && softUnchecked.object.valid() && softChecked.object.valid());
-  soft.timeS = softUnchecked.timeS = 2.1;
-  auto early = world.impact(soft);
-  auto earlyReference = unchecked.impact(softUnchecked);
-  soft.timeS = softChecked.timeS = 2.25;
-  auto due = world.impact(soft);
-  auto dueReference = checked.impact(softChecked);
-  ASSERT_TRUE(early && earlyReference && due && dueReference);
-  EXPECT_EQ(early.value().peakPrincipalStressPa, earlyReference.value().peakPrincipalStressPa);
-  EXPECT_EQ(due.value().peakPrincipalStressPa, dueReference.value().peakPrincipalStressPa);
-  EXPECT_NE(early.value().peakPrincipalStressPa, due.value().peakPrincipalStressPa);
+  expectHitsFollowTheDueTime({world, breaks[0]}, {unchecked, breaks[1]}, {checked, breaks[2]}, 2.1, 2.25);
   // Without a time the first body is checked, as with no delay.
   World untimed = makeWorld(makeSettings(100000, 0.25));
   auto plain = untimed.impact(ball(untimed.addObject({.asset = "plate"}).value(), 60.0));
