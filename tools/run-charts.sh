@@ -34,9 +34,9 @@ plot plot_fracture.py $data/fracture.csv
 # Charts on the default pack (baked here when the main job has not made it).
 mkdir -p out
 [ -f out/default.h5 ] || $cli bake --manifest assets/default-pack.json --out out/default.h5 --quiet
-# The bodies' frequency errors, calibrated on the objects' own fragments broken at the default scenes' impacts (seeds 1001..; chart 5's
+# The bodies' frequency errors, calibrated on the objects' own fragments (seeds 1001..; chart 5's
 # seeds are held back from it), as the main job does.
-$cli calibrate-errors out/default.h5 --scene assets/default-requirements.json --quiet > /dev/null
+$cli calibrate-errors out/default.h5 --quiet > /dev/null
 # Chart 5: a fragment's database match against its own modal analysis (the exact path).
 $cli bench exact-modes out/default.h5 --speeds 10,30 --seeds 2 --max-fragments 8 --repeats 1 --csv $data/exact_modes.csv --quiet
 plot plot_exact_modes.py $data/exact_modes.csv

@@ -15,11 +15,10 @@ rm -rf out/impacts out/fragments out/pictures out/replays out/play out/frames
 mkdir -p out/impacts out/fragments out/replays out/play out/frames
 build/bin/brittle bake --manifest assets/default-pack.json --out out/default.h5
 # How far the matched bodies' own frequencies are off, calibrated on the objects' own fragments
-# broken at the default scenes' impacts (about 2 min; World::frequencyError and `brittle impact`
-# report it, and the player escalates the pieces predicted over its target to P2 checks). Until
-# stop 69 the steel ball's calibration: the scene's models escalate more pieces, and the pane
-# scene's frames waited for them (docs/realtime.md, "Pieces struck before their bodies are made").
-build/bin/brittle calibrate-errors out/default.h5 --scene assets/default-requirements.json --quiet > /dev/null
+# (about 2 min; World::frequencyError and `brittle impact` report it). Not at the default scenes'
+# impacts (--scene): their models escalate more pieces to P2 checks, and the pane scene's frames
+# then wait for them (docs/results/speed-accuracy.md, "Calibrated at the scene's own impacts").
+build/bin/brittle calibrate-errors out/default.h5 --quiet > /dev/null
 build/bin/brittle inspect out/default.h5 --json > out/default.json
 echo "inspection JSON: out/default.json"
 
