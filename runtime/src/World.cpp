@@ -284,11 +284,12 @@ Status validateWorldSettings(const WorldSettings& s) {
       !(f.matchErrorTarget >= 0.0 && std::isfinite(f.matchErrorTarget)) || f.polynomialModeDegree < 0 ||
       f.polynomialModeDegree > kMaxPolynomialModeDegree || f.meshRatioMaxDof < 0 || f.meshRatioLateMaxDof < 0 ||
       !(f.meshRatioLateDelayS >= 0.0) || !std::isfinite(f.meshRatioLateDelayS) ||
-      !(f.meshRatioDelayS >= 0.0 && f.meshRatioDelayS <= f.meshRatioLateDelayS) || !(f.frequencyErrorTarget >= 0.0) ||
+      !(f.meshRatioDelayS >= 0.0 && std::isfinite(f.meshRatioDelayS)) ||
+      (f.meshRatioLateMaxDof > f.meshRatioMaxDof && f.meshRatioDelayS > f.meshRatioLateDelayS) || !(f.frequencyErrorTarget >= 0.0) ||
       !std::isfinite(f.frequencyErrorTarget) || !std::isfinite(f.meshRatioEscalationDelayS) ||
       !(f.meshRatioEscalationDelayS >= (f.frequencyErrorTarget > 0.0 ? f.meshRatioLateDelayS : 0.0))) {
     return invalidArgument("FractureSettings: modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0, ringDownPeriods ≥ 0 and finite, "
-               "debrisVolumeFraction and contactSpreadFraction in [0, 1), exactModesMaxTets ≥ 0, exactModesMaxDof ≥ 0, exactModesBudgetDof ≥ 0, exactModeCount ≥ 1, matchErrorTarget finite and ≥ 0, polynomialModeDegree in [0, 5], meshRatioMaxDof ≥ 0, meshRatioLateMaxDof ≥ 0, meshRatioLateDelayS finite and ≥ 0, meshRatioDelayS in [0, meshRatioLateDelayS], frequencyErrorTarget finite and ≥ 0, meshRatioEscalationDelayS finite and ≥ 0, and ≥ meshRatioLateDelayS with a frequencyErrorTarget");
+               "debrisVolumeFraction and contactSpreadFraction in [0, 1), exactModesMaxTets ≥ 0, exactModesMaxDof ≥ 0, exactModesBudgetDof ≥ 0, exactModeCount ≥ 1, matchErrorTarget finite and ≥ 0, polynomialModeDegree in [0, 5], meshRatioMaxDof ≥ 0, meshRatioLateMaxDof ≥ 0, meshRatioLateDelayS finite and ≥ 0, meshRatioDelayS finite and ≥ 0, and ≤ meshRatioLateDelayS with a later check, frequencyErrorTarget finite and ≥ 0, meshRatioEscalationDelayS finite and ≥ 0, and ≥ meshRatioLateDelayS with a frequencyErrorTarget");
   }
   if (f.crack.maxCracks < 0 || std::isnan(f.crack.propagationStressRatio) || !(f.crack.directionBlend >= 0.0) ||
       !(f.crack.directionBlend <= 1.0) || !(f.crack.noiseRad >= 0.0) || !std::isfinite(f.crack.noiseRad)) {
@@ -457,6 +458,7 @@ Status World::impact(const ImpactDesc& desc, ImpactResult& result) {
 }
 
 Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
+  std::optional<ImpactTicket> recorded;
   try {
     Impl& w = *mImpl;
     if (w.pending.size() >= static_cast<size_t>(w.settings.maxPendingImpacts)) {
@@ -478,6 +480,9 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
     const ImpactTicket ticket{w.nextTicket++};
     PendingImpact* raw = p.get();
     w.pending.emplace(ticket.id, std::move(p));
+    // Should scheduling throw, the impact is forgotten and the object is no longer pending (a task
+    // not scheduled yet is released with its handle, before the catch below runs).
+    recorded = ticket;
     auto compute = [raw, ticket, &hook = w.settings.onImpactComputed] {
       try {
         raw->status = detail::computeImpact(raw->job, *raw->workspace, raw->result, raw->born);
@@ -510,6 +515,10 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
     }
     return ticket;
   } catch (const std::exception& e) {
+    if (recorded) {
+      mImpl->pending.erase(recorded->id);
+      mImpl->slots[desc.object.index].pending = false;
+    }
     return invalidArgument(std::string("submitImpact failed: ") + e.what());
   }
 }

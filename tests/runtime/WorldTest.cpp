@@ -634,13 +634,19 @@ TEST_F(WorldTest, ATimedBreaksPiecesAreCheckedFromMeshRatioDelayS) {
     EXPECT_EQ(untimed.objectAsset(f.object).value()->modal.frequenciesHz,
               checked.objectAsset(breaks[2].fragments[i].object).value()->modal.frequenciesHz);
   }
-  // Typed errors: a negative delay, or one past the later check's.
-  for (double delay : {-0.1, 0.6}) {
+  // Typed errors: a negative or infinite delay, or one past the later check's.
+  for (double delay : {-0.1, std::numeric_limits<double>::infinity(), 0.6}) {
     WorldSettings wrong;
     wrong.fracture.meshRatioDelayS = delay;
     wrong.fracture.meshRatioLateDelayS = 0.5;
     EXPECT_EQ(World::create(Pack(*sPack), wrong).error().code, ErrorCode::InvalidArgument) << delay;
   }
+  // Without a later check its delay sets no bound (settings from before the delay stay valid).
+  WorldSettings noLater;
+  noLater.fracture.meshRatioLateMaxDof = 0;
+  noLater.fracture.meshRatioLateDelayS = 0.0;
+  noLater.fracture.frequencyErrorTarget = 0.0;
+  EXPECT_TRUE(World::create(Pack(*sPack), noLater));
 }
 
 // Each body says where its frequencies come from and how far off the pack's calibration predicts

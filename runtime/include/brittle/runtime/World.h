@@ -377,9 +377,10 @@ struct FragmentResult {
   /// timeS of at least this use the body with every check applied, World::objectAsset(id, timeS)
   /// shows it. NaN: none (the break had no time, or the later check is off).
   double lateCheckDueS = std::numeric_limits<double>::quiet_NaN();
-  /// A matched piece's check within FractureSettings::meshRatioMaxDof, when its break had a time:
-  /// its impacts at a timeS of at least this use the checked body (FractureSettings::meshRatioDelayS).
-  /// NaN: checked in its first body, or not at all.
+  /// When a timed break's piece gets its check within FractureSettings::meshRatioMaxDof: its
+  /// impacts at a timeS of at least this use that version (FractureSettings::meshRatioDelayS), the
+  /// same body as before for a piece over the limit. NaN: the break had no time (its first body is
+  /// checked), the delay is 0, or the piece is not matched.
   double checkDueS = std::numeric_limits<double>::quiet_NaN();
   /// Its escalation (FractureSettings::frequencyErrorTarget): from this host time on, its impacts
   /// use the body checked in quadratic tets if its later body was predicted over the target (the
