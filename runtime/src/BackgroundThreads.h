@@ -16,8 +16,9 @@
 // new break's first bodies never queue behind them or find every thread busy with them (the pane
 // scene with every later body escalated to a P2 check: max frame 24–31 ms and p99 12–23 ms when
 // they shared one queue). Jobs an impact waits for (Urgency::First: the body of a piece struck
-// before it was made, World::submitImpact) go ahead of every other queued one. What jobs compute does not depend on which thread runs them or when
-// (each writes only its own result), so fractures are the same bits.
+// before it was made, World::submitImpact) go ahead of every other queued one. What jobs compute
+// does not depend on which thread runs them or when (each writes only its own result), so
+// fractures are the same bits.
 #pragma once
 
 #include <algorithm>
