@@ -92,6 +92,50 @@ const Result<std::shared_ptr<const Body>>& BodySource::get() const {
   return *mBody;
 }
 
+namespace {
+
+// ω and ζ of the first `modes` modes (makeBody and withFrequencies: the same bits).
+Status setModalRates(Body& body, const ModalBasis& modal, const Material& material, const std::string& name) {
+  body.omega = modal.eigenvaluesRad2PerS2.head(body.modes).cwiseMax(0.0).cwiseSqrt();
+  if (!(body.omega.minCoeff() > 0.0)) {
+    return makeError(ErrorCode::InvalidArgument, "object '" + name + "' has a zero-frequency elastic mode");
+  }
+  body.zeta.resize(body.modes);
+  for (int j = 0; j < body.modes; ++j) body.zeta[j] = rayleighDampingRatio(material, body.omega[j]);
+  return Ok{};
+}
+
+}  // namespace
+
+Result<std::shared_ptr<Body>> withFrequencies(const Body& base, const ModalBasis& rates) {
+  const Eigen::Index r = base.asset.modal.eigenvaluesRad2PerS2.size();
+  if (base.correctionEigenvalues.size() == 0 || rates.frequenciesHz.size() != r || rates.eigenvaluesRad2PerS2.size() != r ||
+      rates.residuals.size() != r) {
+    return makeError(ErrorCode::InvalidArgument, "object '" + base.asset.name + "': new frequencies need " + std::to_string(r) +
+                                                     " of each and a body with correctionEigenvalues");
+  }
+  auto body = std::make_shared<Body>();
+  body->modes = base.modes;
+  if (Status st = setModalRates(*body, rates, base.material, base.asset.name); !st) return st.error();
+  body->asset = base.asset;
+  body->asset.modal.frequenciesHz = rates.frequenciesHz;
+  body->asset.modal.eigenvaluesRad2PerS2 = rates.eigenvaluesRad2PerS2;
+  body->asset.modal.residuals = rates.residuals;
+  body->material = base.material;
+  body->topology = base.topology;
+  body->nodeNormals = base.nodeNormals;
+  body->ring = base.ring;
+  body->boundaryNodes = base.boundaryNodes;
+  body->boundaryTree = base.boundaryTree;
+  body->sizeM = base.sizeM;
+  body->centreM = base.centreM;
+  body->correctionEigenvalues = base.correctionEigenvalues;
+  body->frequencyError = base.frequencyError;
+  body->ritzFrequenciesHz = base.ritzFrequenciesHz;
+  if (base.staticCorrectionScheduled()) body->adoptStaticCorrection(base.staticCorrection());
+  return body;
+}
+
 Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& material, int modeCount,
                                              const ExactModesFactor* factor, Eigen::VectorXd correctionEigenvalues,
                                              const TetTopology* sameTets) {
@@ -126,12 +170,7 @@ Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& 
   body->material = material;
   const auto available = static_cast<int>(asset.modal.modes.cols());
   body->modes = keptModeCount(modeCount, available);
-  body->omega = asset.modal.eigenvaluesRad2PerS2.head(body->modes).cwiseMax(0.0).cwiseSqrt();
-  if (!(body->omega.minCoeff() > 0.0)) {
-    return makeError(ErrorCode::InvalidArgument, "object '" + asset.name + "' has a zero-frequency elastic mode");
-  }
-  body->zeta.resize(body->modes);
-  for (int j = 0; j < body->modes; ++j) body->zeta[j] = rayleighDampingRatio(material, body->omega[j]);
+  if (Status st = setModalRates(*body, asset.modal, material, asset.name); !st) return st.error();
   const auto n = asset.tetMesh.nodes.rows();
   body->nodeNormals.setZero(n, 3);
   body->ring.assign(static_cast<size_t>(n), {});

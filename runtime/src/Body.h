@@ -48,6 +48,10 @@ struct Body {
   /// frequencies keeps its entry's here (its shapes are the entry's), so that the correction it
   /// builds equals the entry's shared one (ImpactStages.cpp: placeEntry).
   Eigen::VectorXd correctionEigenvalues;
+  /// A matched body's own polynomial Ritz frequencies (Hz, all that PolynomialModes gave) before
+  /// any check scaled them; empty for other bodies. A later version's check scales these
+  /// (ImpactStages.cpp: checkedVersion), not the version's own, which may be checked already.
+  Eigen::VectorXd ritzFrequenciesHz;
   /// Where its frequencies come from and their predicted error (World::frequencyError): Own for
   /// a pack object and the exact path; a matched body's maker sets it before handing the body out.
   FrequencyErrorPrediction frequencyError;
@@ -149,5 +153,15 @@ Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& 
                                              const ExactModesFactor* factor = nullptr,
                                              Eigen::VectorXd correctionEigenvalues = {},
                                              const TetTopology* sameTets = nullptr);
+
+/// `base` ringing at `rates`' frequencies, eigenvalues and residuals (of base's mode count; its
+/// modes are not read): the same mesh, shapes, stress modes, topology and static correction
+/// (base's, built now if it was scheduled and not built: a correction does not depend on the
+/// frequencies when base has correctionEigenvalues), with ω, ζ and the stress bounds its own. A
+/// matched body's later, checked version (ImpactStages.cpp: checkedVersion) without placing its
+/// entry and building its geometry again. frequencyError and ritzFrequenciesHz are base's; the
+/// caller sets them. Errors: InvalidArgument (base has no correctionEigenvalues, `rates` of another
+/// size, a zero-frequency mode).
+Result<std::shared_ptr<Body>> withFrequencies(const Body& base, const ModalBasis& rates);
 
 }  // namespace brittle::detail

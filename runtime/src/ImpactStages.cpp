@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numbers>
 #include <string>
 
@@ -251,6 +252,37 @@ struct MeshCheck {
   ElementOrder order = ElementOrder::P1;
 };
 
+// The size of a piece's check in linear DOF (fragmentCutDof over the broken parent, a crossed tet
+// as a tet or prism); 0 without a parent.
+int64_t checkDof(const MeshCheck& check) {
+  if (!check.parent) return 0;
+  const Body& body = *check.parent->body;
+  return fragmentCutDof(body.asset.tetMesh, body.topology, check.parent->nodeLabels, check.label, ElementOrder::P1, CutCells::Prisms);
+}
+
+// The ratios of a piece's own mesh to its polynomial fields (FragmentModes.h,
+// meshFrequencyRatios), where its `dof` are within the check's limit; an error otherwise, or where
+// the check fails (a sub-mesh that hangs by an edge or a node).
+Result<MeshFrequencyRatios> checkRatios(const MeshCheck& check, int64_t dof, const Material& material, int degree) {
+  if (!check.parent || check.maxDof <= 0 || dof <= 0 || dof > check.maxDof) {
+    return makeError(ErrorCode::InvalidArgument, "no check within the limit");
+  }
+  const Body& body = *check.parent->body;
+  auto sub = fragmentSubMesh(body.asset.tetMesh, body.topology, check.parent->nodeLabels, check.parent->edgeCuts, check.label,
+                             CutCells::Prisms);
+  if (!sub) return sub.error();
+  return meshFrequencyRatios(sub.value(), material, degree, kMeshRatioModes, check.order);
+}
+
+// A body's predicted frequency error from its source and indicator (World::frequencyError).
+FrequencyErrorPrediction predictedFrequencyError(FrequencySource source, double indicator, const FrequencyErrorModels& models) {
+  const MatchErrorModel& model = source == FrequencySource::Checked     ? models.checked
+                                 : source == FrequencySource::CheckedP2 ? models.checkedP2
+                                                                        : models.ritz;
+  const MatchErrorPrediction p = predictMatchError(model, indicator);
+  return FrequencyErrorPrediction{source, indicator, p.median, p.p90, p.beyondRange};
+}
+
 // A fragment keeps its parent's spread as a length (ObjectAsset::contactSpreadFraction times the
 // parent's diagonal: what the parent's mesh resolves), as a fraction of its own diagonal, below 1.
 // The exact path's sub-mesh is the parent's own elements; an entry's mesh is no finer than that.
@@ -281,11 +313,9 @@ void inheritContactSpread(const Body& parent, ObjectAsset& fragment) {
 // queries, bench search): the contact of its next impact, and objectAsset, see the piece's own.
 Result<ObjectAsset> placeEntry(const EntryCache& cache, const FragmentMatch& m, const Material& material, const TriangleMesh& surface,
                                const MassProperties& mass, int degree, const MeshCheck& check, const FrequencyErrorModels& models,
-                               Eigen::VectorXd& entryEigenvalues, FrequencyErrorPrediction& estimate) {
-  auto predicted = [&](FrequencySource source, double indicator, const MatchErrorPrediction& p) {
-    estimate = FrequencyErrorPrediction{source, indicator, p.median, p.p90, p.beyondRange};
-  };
-  predicted(FrequencySource::Entry, m.distance, m.predictedError);
+                               Eigen::VectorXd& entryEigenvalues, Eigen::VectorXd& ritzHz, FrequencyErrorPrediction& estimate) {
+  const MatchErrorPrediction& e = m.predictedError;
+  estimate = FrequencyErrorPrediction{FrequencySource::Entry, m.distance, e.median, e.p90, e.beyondRange};
   auto placed = cache.place(m.entry, material, m.queryFrame);
   if (placed) placed.value().massProperties = mass;
   if (placed && check.parent) inheritContactSpread(*check.parent->body, placed.value());
@@ -308,31 +338,47 @@ Result<ObjectAsset> placeEntry(const EntryCache& cache, const FragmentMatch& m, 
                                    : std::numeric_limits<double>::quiet_NaN();
   FrequencySource source = FrequencySource::Ritz;
   double indicator = convergence;
+  Eigen::VectorXd ritz = own.value().frequenciesHz;
   if (check.parent && check.maxDof > 0) {
-    const Body& body = *check.parent->body;
-    const int64_t dof = fragmentCutDof(body.asset.tetMesh, body.topology, check.parent->nodeLabels, check.label, ElementOrder::P1,
-                                       CutCells::Prisms);
-    if (dof > 0 && dof <= check.maxDof) {
-      auto sub = fragmentSubMesh(body.asset.tetMesh, body.topology, check.parent->nodeLabels, check.parent->edgeCuts, check.label,
-                                 CutCells::Prisms);
-      auto ratios = sub ? meshFrequencyRatios(sub.value(), material, degree, kMeshRatioModes, check.order)
-                        : Result<MeshFrequencyRatios>(sub.error());
-      if (ratios) {
-        applyMeshRatios(own.value().frequenciesHz, ratios.value());
-        source = check.order == ElementOrder::P2 ? FrequencySource::CheckedP2 : FrequencySource::Checked;
-        indicator = meshGain(ratios.value());
-      }
+    if (auto ratios = checkRatios(check, checkDof(check), material, degree)) {
+      applyMeshRatios(own.value().frequenciesHz, ratios.value());
+      source = check.order == ElementOrder::P2 ? FrequencySource::CheckedP2 : FrequencySource::Checked;
+      indicator = meshGain(ratios.value());
     }
   }
   Eigen::VectorXd entry = placed.value().modal.eigenvaluesRad2PerS2;
   if (adoptPolynomialFrequencies(placed.value(), own.value())) {
     entryEigenvalues = std::move(entry);
-    const MatchErrorModel& model = source == FrequencySource::Checked     ? models.checked
-                                   : source == FrequencySource::CheckedP2 ? models.checkedP2
-                                                                          : models.ritz;
-    predicted(source, indicator, predictMatchError(model, indicator));
+    ritzHz = std::move(ritz);
+    estimate = predictedFrequencyError(source, indicator, models);
   }
   return placed;
+}
+
+// A matched body's version checked on the fragment's own mesh (`check`, its `dof` counted once
+// for the chain), made from the version before it: base's Ritz values (Body::ritzFrequenciesHz)
+// times the check's ratios, on base's mesh, shapes, stress modes and static correction
+// (withFrequencies). The same bits as making the body again with the check (placeEntry), without
+// placing the entry, the Ritz step and the body's geometry again, ~5 of a check version's ~16 ms
+// in the pane scene (docs/realtime.md, stop 70). A piece whose check is out of its limit or
+// fails keeps `base` itself, as do bodies without Ritz values (the entry's frequencies).
+Result<std::shared_ptr<const Body>> checkedVersion(const Result<std::shared_ptr<const Body>>& base, const MeshCheck& check, int64_t dof,
+                                                   int degree, const FrequencyErrorModels& models) {
+  if (!base || base.value()->ritzFrequenciesHz.size() == 0) return base;
+  const Body& b = *base.value();
+  auto ratios = checkRatios(check, dof, b.material, degree);
+  if (!ratios) return base;
+  PolynomialModes own;
+  own.frequenciesHz = b.ritzFrequenciesHz;
+  applyMeshRatios(own.frequenciesHz, ratios.value());
+  ModalBasis rates;
+  rates.eigenvaluesRad2PerS2 = b.correctionEigenvalues;  // the entry's, as placeEntry adopts them over
+  if (!adoptPolynomialFrequencies(rates, own)) return base;
+  auto made = withFrequencies(b, rates);
+  if (!made) return base;  // as a failed check: the values before it stand
+  const FrequencySource source = check.order == ElementOrder::P2 ? FrequencySource::CheckedP2 : FrequencySource::Checked;
+  made.value()->frequencyError = predictedFrequencyError(source, meshGain(ratios.value()), models);
+  return std::shared_ptr<const Body>(std::move(made).value());
 }
 
 // The pack's frequency-error models where they were calibrated at `degree`, none otherwise: the
@@ -347,15 +393,19 @@ const FrequencyErrorModels& frequencyModelsAt(const FragmentMatcher& matcher, in
 Result<std::shared_ptr<const Body>> matchedBody(const EntryCache& cache, const FragmentMatch& m, const Material& material,
                                                 int modeCount, const TriangleMesh& surface, const MassProperties& mass, int degree,
                                                 const MeshCheck& check, const FrequencyErrorModels& models) {
-  Eigen::VectorXd entryEigenvalues;
+  Eigen::VectorXd entryEigenvalues, ritzHz;
   FrequencyErrorPrediction estimate;
-  auto placed = placeEntry(cache, m, material, surface, mass, degree, check, models, entryEigenvalues, estimate);
+  auto placed = placeEntry(cache, m, material, surface, mass, degree, check, models, entryEigenvalues, ritzHz, estimate);
   if (!placed) return Error{placed.error().code, "entry " + std::to_string(m.entry) + ": " + placed.error().message};
   const auto topology = cache.topology(m.entry);  // held while the body is made
   const TetTopology* sameTets = *topology ? &topology->value() : nullptr;  // else makeBody builds it and reports the error
   auto made = makeBody(std::move(placed).value(), material, modeCount, nullptr, std::move(entryEigenvalues), sameTets);
   // Not shared with anything yet: its maker is the one holder.
-  if (made) std::const_pointer_cast<Body>(made.value())->frequencyError = estimate;
+  if (made) {
+    Body& body = *std::const_pointer_cast<Body>(made.value());
+    body.frequencyError = estimate;
+    body.ritzFrequenciesHz = std::move(ritzHz);
+  }
   return made;
 }
 
@@ -413,28 +463,34 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
     return BodySource::deferred([make, check, surface = std::move(surface)] { return make(surface, check); });
   }
   const MeshCheck lateCheck{parent, static_cast<int>(i), fs.meshRatioLateMaxDof, fs.meshRatioElement};
-  auto sharedSurface = std::make_shared<const TriangleMesh>(std::move(surface));
-  // The piece's check's size in linear DOF, as placeEntry counts it.
-  auto checkDof = [check] {
-    const Body& parentBody = *check.parent->body;
-    return fragmentCutDof(parentBody.asset.tetMesh, parentBody.topology, check.parent->nodeLabels, check.label, ElementOrder::P1,
-                          CutCells::Prisms);
+  // The later versions are the version before them checked (checkedVersion), the piece's size in
+  // linear DOF counted once for them all.
+  struct CountedDof {
+    MeshCheck check;
+    std::once_flag once;
+    int64_t dof = 0;
+    int64_t get() {
+      std::call_once(once, [this] { dof = checkDof(check); });
+      return dof;
+    }
   };
+  auto dof = std::make_shared<CountedDof>();
+  dof->check = check;
   std::vector<BodySource::Later> laters;
   if (delayed) {
     fr.checkDueS = job.desc.timeS + fs.meshRatioDelayS;
-    laters.push_back({[make, check, sharedSurface, checkDof](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
-                        if (!base || checkDof() > check.maxDof) return base;
-                        return make(*sharedSurface, check);
+    laters.push_back({[check, dof, degree, models](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
+                        if (!base || dof->get() > check.maxDof) return base;
+                        return checkedVersion(base, check, dof->get(), degree, *models);
                       },
                       fr.checkDueS, /*soon=*/true});
   }
   if (late) {
     fr.lateCheckDueS = job.desc.timeS + fs.meshRatioLateDelayS;
-    laters.push_back({[make, check, lateCheck, sharedSurface, checkDof](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
-                        const int64_t dof = checkDof();
-                        if (!base || dof <= check.maxDof || dof > lateCheck.maxDof) return base;
-                        return make(*sharedSurface, lateCheck);
+    laters.push_back({[check, lateCheck, dof, degree, models](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
+                        const int64_t d = dof->get();
+                        if (!base || d <= check.maxDof || d > lateCheck.maxDof) return base;
+                        return checkedVersion(base, lateCheck, d, degree, *models);
                       },
                       fr.lateCheckDueS});
   }
@@ -445,20 +501,20 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
     const MeshCheck escalated{parent, static_cast<int>(i), fs.meshRatioLateMaxDof, ElementOrder::P2};
     const double target = fs.frequencyErrorTarget;
     fr.escalationDueS = job.desc.timeS + fs.meshRatioEscalationDelayS;
-    laters.push_back({[make, escalated, sharedSurface, checkDof, target](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
+    laters.push_back({[escalated, dof, degree, models, target](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
                         if (!base) return base;
                         const FrequencyErrorPrediction& p = base.value()->frequencyError;
                         const bool fromMesh = p.source == FrequencySource::Ritz || p.source == FrequencySource::Checked;
-                        if (!fromMesh || !(p.p90 > target) || checkDof() > escalated.maxDof) return base;
-                        auto made = make(*sharedSurface, escalated);
-                        // A P2 check that failed leaves the Ritz values: the later body is better.
+                        if (!fromMesh || !(p.p90 > target) || dof->get() > escalated.maxDof) return base;
+                        auto made = checkedVersion(base, escalated, dof->get(), degree, *models);
+                        // A P2 check that failed leaves the later body: it is the better one.
                         if (!made || made.value()->frequencyError.source != FrequencySource::CheckedP2) return base;
                         return made;
                       },
                       fr.escalationDueS});
   }
   const MeshCheck first{parent, static_cast<int>(i), delayed ? 0 : fs.meshRatioMaxDof, fs.meshRatioElement};
-  return BodySource::deferred([make, first, sharedSurface] { return make(*sharedSurface, first); }, std::move(laters));
+  return BodySource::deferred([make, first, surface = std::move(surface)] { return make(surface, first); }, std::move(laters));
 }
 
 // The exact path, all of it on the workers (BodySource): the fragment's own solid cut out of its

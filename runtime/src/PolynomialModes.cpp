@@ -292,7 +292,10 @@ Result<Eigen::VectorXd> polynomialFrequenciesOnMesh(const Points& nodes, const F
 }
 
 Status adoptPolynomialFrequencies(ObjectAsset& asset, const PolynomialModes& modes) {
-  ModalBasis& basis = asset.modal;
+  return adoptPolynomialFrequencies(asset.modal, modes);
+}
+
+Status adoptPolynomialFrequencies(ModalBasis& basis, const PolynomialModes& modes) {
   const Eigen::Index r = basis.eigenvaluesRad2PerS2.size();
   if (modes.frequenciesHz.size() < r) {
     return makeError(ErrorCode::InvalidArgument, "adoptPolynomialFrequencies: " + std::to_string(modes.frequenciesHz.size()) +

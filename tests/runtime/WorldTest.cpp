@@ -617,8 +617,17 @@ TEST_F(WorldTest, ATimedBreaksPiecesAreCheckedFromMeshRatioDelayS) {
     EXPECT_EQ(before->modal.frequenciesHz, unchecked.objectAsset(breaks[1].fragments[i].object).value()->modal.frequenciesHz);
     EXPECT_EQ(after->modal.frequenciesHz, checked.objectAsset(breaks[2].fragments[i].object).value()->modal.frequenciesHz);
     EXPECT_NE(before->modal.frequenciesHz, after->modal.frequenciesHz);
+    // The checked version is the first one at other frequencies (checkedVersion): the same mesh,
+    // shapes, stress modes and mass, where the world checking at birth made them itself.
+    EXPECT_EQ(after->modal.modes, before->modal.modes);
+    EXPECT_EQ(after->stressModes, before->stressModes);
+    EXPECT_EQ(after->tetMesh.nodes, before->tetMesh.nodes);
+    EXPECT_EQ(after->massProperties.inertiaKgM2, before->massProperties.inertiaKgM2);
+    EXPECT_EQ(after->modal.residuals, checked.objectAsset(breaks[2].fragments[i].object).value()->modal.residuals);
     EXPECT_EQ(world.frequencyError(f.object, 2.24).value().source, FrequencySource::Ritz);
     EXPECT_EQ(world.frequencyError(f.object, 2.25).value().source, FrequencySource::Checked);
+    EXPECT_EQ(world.frequencyError(f.object, 2.25).value().indicator,
+              checked.frequencyError(breaks[2].fragments[i].object).value().indicator);
   }
   EXPECT_GE(matched, 2);
   expectHitsFollowTheDueTime({world, breaks[0]}, {unchecked, breaks[1]}, {checked, breaks[2]}, 2.1, 2.25);
@@ -1338,7 +1347,9 @@ TEST_F(WorldTest, PiecesStruckBeforeTheirBodiesAreMadeBreakAsOnceTheyAre) {
     EXPECT_TRUE(ticket);
     ImpactResult broken;
     EXPECT_TRUE(world.collectImpact(ticket.value(), broken));
-    if (prepared) EXPECT_TRUE(world.waitUntilPrepared());
+    if (prepared) {
+      EXPECT_TRUE(world.waitUntilPrepared());
+    }
     std::vector<ImpactTicket> hits;
     for (const FragmentResult& f : broken.fragments) {
       if (f.path != FragmentPath::Matched) continue;

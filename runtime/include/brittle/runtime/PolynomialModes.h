@@ -103,5 +103,8 @@ Result<Eigen::VectorXd> polynomialFrequenciesOnMesh(const Points& nodes, const F
 /// residuals become ‖Kφ − λMφ‖/‖Kφ‖ for the new λ on the entry's K and M, |1 − λ/λ_entry| (the
 /// stored basis taken as exact). Errors: InvalidArgument (fewer modes than r).
 Status adoptPolynomialFrequencies(ObjectAsset& asset, const PolynomialModes& modes);
+/// The same on a basis alone: its eigenvalues (the entry's) in, the adopted ones out; its modes
+/// are not read.
+Status adoptPolynomialFrequencies(ModalBasis& basis, const PolynomialModes& modes);
 
 }  // namespace brittle
