@@ -154,14 +154,14 @@ Result<std::shared_ptr<const Body>> makeBody(ObjectAsset asset, const Material& 
                                              Eigen::VectorXd correctionEigenvalues = {},
                                              const TetTopology* sameTets = nullptr);
 
-/// `base` ringing at `rates`' frequencies, eigenvalues and residuals (of base's mode count; its
-/// modes are not read): the same mesh, shapes, stress modes, topology and static correction
-/// (base's, built now if it was scheduled and not built: a correction does not depend on the
-/// frequencies when base has correctionEigenvalues), with ω, ζ and the stress bounds its own. A
-/// matched body's later, checked version (ImpactStages.cpp: checkedVersion) without placing its
-/// entry and building its geometry again. frequencyError and ritzFrequenciesHz are base's; the
-/// caller sets them. Errors: InvalidArgument (base has no correctionEigenvalues, `rates` of another
-/// size, a zero-frequency mode).
+/// `base` ringing at `rates`' frequencies, eigenvalues and residuals (as many as base's asset
+/// has; rates' modes are not read): the same mesh, shapes, stress modes, topology and static
+/// correction (base's, built now if it was scheduled and not built: a correction does not depend
+/// on the frequencies when base has correctionEigenvalues), with ω, ζ and the stress bounds its
+/// own. A matched body's later, checked version (ImpactStages.cpp: checkedVersion) without placing
+/// its entry and building its geometry again. frequencyError and ritzFrequenciesHz are base's; the
+/// caller sets them. Errors: InvalidArgument (base has no correctionEigenvalues, `rates` of
+/// another size, a zero-frequency mode).
 Result<std::shared_ptr<Body>> withFrequencies(const Body& base, const ModalBasis& rates);
 
 }  // namespace brittle::detail
