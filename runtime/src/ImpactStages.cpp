@@ -463,10 +463,11 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
     return BodySource::deferred([make, check, surface = std::move(surface)] { return make(surface, check); });
   }
   const MeshCheck lateCheck{parent, static_cast<int>(i), fs.meshRatioLateMaxDof, fs.meshRatioElement};
-  // The later versions are the version before them checked (checkedVersion), the piece's size in
-  // linear DOF counted once for them all.
+  // The later versions are the version before them checked (checkedVersion: a piece out of a
+  // check's limit keeps that version), the piece's size in linear DOF counted once for them all.
   struct CountedDof {
-    MeshCheck check;
+    explicit CountedDof(const MeshCheck& c) : check(c) {}
+    const MeshCheck check;
     std::once_flag once;
     int64_t dof = 0;
     int64_t get() {
@@ -474,23 +475,21 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
       return dof;
     }
   };
-  auto dof = std::make_shared<CountedDof>();
-  dof->check = check;
+  auto dof = std::make_shared<CountedDof>(check);
   std::vector<BodySource::Later> laters;
   if (delayed) {
     fr.checkDueS = job.desc.timeS + fs.meshRatioDelayS;
-    laters.push_back({[check, dof, degree, models](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
-                        if (!base || dof->get() > check.maxDof) return base;
+    laters.push_back({[check, dof, degree, models](const Result<std::shared_ptr<const Body>>& base) {
                         return checkedVersion(base, check, dof->get(), degree, *models);
                       },
                       fr.checkDueS, /*soon=*/true});
   }
   if (late) {
     fr.lateCheckDueS = job.desc.timeS + fs.meshRatioLateDelayS;
-    laters.push_back({[check, lateCheck, dof, degree, models](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
-                        const int64_t d = dof->get();
-                        if (!base || d <= check.maxDof || d > lateCheck.maxDof) return base;
-                        return checkedVersion(base, lateCheck, d, degree, *models);
+    laters.push_back({[check, lateCheck, dof, degree, models](const Result<std::shared_ptr<const Body>>& base) {
+                        // Within the first limit the piece was checked already, with the same result.
+                        if (dof->get() <= check.maxDof) return base;
+                        return checkedVersion(base, lateCheck, dof->get(), degree, *models);
                       },
                       fr.lateCheckDueS});
   }
@@ -501,15 +500,13 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
     const MeshCheck escalated{parent, static_cast<int>(i), fs.meshRatioLateMaxDof, ElementOrder::P2};
     const double target = fs.frequencyErrorTarget;
     fr.escalationDueS = job.desc.timeS + fs.meshRatioEscalationDelayS;
-    laters.push_back({[escalated, dof, degree, models, target](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
+    laters.push_back({[escalated, dof, degree, models, target](const Result<std::shared_ptr<const Body>>& base) {
                         if (!base) return base;
                         const FrequencyErrorPrediction& p = base.value()->frequencyError;
                         const bool fromMesh = p.source == FrequencySource::Ritz || p.source == FrequencySource::Checked;
-                        if (!fromMesh || !(p.p90 > target) || dof->get() > escalated.maxDof) return base;
-                        auto made = checkedVersion(base, escalated, dof->get(), degree, *models);
-                        // A P2 check that failed leaves the later body: it is the better one.
-                        if (!made || made.value()->frequencyError.source != FrequencySource::CheckedP2) return base;
-                        return made;
+                        if (!fromMesh || !(p.p90 > target)) return base;
+                        // A P2 check that fails leaves the later body: it is the better one.
+                        return checkedVersion(base, escalated, dof->get(), degree, *models);
                       },
                       fr.escalationDueS});
   }

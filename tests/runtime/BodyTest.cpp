@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "Body.h"
 #include "brittle/precompute/TetMesher.h"
@@ -73,6 +75,35 @@ TEST(Body, ALaterVersionRingsAtItsOwnFrequenciesOnItsBasesMeshAndShapes) {
   // A base whose correction was never asked for gives a version without one either.
   EXPECT_FALSE(base->staticCorrectionScheduled());
   EXPECT_FALSE(later.staticCorrectionScheduled());
+}
+
+// A scheduled correction is built once, for the base, and the version holds that one: the same
+// stress per newton, bit for bit, with nothing left to build on its first impact.
+TEST(Body, ALaterVersionHoldsItsBasesStaticCorrection) {
+  const auto base = twoModeBody(Eigen::Vector2d(1.0e6, 2.0e6));
+  ASSERT_TRUE(base);
+  base->scheduleStaticCorrection();
+  ASSERT_FALSE(base->staticCorrectionReady());
+  ModalBasis rates;
+  rates.eigenvaluesRad2PerS2 = Eigen::Vector2d(2.5e6, 8.1e6);
+  rates.frequenciesHz = rates.eigenvaluesRad2PerS2.cwiseSqrt() / (2.0 * M_PI);
+  rates.residuals = Eigen::Vector2d::Zero();
+  auto made = detail::withFrequencies(*base, rates);
+  ASSERT_TRUE(made) << made.error().message;
+  EXPECT_TRUE(base->staticCorrectionReady());
+  EXPECT_TRUE(made.value()->staticCorrectionReady());
+  const auto& mine = made.value()->staticCorrection();
+  const auto& theirs = base->staticCorrection();
+  ASSERT_TRUE(theirs) << theirs.error().message;
+  ASSERT_TRUE(mine) << mine.error().message;
+  const std::vector<std::pair<int32_t, double>> load = {{base->boundaryNodes.front(), 1.0}};
+  Eigen::VectorXd a, b;
+  double ca = 0.0, cb = 0.0;
+  ASSERT_TRUE(mine.value().stressPerNewton(load, Eigen::Vector3d::UnitZ(), a, ca));
+  ASSERT_TRUE(theirs.value().stressPerNewton(load, Eigen::Vector3d::UnitZ(), b, cb));
+  EXPECT_GT(a.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(ca, cb);
 }
 
 TEST(Body, ALaterVersionNeedsFrequenciesOfItsBasesSizeAndACorrectionsEigenvalues) {
