@@ -8,6 +8,7 @@
 // distances, and never runs threads of its own (queries are called from the World's workers).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 
@@ -85,6 +86,16 @@ void sortByDistanceThenId(int k, int64_t* ids, float* distances);
 /// Every value 0 or 1, else InvalidArgument naming the first other one (its row, for data).
 Status checkZeroOne(const float* values, int64_t rows, int64_t dims, bool isQuery);
 int64_t codeBytes(int64_t dims, int64_t wordBytes);
+
+/// How a Hamming distance counts its bits (HnswBackend.cpp): a word at a time (portable C++ or the
+/// popcnt instruction), 32 bytes at a time (AVX2 look-ups) or 64 (AVX-512 VPOPCNTDQ). Every form
+/// gives the same integer; the graphs use the fastest the CPU runs.
+enum class Popcount { Portable, Popcnt, Avx2, Avx512 };
+bool cpuRuns(Popcount form);
+/// The fastest form this CPU runs; Popcnt at most in a process kept to 128-bit lanes (Simd.h).
+Popcount fastestPopcount();
+/// The Hamming distance of two codes of `words` 8-byte words (any alignment), as a float (exact).
+float hammingDistance(Popcount form, const uint8_t* a, const uint8_t* b, size_t words);
 void packBits(const float* values, int64_t rows, int64_t dims, int64_t wordBytes, uint8_t* codes);
 
 }  // namespace brittle::search

@@ -554,6 +554,30 @@ TEST(DescriptorIndex, InvertedFileDistancesSameBitsInEitherLanes) {
   }
 }
 
+// Every popcount form the CPU runs gives the bit count of the codes' XOR, counted bit by bit, on
+// codes of 1 to 70 words (whole 32- and 64-byte steps and every tail) at an odd offset (hnswlib
+// aligns codes to 4 bytes only).
+TEST(DescriptorIndex, HammingDistanceSameIntegerInEveryPopcountForm) {
+  std::mt19937_64 rng(71);
+  std::vector<uint8_t> a(8 * 70 + 1), b(8 * 70 + 1);
+  for (auto& byte : a) byte = static_cast<uint8_t>(rng());
+  for (auto& byte : b) byte = static_cast<uint8_t>(rng());
+  for (size_t i = 1; i < b.size(); i += 3) b[i] = a[i];  // near codes too, not only random ones
+  int forms = 0;
+  for (auto form : {search::Popcount::Portable, search::Popcount::Popcnt, search::Popcount::Avx2, search::Popcount::Avx512}) {
+    if (!search::cpuRuns(form)) continue;
+    ++forms;
+    for (size_t words = 1; words <= 70; ++words) {
+      int bits = 0;
+      for (size_t i = 1; i <= 8 * words; ++i) bits += std::popcount(static_cast<unsigned>(a[i] ^ b[i]));
+      EXPECT_EQ(search::hammingDistance(form, a.data() + 1, b.data() + 1, words), static_cast<float>(bits))
+          << "form " << static_cast<int>(form) << ", " << words << " words";
+    }
+  }
+  EXPECT_GE(forms, 1);
+  EXPECT_TRUE(search::cpuRuns(search::fastestPopcount()));
+}
+
 // The build draws nothing: two builds answer alike.
 TEST(DescriptorIndex, InvertedFileBuildsAlike) {
   const int64_t rows = 2000, dims = 28, queries = 100;
