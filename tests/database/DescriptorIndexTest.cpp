@@ -7,6 +7,9 @@
 
 #include "IndexBackends.h"
 
+#include <Eigen/Core>
+#include <hnswlib/hnswlib.h>
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -228,10 +231,53 @@ SetAnswer exactSetAnswer(const std::vector<float>& data, int64_t dims, const flo
   return a;
 }
 
+// The graph's own walk (a query is a walk of a one-row set, with the neighbours' rows prefetched) is
+// hnswlib's searchKnn: the same answers as hnswlib's graph built alike (M, ef_construction 200, the
+// seed, rows in order) and searched by hnswlib, on rows without ties, for several ef and k.
+TEST(DescriptorIndex, GraphWalkIsHnswlibsSearch) {
+  const int64_t rows = 3000, dims = 20, queries = 100;
+  const auto data = randomMatrix(rows, dims, 91);
+  const auto q = randomMatrix(queries, dims, 92);
+  // The backend's distance for 20 floats (HnswBackend.cpp's squaredL2): the same Eigen expression.
+  struct Space : hnswlib::SpaceInterface<float> {
+    size_t dims;
+    explicit Space(size_t d) : dims(d) {}
+    static float distance(const void* a, const void* b, const void* param) {
+      const auto n = static_cast<Eigen::Index>(*static_cast<const size_t*>(param));
+      const Eigen::Map<const Eigen::VectorXf> x(static_cast<const float*>(a), n), y(static_cast<const float*>(b), n);
+      return (x - y).squaredNorm();
+    }
+    size_t get_data_size() override { return dims * sizeof(float); }
+    hnswlib::DISTFUNC<float> get_dist_func() override { return &distance; }
+    void* get_dist_func_param() override { return &dims; }
+  } space(dims);
+  for (int ef : {8, 32}) {
+    DescriptorIndexSettings s = settingsFor(Kind::Hnsw, ef);
+    s.trees = 12;
+    const DescriptorIndex index = buildOrDie(data, dims, s);
+    hnswlib::HierarchicalNSW<float> reference(&space, rows, 12, 200, s.seed);
+    for (int64_t r = 0; r < rows; ++r) reference.addPoint(data.data() + r * dims, static_cast<hnswlib::labeltype>(r));
+    reference.setEf(static_cast<size_t>(ef));
+    for (int k : {1, 5}) {
+      for (int64_t i = 0; i < queries; ++i) {
+        std::vector<int64_t> ids(static_cast<size_t>(k));
+        std::vector<float> d(static_cast<size_t>(k));
+        ASSERT_TRUE(index.query(q.data() + i * dims, k, ids.data(), d.data()).ok());
+        auto found = reference.searchKnn(q.data() + i * dims, static_cast<size_t>(k));  // farthest on top
+        ASSERT_EQ(found.size(), static_cast<size_t>(k));
+        for (int j = k - 1; j >= 0; --j, found.pop()) {
+          EXPECT_EQ(ids[static_cast<size_t>(j)], static_cast<int64_t>(found.top().second)) << "ef " << ef << " query " << i << " rank " << j;
+          EXPECT_EQ(d[static_cast<size_t>(j)], found.top().first);
+        }
+      }
+    }
+  }
+}
+
 // A set query (a fragment in its candidate frames) is answered as the nearest entries to any of its
 // rows: exactly by brute force and by the kd-forest's merge of per-row answers. The HNSW walk under
 // the set's distance: every answer is that entry's own distance to the set, reached at the row it
-// names; a one-row set is hnswlib's own search; a beam as wide as the data is all but exact; and asked to
+// names; a one-row set is a single query; a beam as wide as the data is all but exact; and asked to
 // (eachRow), the graph merges per-row searches instead.
 TEST(DescriptorIndex, SetQueryFindsTheNearestEntryToAnyRow) {
   const int64_t rows = 3000, dims = 28, sets = 200, count = 4;
@@ -275,7 +321,7 @@ TEST(DescriptorIndex, SetQueryFindsTheNearestEntryToAnyRow) {
         ASSERT_LE(d[j - 1], d[j]);
       }
     }
-    if (n == 1) {  // one row: the same walk as a single query
+    if (n == 1) {  // one row: a single query
       int64_t single[k];
       float singleD[k];
       ASSERT_TRUE(graph.query(set, k, single, singleD).ok());
