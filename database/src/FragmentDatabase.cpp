@@ -27,8 +27,22 @@ DescriptorIndexSettings sizedInvertedFile(int64_t entries) {
   return s;
 }
 
-DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entries) {
-  return kind == DescriptorKind::Moment ? sizedInvertedFile(entries) : DescriptorIndexSettings{};
+DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entries, int voxelResolution) {
+  if (kind == DescriptorKind::Moment) return sizedInvertedFile(entries);
+  using Kind = DescriptorIndexSettings::Kind;
+  DescriptorIndexSettings s;
+  s.checks = 32;
+  if (kind == DescriptorKind::Voxel) {
+    s.kind = Kind::HnswBinary;
+    s.trees = 16;
+  } else if (voxelResolution % 8 == 0) {
+    s.kind = Kind::HnswPrincipal;
+    s.trees = 32;
+  } else {
+    s.kind = Kind::Hnsw;
+    s.trees = 16;
+  }
+  return s;
 }
 
 namespace {

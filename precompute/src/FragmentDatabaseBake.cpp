@@ -321,7 +321,8 @@ FragmentDatabase databaseOf(const DatabaseBakeSettings& settings, std::vector<Fr
   const auto count = static_cast<Eigen::Index>(entries.size());
   for (DescriptorKind kind : kAllDescriptorKinds) {
     const auto k = static_cast<size_t>(kind);
-    db.indexSettings[k] = settings.index[k].value_or(defaultIndexSettings(kind, count));
+    const int resolution = kind == DescriptorKind::Voxel ? settings.descriptors.voxel.resolution : settings.descriptors.voxelImproved.resolution;
+    db.indexSettings[k] = settings.index[k].value_or(defaultIndexSettings(kind, count, resolution));
   }
   db.entries = std::move(entries);
   for (DescriptorKind kind : kAllDescriptorKinds) {

@@ -63,23 +63,26 @@ TEST_F(FragmentMatcherTest, SelfRetrievalUnderSimilarityTransforms) {
 }
 
 // The bake stores its default indexes (defaultIndexSettings): the moments' inverted file, one
-// list at 70 entries, which is exact, and the voxel kinds' kd-forest.
+// list at 70 entries, which is exact, and the voxel kinds' graphs (over bits; over floats at 12³).
 TEST_F(FragmentMatcherTest, StoredDefaultIndexFindsTheExactAnswerOnSelfQueries) {
   const DescriptorIndexSettings& moment = database->indexSettings[static_cast<size_t>(DescriptorKind::Moment)];
   EXPECT_EQ(moment.kind, DescriptorIndexSettings::Kind::Ivf);
   EXPECT_EQ(moment.trees, 1);
   EXPECT_EQ(moment.checks, 1);
   EXPECT_EQ(database->indexSettings[static_cast<size_t>(DescriptorKind::Voxel)].kind,
-            DescriptorIndexSettings::Kind::KdForest);
+            DescriptorIndexSettings::Kind::HnswBinary);
+  EXPECT_EQ(database->indexSettings[static_cast<size_t>(DescriptorKind::VoxelImproved)].kind,
+            DescriptorIndexSettings::Kind::Hnsw);  // the fixture's 12³ grids: no principal keys
   auto matcher = FragmentMatcher::build(*database);
   ASSERT_TRUE(matcher);
   EXPECT_EQ(selfRetrievalRate(matcher.value(), DescriptorKind::Moment), 1.0);
   EXPECT_EQ(selfRetrievalRate(matcher.value(), DescriptorKind::VoxelImproved), 1.0);
+  EXPECT_EQ(selfRetrievalRate(matcher.value(), DescriptorKind::Voxel), 1.0);
 }
 
 // The moments' default index is sized to the database: about kIvfRowsPerList rows a list, four
 // probed, one list below 2 · kIvfRowsPerList entries, at most 1 024 lists (the pack's bound).
-TEST(DefaultIndexSettings, InvertedFileSizedToTheEntriesForMomentsKdForestForVoxels) {
+TEST(DefaultIndexSettings, InvertedFileSizedToTheEntriesForMomentsGraphsForVoxels) {
   struct Case {
     int64_t entries;
     int lists, probes;
@@ -91,11 +94,26 @@ TEST(DefaultIndexSettings, InvertedFileSizedToTheEntriesForMomentsKdForestForVox
     EXPECT_EQ(s.trees, c.lists) << c.entries;
     EXPECT_EQ(s.checks, c.probes) << c.entries;
   }
-  for (DescriptorKind kind : {DescriptorKind::Voxel, DescriptorKind::VoxelImproved}) {
-    const DescriptorIndexSettings s = defaultIndexSettings(kind, 100000);
-    EXPECT_EQ(s.kind, DescriptorIndexSettings::Kind::KdForest);
-    EXPECT_EQ(s.trees, DescriptorIndexSettings{}.trees);
-    EXPECT_EQ(s.checks, DescriptorIndexSettings{}.checks);
+  // The voxel kinds: graphs, the improved kind's principal keys only on grids they can pool.
+  struct VoxelCase {
+    DescriptorKind kind;
+    int resolution;
+    DescriptorIndexSettings::Kind index;
+    int m;
+  };
+  for (const VoxelCase c : {VoxelCase{DescriptorKind::Voxel, 16, DescriptorIndexSettings::Kind::HnswBinary, 16},
+                            VoxelCase{DescriptorKind::Voxel, 12, DescriptorIndexSettings::Kind::HnswBinary, 16},
+                            VoxelCase{DescriptorKind::VoxelImproved, 16, DescriptorIndexSettings::Kind::HnswPrincipal, 32},
+                            VoxelCase{DescriptorKind::VoxelImproved, 12, DescriptorIndexSettings::Kind::Hnsw, 16}}) {
+    const DescriptorIndexSettings s = defaultIndexSettings(c.kind, 100000, c.resolution);
+    EXPECT_EQ(s.kind, c.index) << c.resolution;
+    EXPECT_EQ(s.trees, c.m);
+    EXPECT_EQ(s.checks, 32);
+    // and the index builds on such grids
+    const int64_t dims = int64_t(c.resolution) * c.resolution * c.resolution;
+    std::vector<float> grids(static_cast<size_t>(20 * dims));
+    for (size_t i = 0; i < grids.size(); ++i) grids[i] = float((i * 7 / 5 + i / static_cast<size_t>(dims)) % 2);
+    EXPECT_TRUE(DescriptorIndex::build(grids.data(), 20, dims, s).ok()) << c.resolution;
   }
 }
 
