@@ -8,6 +8,10 @@
 #include "IndexBackends.h"
 
 #include <Eigen/Core>
+// As HnswBackend.cpp includes it: hnswlib's templates are instantiated here too, and a shared
+// library's calls can bind to this binary's copies, which must be the same code (without the SSE
+// path's over-read; see HnswBackend.cpp).
+#define NO_MANUAL_VECTORIZATION
 #include <hnswlib/hnswlib.h>
 
 #include <algorithm>
