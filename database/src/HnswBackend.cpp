@@ -81,7 +81,7 @@ float hammingWords(const void* a, const void* b, const void* param) {
 
 #if defined(__x86_64__)
 // 32 bytes a step: each byte's count from two 4-bit look-ups (pshufb), summed per 8 bytes by psadbw
-// (Mula, Kurz & Lemire 2018). The tail words as above.
+// (Mula, Kurz & Lemire 2018). The tail words by the loop above.
 __attribute__((target("avx2"))) float hammingAvx2(const void* a, const void* b, const void* param) {
   const size_t words = *static_cast<const size_t*>(param);
   const auto* x = static_cast<const unsigned char*>(a);
@@ -98,15 +98,10 @@ __attribute__((target("avx2"))) float hammingAvx2(const void* a, const void* b, 
                                            _mm256_shuffle_epi8(table, _mm256_and_si256(_mm256_srli_epi16(d, 4), low)));
     sums = _mm256_add_epi64(sums, _mm256_sad_epu8(counts, _mm256_setzero_si256()));
   }
-  uint64_t sum = static_cast<uint64_t>(_mm256_extract_epi64(sums, 0)) + static_cast<uint64_t>(_mm256_extract_epi64(sums, 1)) +
-                 static_cast<uint64_t>(_mm256_extract_epi64(sums, 2)) + static_cast<uint64_t>(_mm256_extract_epi64(sums, 3));
-  for (; i < words; ++i) {
-    uint64_t u, v;
-    std::memcpy(&u, x + 8 * i, 8);
-    std::memcpy(&v, y + 8 * i, 8);
-    sum += static_cast<uint64_t>(__builtin_popcountll(u ^ v));
-  }
-  return static_cast<float>(sum);
+  const uint64_t sum = static_cast<uint64_t>(_mm256_extract_epi64(sums, 0)) + static_cast<uint64_t>(_mm256_extract_epi64(sums, 1)) +
+                       static_cast<uint64_t>(_mm256_extract_epi64(sums, 2)) + static_cast<uint64_t>(_mm256_extract_epi64(sums, 3));
+  const size_t rest = words - i;
+  return static_cast<float>(sum) + hammingWords<false>(x + 8 * i, y + 8 * i, &rest);  // exact: integers below 2^24
 }
 
 // 64 bytes a step, a popcount per 64-bit lane (AVX-512 VPOPCNTDQ); the tail words masked in.

@@ -613,10 +613,8 @@ TEST(DescriptorIndex, HammingDistanceSameIntegerInEveryPopcountForm) {
   for (auto& byte : a) byte = static_cast<uint8_t>(rng());
   for (auto& byte : b) byte = static_cast<uint8_t>(rng());
   for (size_t i = 1; i < b.size(); i += 3) b[i] = a[i];  // near codes too, not only random ones
-  int forms = 0;
   for (auto form : {search::Popcount::Portable, search::Popcount::Popcnt, search::Popcount::Avx2, search::Popcount::Avx512}) {
     if (!search::cpuRuns(form)) continue;
-    ++forms;
     for (size_t words = 1; words <= 70; ++words) {
       int bits = 0;
       for (size_t i = 1; i <= 8 * words; ++i) bits += std::popcount(static_cast<unsigned>(a[i] ^ b[i]));
@@ -624,7 +622,6 @@ TEST(DescriptorIndex, HammingDistanceSameIntegerInEveryPopcountForm) {
           << "form " << static_cast<int>(form) << ", " << words << " words";
     }
   }
-  EXPECT_GE(forms, 1);
   EXPECT_TRUE(search::cpuRuns(search::fastestPopcount()));
 }
 
