@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <limits>
 #include <memory>
 #include <string>
@@ -149,6 +150,18 @@ Result<DescriptorIndexSettings::Kind> parseDescriptorIndexKind(std::string_view 
     names += std::string(names.empty() ? "" : ", ") + descriptorIndexKindName(kind);
   }
   return makeError(ErrorCode::InvalidArgument, "unknown index backend '" + std::string(name) + "' (expected one of " + names + ")");
+}
+
+std::string describeIndexSettings(const DescriptorIndexSettings& settings) {
+  using Kind = DescriptorIndexSettings::Kind;
+  const std::string name = descriptorIndexKindName(settings.kind);
+  if (settings.kind == Kind::BruteForce || settings.kind == Kind::FaissBinaryFlat) return name;
+  if (settings.kind == Kind::Autotuned) {
+    char precision[32];
+    std::snprintf(precision, sizeof precision, ":%g", static_cast<double>(settings.targetPrecision));
+    return name + precision;
+  }
+  return name + ":" + std::to_string(settings.trees) + ":" + std::to_string(settings.checks);
 }
 
 Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, int64_t dims,

@@ -123,18 +123,55 @@ DebrisSizing chooseDebrisThreshold(const std::string& object, const std::vector<
   return d;
 }
 
-DescriptorIndexSettings SearchSizing::indexSettings() const {
-  DescriptorIndexSettings s;
-  s.kind = checks > 0 ? DescriptorIndexSettings::Kind::KdForest : DescriptorIndexSettings::Kind::BruteForce;
-  if (checks > 0) s.checks = checks;
+double searchBytesCompared(const DescriptorIndexSettings& index, int64_t rows, int64_t cols) {
+  using Kind = DescriptorIndexSettings::Kind;
+  const auto n = static_cast<double>(rows);
+  const double rowBytes = indexTakesBits(index.kind) ? static_cast<double>(cols) / 8.0 : 4.0 * static_cast<double>(cols);
+  const double ef = std::min<double>(index.checks, n);
+  const double walked = std::min(static_cast<double>(index.checks) * index.trees, n);  // ef × M
+  switch (index.kind) {
+    case Kind::BruteForce:
+    case Kind::FaissBinaryFlat: return n * rowBytes;
+    case Kind::KdForest:
+    case Kind::Autotuned: return ef * rowBytes;
+    case Kind::Hnsw:
+    case Kind::HnswBinary:
+    case Kind::FaissHnsw:
+    case Kind::FaissBinaryHnsw: return walked * rowBytes;
+    case Kind::HnswPooled: return walked * 4.0 * 512.0 + ef * rowBytes;  // 8³ block sums
+    case Kind::HnswPrincipal: return walked * 4.0 * 64.0 + ef * rowBytes;  // their first 64 components
+    case Kind::Ivf: {
+      // IvfBackend.cpp: rows of 17–128 values are filed by 16 components and two norms.
+      const double key = cols > 16 && cols <= 128 ? 18.0 : static_cast<double>(cols);
+      const double scanned = std::min(n, index.checks * std::ceil(n / index.trees));
+      return 4.0 * (index.trees * key + scanned * key) + rowBytes;
+    }
+    case Kind::FaissIvf: return (index.trees + std::min(n, index.checks * std::ceil(n / index.trees))) * rowBytes;
+  }
+  return n * rowBytes;
+}
+
+DescriptorIndexSettings indexAtPrecision(const DescriptorIndexSettings& stored, double precision) {
+  using Kind = DescriptorIndexSettings::Kind;
+  if (precision == 0.0) return {.kind = Kind::BruteForce};
+  DescriptorIndexSettings s = stored;
+  if (s.kind == Kind::BruteForce || s.kind == Kind::FaissBinaryFlat || s.kind == Kind::Autotuned) return s;
+  const double scaled = std::max(1.0, std::round(precision * s.checks));
+  const bool lists = s.kind == Kind::Ivf || s.kind == Kind::FaissIvf;
+  s.checks = static_cast<int>(std::min(scaled, lists ? static_cast<double>(s.trees) : 1e9));
   return s;
 }
 
 Result<SearchSizing> chooseSearch(const FragmentDatabase& database, const std::vector<FragmentRecord>& fragments,
                                   const std::vector<Material>& materials, double targetError,
                                   const ModelSizingSettings& settings) {
-  if (database.empty() || !database.hasPhysics() || fragments.empty() || settings.searchChecks.empty()) {
-    return makeError(ErrorCode::InvalidArgument, "search sizing: needs a database with physics, fragments and a checks ladder");
+  if (database.empty() || !database.hasPhysics() || fragments.empty() || settings.searchPrecision.empty()) {
+    return makeError(ErrorCode::InvalidArgument, "search sizing: needs a database with physics, fragments and a precision ladder");
+  }
+  for (double p : settings.searchPrecision) {
+    if (!(std::isfinite(p) && p >= 0.0)) {
+      return makeError(ErrorCode::InvalidArgument, "search sizing: precisions must be finite and ≥ 0 (0: exact), got " + std::to_string(p));
+    }
   }
   std::vector<const Material*> material;
   for (const FragmentRecord& f : fragments) {
@@ -145,22 +182,28 @@ Result<SearchSizing> chooseSearch(const FragmentDatabase& database, const std::v
   SearchSizing out;
   out.fragments = static_cast<int>(fragments.size());
   for (DescriptorKind kind : kAllDescriptorKinds) {
-    if (database.descriptorsOf(kind).cols() == 0) continue;
-    for (int checks : settings.searchChecks) {
-      if (checks < 0) return makeError(ErrorCode::InvalidArgument, "search sizing: checks must be ≥ 0 (0: exact)");
+    const DescriptorMatrix& rows = database.descriptorsOf(kind);
+    if (rows.cols() == 0) continue;
+    std::vector<DescriptorIndexSettings> tried;
+    for (double precision : settings.searchPrecision) {
+      const DescriptorIndexSettings index = indexAtPrecision(database.indexSettings[static_cast<size_t>(kind)], precision);
+      // A precision that lands on an index already tried (a clamped probe count, an exact kind) is not tried twice.
+      if (std::any_of(tried.begin(), tried.end(), [&](const DescriptorIndexSettings& x) {
+            return x.kind == index.kind && x.trees == index.trees && x.checks == index.checks;
+          })) {
+        continue;
+      }
+      tried.push_back(index);
       FragmentMatcherSettings ms;
       for (DescriptorKind k : kAllDescriptorKinds) ms.enabled[static_cast<size_t>(k)] = k == kind;
-      SearchSizing probe;
-      probe.checks = checks;
-      ms.indexOverride[static_cast<size_t>(kind)] = probe.indexSettings();
+      ms.indexOverride[static_cast<size_t>(kind)] = index;
       auto matcher = FragmentMatcher::build(database, ms);
       if (!matcher) return matcher.error();
       SearchTrial t;
       t.kind = kind;
-      t.checks = checks;
-      const auto entries = static_cast<double>(database.entries.size());
-      t.valuesCompared = (checks > 0 ? std::min<double>(checks, entries) : entries) *
-                         static_cast<double>(database.descriptorsOf(kind).cols());
+      t.precision = precision;
+      t.index = index;
+      t.bytesCompared = searchBytesCompared(index, rows.rows(), rows.cols());
       std::vector<double> errors, times;
       for (size_t i = 0; i < fragments.size(); ++i) {
         const auto start = SteadyClock::now();
@@ -180,19 +223,20 @@ Result<SearchSizing> chooseSearch(const FragmentDatabase& database, const std::v
     }
   }
   if (out.trials.empty()) return makeError(ErrorCode::InvalidArgument, "search sizing: the database has no descriptors");
-  // The cheapest that meets the target (fewest values compared, the first tried on ties); else
+  // The cheapest that meets the target (fewest bytes compared, the first tried on ties); else
   // the most accurate. Measured times are not weighed: they would make the sized pack differ from
   // run to run.
   const SearchTrial* best = nullptr;
   for (const SearchTrial& t : out.trials)
-    if (t.medianFrequencyError <= targetError && (!best || t.valuesCompared < best->valuesCompared)) best = &t;
+    if (t.medianFrequencyError <= targetError && (!best || t.bytesCompared < best->bytesCompared)) best = &t;
   out.targetMet = best != nullptr;
   if (!best)
     for (const SearchTrial& t : out.trials)
       if (std::isfinite(t.medianFrequencyError) && (!best || t.medianFrequencyError < best->medianFrequencyError)) best = &t;
   if (!best) best = &out.trials.front();
   out.kind = best->kind;
-  out.checks = best->checks;
+  out.precision = best->precision;
+  out.index = best->index;
   out.medianFrequencyError = best->medianFrequencyError;
   out.medianMatchMs = best->medianMatchMs;
   out.distanceErrors = best->distanceErrors;

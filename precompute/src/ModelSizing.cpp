@@ -393,7 +393,7 @@ Result<SceneSizingReport> sizeScene(const std::vector<ObjectBakeSettings>& manif
     if (!fragments.empty()) {
       auto search = chooseSearch(*db, fragments, materials, requirements.matchFrequencyError, settings);
       if (!search) return search.error();
-      sizedDb->indexSettings[static_cast<size_t>(search.value().kind)] = search.value().indexSettings();
+      sizedDb->indexSettings[static_cast<size_t>(search.value().kind)] = search.value().index;
       report.search = std::move(search).value();
       // The calibration searched with the bake's index; the sized pack's matches use this one. The
       // chosen kind's model is then fitted to the scene's own fragments where there are enough

@@ -235,22 +235,52 @@ TEST_F(ModelSizingTest, FragmentsGiveTheDebrisThresholdAndTheSearch) {
   EXPECT_DOUBLE_EQ(chooseDebrisThreshold("x", {big, small}).debrisVolumeFraction, 0.15);
   EXPECT_DOUBLE_EQ(chooseDebrisThreshold("x", {small}).debrisVolumeFraction, 0.5);
 
-  // Search: every kind × precision is tried; the cheapest that meets the target (fewest values
-  // compared, not the measured time) is chosen, else the most accurate.
+  // Search: every kind × precision of its stored index is tried; the cheapest that meets the
+  // target (fewest bytes compared, not the measured time) is chosen, else the most accurate.
   auto database = bakeFragmentDatabase(testing::shippedShapesDatabase({"box", "plate", "wedge", "blob"}, 12, 400, 6));
   ASSERT_TRUE(database) << database.error().message;
-  s.searchChecks = {2, 32, 0};
+  ASSERT_EQ(database.value().entries.size(), 12u);
+  s.searchPrecision = {0.25, 4.0, 0.0};
   auto loose = chooseSearch(database.value(), fragments.value(), {glass}, 100.0, s);
   ASSERT_TRUE(loose) << loose.error().message;
-  ASSERT_EQ(loose.value().trials.size(), 3u * kDescriptorKindCount);
   EXPECT_TRUE(loose.value().targetMet);
+  // Per kind: the stored index at ¼ and 4× its checks, then brute force; a precision that lands
+  // on an index already tried is not tried again (the moments' one-list inverted file probes its
+  // one list at any precision).
+  using Kind = DescriptorIndexSettings::Kind;
+  size_t expectedTrials = 0;
+  for (DescriptorKind kind : kAllDescriptorKinds) {
+    const DescriptorIndexSettings& stored = database.value().indexSettings[static_cast<size_t>(kind)];
+    std::vector<const SearchTrial*> ofKind;
+    for (const SearchTrial& t : loose.value().trials)
+      if (t.kind == kind) ofKind.push_back(&t);
+    SCOPED_TRACE(descriptorKindName(kind));
+    if (stored.kind == Kind::Ivf) {
+      ASSERT_EQ(stored.trees, 1);
+      ASSERT_EQ(ofKind.size(), 2u);
+      EXPECT_EQ(ofKind[0]->index.checks, 1);
+    } else {
+      ASSERT_EQ(ofKind.size(), 3u);
+      EXPECT_EQ(ofKind[0]->index.checks, std::max(1, static_cast<int>(std::lround(0.25 * stored.checks))));
+      EXPECT_EQ(ofKind[1]->index.checks, 4 * stored.checks);
+      EXPECT_EQ(ofKind[1]->index.trees, stored.trees);
+    }
+    EXPECT_EQ(ofKind[0]->index.kind, stored.kind);
+    EXPECT_EQ(ofKind.back()->precision, 0.0);
+    EXPECT_EQ(ofKind.back()->index.kind, Kind::BruteForce);
+    expectedTrials += ofKind.size();
+  }
+  EXPECT_EQ(loose.value().trials.size(), expectedTrials);
   for (const SearchTrial& t : loose.value().trials) {
     EXPECT_GT(t.matched, 0);
     EXPECT_GT(t.medianMatchMs, 0.0);
-    // Rows compared: the checks (2), else all 12 entries (32 checks on 12 entries, or the exact search).
-    ASSERT_EQ(database.value().entries.size(), 12u);
-    const double rows = t.checks == 2 ? 2.0 : 12.0;
-    EXPECT_EQ(t.valuesCompared, rows * static_cast<double>(descriptorSize(t.kind, database.value().descriptorSettings)));
+    // Brute force reads every row in floats. Nothing reads more rows, but a keyed graph
+    // (hnsw-principal, hnsw-pooled) also reads its keys: at 12 entries it is dearer than the scan.
+    const double exact = 12.0 * 4.0 * static_cast<double>(descriptorSize(t.kind, database.value().descriptorSettings));
+    if (t.index.kind == Kind::BruteForce) EXPECT_EQ(t.bytesCompared, exact);
+    const bool keyed = t.index.kind == Kind::HnswPrincipal || t.index.kind == Kind::HnswPooled;
+    EXPECT_LE(t.bytesCompared, exact + (keyed ? 12.0 * 4.0 * 512.0 : 0.0));
+    EXPECT_GT(t.bytesCompared, 0.0);
     // One (distance, error) pair per matched fragment, the error that the trial's median is of.
     ASSERT_EQ(t.distanceErrors.size(), static_cast<size_t>(t.matched));
     std::vector<double> errors;
@@ -261,25 +291,71 @@ TEST_F(ModelSizingTest, FragmentsGiveTheDebrisThresholdAndTheSearch) {
   }
   // What the sized pack's model of the chosen kind is fitted to: the chosen trial's pairs.
   const SearchTrial& chosen = *std::find_if(loose.value().trials.begin(), loose.value().trials.end(), [&](const SearchTrial& t) {
-    return t.kind == loose.value().kind && t.checks == loose.value().checks;
+    return t.kind == loose.value().kind && t.precision == loose.value().precision;
   });
   EXPECT_EQ(loose.value().distanceErrors, chosen.distanceErrors);
+  EXPECT_EQ(loose.value().index.kind, chosen.index.kind);
+  EXPECT_EQ(loose.value().index.checks, chosen.index.checks);
   for (const SearchTrial& t : loose.value().trials) {  // (every trial meets a 100× target)
-    EXPECT_GE(t.valuesCompared, chosen.valuesCompared);
+    EXPECT_GE(t.bytesCompared, chosen.bytesCompared);
   }
   // The same choice on a second run, whatever the clock read.
   auto rerun = chooseSearch(database.value(), fragments.value(), {glass}, 100.0, s);
   ASSERT_TRUE(rerun);
   EXPECT_EQ(rerun.value().kind, loose.value().kind);
-  EXPECT_EQ(rerun.value().checks, loose.value().checks);
+  EXPECT_EQ(rerun.value().precision, loose.value().precision);
   auto strict = chooseSearch(database.value(), fragments.value(), {glass}, 1e-9, s);
   ASSERT_TRUE(strict);
   EXPECT_FALSE(strict.value().targetMet);
   for (const SearchTrial& t : strict.value().trials) EXPECT_GE(t.medianFrequencyError, strict.value().medianFrequencyError);
-  EXPECT_EQ(strict.value().indexSettings().kind, strict.value().checks > 0 ? DescriptorIndexSettings::Kind::KdForest
-                                                                          : DescriptorIndexSettings::Kind::BruteForce);
+  // The sized pack keeps the stored index's kind at the chosen precision, or brute force.
+  EXPECT_EQ(strict.value().index.kind, strict.value().precision > 0.0
+                                            ? database.value().indexSettings[static_cast<size_t>(strict.value().kind)].kind
+                                            : Kind::BruteForce);
+  ModelSizingSettings bad = s;
+  bad.searchPrecision = {1.0, -0.5};
+  EXPECT_EQ(chooseSearch(database.value(), fragments.value(), {glass}, 0.2, bad).error().code, ErrorCode::InvalidArgument);
+  bad.searchPrecision = {};
+  EXPECT_EQ(chooseSearch(database.value(), fragments.value(), {glass}, 0.2, bad).error().code, ErrorCode::InvalidArgument);
   EXPECT_EQ(chooseSearch(database.value(), {}, {glass}, 0.2, s).error().code, ErrorCode::InvalidArgument);
   EXPECT_EQ(chooseSearch(database.value(), fragments.value(), {}, 0.2, s).error().code, ErrorCode::InvalidArgument);
+}
+
+// The search's cost model (searchBytesCompared) at the sizes it decides between: each kind's
+// stored default index at 10⁵ entries reads more with precision and far less than brute force,
+// and the occupancy graph's walk is ef × M codes of 512 bytes.
+TEST(SearchSizingTest, BytesComparedGrowWithPrecisionAndStayBelowTheExactSearch) {
+  constexpr int64_t kRows = 100000;
+  const std::pair<DescriptorKind, int64_t> kinds[] = {
+      {DescriptorKind::Moment, 30}, {DescriptorKind::Voxel, 4096}, {DescriptorKind::VoxelImproved, 4096}};
+  for (const auto& [kind, cols] : kinds) {
+    SCOPED_TRACE(descriptorKindName(kind));
+    const DescriptorIndexSettings stored = defaultIndexSettings(kind, kRows, 16);
+    const double exact = searchBytesCompared(indexAtPrecision(stored, 0.0), kRows, cols);
+    EXPECT_EQ(exact, 4.0 * kRows * cols);
+    double previous = 0.0;
+    for (double precision : {0.25, 1.0, 4.0}) {
+      const DescriptorIndexSettings index = indexAtPrecision(stored, precision);
+      EXPECT_EQ(index.kind, stored.kind);
+      EXPECT_EQ(index.trees, stored.trees);
+      const double bytes = searchBytesCompared(index, kRows, cols);
+      EXPECT_GT(bytes, previous);
+      EXPECT_LT(bytes, 0.05 * exact);
+      previous = bytes;
+    }
+  }
+  DescriptorIndexSettings binary = defaultIndexSettings(DescriptorKind::Voxel, kRows, 16);
+  ASSERT_EQ(binary.kind, DescriptorIndexSettings::Kind::HnswBinary);
+  EXPECT_EQ(searchBytesCompared(binary, kRows, 4096), 32.0 * 16.0 * 512.0);
+  EXPECT_EQ(searchBytesCompared(binary, 100, 4096), 100.0 * 512.0);  // the walk cannot read more rows than there are
+  // An inverted file probes at most its lists; the exact kinds have no precision to scale.
+  const DescriptorIndexSettings ivf = sizedInvertedFile(kRows);
+  EXPECT_EQ(indexAtPrecision(ivf, 1000.0).checks, ivf.trees);
+  EXPECT_EQ(indexAtPrecision(ivf, 1e-6).checks, 1);
+  const DescriptorIndexSettings flat{.kind = DescriptorIndexSettings::Kind::FaissBinaryFlat};
+  EXPECT_EQ(indexAtPrecision(flat, 4.0).kind, DescriptorIndexSettings::Kind::FaissBinaryFlat);
+  EXPECT_EQ(describeIndexSettings(indexAtPrecision(binary, 0.25)), "hnsw-binary:16:8");
+  EXPECT_EQ(describeIndexSettings(indexAtPrecision(binary, 0.0)), "brute-force");
 }
 
 TEST(SceneSizingTest, BakesOnlyWhatTheSceneUsesAndReportsTheSavings) {
@@ -353,7 +429,7 @@ TEST(SceneSizingTest, CalibratesTheBodiesFrequencyErrorsAtTheScenesImpacts) {
   ModelSizingSettings s = quickScene({5, 10});
   s.elementOrders = {ElementOrder::P1};
   s.fragmentsPerImpact = 3;
-  s.searchChecks = {0};
+  s.searchPrecision = {0.0};
   s.frequencyErrorPoints = 1;
   s.frequencyErrorPiecesPerImpact = 3;
   const DatabaseBakeSettings database = testing::shippedShapesDatabase({"box", "plate"}, 8, 300, 6);

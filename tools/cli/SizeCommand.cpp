@@ -53,11 +53,13 @@ nlohmann::json reportJson(const SceneSizingReport& r) {
   if (r.search) {
     nlohmann::json trials = nlohmann::json::array();
     for (const auto& t : r.search->trials) {
-      trials.push_back({{"descriptor", descriptorKindName(t.kind)}, {"checks", t.checks}, {"matched", t.matched},
+      trials.push_back({{"descriptor", descriptorKindName(t.kind)}, {"precision", t.precision},
+                        {"index", describeIndexSettings(t.index)}, {"matched", t.matched},
                         {"median_frequency_error", std::isfinite(t.medianFrequencyError) ? nlohmann::json(t.medianFrequencyError) : nlohmann::json()},
-                        {"values_compared", t.valuesCompared}, {"median_match_ms", t.medianMatchMs}});
+                        {"bytes_compared", t.bytesCompared}, {"median_match_ms", t.medianMatchMs}});
     }
-    search = {{"descriptor", descriptorKindName(r.search->kind)}, {"checks", r.search->checks},
+    search = {{"descriptor", descriptorKindName(r.search->kind)}, {"precision", r.search->precision},
+              {"index", describeIndexSettings(r.search->index)},
               {"target_met", r.search->targetMet}, {"median_frequency_error", r.search->medianFrequencyError},
               {"median_match_ms", r.search->medianMatchMs}, {"fragments", r.search->fragments}, {"trials", trials},
               // The sized pack's model of the chosen kind is fitted to these when there are ≥ 8 (MatchErrors.h).
@@ -114,14 +116,13 @@ void printReport(const SceneSizingReport& r) {
   }
   if (r.search) {
     std::printf("search: %s, %s, median frequency error %.1f %% (target %.1f %%%s), %.2f ms per match, %d fragments\n",
-                descriptorKindName(r.search->kind),
-                r.search->checks > 0 ? ("kd-forest " + std::to_string(r.search->checks) + " checks").c_str() : "exact search",
+                descriptorKindName(r.search->kind), describeIndexSettings(r.search->index).c_str(),
                 100.0 * r.search->medianFrequencyError, 100.0 * r.matchTargetError,
                 r.search->targetMet ? "" : ": NOT met, the most accurate kept", r.search->medianMatchMs, r.search->fragments);
     for (const auto& t : r.search->trials) {
-      std::printf("      %-15s %4s: %6.1f %%  %8.0f values compared  %6.2f ms  (%d matched)\n", descriptorKindName(t.kind),
-                  t.checks > 0 ? std::to_string(t.checks).c_str() : "all", 100.0 * t.medianFrequencyError, t.valuesCompared,
-                  t.medianMatchMs, t.matched);
+      std::printf("      %-15s %-22s: %6.1f %%  %9.0f bytes compared  %6.2f ms  (%d matched)\n", descriptorKindName(t.kind),
+                  describeIndexSettings(t.index).c_str(), 100.0 * t.medianFrequencyError, t.bytesCompared, t.medianMatchMs,
+                  t.matched);
     }
   }
   std::printf("database: %s\n", r.refracture ? "kept (fragments break again)" : "dropped (the scene does not refracture)");
@@ -176,6 +177,11 @@ Runner addSizeCommand(CLI::App& app) {
                   "Surface points per impactor and speed end for the bodies' frequency-error calibration at the scene's "
                   "impacts (0: none; the pack then predicts no body's error)")
       ->capture_default_str()->check(CLI::Range(0, 1000));
+  cmd->add_option("--search-precision", o->settings.searchPrecision,
+                  "Search precisions tried per descriptor kind: factors on the checks of the index the database stores (a graph's ef, an "
+                  "inverted file's lists probed, a kd-forest's checks); 0: the exact search. The cheapest that meets the scene's "
+                  "match_frequency_error is stored")
+      ->delimiter(',')->capture_default_str()->check(CLI::Range(0.0, 1e6));
   cmd->add_option("--sized-manifest", o->sizedManifest, "Also write the sized pack's bake manifest here");
   cmd->add_option("--report", o->report, "Also write the report as JSON here");
   cmd->add_option("--settings-out", o->settingsOut,

@@ -68,6 +68,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -110,6 +111,9 @@ constexpr bool indexTakesBits(DescriptorIndexSettings::Kind kind) {
 const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind);
 /// Inverse of descriptorIndexKindName. Error: InvalidArgument listing the valid names.
 Result<DescriptorIndexSettings::Kind> parseDescriptorIndexKind(std::string_view name);
+/// The settings as `bench search --index` spells them: "NAME:TREES:CHECKS" ("ivf:256:4",
+/// "hnsw-binary:16:32"), "autotuned:PRECISION", or the exact kinds' name alone.
+std::string describeIndexSettings(const DescriptorIndexSettings& settings);
 
 class DescriptorIndex {
  public:

@@ -59,7 +59,9 @@ Result<SceneRequirements> loadSceneRequirements(const std::filesystem::path& pat
 struct ModelSizingSettings {
   std::vector<int> modeLadder = {5, 10, 15, 20, 30, 40, 60, 80, 100};  ///< ascending after validation
   int points = 3;                    ///< surface points per impactor and speed
-  std::vector<int> searchChecks = {4, 16, 64, 0};  ///< kd-forest checks tried (0: the exact search)
+  /// Search precisions tried: factors on the `checks` of the index the database stores for each
+  /// kind (a graph's ef, an inverted file's lists probed, a kd-forest's checks); 0: the exact search.
+  std::vector<double> searchPrecision = {0.25, 1.0, 4.0, 0.0};
   int fragmentsPerImpact = 12;       ///< fragments studied per top-speed impact, spread over their sizes
   int referenceStepsPerContact = 60; ///< Newmark steps per contact time
   int timingRepeats = 3;             ///< impacts timed per mode count and impact (median)
