@@ -507,6 +507,11 @@ TEST_F(CliTest, SizeBakesTheSceneObjectsAtTheirModeCountsAndReports) {
   const CliRun broken = run("size --manifest " + path("m.json") + " --scene " + path("broken.json") + " --quiet --out " + path("no.h5"));
   EXPECT_EQ(broken.exitCode, 3);
   EXPECT_NE(broken.out.find("error [parse_error]"), std::string::npos) << broken.out;
+  // A negative search precision is refused before anything is baked.
+  const CliRun precision = run("size --manifest " + path("m.json") + " --scene " + path("s.json") +
+                               " --search-precision 1,-0.5 --quiet --out " + path("no.h5"));
+  EXPECT_NE(precision.exitCode, 0);
+  EXPECT_NE(precision.out.find("--search-precision"), std::string::npos) << precision.out;
   EXPECT_FALSE(std::filesystem::exists(dir / "no.h5"));
 }
 
