@@ -11,44 +11,36 @@ namespace brittle::detail {
 
 const Result<StaticCorrection>& Body::staticCorrection() const {
   scheduleStaticCorrection();
-  std::call_once(mCorrectionOnce, [this] {
+  return mCorrection.get([this] {
     auto built = correctionEigenvalues.size() == 0 ? StaticCorrection::build(asset, material, modes) : [&] {
       ObjectAsset entry = asset;  // the same body with the eigenvalues its correction is for
       entry.modal.eigenvaluesRad2PerS2 = correctionEigenvalues;
       return StaticCorrection::build(entry, material, modes);
     }();
     if (!built) built = Error{built.error().code, "object '" + asset.name + "': " + built.error().message};
-    mCorrection.emplace(std::move(built));
-    mCorrectionReady.store(true, std::memory_order_release);
+    return built;
   });
-  return *mCorrection;
 }
 
 void Body::adoptStaticCorrection(Result<StaticCorrection> correction) const {
   scheduleStaticCorrection();
-  std::call_once(mCorrectionOnce, [&] {
-    mCorrection.emplace(std::move(correction));
-    mCorrectionReady.store(true, std::memory_order_release);
-  });
+  mCorrection.install(std::move(correction));
 }
 
 const StressBounds& Body::stressBounds() const {
-  std::call_once(mBoundsOnce, [this] {
-    mStressBounds = stressModeBounds(asset.stressModes, modes, omega.cwiseInverse(),
-                                     stressPointNodes(asset.tetMesh.tets, stressPointsPerElement(asset.elementOrder)));
+  return mStressBounds.get([this] {
+    return stressModeBounds(asset.stressModes, modes, omega.cwiseInverse(),
+                            stressPointNodes(asset.tetMesh.tets, stressPointsPerElement(asset.elementOrder)));
   });
-  return mStressBounds;
 }
 
 const TetMoments& Body::tetMoments() const {
-  std::call_once(mMomentsOnce, [this] { mTetMoments = tetVolumeMoments(asset.tetMesh, centreM); });
-  return mTetMoments;
+  return mTetMoments.get([this] { return tetVolumeMoments(asset.tetMesh, centreM); });
 }
 
 std::shared_ptr<const BodySource> BodySource::ready(std::shared_ptr<const Body> body) {
   auto source = std::make_shared<BodySource>();
-  std::call_once(source->mOnce, [&] { source->mBody.emplace(std::move(body)); });
-  source->mMade.store(true, std::memory_order_release);
+  source->mBody.install(std::move(body));
   return source;
 }
 
@@ -80,16 +72,15 @@ std::shared_ptr<const BodySource> BodySource::deferred(Maker make, std::vector<L
 }
 
 const Result<std::shared_ptr<const Body>>& BodySource::get() const {
-  std::call_once(mOnce, [this] {
-    try {
-      mBody.emplace(mMake());
-    } catch (const std::exception& e) {
-      mBody.emplace(makeError(ErrorCode::InvalidArgument, std::string("making the body failed: ") + e.what()));
-    }
-    mMake = nullptr;
-    mMade.store(true, std::memory_order_release);
-  });
-  return *mBody;
+  return mBody.get(
+      [this]() -> Result<std::shared_ptr<const Body>> {
+        try {
+          return mMake();
+        } catch (const std::exception& e) {
+          return makeError(ErrorCode::InvalidArgument, std::string("making the body failed: ") + e.what());
+        }
+      },
+      [this] { mMake = nullptr; });
 }
 
 namespace {

@@ -5,8 +5,9 @@
 // runtime: World.cpp places bodies in slots, ImpactStages.cpp reads them.
 //
 // A Body is immutable once made, except for its static correction, stress bounds and tets' moments, each made
-// at most once (std::call_once) by whichever thread asks first: a background task the World starts when a
-// pack object is placed, or the body's first impact. Several threads may read a Body at once.
+// on first use by whichever thread asks first (OnceValue.h): a background task the World starts when a
+// pack object is placed, or the body's first impact, which makes its own copy should that task's thread be
+// starved. Several threads may read a Body at once.
 #pragma once
 
 #include <Eigen/Core>
@@ -27,6 +28,7 @@
 #include "brittle/runtime/StaticCorrection.h"
 #include "brittle/runtime/TetTopology.h"
 #include "brittle/runtime/World.h"
+#include "OnceValue.h"
 #include "TriangleBoxTree.h"
 
 namespace brittle::detail {
@@ -69,7 +71,7 @@ struct Body {
   /// when another thread is building it. Its errors are those of StaticCorrection::build.
   const Result<StaticCorrection>& staticCorrection() const;
   /// Whether staticCorrection() would return at once (built, or failed).
-  bool staticCorrectionReady() const { return mCorrectionReady.load(std::memory_order_acquire); }
+  bool staticCorrectionReady() const { return mCorrection.ready(); }
   /// Whether its build was started or asked for: a pack object's when it is placed, a matched
   /// fragment's when its body is made (ImpactStages.cpp); the World then builds it on the workers.
   bool staticCorrectionScheduled() const { return mCorrectionScheduled.load(std::memory_order_acquire); }
@@ -77,24 +79,21 @@ struct Body {
   /// Installs a static correction built elsewhere (makeBody, from the exact path's factor; a
   /// matched fragment's maker, its entry's placed) before the body is handed out: it then counts
   /// as built and scheduled. Const as the lazily built members are: the first install or build
-  /// wins (std::call_once).
+  /// wins (OnceValue).
   void adoptStaticCorrection(Result<StaticCorrection> correction) const;
 
  private:
-  mutable std::once_flag mCorrectionOnce;
-  mutable std::atomic<bool> mCorrectionReady{false};
   mutable std::atomic<bool> mCorrectionScheduled{false};
-  mutable std::optional<Result<StaticCorrection>> mCorrection;
-  mutable std::once_flag mBoundsOnce;
-  mutable StressBounds mStressBounds;
-  mutable std::once_flag mMomentsOnce;
-  mutable TetMoments mTetMoments;
+  OnceValue<Result<StaticCorrection>> mCorrection;
+  OnceValue<StressBounds> mStressBounds;
+  OnceValue<TetMoments> mTetMoments;
 };
 
 /// A body made on first use: a fragment's new object, whose modal data (its own analysis, or its
 /// matched entry rescaled) are made on a worker after the impact that broke its parent, or by
-/// whichever thread needs them first (std::call_once: others wait). Making is a pure function of
-/// what the maker captured, so when it runs changes nothing.
+/// whichever thread needs them first (OnceValue: others wait, or make their own copy when its
+/// maker's thread is starved). Making is a pure function of what the maker captured, so when and
+/// where it runs changes nothing.
 class BodySource {
  public:
   using Maker = std::function<Result<std::shared_ptr<const Body>>()>;
@@ -121,13 +120,11 @@ class BodySource {
   bool wantedSoon() const { return mWantedSoon; }
   /// The body, made now if it was not; its errors are the maker's.
   const Result<std::shared_ptr<const Body>>& get() const;
-  bool isMade() const { return mMade.load(std::memory_order_acquire); }
+  bool isMade() const { return mBody.ready(); }
 
  private:
-  mutable std::once_flag mOnce;
-  mutable std::atomic<bool> mMade{false};
-  mutable Maker mMake;  // released once made
-  mutable std::optional<Result<std::shared_ptr<const Body>>> mBody;
+  mutable Maker mMake;  // released once made and no thread is in it
+  OnceValue<Result<std::shared_ptr<const Body>>> mBody;
   std::shared_ptr<const BodySource> mLate;
   double mLateDueS = 0.0;
   bool mWantedSoon = true;

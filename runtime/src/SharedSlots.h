@@ -1,6 +1,7 @@
 // SharedSlots.h — values built once per key, on first use, by whichever thread asks first (the
-// others asking for the same key wait for it), and kept up to a capacity: past it, the least
-// recently asked-for key is dropped. Private to the runtime: the World's per-entry caches
+// others asking for the same key wait for it, or build their own copy when its builder's thread is
+// starved: OnceValue.h), and kept up to a capacity: past it, the least recently asked-for key is
+// dropped. Private to the runtime: the World's per-entry caches
 // (EntryCache.h, EntryCorrections.h) are made of it.
 //
 // A value is handed out as a shared pointer, so one that is dropped while a worker still uses it
@@ -19,6 +20,7 @@
 #include <optional>
 
 #include "brittle/core/Result.h"
+#include "OnceValue.h"
 
 namespace brittle::detail {
 
@@ -41,14 +43,8 @@ class SharedSlots {
       slot = it->second.slot;
       if (inserted && mCapacity > 0 && mSlots.size() > mCapacity) dropLeastRecent();
     }
-    std::call_once(slot->once, [&] {
-      struct Count {  // counted also when make() throws
-        std::atomic<int32_t>& built;
-        ~Count() { built.fetch_add(1, std::memory_order_release); }
-      } count{mBuilt};
-      slot->value.emplace(make());
-    });
-    return std::shared_ptr<const Result<T>>(slot, &*slot->value);
+    const Result<T>& value = slot->value.get(make, [] {}, [this] { mBuilt.fetch_add(1, std::memory_order_release); });
+    return std::shared_ptr<const Result<T>>(slot, &value);
   }
 
   /// Forgets `key`'s value (its holders keep it): asked for again, it is built again. For a
@@ -58,7 +54,8 @@ class SharedSlots {
     mSlots.erase(key);
   }
 
-  /// Values built so far (failed ones and rebuilt ones included).
+  /// Values built so far (failed ones and rebuilt ones included; a copy built beside a starved
+  /// builder and dropped is not counted).
   int32_t built() const { return mBuilt.load(std::memory_order_acquire); }
   /// Keys held now (≤ the capacity).
   size_t size() const {
@@ -68,8 +65,7 @@ class SharedSlots {
 
  private:
   struct Slot {
-    std::once_flag once;
-    std::optional<Result<T>> value;
+    OnceValue<Result<T>> value;
   };
   struct Held {
     std::shared_ptr<Slot> slot;
@@ -86,7 +82,7 @@ class SharedSlots {
   }
 
   const size_t mCapacity;
-  mutable std::mutex mMutex;  // guards mSlots and mClock; each value is built under its slot's once_flag
+  mutable std::mutex mMutex;  // guards mSlots and mClock; each value is built by its slot's OnceValue
   std::map<Key, Held> mSlots;
   uint64_t mClock = 0;
   std::atomic<int32_t> mBuilt{0};
