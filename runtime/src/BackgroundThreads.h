@@ -9,7 +9,8 @@
 // `bench impact`: 3.75 → 4.96 ms median, p99 6 → 10–13 ms, with two workers). Threads at idle
 // priority (Linux SCHED_IDLE; elsewhere the normal priority) run only on a core nothing else
 // wants: a sleeping host's, or a worker's between impacts. An impact that needs a body being made
-// here waits for it (std::call_once), which frees its own core for the maker.
+// here waits for it, which frees its own core for the maker; where other work keeps every core busy
+// the maker gets none, and the impact then makes the body itself (OnceValue.h).
 //
 // Jobs run in submission order as threads free up, those that can wait (Urgency::Later: a piece's
 // later check and escalation) after every other queued one and on all threads but one, so that a
