@@ -111,7 +111,7 @@ class OnceValue {
       made.emplace(make());
     } catch (...) {
       lock.lock();
-      --mRunners;
+      if (--mRunners == 0 && mReady.load(std::memory_order_relaxed)) settled();  // another copy was published
       mDone.notify_all();
       throw;
     }
