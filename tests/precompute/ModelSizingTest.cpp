@@ -277,7 +277,9 @@ TEST_F(ModelSizingTest, FragmentsGiveTheDebrisThresholdAndTheSearch) {
     // Brute force reads every row in floats. Nothing reads more rows, but a keyed graph
     // (hnsw-principal, hnsw-pooled) also reads its keys: at 12 entries it is dearer than the scan.
     const double exact = 12.0 * 4.0 * static_cast<double>(descriptorSize(t.kind, database.value().descriptorSettings));
-    if (t.index.kind == Kind::BruteForce) EXPECT_EQ(t.bytesCompared, exact);
+    if (t.index.kind == Kind::BruteForce) {
+      EXPECT_EQ(t.bytesCompared, exact);
+    }
     const bool keyed = t.index.kind == Kind::HnswPrincipal || t.index.kind == Kind::HnswPooled;
     EXPECT_LE(t.bytesCompared, exact + (keyed ? 12.0 * 4.0 * 512.0 : 0.0));
     EXPECT_GT(t.bytesCompared, 0.0);
