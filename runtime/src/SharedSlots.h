@@ -17,7 +17,6 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <optional>
 
 #include "brittle/core/Result.h"
 #include "OnceValue.h"
