@@ -1,6 +1,7 @@
 #include "BackgroundThreads.h"
 
 #include <atomic>
+#include <chrono>
 #include <utility>
 
 #if defined(__linux__)
@@ -36,7 +37,18 @@ BackgroundThreads::BackgroundThreads(int threads) {
       if (becomeBackgroundThread()) ++mIdleThreads;
       run();
     });
+    mClocks.push_back(threadCpuClock(mThreads.back().native_handle()));
   }
+}
+
+double BackgroundThreads::threadsCpuSeconds() const {
+  double sum = 0.0;
+  for (clockid_t clock : mClocks) {
+    const double s = clockSeconds(clock);
+    if (s < 0.0) return -1.0;
+    sum += s;
+  }
+  return sum;
 }
 
 bool BackgroundThreads::idlePriority() const {
@@ -106,19 +118,42 @@ void BackgroundThreads::run() {
   }
 }
 
-void BackgroundThreads::wait() {
+bool BackgroundThreads::wait(bool untilStarved) {
+  // With untilStarved: the running jobs' threads watched from when the host began to wait for
+  // them; the watch starts again when a job starts or ends.
+  int watchedRunning = -1;
+  double cpuStart = 0.0;
+  auto wallStart = std::chrono::steady_clock::now();
   for (;;) {
     std::function<void()> job;
     bool later = false;
     {
       std::unique_lock lock(mMutex);
-      mIdleWait.wait(lock, [&] { return !mFirstQueue.empty() || !mQueue.empty() || !mLaterQueue.empty() || mRunning == 0; });
+      const auto actionable = [&] {
+        return !mFirstQueue.empty() || !mQueue.empty() || !mLaterQueue.empty() || mRunning == 0;
+      };
+      if (!untilStarved) mIdleWait.wait(lock, actionable);
+      while (!actionable()) {
+        if (watchedRunning != mRunning) {
+          watchedRunning = mRunning;
+          cpuStart = threadsCpuSeconds();
+          wallStart = std::chrono::steady_clock::now();
+        }
+        mIdleWait.wait_for(lock, kStarvedSlice);
+        if (actionable() || watchedRunning != mRunning) continue;
+        const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
+        if (starved(cpuStart, threadsCpuSeconds() - cpuStart, wall)) {
+          if (mError) std::rethrow_exception(std::exchange(mError, nullptr));
+          return false;
+        }
+      }
       if (!take(job, later, /*host=*/true)) {  // nothing queued and nothing running: done
         if (mError) std::rethrow_exception(std::exchange(mError, nullptr));
-        return;
+        return true;
       }
     }
     execute(job, later);
+    watchedRunning = -1;
   }
 }
 

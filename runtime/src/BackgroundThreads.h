@@ -32,6 +32,8 @@
 #include <thread>
 #include <vector>
 
+#include "ThreadClock.h"
+
 namespace brittle::detail {
 
 class BackgroundThreads {
@@ -46,8 +48,13 @@ class BackgroundThreads {
   enum class Urgency { First, Now, Later };
   void submit(std::function<void()> job, Urgency urgency = Urgency::Now);
   /// Runs queued jobs on the calling thread too (a host waiting on a loading screen helps), until
-  /// none is queued or running. Rethrows the first exception a job threw since the last wait.
-  void wait();
+  /// none is queued or running: true. With `untilStarved`, it also stops once none is queued and
+  /// the threads running jobs are starved (together under kStarvedShare of a core since the host
+  /// began to wait for them, ThreadClock.h): false, and the jobs run on. A host that waits only for
+  /// values it can make itself (World::waitUntilPrepared: OnceValue.h) then makes them instead of
+  /// waiting for as long as other work keeps every core busy. Rethrows the first exception a job
+  /// threw since the last wait.
+  bool wait(bool untilStarved = false);
   /// Whether every thread has lowered itself to idle priority (false where the system refused or
   /// has none, and until each has started).
   bool idlePriority() const;
@@ -56,6 +63,7 @@ class BackgroundThreads {
  private:
   void run();
   void execute(std::function<void()>& job, bool later);  // runs it, keeps its exception, counts it done
+  double threadsCpuSeconds() const;  // the threads' CPU time together; −1 when a clock cannot be read
 
   std::mutex mMutex;
   std::condition_variable mWork, mIdleWait;
@@ -70,6 +78,7 @@ class BackgroundThreads {
   std::atomic<int> mIdleThreads{0};
   std::exception_ptr mError;
   std::vector<std::thread> mThreads;
+  std::vector<clockid_t> mClocks;  // each thread's CPU clock, set by the constructor
 };
 
 }  // namespace brittle::detail

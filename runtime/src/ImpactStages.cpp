@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <mutex>
 #include <numbers>
 #include <string>
 
 #include "ContactGeometry.h"
+#include "OnceValue.h"
 #include "brittle/core/Timing.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/runtime/FragmentModes.h"
@@ -468,12 +468,8 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
   struct CountedDof {
     explicit CountedDof(const MeshCheck& c) : check(c) {}
     const MeshCheck check;
-    std::once_flag once;
-    int64_t dof = 0;
-    int64_t get() {
-      std::call_once(once, [this] { dof = checkDof(check); });
-      return dof;
-    }
+    OnceValue<int64_t> dof;
+    int64_t get() const { return dof.get([this] { return checkDof(check); }); }
   };
   auto dof = std::make_shared<CountedDof>(check);
   std::vector<BodySource::Later> laters;

@@ -16,15 +16,14 @@
 // is the same and fractures do not change; the other copy is dropped.
 #pragma once
 
-#include <pthread.h>
-#include <time.h>
-
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
 #include <optional>
 #include <utility>
+
+#include "ThreadClock.h"
 
 namespace brittle::detail {
 
@@ -54,15 +53,14 @@ class OnceValue {
       }
       if (!watching || watched != mMakerClock) {  // a maker started since: watch it from now
         watched = mMakerClock;
-        cpuStart = seconds(watched);
+        cpuStart = clockSeconds(watched);
         wallStart = std::chrono::steady_clock::now();
         watching = true;
       }
       mDone.wait_for(lock, kSlice);
       if (mReady.load(std::memory_order_relaxed) || mRunners == 0 || watched != mMakerClock) continue;
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
-      const double cpu = seconds(watched) - cpuStart;
-      if (!(cpuStart >= 0.0 && cpu >= kStarvedShare * wall)) {  // starved since it was watched (or its clock unreadable)
+      if (starved(cpuStart, clockSeconds(watched) - cpuStart, wall)) {  // since it was watched (or its clock unreadable)
         run(lock, make, settled, published);
         break;
       }
@@ -91,12 +89,8 @@ class OnceValue {
   /// Whether get() would return at once.
   bool ready() const { return mReady.load(std::memory_order_acquire); }
 
-  /// How often a waiter looks at the maker's progress, and the share of a core the maker must
-  /// have had since the waiter began to watch it. A maker at normal priority on a loaded machine
-  /// gets about its fair share over a few slices (≥ 1/2 with one competitor per core); one at idle
-  /// priority there gets next to none. A copy made when it was not needed costs CPU only.
-  static constexpr std::chrono::microseconds kSlice{2000};
-  static constexpr double kStarvedShare = 0.25;
+  /// How often a waiter looks at the maker's progress (ThreadClock.h says how it judges it).
+  static constexpr std::chrono::microseconds kSlice = kStarvedSlice;
 
  private:
   // Runs make() on this thread with `lock` released; publishes its value unless another copy was
@@ -104,7 +98,7 @@ class OnceValue {
   template <class Make, class Settled, class Published>
   void run(std::unique_lock<std::mutex>& lock, Make& make, Settled& settled, Published& published) const {
     ++mRunners;
-    mMakerClock = threadClock();  // waiters watch the newest maker
+    mMakerClock = threadCpuClock();  // waiters watch the newest maker
     lock.unlock();
     std::optional<T> made;
     try {
@@ -124,18 +118,6 @@ class OnceValue {
     if (--mRunners == 0) settled();  // the value is published: by this copy or an earlier one
     if (first) mReady.store(true, std::memory_order_release);
     mDone.notify_all();
-  }
-
-  static clockid_t threadClock() {
-    clockid_t clock{};
-    if (pthread_getcpuclockid(pthread_self(), &clock) != 0) return CLOCK_MONOTONIC;  // never starved-looking
-    return clock;
-  }
-  // CPU seconds of a thread's clock; −1 when it cannot be read.
-  static double seconds(clockid_t clock) {
-    timespec t{};
-    if (clock_gettime(clock, &t) != 0) return -1.0;
-    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
   }
 
   mutable std::mutex mMutex;

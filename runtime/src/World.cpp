@@ -559,7 +559,9 @@ int32_t World::entryCorrectionsBuilt() const {
 Status World::waitUntilPrepared() {
   try {
     Impl& w = *mImpl;
-    if (w.backgroundThreads) w.backgroundThreads->wait();
+    // Where every core is kept busy, a body or correction being made on a starved background
+    // thread is made here instead (each is a OnceValue): the loading screen is not held up by it.
+    if (w.backgroundThreads) (void)w.backgroundThreads->wait(/*untilStarved=*/true);
     for (const auto& source : w.packBodies) {
       if (!source) continue;
       const std::shared_ptr<const Body>& body = source->get().value();  // pack bodies are made when placed

@@ -1,6 +1,7 @@
 // The World's background threads (runtime/src/BackgroundThreads.h): jobs run beside the host at
 // idle priority on threads named brittle-bg, all of them at once when there are threads for them; without threads, only when
-// the host waits; a job's exception reaches the waiting host once; jobs not started are dropped.
+// the host waits; a job's exception reaches the waiting host once; a host can stop waiting for a
+// starved job; jobs not started are dropped.
 #include "BackgroundThreads.h"
 
 #include <gtest/gtest.h>
@@ -132,6 +133,43 @@ TEST(BackgroundThreads, LaterJobsLeaveAThreadForTheJobsOfNow) {
   pool.wait();  // the host, waiting, may take the second beside the first: no limit for it
   EXPECT_EQ(laterRunning, 0);
   EXPECT_TRUE(nowRan);
+}
+
+// A running job that gets no CPU (blocked here, as a thread at idle priority is while other work
+// keeps every core busy): a host waiting with untilStarved runs what is queued itself, then stops
+// waiting and is told so while the job is still blocked; a plain wait then waits for it. With a
+// plain wait alone (before untilStarved) the host waited until the job's 30 s timeout.
+TEST(BackgroundThreads, AHostStopsWaitingForAStarvedJobWhenItAsks) {
+  BackgroundThreads pool(1);
+  std::mutex m;
+  std::condition_variable cv;
+  bool inside = false, release = false;
+  std::atomic<bool> done{false}, queuedRanOnHost{false};
+  const std::thread::id host = std::this_thread::get_id();
+  pool.submit([&] {
+    std::unique_lock lock(m);
+    inside = true;
+    cv.notify_all();
+    cv.wait_for(lock, std::chrono::seconds(30), [&] { return release; });
+    done = true;
+  });
+  {
+    std::unique_lock lock(m);
+    ASSERT_TRUE(cv.wait_for(lock, std::chrono::seconds(20), [&] { return inside; }));
+  }
+  pool.submit([&] { queuedRanOnHost = std::this_thread::get_id() == host; });  // the one thread is busy
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_FALSE(pool.wait(/*untilStarved=*/true));
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+  EXPECT_TRUE(queuedRanOnHost.load());
+  EXPECT_FALSE(done.load());
+  {
+    std::lock_guard lock(m);
+    release = true;
+  }
+  cv.notify_all();
+  EXPECT_TRUE(pool.wait());
+  EXPECT_TRUE(done.load());
 }
 
 // A job an impact waits for (Urgency::First: the body of a piece struck before it was made) goes

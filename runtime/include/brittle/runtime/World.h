@@ -502,7 +502,10 @@ class World {
   /// Impacts submitted and not yet collected.
   int32_t pendingImpacts() const;
   /// Waits until the background preparation of every placed pack object is done (a host's
-  /// loading screen: afterwards no first impact waits for it). Errors: the first failed
+  /// loading screen: afterwards no first impact waits for it), and the fragments' bodies being
+  /// made. Where other work keeps every core busy, so that the background threads (at idle
+  /// priority) get none, it makes what the pack objects still need on the calling thread instead,
+  /// and leaves the rest running. Errors: the first failed
   /// preparation, in pack order (as StaticCorrection::build); the objects stay placed and their
   /// impacts return the same error.
   Status waitUntilPrepared();
