@@ -10,6 +10,7 @@
 #include <Eigen/SparseCholesky>
 #include <cstring>
 #include <functional>
+#include <map>
 #include <memory>
 #include <random>
 #include <vector>
@@ -22,15 +23,20 @@
 namespace brittle {
 namespace {
 
-// The factor the static correction makes of a glass box's K + M (1.2k tets of `order`).
-std::unique_ptr<ShiftedFactor> glassBoxFactor(ElementOrder order) {
+// The factor the static correction makes of a glass box's K + M (1.2k tets of `order`), made once
+// per process and element (the suite is one ctest test: SHARED_SUITES); the tests only read it.
+const ShiftedFactor* glassBoxFactor(ElementOrder order) {
+  static std::map<ElementOrder, std::unique_ptr<ShiftedFactor>> made;
+  auto [it, inserted] = made.try_emplace(order);
+  if (!inserted) return it->second.get();
   const ObjectAsset plate = testing::makeGlassPlatePack(1200, 6, 0.1, order).value().objects[0];
   auto mesh = makeFemMesh(plate.tetMesh, order);
   if (!mesh) return nullptr;
   auto fem = assembleFem(mesh.value(), testing::presetGlass(), FemSettings{});
   if (!fem) return nullptr;
   auto factor = std::make_unique<ShiftedFactor>(fem.value().stiffness + 1.0 * fem.value().mass);
-  return factor->info() == Eigen::Success ? std::move(factor) : nullptr;
+  if (factor->info() == Eigen::Success) it->second = std::move(factor);
+  return it->second.get();
 }
 
 // `check` on the factors of a P1 and a P2 box.
@@ -38,7 +44,7 @@ void forEachBoxFactor(
     const std::function<void(ElementOrder, const ShiftedFactor&, const Eigen::SparseMatrix<double>&)>& check) {
   for (ElementOrder order : {ElementOrder::P1, ElementOrder::P2}) {
     SCOPED_TRACE(elementOrderName(order));
-    const std::unique_ptr<ShiftedFactor> factor = glassBoxFactor(order);
+    const ShiftedFactor* factor = glassBoxFactor(order);
     ASSERT_NE(factor, nullptr);
     check(order, *factor, factor->matrixL().nestedExpression());
   }
