@@ -14,7 +14,7 @@ case $seconds in '' | *[!0-9]*) echo "usage: tools/run-fuzzers.sh [SECONDS_PER_T
 
 # clang-14 alone does not bring libFuzzer's runtime (libclang-rt-14-dev, only recommended) or
 # llvm-symbolizer (llvm-14), which turns the sanitizers' stacks into file and line.
-PACKAGES=(cmake make clang-14 libclang-rt-14-dev llvm-14
+PACKAGES=(cmake make ninja-build clang-14 libclang-rt-14-dev llvm-14
   libeigen3-dev libtbb-dev libcgal-dev libopenvdb-dev libboost-iostreams-dev libhdf5-dev
   nlohmann-json3-dev libflann-dev libhnswlib-dev libfaiss-dev libblas-dev liblapack-dev)
 SUDO=""
@@ -31,7 +31,13 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 build=build-fuzz
-cmake -S tests/fuzz -B "$build" -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 >/dev/null
+# Ninja (tools/setup.sh installs it): a target's units compile while the libraries it links are
+# still being built, which Makefiles would wait for. A build directory made by another generator is
+# made again.
+if [ -f "$build/CMakeCache.txt" ] && ! grep -q '^CMAKE_GENERATOR:INTERNAL=Ninja$' "$build/CMakeCache.txt"; then
+  rm -rf "$build"
+fi
+cmake -S tests/fuzz -B "$build" -G Ninja -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 >/dev/null
 cmake --build "$build" -j 2
 
 # Leaks inside libhdf5 itself are suppressed (tests/lsan.supp says which and why); anything

@@ -207,20 +207,26 @@ ImpactDesc quadraticPlateHit(ObjectId plate) {
   return d;
 }
 
+// The small P2 plate the WorldP2Test tests break, baked once for the process (they run in one).
+const Result<Pack>& quadraticPlatePack() {
+  static const Result<Pack> pack = testing::makeGlassPlatePack(300, 12, 0.15, ElementOrder::P2);
+  return pack;
+}
+
 TEST(WorldP2Test, FragmentsMatchedToQuadraticEntriesAreQuadraticAndBreakAgain) {
   // A database of the brick's own pieces in P2 tets (bake-db --element p2 on a mesh base shape,
   // broken off by the runtime): a matched fragment is its entry placed, P2 (FEM nodes and four
   // stress points per tet), and it breaks again.
-  auto pack = testing::makeGlassPlatePack(300, 12, 0.15, ElementOrder::P2);
-  ASSERT_TRUE(pack) << pack.error().message;
+  ASSERT_TRUE(quadraticPlatePack()) << quadraticPlatePack().error().message;
+  Pack pack = quadraticPlatePack().value();
   DatabaseBakeSettings db = testing::brickPiecesDatabase(4);
   db.modeCount = 8;
   auto database = bakeFragmentDatabase(db);
   ASSERT_TRUE(database) << database.error().message;
-  pack.value().database = std::move(database).value();
+  pack.database = std::move(database).value();
   WorldSettings settings;
   settings.fracture.exactModesMaxTets = 0;  // every fragment that is not debris is matched
-  auto world = World::create(std::move(pack).value(), settings);
+  auto world = World::create(std::move(pack), settings);
   ASSERT_TRUE(world) << world.error().message;
   ImpactDesc d = quadraticPlateHit(world.value().addObject({.asset = "plate"}).value());
   auto hit = world.value().impact(d);
@@ -258,7 +264,7 @@ TEST(WorldP2Test, FragmentsMatchedToQuadraticEntriesAreQuadraticAndBreakAgain) {
 TEST(WorldP2Test, AQuadraticPlateBreaksIntoClosedFragmentsThatKeepTheirElement) {
   // The default pack's plate is P2: its impact scans the elements' corners, its static correction
   // solves with the P2 K, and the exact path gives each fragment its own P2 model.
-  auto pack = testing::makeGlassPlatePack(300, 12, 0.15, ElementOrder::P2);
+  const Result<Pack>& pack = quadraticPlatePack();
   ASSERT_TRUE(pack) << pack.error().message;
   const ObjectAsset plate = pack.value().objects[0];
   ASSERT_EQ(plate.elementOrder, ElementOrder::P2);
