@@ -70,6 +70,16 @@ PlayResult play(const Scene& s, PlayerSettings settings = {}) {
   return std::move(r).value();
 }
 
+// A default scene played with the default settings, once per process (the player tests run in
+// one): plays are deterministic (PlayerTest plays each scene twice and compares the bits), so the
+// tests below that compare other settings against the default share its play.
+const PlayResult& defaultPlay(const std::string& name) {
+  static std::map<std::string, PlayResult> plays;
+  auto it = plays.find(name);
+  if (it == plays.end()) it = plays.emplace(name, play(defaultScene(name))).first;
+  return it->second;
+}
+
 // Each default scene, with its fracture applied at once (latency 0, on the player's thread) and
 // two frames after the contact (computed on the World's workers meanwhile).
 class PlayerTest : public ::testing::TestWithParam<std::tuple<const char*, int>> {
@@ -177,7 +187,7 @@ TEST(PlayerLatencyTest, TheBallGoesThroughThePaneWhateverTheLatency) {
   bad.fractureLatencyFrames = -2;
   EXPECT_EQ(validatePlayerSettings(bad).error().code, ErrorCode::InvalidArgument);
   // Automatic: 33 ms of play, 8 of the scene's 240 Hz frames.
-  const PlayResult automatic = play(s);
+  const PlayResult& automatic = defaultPlay("ball-through-pane");
   ASSERT_FALSE(automatic.events.empty());
   EXPECT_EQ(automatic.events.front().appliedFrame - automatic.events.front().frame, 8);
 }
@@ -235,7 +245,7 @@ TEST(PlayerReplayTest, EveryFragmentNodeIsAnimatedOverItsLifetime) {
   settings.recordTracks = true;
   const PlayResult r = play(defaultScene("ball-through-pane"), settings);
   ASSERT_GE(r.breaks, 1);
-  EXPECT_EQ(r.poseHash, play(defaultScene("ball-through-pane")).poseHash);  // recording changes nothing
+  EXPECT_EQ(r.poseHash, defaultPlay("ball-through-pane").poseHash);  // recording changes nothing
   const auto path = testing::makeTempDir("replay") / "replay.glb";
   const Status written = writeGltfReplay(r, path);
   ASSERT_TRUE(written) << written.error().message;
@@ -290,7 +300,8 @@ TEST(PlayerCapTest, ImpactsAboveTheCapWaitAndAreCounted) {
   const Scene s = defaultScene("brick-stack");
   PlayerSettings capped;
   capped.maxImpactsPerStep = 1;
-  const PlayResult free = play(s), one = play(s, capped);
+  const PlayResult& free = defaultPlay("brick-stack");
+  const PlayResult one = play(s, capped);
   EXPECT_EQ(free.deferredImpacts, 0);
   EXPECT_GE(one.deferredImpacts, 1);
   std::map<int64_t, int> perFrameStep;
@@ -308,7 +319,8 @@ TEST(PlayerBudgetTest, ImpactsBeyondTheBudgetWaitThenRunSimplified) {
   PlayerSettings tight;
   tight.fractureBudgetS = 1e-12;
   tight.maxBudgetWaits = 2;
-  const PlayResult free = play(s), budget = play(s, tight);
+  const PlayResult& free = defaultPlay("brick-stack");
+  const PlayResult budget = play(s, tight);
   EXPECT_EQ(free.budgetDeferredImpacts, 0);
   EXPECT_EQ(free.simplifiedImpacts, 0);
   EXPECT_GE(budget.budgetDeferredImpacts, 2);
