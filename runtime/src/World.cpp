@@ -72,6 +72,12 @@ struct World::Impl {
   std::unique_ptr<detail::EntryCache> entryCache;              // with a matcher
   std::unique_ptr<detail::EntryCorrections> entryCorrections;  // with a matcher and shareEntryCorrections
   std::set<std::string> entryCorrectionsScheduled;  // materials whose entries placement has scheduled
+  struct ScheduledEntryCorrection {  // one of them, as waitUntilPrepared asks for it
+    int32_t entry;
+    Material material;
+    int modes;
+  };
+  std::vector<ScheduledEntryCorrection> scheduledEntryCorrections;
   std::vector<std::shared_ptr<const BodySource>> packBodies;  // per pack object, built on first use
   std::vector<Slot> slots;
   std::vector<uint32_t> freeSlots;
@@ -373,6 +379,7 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
             w.background().submit([ec = w.entryCorrections.get(), e, material = *mat, modes] {
               (void)ec->get(static_cast<int32_t>(e), material, modes);
             });
+            w.scheduledEntryCorrections.push_back({static_cast<int32_t>(e), *mat, modes});
           }
         }
       } else {
@@ -559,15 +566,19 @@ int32_t World::entryCorrectionsBuilt() const {
 Status World::waitUntilPrepared() {
   try {
     Impl& w = *mImpl;
-    // Where every core is kept busy, a body or correction being made on a starved background
-    // thread is made here instead (each is a OnceValue): the loading screen is not held up by it.
+    // Where every core is kept busy, what placement scheduled and a starved background thread is
+    // still making is made here instead (each is a OnceValue): the loading screen is not held up
+    // by it. Where the threads ran, all of it is made already and these calls return at once.
     if (w.backgroundThreads) (void)w.backgroundThreads->wait(/*untilStarved=*/true);
     for (const auto& source : w.packBodies) {
       if (!source) continue;
       const std::shared_ptr<const Body>& body = source->get().value();  // pack bodies are made when placed
+      (void)body->stressBounds();
+      (void)body->tetMoments();
       if (!body->staticCorrectionScheduled()) continue;
       if (const auto& correction = body->staticCorrection(); !correction) return correction.error();
     }
+    for (const auto& c : w.scheduledEntryCorrections) (void)w.entryCorrections->get(c.entry, c.material, c.modes);
     return Ok{};
   } catch (const std::exception& e) {
     return invalidArgument(std::string("waitUntilPrepared failed: ") + e.what());
