@@ -72,11 +72,12 @@ struct World::Impl {
   std::unique_ptr<detail::EntryCache> entryCache;              // with a matcher
   std::unique_ptr<detail::EntryCorrections> entryCorrections;  // with a matcher and shareEntryCorrections
   std::set<std::string> entryCorrectionsScheduled;  // materials whose entries placement has scheduled
-  struct ScheduledEntryCorrection {  // one of them, as waitUntilPrepared asks for it
+  struct ScheduledEntryCorrection {  // one of their entries' corrections
     int32_t entry;
     Material material;
     int modes;
   };
+  // Those not yet asked for by waitUntilPrepared, which makes any a starved thread has not.
   std::vector<ScheduledEntryCorrection> scheduledEntryCorrections;
   std::vector<std::shared_ptr<const BodySource>> packBodies;  // per pack object, built on first use
   std::vector<Slot> slots;
@@ -376,10 +377,9 @@ Result<ObjectId> World::addObject(const ObjectDesc& desc) {
             // its frequencies: the entry's arrays may not be read yet (EntryReading::OnDemand)
             const auto stored = static_cast<int>(w.pack.database.entries[e].asset.modal.frequenciesHz.size());
             const int modes = detail::keptModeCount(modeCount, stored);  // the matched body's, as makeBody keeps them
-            w.background().submit([ec = w.entryCorrections.get(), e, material = *mat, modes] {
-              (void)ec->get(static_cast<int32_t>(e), material, modes);
-            });
-            w.scheduledEntryCorrections.push_back({static_cast<int32_t>(e), *mat, modes});
+            const auto& c = w.scheduledEntryCorrections.emplace_back(
+                Impl::ScheduledEntryCorrection{static_cast<int32_t>(e), *mat, modes});
+            w.background().submit([ec = w.entryCorrections.get(), c] { (void)ec->get(c.entry, c.material, c.modes); });
           }
         }
       } else {
@@ -578,7 +578,9 @@ Status World::waitUntilPrepared() {
       if (!body->staticCorrectionScheduled()) continue;
       if (const auto& correction = body->staticCorrection(); !correction) return correction.error();
     }
+    // Each once: one the cache drops later (entryCacheCapacity) is rebuilt when matched, as before.
     for (const auto& c : w.scheduledEntryCorrections) (void)w.entryCorrections->get(c.entry, c.material, c.modes);
+    w.scheduledEntryCorrections.clear();
     return Ok{};
   } catch (const std::exception& e) {
     return invalidArgument(std::string("waitUntilPrepared failed: ") + e.what());
