@@ -718,6 +718,39 @@ TEST_F(CliTest, SearchBenchWritesItsCsv) {
   }
 }
 
+// A database baked once (bake-db) searched by `bench search --database`: the pack's entries and its
+// descriptor settings (an 8³ grid here, not the bench's 16³), sizes above its entry count skipped,
+// and typed refusals.
+TEST_F(CliTest, SearchBenchSearchesAPacksDatabase) {
+  const std::string shapes = "\"" + (testing::sourceDir() / "assets" / "shapes" / "base-shapes.json").string() + "\"";
+  ASSERT_EQ(run("bake-db " + shapesOption() + " --entries 30 --descriptors-only --voxel-resolution 8 --quiet --out " + path("db.h5")).exitCode, 0);
+  const std::string bench = "bench search --shapes " + shapes + " --sizes 30,60 --queries 5 --physics-queries 0 --index hnsw:16:16 --csv " +
+                            path("search.csv") + " --cost-csv " + path("cost.csv");
+  const CliRun searched = run(bench + " --database " + path("db.h5"));
+  ASSERT_EQ(searched.exitCode, 0) << searched.out;
+  EXPECT_NE(searched.out.find("database: 30 entries read from"), std::string::npos) << searched.out;
+  EXPECT_NE(searched.out.find("skip moment at 60 entries (the pack's database holds 30)"), std::string::npos) << searched.out;
+  const Csv csv = readCsv(dir / "search.csv");
+  ASSERT_EQ(csv.lines.size(), 3u * 2);  // 30 entries × kinds × (brute force, the graph); 60 skipped
+  for (const std::string& line : csv.lines) {
+    EXPECT_EQ(line.rfind("30,", 0), 0u) << line;
+    EXPECT_NE(line.find(",0,cut,4,8,each"), std::string::npos) << "the pack's settings, none of it from the runtime: " << line;
+    if (line.find(",brute-force,") != std::string::npos) EXPECT_NE(line.find(",1,0,0,0,0"), std::string::npos) << line;
+  }
+  // The pack's settings are the database's: the bake's own options are refused beside it.
+  const CliRun both = run(bench + " --database " + path("db.h5") + " --voxel-resolution 16");
+  EXPECT_EQ(both.exitCode, 2) << both.out;
+  EXPECT_NE(both.out.find("excludes"), std::string::npos) << both.out;
+  // A pack of objects only: a typed error, no CSV written.
+  testing::writeOff(testing::makeBoxSurface(0.2, 0.1, 0.05), dir / "box.off");
+  ASSERT_EQ(run("bake --mesh " + path("box.off") + " --material glass --tets 300 --modes 4 --quiet --out " + path("objects.h5")).exitCode, 0);
+  std::filesystem::remove(dir / "search.csv");
+  const CliRun objects = run(bench + " --database " + path("objects.h5"));
+  EXPECT_EQ(objects.exitCode, 2) << objects.out;  // invalid_argument
+  EXPECT_NE(objects.out.find("holds no fragment database"), std::string::npos) << objects.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "search.csv"));
+}
+
 TEST_F(CliTest, SearchBenchWithRuntimeFragmentsAsQueriesAndEntries) {
   const std::string shapes = "\"" + (testing::sourceDir() / "assets" / "shapes" / "base-shapes.json").string() + "\"";
   const CliRun bench = run("bench search --shapes " + shapes +

@@ -18,6 +18,7 @@
 
 #include "brittle/core/Timing.h"
 #include "brittle/database/FragmentMatcher.h"
+#include "brittle/database/Pack.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/descriptors/MeshRefinement.h"
 #include "brittle/precompute/BakePipeline.h"
@@ -108,7 +109,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
   }
   const int64_t maxSize = *std::max_element(s.sizes.begin(), s.sizes.end());
   const bool anyVoxel = std::any_of(s.kinds.begin(), s.kinds.end(), [](auto k) { return k != DescriptorKind::Moment; });
-  const int64_t fullSize = anyVoxel ? std::min(maxSize, s.voxelSizeLimit) : 0;
+  int64_t fullSize = anyVoxel ? std::min(maxSize, s.voxelSizeLimit) : 0;
 
   DatabaseBakeSettings bake;
   bake.shapes = s.shapes;
@@ -118,24 +119,50 @@ Status runSearchBench(const SearchBenchSettings& s) {
   bake.descriptors.moment.maxOrder = s.momentOrder;
   bake.runtimeFragments.fraction = s.runtimeFraction;
 
-  // Databases: every kind up to fullSize entries, moments only beyond (same seed: same fragments).
+  // Databases: every kind up to fullSize entries, moments only beyond (same seed: same fragments);
+  // or a pack's, whole, with the queries described by its descriptor settings.
   FragmentDatabase full, big;
-  if (fullSize > 0) {
+  if (!s.database.empty()) {
     auto t = SteadyClock::now();
-    bake.entryCount = fullSize;
-    auto db = bakeFragmentDatabase(bake);
-    if (!db) return db.error();
-    full = std::move(db).value();
-    log(s.quiet, "database: %lld entries with every descriptor in %.1f s\n", static_cast<long long>(fullSize), secondsSince(t));
+    auto pack = readPack(s.database);
+    if (!pack) return pack.error();
+    full = std::move(pack.value().database);
+    if (full.empty()) return makeError(ErrorCode::InvalidArgument, s.database.string() + " holds no fragment database (bake one with bake-db)");
+    for (DescriptorKind kind : s.kinds) {
+      if (full.descriptorsOf(kind).rows() != static_cast<Eigen::Index>(full.entries.size())) {
+        return makeError(ErrorCode::InvalidArgument, s.database.string() + ": its database has no " + descriptorKindName(kind) + " descriptors");
+      }
+    }
+    bake.descriptors = full.descriptorSettings;
+    fullSize = static_cast<int64_t>(full.entries.size());
+    log(s.quiet, "database: %lld entries read from %s in %.1f s\n", static_cast<long long>(fullSize), s.database.string().c_str(),
+        secondsSince(t));
+  } else {
+    if (fullSize > 0) {
+      auto t = SteadyClock::now();
+      bake.entryCount = fullSize;
+      auto db = bakeFragmentDatabase(bake);
+      if (!db) return db.error();
+      full = std::move(db).value();
+      log(s.quiet, "database: %lld entries with every descriptor in %.1f s\n", static_cast<long long>(fullSize), secondsSince(t));
+    }
+    if (maxSize > fullSize) {
+      auto t = SteadyClock::now();
+      bake.entryCount = maxSize;
+      bake.kinds = {true, false, false};
+      auto db = bakeFragmentDatabase(bake);
+      if (!db) return db.error();
+      big = std::move(db).value();
+      log(s.quiet, "database: %lld entries with moments in %.1f s\n", static_cast<long long>(maxSize), secondsSince(t));
+    }
   }
-  if (maxSize > fullSize) {
-    auto t = SteadyClock::now();
-    bake.entryCount = maxSize;
-    bake.kinds = {true, false, false};
-    auto db = bakeFragmentDatabase(bake);
-    if (!db) return db.error();
-    big = std::move(db).value();
-    log(s.quiet, "database: %lld entries with moments in %.1f s\n", static_cast<long long>(maxSize), secondsSince(t));
+  // What the CSV reports of the database: the pack's own where one was given.
+  const int momentOrder = bake.descriptors.moment.maxOrder, voxelResolution = bake.descriptors.voxel.resolution;
+  double runtimeFraction = s.runtimeFraction;
+  if (!s.database.empty()) {
+    const auto fromRuntime = std::count_if(full.entries.begin(), full.entries.end(),
+                                           [](const FragmentEntry& e) { return e.cut.rfind("runtime:", 0) == 0; });
+    runtimeFraction = static_cast<double>(fromRuntime) / static_cast<double>(full.entries.size());
   }
 
   // Queries: new fragments (another seed) in random poses and sizes.
@@ -288,8 +315,8 @@ Status runSearchBench(const SearchBenchSettings& s) {
     for (DescriptorKind kind : s.kinds) {
       const FragmentDatabase& db = kind == DescriptorKind::Moment && n > fullSize ? big : full;
       if (static_cast<int64_t>(db.entries.size()) < n) {
-        log(s.quiet, "skip %s at %lld entries (voxel kinds stop at %lld)\n", descriptorKindName(kind),
-            static_cast<long long>(n), static_cast<long long>(fullSize));
+        log(s.quiet, "skip %s at %lld entries (%s %lld)\n", descriptorKindName(kind), static_cast<long long>(n),
+            s.database.empty() ? "voxel kinds stop at" : "the pack's database holds", static_cast<long long>(fullSize));
         continue;
       }
       std::vector<IndexChoice> choices{parseIndexChoice("brute-force").value()};
@@ -366,8 +393,8 @@ Status runSearchBench(const SearchBenchSettings& s) {
             << static_cast<double>(matcher.value().index(kind)->memoryBytes()) / 1048576.0 << "," << median << ","
             << percentile(times, 0.99) << "," << bruteMedian << "," << bruteMedian / median << "," << recall << ","
             << massErr.size() << "," << percentile(massErr, 0.5) << "," << percentile(inertiaErr, 0.5) << ","
-            << percentile(freqErr, 0.5) << "," << s.runtimeFraction << "," << (s.runtimeQueries ? "runtime" : "cut") << ","
-            << s.momentOrder << "," << s.voxelResolution << ","
+            << percentile(freqErr, 0.5) << "," << runtimeFraction << "," << (s.runtimeQueries ? "runtime" : "cut") << ","
+            << momentOrder << "," << voxelResolution << ","
             << (choice.framesAsOneSet ? "set" : "each")  // parseIndexChoice sets it for the graphs only
             << "\n";
         csv.flush();

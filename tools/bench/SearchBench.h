@@ -52,6 +52,11 @@ struct SearchBenchSettings {
   int voxelResolution = 16;
   int momentOrder = 4;             ///< highest order of the moment descriptor (database and queries)
   uint64_t seed = 1;
+  /// Empty: bake the database each run. Else a pack whose fragment database (`bake-db`, for
+  /// example `--descriptors-only` at 10⁵ entries) is searched instead, read whole; its descriptor
+  /// settings describe the queries, and sizes above its entry count are skipped. The queries are
+  /// cut as without it (from `shapes`, with `seed`).
+  std::filesystem::path database;
   std::filesystem::path searchCsv = "docs/results/data/search.csv";
   std::filesystem::path descriptorCsv = "docs/results/data/descriptor_cost.csv";
   bool quiet = false;

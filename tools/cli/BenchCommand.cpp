@@ -48,7 +48,7 @@ Runner addBenchCommand(CLI::App& app) {
   search->add_option("--sizes", s->sizes, "Database sizes")->delimiter(',')->capture_default_str();
   search->add_option("--kinds", *kinds, "Descriptor kinds")->delimiter(',')->capture_default_str()
       ->check(CLI::IsMember({"moment", "voxel", "voxel-improved"}));
-  search->add_option("--voxel-size-limit", s->voxelSizeLimit, "Largest database size for the voxel kinds")->capture_default_str();
+  auto* voxelSizeLimit = search->add_option("--voxel-size-limit", s->voxelSizeLimit, "Largest database size for the voxel kinds")->capture_default_str();
   search->add_option("--index", *indices, "Index settings: kd-forest:TREES:CHECKS, hnsw:M:EF, hnsw-binary:M:EF, hnsw-pooled:M:EF (the voxel kinds: a graph over 8x8x8 block sums, the ef nearest re-ranked exactly; hnsw-principal:M:EF the same over their 64 principal components; a graph with :set searches a fragment's candidate frames in one walk instead of one by one), autotuned:PRECISION, brute-force; FAISS's "
                      "faiss-hnsw:M:EF, faiss-ivf:LISTS:PROBES, faiss-binary-flat, faiss-binary-hnsw:M:EF (the binary kinds: "
                      "voxel kind only)")
@@ -61,15 +61,23 @@ Runner addBenchCommand(CLI::App& app) {
                      "Query fragments are refined by midpoint subdivision (same solid) to at least this many triangles")
       ->capture_default_str()
       ->check(CLI::Range(int64_t{0}, int64_t{1} << 20));
-  search->add_option("--runtime-fraction", s->runtimeFraction,
+  auto* runtimeFraction = search->add_option("--runtime-fraction", s->runtimeFraction,
                      "Share of database entries broken off base shapes by the runtime (a second source)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   search->add_flag("--runtime-queries", s->runtimeQueries,
                    "Query with fragments broken off by the runtime instead of exact cuts");
-  search->add_option("--voxel-resolution", s->voxelResolution, "Voxels per axis")->capture_default_str()->check(CLI::Range(2, 64));
-  search->add_option("--moment-order", s->momentOrder, "Highest order of the moment descriptor")->capture_default_str()->check(CLI::Range(2, 10));
+  auto* voxelResolution = search->add_option("--voxel-resolution", s->voxelResolution, "Voxels per axis")->capture_default_str()->check(CLI::Range(2, 64));
+  auto* momentOrder = search->add_option("--moment-order", s->momentOrder, "Highest order of the moment descriptor")->capture_default_str()->check(CLI::Range(2, 10));
   search->add_option("--seed", s->seed, "Seed of the database and the queries")->capture_default_str();
+  // A database baked once (10⁵ entries with every descriptor: about 28 min on 2 cores) and searched by many runs.
+  search->add_option("--database", s->database,
+                     "Search this pack's fragment database (bake-db, e.g. --descriptors-only) instead of baking one; its descriptor settings describe the queries")
+      ->check(CLI::ExistingFile)
+      ->excludes(voxelResolution)
+      ->excludes(momentOrder)
+      ->excludes(voxelSizeLimit)
+      ->excludes(runtimeFraction);
   search->add_option("--csv", s->searchCsv, "Search results CSV")->capture_default_str();
   search->add_option("--cost-csv", s->descriptorCsv, "Descriptor cost CSV")->capture_default_str();
   search->add_flag("--quiet", s->quiet, "No progress lines");
