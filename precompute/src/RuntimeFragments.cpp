@@ -136,9 +136,8 @@ Result<TriangleMesh> RuntimeFragmentSource::fragment(size_t shape, uint64_t seed
   }
   if (how) {
     char buffer[96];
-    std::snprintf(buffer, sizeof buffer, "runtime: v=%.1f m/s, fragment %zu of %zu", d.speedMps, pick + 1,
-                  result.fragments.size());
-    *how = buffer;
+    std::snprintf(buffer, sizeof buffer, " v=%.1f m/s, fragment %zu of %zu", d.speedMps, pick + 1, result.fragments.size());
+    *how = std::string(kRuntimeCutPrefix) + buffer;  // brokenByTheRuntime (FragmentDatabase.h) reads it
   }
   return std::move(result.fragments[pick].surface);
 }

@@ -160,8 +160,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
   const int momentOrder = bake.descriptors.moment.maxOrder, voxelResolution = bake.descriptors.voxel.resolution;
   double runtimeFraction = s.runtimeFraction;
   if (!s.database.empty()) {
-    const auto fromRuntime = std::count_if(full.entries.begin(), full.entries.end(),
-                                           [](const FragmentEntry& e) { return e.cut.rfind("runtime:", 0) == 0; });
+    const auto fromRuntime = std::count_if(full.entries.begin(), full.entries.end(), brokenByTheRuntime);
     runtimeFraction = static_cast<double>(fromRuntime) / static_cast<double>(full.entries.size());
   }
 
@@ -373,8 +372,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
           if (it == physical.end()) {
             std::array<Descriptor, kDescriptorKindCount> unused;
             const FragmentEntry& e = db.entries[static_cast<size_t>(m.entry)];
-            const bool fromRuntime = e.cut.rfind("runtime:", 0) == 0;
-            auto entry = bakeFragmentEntry(e.surface, e.asset.name, fromRuntime ? runtimePhysicsBake : physicsBake, unused);
+            auto entry = bakeFragmentEntry(e.surface, e.asset.name, brokenByTheRuntime(e) ? runtimePhysicsBake : physicsBake, unused);
             if (!entry) continue;  // counted out like a query without ground truth
             it = physical.emplace(m.entry, std::move(entry).value()).first;
           }

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "brittle/database/DescriptorIndex.h"
@@ -34,10 +35,15 @@ struct FragmentEntry {
   /// computed from it.
   TriangleMesh surface;
   std::string baseShape;             ///< name of the base shape it was cut from
-  std::string cut;                   ///< how: "voronoi", "planes", "runtime"
+  std::string cut;                   ///< how: "voronoi", "planes", or kRuntimeCutPrefix and the impact
   uint64_t seed = 0;                 ///< the seed that reproduces the cut
   double baseVolumeFraction = 0.0;   ///< fragment volume / base shape volume, before normalising
 };
+
+/// How `FragmentEntry::cut` starts for an entry broken off a base shape by the runtime
+/// (RuntimeFragments.h) instead of cut; the rest names the impact's speed and the piece.
+inline constexpr std::string_view kRuntimeCutPrefix = "runtime:";
+inline bool brokenByTheRuntime(const FragmentEntry& entry) { return entry.cut.rfind(kRuntimeCutPrefix, 0) == 0; }
 
 /// Reads the arrays of entries that a database does not hold: a pack read with
 /// EntryReading::OnDemand (Pack.h). Thread-safe; every call reads and checks the entry anew.
