@@ -14,6 +14,7 @@
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/PolynomialModes.h"
 #include "brittle/runtime/TetTopology.h"
+#include "SupernodalCholesky.h"
 
 namespace brittle {
 namespace {
@@ -120,14 +121,51 @@ Status lowestEigenpairs(const FemSystem& fem, int count, double sigma, const Exa
 // took the least time on the default objects' pieces (8, 12 and 20 measured).
 constexpr int kElasticLanczosExtra = 12;
 
+// The same standard form from a supernodal factor K − σM = Pᵀ L Lᵀ P: G = Pᵀ L, so
+// A = L⁻¹ P M Pᵀ L⁻ᵀ and ψ = Gᵀ φ = Lᵀ P φ.
+class SupernodalFormOp {
+ public:
+  using Scalar = double;
+  SupernodalFormOp(const detail::SupernodalCholesky& factor, const SparseMatrixd& mass)
+      : mFactor(factor), mMass(mass), mT(factor.rows()), mU(factor.rows()) {}
+  Eigen::Index rows() const { return mFactor.rows(); }
+  Eigen::Index cols() const { return mFactor.rows(); }
+  void perform_op(const double* x, double* y) const {
+    std::copy(x, x + rows(), mT.data());
+    mFactor.solveLt(mT.data());
+    mFactor.permuteBack(mT.data(), mU.data());
+    mT.noalias() = mMass * mU;
+    mFactor.permute(mT.data(), y);
+    mFactor.solveL(y);
+  }
+  // ψ = Lᵀ P φ
+  Eigen::VectorXd psi(const Eigen::VectorXd& phi) const {
+    Eigen::VectorXd out(rows());
+    mFactor.permute(phi.data(), mT.data());
+    mFactor.multiplyLt(mT.data(), out.data());
+    return out;
+  }
+
+ private:
+  const detail::SupernodalCholesky& mFactor;
+  const SparseMatrixd& mMass;
+  mutable Eigen::VectorXd mT, mU;
+};
+
+// At and above this many DOF the own-mesh check factorises by supernodes (SupernodalCholesky.h);
+// below, Eigen's SimplicialLDLT, which is as fast there (the panels are narrow) and whose bits the
+// linear-tet checks of the default settings keep.
+constexpr Eigen::Index kSupernodalMinDof = 6000;
+
 // The standard form with the six rigid motions taken out: A' = (I − QQᵀ) A (I − QQᵀ), Q an
 // orthonormal basis of the rigid modes' ψ = Gᵀ φ. Elastic modes are (K − σM)-orthogonal to the
 // rigid ones, so their ψ are orthogonal to Q and keep θ; the rigid directions go to 0. Lanczos
 // then needs only the elastic modes wanted, not six more ahead of them at the top of A's spectrum.
+template <class Op>
 class ElasticFormOp {
  public:
   using Scalar = double;
-  ElasticFormOp(const StandardFormOp& op, Eigen::MatrixXd q) : mOp(op), mQ(std::move(q)), mT(op.rows()) {}
+  ElasticFormOp(const Op& op, Eigen::MatrixXd q) : mOp(op), mQ(std::move(q)), mT(op.rows()) {}
   Eigen::Index rows() const { return mOp.rows(); }
   Eigen::Index cols() const { return mOp.rows(); }
   void perform_op(const double* x, double* y) const {
@@ -139,7 +177,7 @@ class ElasticFormOp {
   }
 
  private:
-  const StandardFormOp& mOp;
+  const Op& mOp;
   const Eigen::MatrixXd mQ;
   mutable Eigen::VectorXd mT;
 };
@@ -167,30 +205,41 @@ Result<Eigen::VectorXd> lowestElasticEigenvalues(const FemSystem& fem, const Poi
     }
     return values;
   }
-  Eigen::SimplicialLDLT<SparseMatrixd> factor(fem.stiffness - sigma * fem.mass);
-  if (factor.info() != Eigen::Success || !(factor.vectorD().minCoeff() > 0.0)) {
-    return makeError(ErrorCode::FactorizationFailed, "fragment '" + name + "': K − σM did not factorise as positive definite");
-  }
-  // The rigid motions' ψ = Gᵀφ = D^½ Lᵀ P φ; Q orthonormalises them, so φ need not be M-normal.
+  const std::string failed = "fragment '" + name + "': K − σM did not factorise as positive definite";
+  // The rigid motions' ψ = Gᵀφ; Q orthonormalises them, so φ need not be M-normal.
   const Eigen::MatrixXd rigid = rigidBodyMotions(nodes);
-  const Eigen::VectorXd scale = factor.vectorD().cwiseSqrt();
   Eigen::MatrixXd psi(n, 6);
-  for (int c = 0; c < 6; ++c) {
-    Eigen::VectorXd t = factor.permutationP() * rigid.col(c);
-    psi.col(c) = scale.cwiseProduct(factor.matrixU() * t);
+  auto lanczos = [&](const auto& standard) -> Status {
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(psi);
+    const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(n, 6);
+    ElasticFormOp op(standard, q);
+    const Eigen::Index ncv = std::min<Eigen::Index>(n - 6, std::max<Eigen::Index>(2 * count + 1, count + kElasticLanczosExtra));
+    Spectra::SymEigsSolver<decltype(op)> solver(op, count, ncv);
+    solver.init();
+    solver.compute(Spectra::SortRule::LargestAlge, 1000, s.tolerance, Spectra::SortRule::LargestAlge);
+    if (solver.info() != Spectra::CompInfo::Successful) {
+      return makeError(ErrorCode::EigenNotConverged, "fragment '" + name + "': Spectra did not converge on " + std::to_string(count) + " elastic modes");
+    }
+    values = sigma + solver.eigenvalues().cwiseInverse().array();  // θ descending: λ ascending
+    return Ok{};
+  };
+  if (n >= kSupernodalMinDof) {
+    detail::SupernodalCholesky factor;
+    if (!factor.compute(fem.stiffness - sigma * fem.mass, 3)) return makeError(ErrorCode::FactorizationFailed, failed);
+    const SupernodalFormOp standard(factor, fem.mass);
+    for (int c = 0; c < 6; ++c) psi.col(c) = standard.psi(rigid.col(c));
+    if (Status st = lanczos(standard); !st) return st.error();
+  } else {
+    const Eigen::SimplicialLDLT<SparseMatrixd> factor(fem.stiffness - sigma * fem.mass);
+    if (factor.info() != Eigen::Success || !(factor.vectorD().minCoeff() > 0.0)) return makeError(ErrorCode::FactorizationFailed, failed);
+    // ψ = D^½ Lᵀ P φ
+    const Eigen::VectorXd scale = factor.vectorD().cwiseSqrt();
+    for (int c = 0; c < 6; ++c) {
+      Eigen::VectorXd t = factor.permutationP() * rigid.col(c);
+      psi.col(c) = scale.cwiseProduct(factor.matrixU() * t);
+    }
+    if (Status st = lanczos(StandardFormOp(factor, fem.mass)); !st) return st.error();
   }
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(psi);
-  const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(n, 6);
-  StandardFormOp standard(factor, fem.mass);
-  ElasticFormOp op(standard, q);
-  const Eigen::Index ncv = std::min<Eigen::Index>(n - 6, std::max<Eigen::Index>(2 * count + 1, count + kElasticLanczosExtra));
-  Spectra::SymEigsSolver<ElasticFormOp> solver(op, count, ncv);
-  solver.init();
-  solver.compute(Spectra::SortRule::LargestAlge, 1000, s.tolerance, Spectra::SortRule::LargestAlge);
-  if (solver.info() != Spectra::CompInfo::Successful) {
-    return makeError(ErrorCode::EigenNotConverged, "fragment '" + name + "': Spectra did not converge on " + std::to_string(count) + " elastic modes");
-  }
-  values = sigma + solver.eigenvalues().cwiseInverse().array();  // θ descending: λ ascending
   // A seventh zero mode (a mechanism) has θ = −1/σ, the rigid motions' own: λ at rounding.
   if (!(values[0] > 1e-8 * values.cwiseAbs().maxCoeff())) {
     return makeError(ErrorCode::RigidModeMismatch, "fragment '" + name + "': more than 6 near-zero modes");

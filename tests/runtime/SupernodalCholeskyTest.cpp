@@ -1,0 +1,121 @@
+// SupernodalCholesky.h (private to the runtime): the supernodal factor of a quadratic-tet solid's
+// K + M solves it to rounding and agrees with Eigen's SimplicialLDLT, in its nodes' order and in
+// the DOF's own; what is not positive definite, not finite or not square is refused; and the own-mesh
+// check that uses it above kSupernodalMinDof gives the frequencies Eigen's factor gives.
+#include "SupernodalCholesky.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+
+#include "brittle/runtime/FemAssembly.h"
+#include "brittle/runtime/FragmentModes.h"
+#include "brittle/testing/BakeFixtures.h"
+#include "brittle/testing/Fixtures.h"
+
+namespace brittle {
+namespace {
+
+using detail::SupernodalCholesky;
+
+// K and M of a glass box in quadratic tets (8 × 4 × 3 cells, 2.2k DOF).
+FemSystem glassBoxSystem() {
+  auto mesh = makeFemMesh(testing::makeBoxTetMesh(0.08, 0.04, 0.03, 8, 4, 3), ElementOrder::P2);
+  EXPECT_TRUE(mesh);
+  auto fem = assembleFem(mesh.value(), testing::presetGlass(), FemSettings{});
+  EXPECT_TRUE(fem);
+  return fem.value();
+}
+
+Eigen::VectorXd randomVector(Eigen::Index n, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  Eigen::VectorXd v(n);
+  for (Eigen::Index i = 0; i < n; ++i) v[i] = static_cast<double>(rng() >> 11) * 0x1.0p-53 - 0.5;
+  return v;
+}
+
+TEST(SupernodalCholesky, SolvesAQuadraticSolidAsEigensFactorDoes) {
+  // K + μM with μ at 1 kHz: the rigid motions' eigenvalue μ keeps A's condition near 10⁶, where
+  // K + M's (~10¹²) would leave both solutions' rigid parts uncertain in their fourth digit.
+  const FemSystem fem = glassBoxSystem();
+  const Eigen::SparseMatrix<double> a = fem.stiffness + std::pow(2.0 * M_PI * 1e3, 2) * fem.mass;
+  const Eigen::Index n = a.rows();
+  ASSERT_GT(n, 2000);
+  const Eigen::VectorXd b = randomVector(n, 7);
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> eigen(a);
+  ASSERT_EQ(eigen.info(), Eigen::Success);
+  const Eigen::VectorXd reference = eigen.solve(b);
+  for (Eigen::Index block : {Eigen::Index{1}, Eigen::Index{3}}) {
+    SCOPED_TRACE(block);
+    SupernodalCholesky factor;
+    ASSERT_TRUE(factor.compute(a, block));
+    EXPECT_EQ(factor.rows(), n);
+    EXPECT_LT(factor.supernodeCount(), n / 3);  // a node's three columns at least, most of them wider
+    // The same order fills L as Eigen's does; the nodes' order within a few per cent of it.
+    const auto eigenNonZeros = static_cast<double>(eigen.matrixL().nestedExpression().nonZeros() + n);
+    EXPECT_LT(static_cast<double>(factor.nonZeros()), 1.1 * eigenNonZeros);
+    if (block == 1) {
+      EXPECT_EQ(static_cast<double>(factor.nonZeros()), eigenNonZeros);
+    }
+    Eigen::VectorXd x = b;
+    factor.solve(x);
+    std::printf("block %ld: residual %.3g (Eigen's %.3g), difference %.3g\n", static_cast<long>(block), (a * x - b).norm() / b.norm(), (a * reference - b).norm() / b.norm(), (x - reference).norm() / reference.norm());
+    EXPECT_LT((a * x - b).norm() / b.norm(), std::max(1e-11, 2.0 * (a * reference - b).norm() / b.norm()));
+    EXPECT_LT((x - reference).norm() / reference.norm(), 1e-10);
+    // ‖Lᵀ P v‖² = vᵀ A v, and L L⁻¹ (through Lᵀ and its solve) is the identity.
+    const Eigen::VectorXd v = randomVector(n, 11);
+    Eigen::VectorXd pv(n), ltpv(n);
+    factor.permute(v.data(), pv.data());
+    factor.multiplyLt(pv.data(), ltpv.data());
+    EXPECT_NEAR(ltpv.squaredNorm() / v.dot(a * v), 1.0, 1e-12);
+    Eigen::VectorXd back = ltpv;
+    factor.solveLt(back.data());
+    EXPECT_LT((back - pv).norm() / pv.norm(), 1e-12);
+    Eigen::VectorXd unpermuted(n);
+    factor.permuteBack(pv.data(), unpermuted.data());
+    EXPECT_EQ(unpermuted, v);
+  }
+}
+
+TEST(SupernodalCholesky, RefusesWhatIsNotPositiveDefiniteFiniteOrSquare) {
+  const FemSystem fem = glassBoxSystem();
+  SupernodalCholesky factor;
+  // K − λM with λ past the lowest elastic eigenvalues (tens of kHz here) is indefinite.
+  const double lambda = std::pow(2.0 * M_PI * 1e5, 2);
+  EXPECT_FALSE(factor.compute(fem.stiffness - lambda * fem.mass, 3));
+  EXPECT_EQ(factor.rows(), 0);
+  Eigen::SparseMatrix<double> nan = fem.stiffness + fem.mass;
+  nan.coeffs()[17] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(factor.compute(nan, 3));
+  EXPECT_FALSE(factor.compute(Eigen::SparseMatrix<double>(4, 5)));
+  EXPECT_FALSE(factor.compute(Eigen::SparseMatrix<double>(0, 0)));
+  // A zero pivot: the identity with one diagonal entry zero.
+  Eigen::SparseMatrix<double> singular(6, 6);
+  for (int i = 0; i < 6; ++i) singular.insert(i, i) = i == 4 ? 0.0 : 1.0;
+  EXPECT_FALSE(factor.compute(singular, 3));
+  EXPECT_TRUE(factor.compute(fem.stiffness + fem.mass, 3));
+}
+
+// Above kSupernodalMinDof (6 000) the own-mesh check's Lanczos runs on the supernodal factor: a box
+// of 7.4k quadratic DOF checks to the frequencies of the exact path's own modal analysis of it,
+// which factorises with Eigen's SimplicialLDLT.
+TEST(SupernodalCholesky, TheLargeQuadraticChecksFrequenciesAreTheExactPaths) {
+  const FragmentSubMesh sub{testing::makeBoxTetMesh(0.12, 0.05, 0.04, 12, 5, 4), 0, 0, 0.0};
+  ASSERT_GE(3 * makeFemMesh(sub.mesh, ElementOrder::P2).value().nodes().rows(), 6000);
+  auto ratios = meshFrequencyRatios(sub, testing::presetGlass(), 5, kMeshRatioModes, ElementOrder::P2);
+  ASSERT_TRUE(ratios) << ratios.error().message;
+  ExactModesSettings es;
+  es.modeCount = kMeshRatioModes;
+  es.elementOrder = ElementOrder::P2;
+  auto own = exactFragmentAsset(sub, testing::presetGlass(), es, "own");
+  ASSERT_TRUE(own) << own.error().message;
+  for (int k = 0; k < kMeshRatioModes; ++k) EXPECT_NEAR(ratios.value().meshHz[k] / own.value().modal.frequenciesHz[k], 1.0, 1e-9) << k;
+}
+
+}  // namespace
+}  // namespace brittle
