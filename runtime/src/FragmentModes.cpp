@@ -13,6 +13,7 @@
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/PolynomialModes.h"
+#include "brittle/runtime/StaticCorrection.h"
 #include "brittle/runtime/TetTopology.h"
 #include "SupernodalCholesky.h"
 
@@ -76,11 +77,12 @@ Status lowestEigenpairs(const FemSystem& fem, int count, double sigma, const Exa
     vectors = dense.eigenvectors().leftCols(count);
     return Ok{};
   }
-  auto shifted = std::make_shared<Eigen::SimplicialLDLT<SparseMatrixd>>(fem.stiffness - sigma * fem.mass);
-  const Eigen::SimplicialLDLT<SparseMatrixd>& factor = *shifted;
-  if (factor.info() != Eigen::Success || !(factor.vectorD().minCoeff() > 0.0)) {
+  auto made = factorInOrder(fem.stiffness - sigma * fem.mass, Eigen::VectorXi());
+  if (!made || !(made.value()->vectorD().minCoeff() > 0.0)) {
     return makeError(ErrorCode::FactorizationFailed, "K − σM did not factorise as positive definite");
   }
+  std::shared_ptr<const Eigen::SimplicialLDLT<SparseMatrixd>> shifted = std::move(made).value();
+  const Eigen::SimplicialLDLT<SparseMatrixd>& factor = *shifted;
   StandardFormOp op(factor, fem.mass);
   const Eigen::Index ncv = std::min<Eigen::Index>(n, std::max<Eigen::Index>(2 * count + 1, count + 20));
   Spectra::SymEigsSolver<StandardFormOp> solver(op, count, ncv);
@@ -152,20 +154,14 @@ class SupernodalFormOp {
   mutable Eigen::VectorXd mT, mU;
 };
 
-// At and above this many DOF the own-mesh check factorises by supernodes (SupernodalCholesky.h);
-// below, Eigen's SimplicialLDLT, which is as fast there (the panels are narrow) and whose bits the
-// linear-tet checks of the default settings keep.
-constexpr Eigen::Index kSupernodalMinDof = 6000;
-
 // The standard form with the six rigid motions taken out: A' = (I − QQᵀ) A (I − QQᵀ), Q an
 // orthonormal basis of the rigid modes' ψ = Gᵀ φ. Elastic modes are (K − σM)-orthogonal to the
 // rigid ones, so their ψ are orthogonal to Q and keep θ; the rigid directions go to 0. Lanczos
 // then needs only the elastic modes wanted, not six more ahead of them at the top of A's spectrum.
-template <class Op>
 class ElasticFormOp {
  public:
   using Scalar = double;
-  ElasticFormOp(const Op& op, Eigen::MatrixXd q) : mOp(op), mQ(std::move(q)), mT(op.rows()) {}
+  ElasticFormOp(const SupernodalFormOp& op, Eigen::MatrixXd q) : mOp(op), mQ(std::move(q)), mT(op.rows()) {}
   Eigen::Index rows() const { return mOp.rows(); }
   Eigen::Index cols() const { return mOp.rows(); }
   void perform_op(const double* x, double* y) const {
@@ -177,7 +173,7 @@ class ElasticFormOp {
   }
 
  private:
-  const Op& mOp;
+  const SupernodalFormOp& mOp;
   const Eigen::MatrixXd mQ;
   mutable Eigen::VectorXd mT;
 };
@@ -205,41 +201,28 @@ Result<Eigen::VectorXd> lowestElasticEigenvalues(const FemSystem& fem, const Poi
     }
     return values;
   }
-  const std::string failed = "fragment '" + name + "': K − σM did not factorise as positive definite";
+  // K − σM by supernodes (SupernodalCholesky.h): on the default objects' pieces the check took
+  // 0.55–0.9 of its time with Eigen's SimplicialLDLT (docs/results/speed-accuracy.md).
+  detail::SupernodalCholesky factor;
+  if (!factor.compute(fem.stiffness - sigma * fem.mass, 3)) {
+    return makeError(ErrorCode::FactorizationFailed, "fragment '" + name + "': K − σM did not factorise as positive definite");
+  }
+  const SupernodalFormOp standard(factor, fem.mass);
   // The rigid motions' ψ = Gᵀφ; Q orthonormalises them, so φ need not be M-normal.
   const Eigen::MatrixXd rigid = rigidBodyMotions(nodes);
   Eigen::MatrixXd psi(n, 6);
-  auto lanczos = [&](const auto& standard) -> Status {
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(psi);
-    const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(n, 6);
-    ElasticFormOp op(standard, q);
-    const Eigen::Index ncv = std::min<Eigen::Index>(n - 6, std::max<Eigen::Index>(2 * count + 1, count + kElasticLanczosExtra));
-    Spectra::SymEigsSolver<decltype(op)> solver(op, count, ncv);
-    solver.init();
-    solver.compute(Spectra::SortRule::LargestAlge, 1000, s.tolerance, Spectra::SortRule::LargestAlge);
-    if (solver.info() != Spectra::CompInfo::Successful) {
-      return makeError(ErrorCode::EigenNotConverged, "fragment '" + name + "': Spectra did not converge on " + std::to_string(count) + " elastic modes");
-    }
-    values = sigma + solver.eigenvalues().cwiseInverse().array();  // θ descending: λ ascending
-    return Ok{};
-  };
-  if (n >= kSupernodalMinDof) {
-    detail::SupernodalCholesky factor;
-    if (!factor.compute(fem.stiffness - sigma * fem.mass, 3)) return makeError(ErrorCode::FactorizationFailed, failed);
-    const SupernodalFormOp standard(factor, fem.mass);
-    for (int c = 0; c < 6; ++c) psi.col(c) = standard.psi(rigid.col(c));
-    if (Status st = lanczos(standard); !st) return st.error();
-  } else {
-    const Eigen::SimplicialLDLT<SparseMatrixd> factor(fem.stiffness - sigma * fem.mass);
-    if (factor.info() != Eigen::Success || !(factor.vectorD().minCoeff() > 0.0)) return makeError(ErrorCode::FactorizationFailed, failed);
-    // ψ = D^½ Lᵀ P φ
-    const Eigen::VectorXd scale = factor.vectorD().cwiseSqrt();
-    for (int c = 0; c < 6; ++c) {
-      Eigen::VectorXd t = factor.permutationP() * rigid.col(c);
-      psi.col(c) = scale.cwiseProduct(factor.matrixU() * t);
-    }
-    if (Status st = lanczos(StandardFormOp(factor, fem.mass)); !st) return st.error();
+  for (int c = 0; c < 6; ++c) psi.col(c) = standard.psi(rigid.col(c));
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(psi);
+  const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(n, 6);
+  ElasticFormOp op(standard, q);
+  const Eigen::Index ncv = std::min<Eigen::Index>(n - 6, std::max<Eigen::Index>(2 * count + 1, count + kElasticLanczosExtra));
+  Spectra::SymEigsSolver<ElasticFormOp> solver(op, count, ncv);
+  solver.init();
+  solver.compute(Spectra::SortRule::LargestAlge, 1000, s.tolerance, Spectra::SortRule::LargestAlge);
+  if (solver.info() != Spectra::CompInfo::Successful) {
+    return makeError(ErrorCode::EigenNotConverged, "fragment '" + name + "': Spectra did not converge on " + std::to_string(count) + " elastic modes");
   }
+  values = sigma + solver.eigenvalues().cwiseInverse().array();  // θ descending: λ ascending
   // A seventh zero mode (a mechanism) has θ = −1/σ, the rigid motions' own: λ at rounding.
   if (!(values[0] > 1e-8 * values.cwiseAbs().maxCoeff())) {
     return makeError(ErrorCode::RigidModeMismatch, "fragment '" + name + "': more than 6 near-zero modes");

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "BackwardSolve.h"
+#include "SupernodalCholesky.h"
 #include "FixedRanges.h"
 #include "brittle/database/ScalingLaws.h"
 #include "brittle/runtime/FemAssembly.h"
@@ -13,19 +14,39 @@
 namespace brittle {
 namespace {
 
-// Eigen's SimplicialLDLT::compute() with the elimination order given instead of computed: the same
-// steps as its ordering() (P a Pᵀ's upper triangle from a's lower one), analysis and factorisation.
-class OrderedFactor final : public ShiftedFactor {
+// Eigen's SimplicialLDLT analysis with the elimination order given instead of computed: the same
+// steps as its ordering() (P a Pᵀ's upper triangle from a's lower one) and analysis.
+class OrderedAnalysis final : public ShiftedFactor {
  public:
-  OrderedFactor(const SparseMatrixd& a, const Eigen::VectorXi& order, bool factorise) {
+  OrderedAnalysis(const SparseMatrixd& a, const Eigen::VectorXi& order) {
     m_Pinv.indices() = order;  // Eigen's inverse permutation: new position → row
     m_P = m_Pinv.inverse();
     CholMatrixType ap(a.rows(), a.cols());
     ap.selfadjointView<Eigen::Upper>() = a.selfadjointView<Eigen::Lower>().twistedBy(m_P);
     analyzePattern_preordered(ap, true);
-    if (factorise) factorize_preordered<true>(ap);
   }
   Eigen::Index analysedNonZeros() const { return m_matrix.nonZeros(); }
+};
+
+// SimplicialLDLT's state made by SupernodalCholesky.h: the same L pattern and order (AMD's where
+// none is given, as Eigen's own analysis), a fraction of the time (the P2 plate's K + μM in its stored
+// order: see docs/realtime.md, "Factorised by supernodes"), and bits of their own. Everything that
+// reads the factor (solve(), matrixL(), vectorD(), the permutations) reads what this sets.
+class SupernodalFactor final : public ShiftedFactor {
+ public:
+  SupernodalFactor(const SparseMatrixd& a, const Eigen::VectorXi& order) {
+    detail::SupernodalCholesky factor;
+    const bool made = order.size() == 0 ? factor.compute(a) : factor.computeInOrder(a, order);
+    m_info = made ? Eigen::Success : Eigen::NumericalIssue;
+    if (!made) return;
+    m_Pinv.resize(a.rows());
+    for (Eigen::Index i = 0; i < a.rows(); ++i) m_Pinv.indices()[i] = factor.orderAt(i);
+    m_P = m_Pinv.inverse();
+    factor.toUnitLower(m_matrix, m_diag);
+    this->Eigen::SparseSolverBase<ShiftedFactor>::m_isInitialized = true;  // private in SimplicialCholeskyBase
+    m_analysisIsOk = true;
+    m_factorizationIsOk = true;
+  }
 };
 
 // The non-zeros of AMD's L after its analysis alone.
@@ -38,15 +59,10 @@ class AmdAnalysis final : public ShiftedFactor {
 }  // namespace
 
 Result<std::shared_ptr<const ShiftedFactor>> factorInOrder(const SparseMatrixd& a, const Eigen::VectorXi& order) {
-  std::shared_ptr<const ShiftedFactor> factor;
-  if (order.size() == 0) {
-    factor = std::make_shared<ShiftedFactor>(a);
-  } else {
-    if (a.rows() != a.cols() || !isPermutation(order, a.rows())) {
-      return makeError(ErrorCode::InvalidArgument, "factorInOrder: the order is not a permutation of the matrix's rows");
-    }
-    factor = std::make_shared<OrderedFactor>(a, order, true);
+  if (order.size() != 0 && (a.rows() != a.cols() || !isPermutation(order, a.rows()))) {
+    return makeError(ErrorCode::InvalidArgument, "factorInOrder: the order is not a permutation of the matrix's rows");
   }
+  std::shared_ptr<const ShiftedFactor> factor = std::make_shared<SupernodalFactor>(a, order);
   if (factor->info() != Eigen::Success) return makeError(ErrorCode::FactorizationFailed, "the matrix did not factorise");
   return factor;
 }
@@ -54,7 +70,7 @@ Result<std::shared_ptr<const ShiftedFactor>> factorInOrder(const SparseMatrixd& 
 Eigen::Index factorNonZeros(const SparseMatrixd& a, const Eigen::VectorXi& order) {
   if (order.size() == 0) return AmdAnalysis(a).analysedNonZeros();
   if (a.rows() != a.cols() || !isPermutation(order, a.rows())) return -1;
-  return OrderedFactor(a, order, false).analysedNonZeros();
+  return OrderedAnalysis(a, order).analysedNonZeros();
 }
 
 using MatrixXfRow = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;

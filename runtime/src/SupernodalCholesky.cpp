@@ -13,15 +13,11 @@ bool SupernodalCholesky::compute(const Eigen::SparseMatrix<double>& a, Eigen::In
   *this = SupernodalCholesky{};
   const Eigen::Index n = a.rows();
   if (n == 0 || a.cols() != n || n > INT32_MAX / 2) return false;
-  for (Eigen::Index i = 0; i < a.nonZeros(); ++i)
-    if (!std::isfinite(a.valuePtr()[i])) return false;
-
   // The elimination order: AMD on the symmetric pattern (Eigen's, which returns the inverse
   // permutation), of the nodes' graph where the DOF come in blocks of `block` (each node's DOF then
   // eliminated together, in order: a ninth of the entries to order, and panels at least a block
-  // wide), else of the DOF's own. L factors P A Pᵀ.
-  using Permutation = Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int>;
-  Permutation inverse(n);
+  // wide), else of the DOF's own.
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse(n);
   if (block > 1 && n % block == 0) {
     const Eigen::Index nodes = n / block;
     std::vector<Eigen::Triplet<double, int>> links;
@@ -34,7 +30,7 @@ bool SupernodalCholesky::compute(const Eigen::SparseMatrix<double>& a, Eigen::In
         }
     Eigen::SparseMatrix<double> graph(nodes, nodes);
     graph.setFromTriplets(links.begin(), links.end());
-    Permutation nodeInverse;
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> nodeInverse;
     Eigen::AMDOrdering<int> amd;
     amd(graph, nodeInverse);
     for (Eigen::Index k = 0; k < nodes; ++k)
@@ -44,6 +40,26 @@ bool SupernodalCholesky::compute(const Eigen::SparseMatrix<double>& a, Eigen::In
     Eigen::AMDOrdering<int> amd;
     amd(full, inverse);
   }
+  return computeInOrder(a, inverse.indices());
+}
+
+bool SupernodalCholesky::computeInOrder(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXi& order) {
+  *this = SupernodalCholesky{};
+  const Eigen::Index n = a.rows();
+  if (n == 0 || a.cols() != n || n > INT32_MAX / 2 || order.size() != n) return false;
+  {
+    std::vector<char> seen(static_cast<size_t>(n), 0);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (order[i] < 0 || order[i] >= n || seen[static_cast<size_t>(order[i])]) return false;
+      seen[static_cast<size_t>(order[i])] = 1;
+    }
+  }
+  for (Eigen::Index col = 0; col < n; ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(a, col); it; ++it)
+      if (!std::isfinite(it.value())) return false;
+  using Permutation = Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int>;
+  Permutation inverse(n);
+  inverse.indices() = order;
   const Permutation p = inverse.inverse();
   Eigen::SparseMatrix<double> ap(n, n);
   ap.selfadjointView<Eigen::Upper>() = a.selfadjointView<Eigen::Lower>().twistedBy(p);
@@ -174,6 +190,32 @@ bool SupernodalCholesky::compute(const Eigen::SparseMatrix<double>& a, Eigen::In
   mN = n;
   mScratch.assign(std::max<size_t>(widest, 1), 0.0);
   return true;
+}
+
+void SupernodalCholesky::toUnitLower(Eigen::SparseMatrix<double>& unitLower, Eigen::VectorXd& pivots) const {
+  const int64_t strict = mNonZeros - mN;
+  std::vector<int> outer(static_cast<size_t>(mN) + 1, 0), inner(static_cast<size_t>(strict));
+  std::vector<double> values(static_cast<size_t>(strict));
+  pivots.resize(mN);
+  int64_t at = 0;
+  for (size_t s = 0; s + 1 < mFirst.size(); ++s) {
+    const int32_t f = mFirst[s];
+    const Eigen::Index k = mFirst[s + 1] - f, m = mRowsAt[s + 1] - mRowsAt[s];
+    const double* panel = mValues.data() + mValuesAt[s];
+    const int32_t* rows = mRows.data() + mRowsAt[s];
+    for (Eigen::Index c = 0; c < k; ++c) {
+      const double* column = panel + c * m;
+      const double diagonal = column[c];
+      pivots[f + c] = diagonal * diagonal;
+      for (Eigen::Index i = c + 1; i < m; ++i) {
+        inner[static_cast<size_t>(at)] = rows[i];
+        values[static_cast<size_t>(at)] = column[i] / diagonal;
+        ++at;
+      }
+      outer[static_cast<size_t>(f + c) + 1] = static_cast<int>(at);
+    }
+  }
+  unitLower = Eigen::Map<const Eigen::SparseMatrix<double>>(mN, mN, strict, outer.data(), inner.data(), values.data());
 }
 
 void SupernodalCholesky::permute(const double* x, double* out) const {

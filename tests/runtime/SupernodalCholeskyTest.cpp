@@ -1,7 +1,8 @@
 // SupernodalCholesky.h (private to the runtime): the supernodal factor of a quadratic-tet solid's
 // K + M solves it to rounding and agrees with Eigen's SimplicialLDLT, in its nodes' order and in
-// the DOF's own; what is not positive definite, not finite or not square is refused; and the own-mesh
-// check that uses it above kSupernodalMinDof gives the frequencies Eigen's factor gives.
+// the DOF's own; what is not positive definite, not finite or not square is refused; factorInOrder
+// hands it over in SimplicialLDLT's form, with Eigen's pattern, in a given order and in AMD's; and
+// the own-mesh check that uses it gives the frequencies of the exact path's modal analysis.
 #include "SupernodalCholesky.h"
 
 #include <gtest/gtest.h>
@@ -15,6 +16,7 @@
 
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/FragmentModes.h"
+#include "brittle/runtime/StaticCorrection.h"
 #include "brittle/testing/BakeFixtures.h"
 #include "brittle/testing/Fixtures.h"
 
@@ -25,7 +27,8 @@ using detail::SupernodalCholesky;
 
 // K and M of a glass box in quadratic tets (8 × 4 × 3 cells, 2.2k DOF).
 FemSystem glassBoxSystem() {
-  auto mesh = makeFemMesh(testing::makeBoxTetMesh(0.08, 0.04, 0.03, 8, 4, 3), ElementOrder::P2);
+  const TetMesh box = testing::makeBoxTetMesh(0.08, 0.04, 0.03, 8, 4, 3);
+  auto mesh = makeFemMesh(box, ElementOrder::P2);  // it points into `box`
   EXPECT_TRUE(mesh);
   auto fem = assembleFem(mesh.value(), testing::presetGlass(), FemSettings{});
   EXPECT_TRUE(fem);
@@ -101,12 +104,12 @@ TEST(SupernodalCholesky, RefusesWhatIsNotPositiveDefiniteFiniteOrSquare) {
   EXPECT_TRUE(factor.compute(fem.stiffness + fem.mass, 3));
 }
 
-// Above kSupernodalMinDof (6 000) the own-mesh check's Lanczos runs on the supernodal factor: a box
-// of 7.4k quadratic DOF checks to the frequencies of the exact path's own modal analysis of it,
-// which factorises with Eigen's SimplicialLDLT.
+// The own-mesh check's Lanczos runs on the supernodal factor itself, the exact path's on its
+// SimplicialLDLT form with Eigen's solves (another standard form): a box of 7.4k quadratic DOF
+// checks to the exact path's frequencies of it.
 TEST(SupernodalCholesky, TheLargeQuadraticChecksFrequenciesAreTheExactPaths) {
   const FragmentSubMesh sub{testing::makeBoxTetMesh(0.12, 0.05, 0.04, 12, 5, 4), 0, 0, 0.0};
-  ASSERT_GE(3 * makeFemMesh(sub.mesh, ElementOrder::P2).value().nodes().rows(), 6000);
+  ASSERT_GT(3 * makeFemMesh(sub.mesh, ElementOrder::P2).value().nodes().rows(), 7000);
   auto ratios = meshFrequencyRatios(sub, testing::presetGlass(), 5, kMeshRatioModes, ElementOrder::P2);
   ASSERT_TRUE(ratios) << ratios.error().message;
   ExactModesSettings es;
@@ -115,6 +118,57 @@ TEST(SupernodalCholesky, TheLargeQuadraticChecksFrequenciesAreTheExactPaths) {
   auto own = exactFragmentAsset(sub, testing::presetGlass(), es, "own");
   ASSERT_TRUE(own) << own.error().message;
   for (int k = 0; k < kMeshRatioModes; ++k) EXPECT_NEAR(ratios.value().meshHz[k] / own.value().modal.frequenciesHz[k], 1.0, 1e-9) << k;
+}
+
+// factorInOrder's factor is SimplicialLDLT's state: Eigen's pattern (the same non-zeros of L, in
+// AMD's order and in a given one), its solve() within rounding of Eigen's own factor's, and
+// L D Lᵀ = P A Pᵀ entry by entry.
+TEST(SupernodalCholesky, FactorInOrderHandsOverSimplicialLdltsForm) {
+  const FemSystem fem = glassBoxSystem();
+  const Eigen::SparseMatrix<double> a = fem.stiffness + std::pow(2.0 * M_PI * 1e3, 2) * fem.mass;
+  const Eigen::Index n = a.rows();
+  const Eigen::VectorXd b = randomVector(n, 5);
+  Eigen::VectorXi reversed(n);
+  for (Eigen::Index i = 0; i < n; ++i) reversed[i] = static_cast<int>(n - 1 - i);
+  for (const Eigen::VectorXi& order : {Eigen::VectorXi(), reversed}) {
+    SCOPED_TRACE(order.size());
+    auto made = factorInOrder(a, order);
+    ASSERT_TRUE(made) << made.error().message;
+    const ShiftedFactor& factor = *made.value();
+    ASSERT_EQ(factor.info(), Eigen::Success);
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> eigen;
+    if (order.size() == 0) {
+      eigen.compute(a);
+    } else {
+      // Eigen's own with the same order: the natural order of P A Pᵀ.
+      Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse(n);
+      inverse.indices() = order;
+      Eigen::SparseMatrix<double> ap(n, n);
+      ap.selfadjointView<Eigen::Lower>() = a.selfadjointView<Eigen::Lower>().twistedBy(inverse.inverse());
+      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> natural(ap);
+      ASSERT_EQ(natural.info(), Eigen::Success);
+      EXPECT_EQ(factor.matrixL().nestedExpression().nonZeros(), natural.matrixL().nestedExpression().nonZeros());
+      EXPECT_EQ(factor.permutationPinv().indices(), order);
+    }
+    if (order.size() == 0) {
+      ASSERT_EQ(eigen.info(), Eigen::Success);
+      EXPECT_EQ(factor.matrixL().nestedExpression().nonZeros(), eigen.matrixL().nestedExpression().nonZeros());
+      EXPECT_EQ(factor.permutationP().indices(), eigen.permutationP().indices());
+      EXPECT_LT((factor.vectorD() - eigen.vectorD()).cwiseAbs().maxCoeff() / eigen.vectorD().cwiseAbs().maxCoeff(), 1e-12);
+    }
+    const Eigen::VectorXd x = factor.solve(b);
+    EXPECT_LT((a * x - b).norm() / b.norm(), 1e-11);
+    const Eigen::SparseMatrix<double> l = factor.matrixL();
+    const Eigen::SparseMatrix<double> ldlt = l * factor.vectorD().asDiagonal() * l.transpose();
+    Eigen::SparseMatrix<double> pap(n, n);
+    pap = a.selfadjointView<Eigen::Lower>().twistedBy(factor.permutationP());
+    EXPECT_LT((Eigen::MatrixXd(ldlt) - Eigen::MatrixXd(pap)).cwiseAbs().maxCoeff() / Eigen::MatrixXd(pap).cwiseAbs().maxCoeff(), 1e-13);
+  }
+  Eigen::VectorXi twice = reversed;
+  twice[0] = twice[1];
+  EXPECT_EQ(factorInOrder(a, twice).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(factorInOrder(fem.stiffness - std::pow(2.0 * M_PI * 1e5, 2) * fem.mass, Eigen::VectorXi()).error().code,
+            ErrorCode::FactorizationFailed);
 }
 
 }  // namespace

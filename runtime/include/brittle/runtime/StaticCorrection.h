@@ -39,12 +39,14 @@
 
 namespace brittle {
 
-/// A sparse LDLᵀ factorisation of K + μM (μ > 0).
+/// A sparse LDLᵀ factorisation of K + μM (μ > 0), in Eigen's form.
 using ShiftedFactor = Eigen::SimplicialLDLT<SparseMatrixd>;
 
 /// The factorisation of `a` (its lower triangle) eliminating its rows in `order`
 /// (ObjectAsset::eliminationOrder: position k holds the row eliminated k-th), or in Eigen's AMD
-/// order where `order` is empty. Errors: InvalidArgument (an order that is not a permutation of
+/// order where `order` is empty. It is computed by supernodes (dense panels, runtime/src/
+/// SupernodalCholesky.h) and handed over as SimplicialLDLT's state: the same pattern as Eigen's own
+/// factorisation, in a fraction of the time, and not its bits. Errors: InvalidArgument (an order that is not a permutation of
 /// a's rows), FactorizationFailed.
 Result<std::shared_ptr<const ShiftedFactor>> factorInOrder(const SparseMatrixd& a, const Eigen::VectorXi& order);
 /// Non-zeros of that factor's strict lower L, from the symbolic analysis alone (what the bake
