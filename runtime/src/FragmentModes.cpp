@@ -710,7 +710,7 @@ Result<ObjectAsset> exactFragmentAsset(const FragmentSubMesh& sub, const Materia
   a.stressModes = computeStressModes(e.femMesh, material, m.modes);
   a.elementOrder = settings.elementOrder;
   a.bake.requestedModes = settings.modeCount;
-  a.bake.factorization = e.dense ? "dense" : "eigen-ldlt";
+  a.bake.factorization = e.dense ? "dense" : "supernodal-ldlt";
   if (factorOut && e.factor) {
     factorOut->fem = std::move(e.fem);
     factorOut->factor = std::move(e.factor);
