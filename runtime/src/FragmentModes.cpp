@@ -13,7 +13,6 @@
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/PolynomialModes.h"
-#include "brittle/runtime/StaticCorrection.h"
 #include "brittle/runtime/TetTopology.h"
 #include "SupernodalCholesky.h"
 
@@ -21,48 +20,53 @@ namespace brittle {
 namespace {
 
 
-// The shifted problem in standard form. With K − σM = Pᵀ L D Lᵀ P (σ < 0, so D > 0) and
-// G = Pᵀ L D^½, K φ = λ M φ is A ψ = θ ψ for the symmetric A = G⁻¹ M G⁻ᵀ, ψ = Gᵀ φ and
-// θ = 1/(λ − σ): the lowest λ are the largest θ. An application of A costs what Spectra's
-// generalised shift-invert operator does (one solve with the factor and one product with M), but
-// the Lanczos vectors are then orthogonal in the Euclidean product instead of M's, so the several
-// further products with M per step that M-orthogonalisation takes are gone (measured on exact-path
-// pieces of 430–1 600 DOF: they were 19 % of the build, the solves 28 %).
+// The shifted problem in standard form. With K − σM = Pᵀ L Lᵀ P (σ < 0, so it is positive
+// definite; a supernodal factor, SupernodalCholesky.h) and G = Pᵀ L, K φ = λ M φ is A ψ = θ ψ for
+// the symmetric A = G⁻¹ M G⁻ᵀ = L⁻¹ P M Pᵀ L⁻ᵀ, ψ = Gᵀ φ = Lᵀ P φ and θ = 1/(λ − σ): the lowest λ
+// are the largest θ. An application of A costs what Spectra's generalised shift-invert operator does
+// (one solve with the factor and one product with M), but the Lanczos vectors are then orthogonal in
+// the Euclidean product instead of M's, so the several further products with M per step that
+// M-orthogonalisation takes are gone (measured on exact-path pieces of 430–1 600 DOF: they were 19 %
+// of the build, the solves 28 %). The solves run by panel: on a 25k-DOF quadratic piece 16 of them
+// took 144 ms against 235 through Eigen's SimplicialLDLT.
 class StandardFormOp {
  public:
   using Scalar = double;
-  StandardFormOp(const Eigen::SimplicialLDLT<SparseMatrixd>& factor, const SparseMatrixd& mass)
-      : mFactor(factor), mMass(mass), mScale(factor.vectorD().cwiseSqrt().cwiseInverse()), mT(factor.rows()) {}
+  StandardFormOp(const detail::SupernodalCholesky& factor, const SparseMatrixd& mass)
+      : mFactor(factor), mMass(mass), mT(factor.rows()), mU(factor.rows()) {}
   Eigen::Index rows() const { return mFactor.rows(); }
   Eigen::Index cols() const { return mFactor.rows(); }
-  // y = D^-½ L⁻¹ P M Pᵀ L⁻ᵀ D^-½ x
   void perform_op(const double* x, double* y) const {
-    Eigen::Map<const Eigen::VectorXd> in(x, rows());
-    Eigen::Map<Eigen::VectorXd> out(y, rows());
-    mT = mScale.cwiseProduct(in);
-    mFactor.matrixU().solveInPlace(mT);
-    out = mFactor.permutationP() * (mMass * (mFactor.permutationPinv() * mT));
-    mFactor.matrixL().solveInPlace(out);
-    out.array() *= mScale.array();
+    std::copy(x, x + rows(), mT.data());
+    mFactor.solveLt(mT.data());
+    mFactor.permuteBack(mT.data(), mU.data());
+    mT.noalias() = mMass * mU;
+    mFactor.permute(mT.data(), y);
+    mFactor.solveL(y);
   }
-  // φ = G⁻ᵀ ψ = Pᵀ L⁻ᵀ D^-½ ψ, column by column.
+  // ψ = Lᵀ P φ
+  Eigen::VectorXd psi(const Eigen::VectorXd& phi) const {
+    Eigen::VectorXd out(rows());
+    mFactor.permute(phi.data(), mT.data());
+    mFactor.multiplyLt(mT.data(), out.data());
+    return out;
+  }
+  // φ = G⁻ᵀ ψ = Pᵀ L⁻ᵀ ψ, column by column.
   Eigen::MatrixXd modes(const Eigen::MatrixXd& psi) const {
     Eigen::MatrixXd phi(psi.rows(), psi.cols());
     for (Eigen::Index c = 0; c < psi.cols(); ++c) {
-      mT = mScale.cwiseProduct(psi.col(c));
-      mFactor.matrixU().solveInPlace(mT);
-      phi.col(c) = mFactor.permutationPinv() * mT;
+      mT = psi.col(c);
+      mFactor.solveLt(mT.data());
+      mFactor.permuteBack(mT.data(), phi.col(c).data());
     }
     return phi;
   }
 
  private:
-  const Eigen::SimplicialLDLT<SparseMatrixd>& mFactor;
+  const detail::SupernodalCholesky& mFactor;
   const SparseMatrixd& mMass;
-  const Eigen::VectorXd mScale;  // D^-½
-  mutable Eigen::VectorXd mT;
+  mutable Eigen::VectorXd mT, mU;
 };
-
 // Lowest `count` eigenpairs of K φ = λ M φ, ascending, M-normalised; `factor` gets the sparse
 // path's factorisation of K − σM (null on the dense path).
 Status lowestEigenpairs(const FemSystem& fem, int count, double sigma, const ExactModesSettings& s,
@@ -77,12 +81,10 @@ Status lowestEigenpairs(const FemSystem& fem, int count, double sigma, const Exa
     vectors = dense.eigenvectors().leftCols(count);
     return Ok{};
   }
-  auto made = factorInOrder(fem.stiffness - sigma * fem.mass, Eigen::VectorXi());
-  if (!made || !(made.value()->vectorD().minCoeff() > 0.0)) {
+  detail::SupernodalCholesky factor;
+  if (!factor.compute(fem.stiffness - sigma * fem.mass, 3)) {
     return makeError(ErrorCode::FactorizationFailed, "K − σM did not factorise as positive definite");
   }
-  std::shared_ptr<const Eigen::SimplicialLDLT<SparseMatrixd>> shifted = std::move(made).value();
-  const Eigen::SimplicialLDLT<SparseMatrixd>& factor = *shifted;
   StandardFormOp op(factor, fem.mass);
   const Eigen::Index ncv = std::min<Eigen::Index>(n, std::max<Eigen::Index>(2 * count + 1, count + 20));
   Spectra::SymEigsSolver<StandardFormOp> solver(op, count, ncv);
@@ -108,51 +110,24 @@ Status lowestEigenpairs(const FemSystem& fem, int count, double sigma, const Exa
   constexpr double kMaxResidual = 1e-8;
   if (worstResidual() > kMaxResidual) {
     Eigen::MatrixXd y(n, vectors.cols());
-    for (Eigen::Index c = 0; c < vectors.cols(); ++c) y.col(c) = factor.solve(fem.mass * vectors.col(c));
+    for (Eigen::Index c = 0; c < vectors.cols(); ++c) {
+      Eigen::VectorXd column = fem.mass * vectors.col(c);
+      factor.solve(column);
+      y.col(c) = column;
+    }
     const Eigen::MatrixXd a = y.transpose() * (fem.stiffness * y), b = y.transpose() * (fem.mass * y);
     Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> ritz(0.5 * (a + a.transpose()), 0.5 * (b + b.transpose()));
     if (ritz.info() != Eigen::Success) return makeError(ErrorCode::EigenNotConverged, "the Rayleigh–Ritz step failed");
     values = ritz.eigenvalues();
     vectors = y * ritz.eigenvectors();
   }
-  factorOut = std::move(shifted);
+  factorOut = detail::simplicialForm(factor);  // for the static correction (ExactModesFactor)
   return Ok{};
 }
 
 // Lanczos vectors beyond the wanted count in lowestElasticEigenvalues (Spectra's ncv − nev): 12
 // took the least time on the default objects' pieces (8, 12 and 20 measured).
 constexpr int kElasticLanczosExtra = 12;
-
-// The same standard form from a supernodal factor K − σM = Pᵀ L Lᵀ P: G = Pᵀ L, so
-// A = L⁻¹ P M Pᵀ L⁻ᵀ and ψ = Gᵀ φ = Lᵀ P φ.
-class SupernodalFormOp {
- public:
-  using Scalar = double;
-  SupernodalFormOp(const detail::SupernodalCholesky& factor, const SparseMatrixd& mass)
-      : mFactor(factor), mMass(mass), mT(factor.rows()), mU(factor.rows()) {}
-  Eigen::Index rows() const { return mFactor.rows(); }
-  Eigen::Index cols() const { return mFactor.rows(); }
-  void perform_op(const double* x, double* y) const {
-    std::copy(x, x + rows(), mT.data());
-    mFactor.solveLt(mT.data());
-    mFactor.permuteBack(mT.data(), mU.data());
-    mT.noalias() = mMass * mU;
-    mFactor.permute(mT.data(), y);
-    mFactor.solveL(y);
-  }
-  // ψ = Lᵀ P φ
-  Eigen::VectorXd psi(const Eigen::VectorXd& phi) const {
-    Eigen::VectorXd out(rows());
-    mFactor.permute(phi.data(), mT.data());
-    mFactor.multiplyLt(mT.data(), out.data());
-    return out;
-  }
-
- private:
-  const detail::SupernodalCholesky& mFactor;
-  const SparseMatrixd& mMass;
-  mutable Eigen::VectorXd mT, mU;
-};
 
 // The standard form with the six rigid motions taken out: A' = (I − QQᵀ) A (I − QQᵀ), Q an
 // orthonormal basis of the rigid modes' ψ = Gᵀ φ. Elastic modes are (K − σM)-orthogonal to the
@@ -161,7 +136,7 @@ class SupernodalFormOp {
 class ElasticFormOp {
  public:
   using Scalar = double;
-  ElasticFormOp(const SupernodalFormOp& op, Eigen::MatrixXd q) : mOp(op), mQ(std::move(q)), mT(op.rows()) {}
+  ElasticFormOp(const StandardFormOp& op, Eigen::MatrixXd q) : mOp(op), mQ(std::move(q)), mT(op.rows()) {}
   Eigen::Index rows() const { return mOp.rows(); }
   Eigen::Index cols() const { return mOp.rows(); }
   void perform_op(const double* x, double* y) const {
@@ -173,7 +148,7 @@ class ElasticFormOp {
   }
 
  private:
-  const SupernodalFormOp& mOp;
+  const StandardFormOp& mOp;
   const Eigen::MatrixXd mQ;
   mutable Eigen::VectorXd mT;
 };
@@ -207,7 +182,7 @@ Result<Eigen::VectorXd> lowestElasticEigenvalues(const FemSystem& fem, const Poi
   if (!factor.compute(fem.stiffness - sigma * fem.mass, 3)) {
     return makeError(ErrorCode::FactorizationFailed, "fragment '" + name + "': K − σM did not factorise as positive definite");
   }
-  const SupernodalFormOp standard(factor, fem.mass);
+  const StandardFormOp standard(factor, fem.mass);
   // The rigid motions' ψ = Gᵀφ; Q orthonormalises them, so φ need not be M-normal.
   const Eigen::MatrixXd rigid = rigidBodyMotions(nodes);
   Eigen::MatrixXd psi(n, 6);

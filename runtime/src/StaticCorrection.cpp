@@ -28,27 +28,6 @@ class OrderedAnalysis final : public ShiftedFactor {
   Eigen::Index analysedNonZeros() const { return m_matrix.nonZeros(); }
 };
 
-// SimplicialLDLT's state made by SupernodalCholesky.h: the same L pattern and order (AMD's where
-// none is given, as Eigen's own analysis), a fraction of the time (the P2 plate's K + μM in its stored
-// order: see docs/realtime.md, "Factorised by supernodes"), and bits of their own. Everything that
-// reads the factor (solve(), matrixL(), vectorD(), the permutations) reads what this sets.
-class SupernodalFactor final : public ShiftedFactor {
- public:
-  SupernodalFactor(const SparseMatrixd& a, const Eigen::VectorXi& order) {
-    detail::SupernodalCholesky factor;
-    const bool made = order.size() == 0 ? factor.compute(a) : factor.computeInOrder(a, order);
-    m_info = made ? Eigen::Success : Eigen::NumericalIssue;
-    if (!made) return;
-    m_Pinv.resize(a.rows());
-    for (Eigen::Index i = 0; i < a.rows(); ++i) m_Pinv.indices()[i] = factor.orderAt(i);
-    m_P = m_Pinv.inverse();
-    factor.toUnitLower(m_matrix, m_diag);
-    this->Eigen::SparseSolverBase<ShiftedFactor>::m_isInitialized = true;  // private in SimplicialCholeskyBase
-    m_analysisIsOk = true;
-    m_factorizationIsOk = true;
-  }
-};
-
 // The non-zeros of AMD's L after its analysis alone.
 class AmdAnalysis final : public ShiftedFactor {
  public:
@@ -62,9 +41,15 @@ Result<std::shared_ptr<const ShiftedFactor>> factorInOrder(const SparseMatrixd& 
   if (order.size() != 0 && (a.rows() != a.cols() || !isPermutation(order, a.rows()))) {
     return makeError(ErrorCode::InvalidArgument, "factorInOrder: the order is not a permutation of the matrix's rows");
   }
-  std::shared_ptr<const ShiftedFactor> factor = std::make_shared<SupernodalFactor>(a, order);
-  if (factor->info() != Eigen::Success) return makeError(ErrorCode::FactorizationFailed, "the matrix did not factorise");
-  return factor;
+  // By supernodes (SupernodalCholesky.h), handed over in SimplicialLDLT's form: the same L pattern
+  // and order (AMD's where none is given, as Eigen's own analysis), in a fraction of the time (the
+  // P2 plate's K + μM in its stored order: docs/realtime.md, "Factorised by supernodes"), with bits
+  // of their own.
+  detail::SupernodalCholesky factor;
+  if (!(order.size() == 0 ? factor.compute(a) : factor.computeInOrder(a, order))) {
+    return makeError(ErrorCode::FactorizationFailed, "the matrix did not factorise");
+  }
+  return detail::simplicialForm(factor);
 }
 
 Eigen::Index factorNonZeros(const SparseMatrixd& a, const Eigen::VectorXi& order) {

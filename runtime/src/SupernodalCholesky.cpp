@@ -280,4 +280,31 @@ void SupernodalCholesky::solve(Eigen::VectorXd& x) const {
   permuteBack(y.data(), x.data());
 }
 
+namespace {
+
+// SimplicialLDLT with its state set from outside: everything that reads the factor reads what the
+// constructor sets.
+class SimplicialForm final : public Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> {
+ public:
+  explicit SimplicialForm(const SupernodalCholesky& factor) {
+    const Eigen::Index n = factor.rows();
+    m_Pinv.resize(n);
+    for (Eigen::Index i = 0; i < n; ++i) m_Pinv.indices()[i] = factor.orderAt(i);
+    m_P = m_Pinv.inverse();
+    factor.toUnitLower(m_matrix, m_diag);
+    m_info = Eigen::Success;
+    // private in SimplicialCholeskyBase, protected in the base that holds it
+    this->Eigen::SparseSolverBase<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>::m_isInitialized = true;
+    m_analysisIsOk = true;
+    m_factorizationIsOk = true;
+  }
+};
+
+}  // namespace
+
+std::shared_ptr<const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> simplicialForm(const SupernodalCholesky& factor) {
+  assert(factor.rows() > 0);
+  return std::make_shared<SimplicialForm>(factor);
+}
+
 }  // namespace brittle::detail

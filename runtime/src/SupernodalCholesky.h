@@ -1,8 +1,8 @@
 // SupernodalCholesky.h — a sparse Cholesky factor P A Pᵀ = L Lᵀ by supernodes, with Eigen's dense
-// kernels on each supernode's panel. Private to the runtime: the own-mesh checks' shift-invert
-// factor of K − σM (FragmentModes.cpp), and every factor of factorInOrder (StaticCorrection.h:
-// objects' and entries' static corrections, the exact path's modal analysis), handed over there in
-// SimplicialLDLT's form (toUnitLower).
+// kernels on each supernode's panel. Private to the runtime: the shift-invert factor of K − σM of
+// the exact path's modal analysis and the own-mesh checks (FragmentModes.cpp), and every factor of
+// factorInOrder (StaticCorrection.h: objects' and entries' static corrections); the static
+// correction reads it in SimplicialLDLT's form (simplicialForm).
 //
 // Eigen's SimplicialLDLT computes L one row at a time, an entry at a time: on a quadratic-tet
 // piece's K (25k DOF, 4.7M non-zeros in L) its factorisation took 657 ms of a 1.13 s check, at
@@ -20,8 +20,10 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace brittle::detail {
@@ -72,5 +74,10 @@ class SupernodalCholesky {
   std::vector<double> mValues;
   mutable std::vector<double> mScratch;
 };
+
+/// The factor as Eigen's SimplicialLDLT state (the static correction's ShiftedFactor): U = L D^-½
+/// and D = diag(L)² in the same order, so that solve(), matrixL(), vectorD() and the permutations
+/// read it as they read Eigen's own. `factor` must hold a factorisation.
+std::shared_ptr<const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> simplicialForm(const SupernodalCholesky& factor);
 
 }  // namespace brittle::detail

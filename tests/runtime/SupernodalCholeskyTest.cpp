@@ -104,8 +104,8 @@ TEST(SupernodalCholesky, RefusesWhatIsNotPositiveDefiniteFiniteOrSquare) {
   EXPECT_TRUE(factor.compute(fem.stiffness + fem.mass, 3));
 }
 
-// The own-mesh check's Lanczos runs on the supernodal factor itself, the exact path's on its
-// SimplicialLDLT form with Eigen's solves (another standard form): a box of 7.4k quadratic DOF
+// Both Lanczos runs on the supernodal factor: the own-mesh check's with the rigid motions projected
+// out of the operator, the exact path's with them computed as modes: a box of 7.4k quadratic DOF
 // checks to the exact path's frequencies of it.
 TEST(SupernodalCholesky, TheLargeQuadraticChecksFrequenciesAreTheExactPaths) {
   const FragmentSubMesh sub{testing::makeBoxTetMesh(0.12, 0.05, 0.04, 12, 5, 4), 0, 0, 0.0};
