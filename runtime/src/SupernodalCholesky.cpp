@@ -20,16 +20,27 @@ bool SupernodalCholesky::compute(const Eigen::SparseMatrix<double>& a, Eigen::In
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse(n);
   if (block > 1 && n % block == 0) {
     const Eigen::Index nodes = n / block;
-    std::vector<Eigen::Triplet<double, int>> links;
-    links.reserve(static_cast<size_t>(a.nonZeros() / (block * block)) + static_cast<size_t>(nodes));
-    for (Eigen::Index col = 0; col < n; col += block)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(a, col); it; ++it)
-        if (it.row() % block == 0) {
-          links.emplace_back(static_cast<int>(it.row() / block), static_cast<int>(col / block), 1.0);
-          links.emplace_back(static_cast<int>(col / block), static_cast<int>(it.row() / block), 1.0);
+    // The nodes' graph from the lower triangle's node blocks, a column per node with its rows
+    // sorted and unique (Eigen's AMD orders the pattern of G + Gᵀ).
+    std::vector<int> outer(static_cast<size_t>(nodes) + 1, 0), inner;
+    std::vector<int> seen(static_cast<size_t>(nodes), -1);
+    inner.reserve(static_cast<size_t>(a.nonZeros() / (block * block)) + static_cast<size_t>(nodes));
+    for (Eigen::Index w = 0; w < nodes; ++w) {
+      const size_t from = inner.size();
+      for (Eigen::Index col = w * block; col < (w + 1) * block; ++col)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(a, col); it; ++it) {
+          const auto v = static_cast<int>(it.row() / block);
+          if (it.row() >= col && seen[static_cast<size_t>(v)] != w) {
+            seen[static_cast<size_t>(v)] = static_cast<int>(w);
+            inner.push_back(v);
+          }
         }
-    Eigen::SparseMatrix<double> graph(nodes, nodes);
-    graph.setFromTriplets(links.begin(), links.end());
+      std::sort(inner.begin() + static_cast<std::ptrdiff_t>(from), inner.end());
+      outer[static_cast<size_t>(w) + 1] = static_cast<int>(inner.size());
+    }
+    const std::vector<double> ones(inner.size(), 1.0);
+    const Eigen::SparseMatrix<double> graph = Eigen::Map<const Eigen::SparseMatrix<double>>(
+        nodes, nodes, static_cast<Eigen::Index>(inner.size()), outer.data(), inner.data(), ones.data());
     Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> nodeInverse;
     Eigen::AMDOrdering<int> amd;
     amd(graph, nodeInverse);
@@ -56,7 +67,7 @@ bool SupernodalCholesky::computeInOrder(const Eigen::SparseMatrix<double>& a, co
   }
   for (Eigen::Index col = 0; col < n; ++col)
     for (Eigen::SparseMatrix<double>::InnerIterator it(a, col); it; ++it)
-      if (!std::isfinite(it.value())) return false;
+      if (it.row() >= col && !std::isfinite(it.value())) return false;
   using Permutation = Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int>;
   Permutation inverse(n);
   inverse.indices() = order;
@@ -135,6 +146,7 @@ bool SupernodalCholesky::computeInOrder(const Eigen::SparseMatrix<double>& a, co
     widest = std::max(widest, rows.size());
   }
   rowsBelow = {};
+  if (mNonZeros - n > INT32_MAX) return false;  // toUnitLower's 32-bit column starts
   mValues.assign(static_cast<size_t>(mValuesAt[supernodes]), 0.0);
   ap = std::move(lower);
 

@@ -14,9 +14,13 @@
 // Measured against SimplicialLDLT on glass boxes (factorisation, one thread): P1 at 3.4k DOF 25 ms
 // against 91, P2 at 8.8k 170 ms against 833, at 23k 1.35 s against 12.2 s; 16 solves 1.5–2× faster.
 //
-// The elimination order is Eigen's AMD, of the nodes' graph where the DOF come in blocks (a
-// node's three), else of the DOF's own as SimplicialLDLT's. The factorisation runs on one thread in a fixed order: the same bits in any process. They are not
-// SimplicialLDLT's bits (another order of the same sums).
+// The elimination order is given (a pack's stored one), or Eigen's AMD: of the DOF's own graph, as
+// SimplicialLDLT's, so that L has its pattern, or of the nodes' graph where the DOF come in blocks
+// (a node's three: a ninth of the entries to order, within a few per cent of the fill). The
+// factorisation runs on one thread in a fixed order, and Eigen's kernels block by the cache sizes
+// the build fixes (EIGEN_NO_CPUID, cmake/BrittleTargets.cmake): the same bits in any process and on
+// any machine that runs the same build. They are not SimplicialLDLT's bits (another order of the
+// same sums). The const solves share one scratch buffer: one caller at a time.
 #pragma once
 
 #include <Eigen/Core>
@@ -30,10 +34,10 @@ namespace brittle::detail {
 
 class SupernodalCholesky {
  public:
-  /// Orders and factorises the symmetric matrix `a` (n by n; its lower triangle is read, and its
-  /// pattern must be symmetric). With `block` > 1 dividing n, the DOF come in blocks of that many
-  /// (a node's x, y, z) that are ordered together. False where `a` is not square, not finite, or
-  /// not positive definite (a pivot ≤ 0); the factor is then empty.
+  /// Orders and factorises the symmetric matrix `a` (n by n; only its lower triangle is read, as a
+  /// full matrix or alone). With `block` > 1 dividing n, the DOF come in blocks of that many (a
+  /// node's x, y, z) that are ordered together. False where `a` is not square, its lower triangle
+  /// not finite, or it is not positive definite (a pivot ≤ 0); the factor is then empty.
   bool compute(const Eigen::SparseMatrix<double>& a, Eigen::Index block = 1);
   /// ... in the order given: `order` (n values) lists A's rows in the order they are eliminated
   /// (Eigen's inverse permutation, as a pack stores it). False as above, or where `order` is not a

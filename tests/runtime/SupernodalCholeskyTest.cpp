@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
@@ -128,9 +129,12 @@ TEST(SupernodalCholesky, FactorInOrderHandsOverSimplicialLdltsForm) {
   const Eigen::SparseMatrix<double> a = fem.stiffness + std::pow(2.0 * M_PI * 1e3, 2) * fem.mass;
   const Eigen::Index n = a.rows();
   const Eigen::VectorXd b = randomVector(n, 5);
-  Eigen::VectorXi reversed(n);
-  for (Eigen::Index i = 0; i < n; ++i) reversed[i] = static_cast<int>(n - 1 - i);
-  for (const Eigen::VectorXi& order : {Eigen::VectorXi(), reversed}) {
+  // A given order: AMD's on the nodes' graph, which Eigen's analysis would not choose.
+  SupernodalCholesky byNodes;
+  ASSERT_TRUE(byNodes.compute(a, 3));
+  Eigen::VectorXi given(n);
+  for (Eigen::Index i = 0; i < n; ++i) given[i] = byNodes.orderAt(i);
+  for (const Eigen::VectorXi& order : {Eigen::VectorXi(), given}) {
     SCOPED_TRACE(order.size());
     auto made = factorInOrder(a, order);
     ASSERT_TRUE(made) << made.error().message;
@@ -162,13 +166,92 @@ TEST(SupernodalCholesky, FactorInOrderHandsOverSimplicialLdltsForm) {
     const Eigen::SparseMatrix<double> ldlt = l * factor.vectorD().asDiagonal() * l.transpose();
     Eigen::SparseMatrix<double> pap(n, n);
     pap = a.selfadjointView<Eigen::Lower>().twistedBy(factor.permutationP());
-    EXPECT_LT((Eigen::MatrixXd(ldlt) - Eigen::MatrixXd(pap)).cwiseAbs().maxCoeff() / Eigen::MatrixXd(pap).cwiseAbs().maxCoeff(), 1e-13);
+    const Eigen::SparseMatrix<double> difference = ldlt - pap;
+    EXPECT_LT(difference.coeffs().cwiseAbs().maxCoeff() / pap.coeffs().cwiseAbs().maxCoeff(), 1e-13);
   }
-  Eigen::VectorXi twice = reversed;
+  Eigen::VectorXi twice = given;
   twice[0] = twice[1];
   EXPECT_EQ(factorInOrder(a, twice).error().code, ErrorCode::InvalidArgument);
   EXPECT_EQ(factorInOrder(fem.stiffness - std::pow(2.0 * M_PI * 1e5, 2) * fem.mass, Eigen::VectorXi()).error().code,
             ErrorCode::FactorizationFailed);
+}
+
+// The lower triangle alone, or in a matrix not compressed, is read as the full matrix: the same
+// bits; a block that does not divide n orders the DOF's own graph; one row and a diagonal are
+// solved exactly; computeInOrder refuses what is not a permutation.
+TEST(SupernodalCholesky, ReadsTheLowerTriangleAloneAndSmallMatricesExactly) {
+  const FemSystem fem = glassBoxSystem();
+  const Eigen::SparseMatrix<double> a = fem.stiffness + std::pow(2.0 * M_PI * 1e3, 2) * fem.mass;
+  const Eigen::Index n = a.rows();
+  const Eigen::VectorXd b = randomVector(n, 3);
+  Eigen::SparseMatrix<double> lower = a.triangularView<Eigen::Lower>();
+  Eigen::SparseMatrix<double> uncompressed(n, n);
+  uncompressed.reserve(Eigen::VectorXi::Constant(n, 200));
+  for (Eigen::Index col = 0; col < n; ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(a, col); it; ++it) uncompressed.insert(it.row(), col) = it.value();
+  ASSERT_FALSE(uncompressed.isCompressed());
+  for (Eigen::Index block : {Eigen::Index{1}, Eigen::Index{3}}) {
+    SupernodalCholesky full, alone, loose;
+    ASSERT_TRUE(full.compute(a, block));
+    ASSERT_TRUE(alone.compute(lower, block));
+    ASSERT_TRUE(loose.compute(uncompressed, block));
+    Eigen::VectorXd x = b, y = b, z = b;
+    full.solve(x);
+    alone.solve(y);
+    loose.solve(z);
+    EXPECT_EQ(x, y) << block;
+    EXPECT_EQ(x, z) << block;
+  }
+  // A NaN above the diagonal is never read.
+  Eigen::SparseMatrix<double> upperNan = a;
+  for (Eigen::SparseMatrix<double>::InnerIterator it(upperNan, n - 1); it; ++it)
+    if (it.row() < n - 1) it.valueRef() = std::numeric_limits<double>::quiet_NaN();
+  SupernodalCholesky factor;
+  EXPECT_TRUE(factor.compute(upperNan, 3));
+
+  Eigen::SparseMatrix<double> one(1, 1);
+  one.insert(0, 0) = 4.0;
+  ASSERT_TRUE(factor.compute(one, 3));  // 3 does not divide 1: the DOF's own order
+  Eigen::VectorXd x = Eigen::VectorXd::Constant(1, 2.0);
+  factor.solve(x);
+  EXPECT_EQ(x[0], 0.5);
+  Eigen::SparseMatrix<double> diagonal(7, 7);
+  for (int i = 0; i < 7; ++i) diagonal.insert(i, i) = 1.0 + i;
+  ASSERT_TRUE(factor.compute(diagonal, 3));
+  EXPECT_EQ(factor.supernodeCount(), 7);
+  EXPECT_EQ(factor.nonZeros(), 7);
+  Eigen::VectorXd d = Eigen::VectorXd::LinSpaced(7, 1.0, 7.0);
+  factor.solve(d);
+  EXPECT_TRUE(d.isApprox(Eigen::VectorXd::Ones(7), 1e-15));
+
+  Eigen::VectorXi order = Eigen::VectorXi::LinSpaced(7, 0, 6);
+  EXPECT_TRUE(factor.computeInOrder(diagonal, order));
+  order[3] = 2;  // twice
+  EXPECT_FALSE(factor.computeInOrder(diagonal, order));
+  order[3] = 7;  // out of range
+  EXPECT_FALSE(factor.computeInOrder(diagonal, order));
+  EXPECT_FALSE(factor.computeInOrder(diagonal, Eigen::VectorXi::LinSpaced(6, 0, 5)));
+  EXPECT_EQ(factor.rows(), 0);
+}
+
+// The check's frequencies on a quadratic box small enough for Eigen's dense generalised solver,
+// which shares nothing with the factor, but above the check's own dense limit.
+TEST(SupernodalCholesky, TheChecksFrequenciesAreTheDenseSolversOnAQuadraticBox) {
+  const FragmentSubMesh sub{testing::makeBoxTetMesh(0.06, 0.03, 0.02, 4, 2, 2), 0, 0, 0.0};
+  auto mesh = makeFemMesh(sub.mesh, ElementOrder::P2);
+  ASSERT_TRUE(mesh);
+  auto fem = assembleFem(mesh.value(), testing::presetGlass(), FemSettings{});
+  ASSERT_TRUE(fem);
+  ASSERT_GT(fem.value().stiffness.rows(), 2 * ExactModesSettings{}.denseMaxDof);
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> dense(Eigen::MatrixXd(fem.value().stiffness),
+                                                                        Eigen::MatrixXd(fem.value().mass), Eigen::EigenvaluesOnly);
+  ASSERT_EQ(dense.info(), Eigen::Success);
+  auto ratios = meshFrequencyRatios(sub, testing::presetGlass(), 5, kMeshRatioModes, ElementOrder::P2);
+  ASSERT_TRUE(ratios) << ratios.error().message;
+  for (int k = 0; k < kMeshRatioModes; ++k) {
+    const double hz = std::sqrt(dense.eigenvalues()[6 + k]) / (2.0 * M_PI);
+    EXPECT_NEAR(ratios.value().meshHz[k] / hz, 1.0, 1e-9) << k;
+  }
 }
 
 }  // namespace

@@ -11,8 +11,9 @@
 // tet around it, so the mesh is conforming, and its volume is the fragment surface's volume.
 //
 // Modes: K and M of the sub-mesh (FemAssembly.h), then the lowest modeCount + 6 eigenpairs of
-// K φ = λ M φ by Spectra's shift-invert Lanczos on an Eigen SimplicialLDLT of K − σM (σ < 0, so
-// the factor is positive definite; no ARPACK or CHOLMOD in the runtime), or by Eigen's dense
+// K φ = λ M φ by Spectra's shift-invert Lanczos on a supernodal Cholesky factor of K − σM (σ < 0,
+// so it is positive definite; runtime/src/SupernodalCholesky.h, Eigen's dense kernels per panel; no
+// ARPACK or CHOLMOD in the runtime), handed on in SimplicialLDLT's form, or by Eigen's dense
 // generalised solver when 3N ≤ denseMaxDof. The six rigid modes are dropped, the others are
 // mass-normalised, and the stress modes follow (computeStressModes). The cost grows with the
 // fragment's size, which is why the World takes this path only below a tet count

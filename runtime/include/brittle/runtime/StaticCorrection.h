@@ -46,8 +46,9 @@ using ShiftedFactor = Eigen::SimplicialLDLT<SparseMatrixd>;
 /// (ObjectAsset::eliminationOrder: position k holds the row eliminated k-th), or in Eigen's AMD
 /// order where `order` is empty. It is computed by supernodes (dense panels, runtime/src/
 /// SupernodalCholesky.h) and handed over as SimplicialLDLT's state: the same pattern as Eigen's own
-/// factorisation, in a fraction of the time, and not its bits. Errors: InvalidArgument (an order that is not a permutation of
-/// a's rows), FactorizationFailed.
+/// factorisation, in a fraction of the time, and not its bits. Errors: InvalidArgument (an order
+/// that is not a permutation of a's rows), FactorizationFailed (a not positive definite, or not
+/// finite: K + μM with μ > 0 is).
 Result<std::shared_ptr<const ShiftedFactor>> factorInOrder(const SparseMatrixd& a, const Eigen::VectorXi& order);
 /// Non-zeros of that factor's strict lower L, from the symbolic analysis alone (what the bake
 /// compares orders by). `order` as above; one that is not a permutation gives −1.
