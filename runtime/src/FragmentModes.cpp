@@ -67,6 +67,7 @@ class StandardFormOp {
   const SparseMatrixd& mMass;
   mutable Eigen::VectorXd mT, mU;
 };
+
 // Lowest `count` eigenpairs of K φ = λ M φ, ascending, M-normalised; `factor` gets the sparse
 // path's factorisation of K − σM (null on the dense path).
 Status lowestEigenpairs(const FemSystem& fem, int count, double sigma, const ExactModesSettings& s,
@@ -176,8 +177,9 @@ Result<Eigen::VectorXd> lowestElasticEigenvalues(const FemSystem& fem, const Poi
     }
     return values;
   }
-  // K − σM by supernodes (SupernodalCholesky.h): on the default objects' pieces the check took
-  // 0.55–0.9 of its time with Eigen's SimplicialLDLT (docs/results/speed-accuracy.md).
+  // K − σM by supernodes (SupernodalCholesky.h): against Eigen's SimplicialLDLT, the quadratic
+  // checks of the default objects' pieces take 0.74 of their time (median; p10 0.54, p90 0.98), the
+  // small linear ones about the same (docs/results/speed-accuracy.md, "The checks by supernodes").
   detail::SupernodalCholesky factor;
   if (!factor.compute(fem.stiffness - sigma * fem.mass, 3)) {
     return makeError(ErrorCode::FactorizationFailed, "fragment '" + name + "': K − σM did not factorise as positive definite");

@@ -1,5 +1,7 @@
 #include "SupernodalCholesky.h"
 
+#include "brittle/database/ObjectAsset.h"  // isPermutation
+
 #include <Eigen/Cholesky>
 #include <Eigen/OrderingMethods>
 #include <algorithm>
@@ -57,14 +59,7 @@ bool SupernodalCholesky::compute(const Eigen::SparseMatrix<double>& a, Eigen::In
 bool SupernodalCholesky::computeInOrder(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXi& order) {
   *this = SupernodalCholesky{};
   const Eigen::Index n = a.rows();
-  if (n == 0 || a.cols() != n || n > INT32_MAX / 2 || order.size() != n) return false;
-  {
-    std::vector<char> seen(static_cast<size_t>(n), 0);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      if (order[i] < 0 || order[i] >= n || seen[static_cast<size_t>(order[i])]) return false;
-      seen[static_cast<size_t>(order[i])] = 1;
-    }
-  }
+  if (n == 0 || a.cols() != n || n > INT32_MAX / 2 || !isPermutation(order, n)) return false;
   for (Eigen::Index col = 0; col < n; ++col)
     for (Eigen::SparseMatrix<double>::InnerIterator it(a, col); it; ++it)
       if (it.row() >= col && !std::isfinite(it.value())) return false;
