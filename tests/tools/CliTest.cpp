@@ -164,9 +164,22 @@ TEST_F(CliTest, PlayWritesStatisticsAndAReplayAndReportsBadScenes) {
   const auto stats = nlohmann::json::parse(fileBytes(dir / "stats.json"));
   EXPECT_EQ(stats["summary"]["pose_hash"], doc["summary"]["pose_hash"]);
   EXPECT_EQ(fileBytes(dir / "replay.glb").substr(0, 4), "glTF");
+  EXPECT_EQ(doc["seed"], 1);  // the scene's default
   const CliRun text = run("play " + path("box.h5") + " " + path("scene.json"));
   ASSERT_EQ(text.exitCode, 0) << text.out;
   EXPECT_NE(text.out.find("frame time (ms)"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("scene (seed 1):"), std::string::npos) << text.out;
+  // --seed replaces the scene's: reported, and the same history in another process.
+  std::string hash;
+  for (int i = 0; i < 2; ++i) {
+    const CliRun seeded = run("play " + path("box.h5") + " " + path("scene.json") + " --seed 7 --json --frames-every 0");
+    ASSERT_EQ(seeded.exitCode, 0) << seeded.out;
+    const auto s = nlohmann::json::parse(seeded.out);
+    EXPECT_EQ(s["seed"], 7);
+    if (i == 0) hash = s["summary"]["pose_hash"].get<std::string>();
+    else EXPECT_EQ(s["summary"]["pose_hash"].get<std::string>(), hash);
+  }
+  EXPECT_EQ(run("play " + path("box.h5") + " " + path("scene.json") + " --seed -3").exitCode, 2);
 
   const CliRun missing = run("play " + path("box.h5") + " " + path("no-scene.json"));
   EXPECT_EQ(missing.exitCode, 3) << missing.out;

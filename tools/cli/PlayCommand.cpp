@@ -1,6 +1,7 @@
 // brittle play — play a scene with a pack's objects in Bullet; print and write the statistics.
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "CliSupport.h"
@@ -27,6 +28,7 @@ struct PlayOptions {
   double frameBudgetMs = 0.0;
   std::string framesDir, frameSize = "960x540";
   int frameEvery = 1;
+  int64_t seed = -1;  // the scene's
   bool json = false;
 };
 
@@ -74,6 +76,10 @@ Runner addPlayCommand(CLI::App& app) {
   cmd->add_option("--hull-vertices", o->settings.hullMaxVertices,
                   "Most vertices of a fragment's collision hull: its extreme vertices in this many directions (0: the exact hull)")
       ->capture_default_str()->check(CLI::Range(0, 4096));
+  cmd->add_option("--seed", o->seed,
+                  "The World's seed in place of the scene's: the cracks draw from it, so the same scene plays another "
+                  "fracture history, itself bit-identical from run to run (default: the scene's \"seed\")")
+      ->check(CLI::Range(int64_t{0}, std::numeric_limits<int64_t>::max()));
   cmd->add_option("--settings", o->runtimeSettings, "Runtime settings (JSON, as brittle size writes them); flags given here win");
   cmd->add_option("--frames", o->framesDir, "Also draw frames into this directory (frame_NNNNNN.png; needs a display: xvfb-run)");
   cmd->add_option("--frame-every", o->frameEvery, "Draw every N-th frame")->capture_default_str()->check(CLI::PositiveNumber);
@@ -82,6 +88,7 @@ Runner addPlayCommand(CLI::App& app) {
   return [o, cmd]() -> int {
     auto scene = loadScene(o->scene);
     if (!scene) return reportError(scene.error());
+    if (o->seed >= 0) scene.value().seed = static_cast<uint64_t>(o->seed);
     auto pack = readPack(o->pack, EntryReading::OnDemand);  // a World reads entries as it matches them
     if (!pack) return reportError(pack.error());
     o->settings.world.fracture.modeCount = o->modes;

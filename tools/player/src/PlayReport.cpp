@@ -26,6 +26,7 @@ nlohmann::json playReportJson(const PlayResult& r, int framesEvery) {
   const FrameTimeSummary t = summarizeFrameTimes(r.frameStats);
   nlohmann::json doc;
   doc["scene"] = r.scene;
+  doc["seed"] = r.seed;
   doc["frame_count"] = r.frames;
   doc["time_step_s"] = r.timeStepS;
   doc["load_s"] = r.loadS;
@@ -105,7 +106,7 @@ nlohmann::json playReportJson(const PlayResult& r, int framesEvery) {
 void printPlaySummary(const PlayResult& r, std::ostream& out) {
   const FrameTimeSummary t = summarizeFrameTimes(r.frameStats);
   const double total = t.bulletS + t.fractureS;
-  out << std::setprecision(4) << r.scene << ": " << r.frames << " frames of " << 1e3 * r.timeStepS << " ms, "
+  out << std::setprecision(4) << r.scene << " (seed " << r.seed << "): " << r.frames << " frames of " << 1e3 * r.timeStepS << " ms, "
       << r.impacts << " impacts (" << r.failedImpacts << " refused, " << r.deferredImpacts << " deferred), "
       << r.breaks << " breaks\n";
   {

@@ -155,6 +155,7 @@ Material Simulation::materialOf(const std::string& name) const {
 void Simulation::begin() {
   mOut = PlayResult{};
   mOut.scene = mScene.name;
+  mOut.seed = mScene.seed;
   mOut.timeStepS = mScene.timeStepS;
   mOut.frames = std::max<int64_t>(1, std::llround(mScene.durationS / mScene.timeStepS));
   mFrame = 0;

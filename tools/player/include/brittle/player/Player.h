@@ -174,6 +174,7 @@ struct BodyState {
 
 struct PlayResult {
   std::string scene;
+  uint64_t seed = 1;             ///< the World's seed (the scene's, or the player's override): the fracture history
   int64_t frames = 0;
   double timeStepS = 0.0;
   std::vector<ImpactEvent> events;
