@@ -73,6 +73,8 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
     } else if (key == "exact_mode_count") {
       if (Status st = integer(key, s.exactModeCount); !st) return st.error();
       if (s.exactModeCount < 1) return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"exact_mode_count\" must be ≥ 1");
+    } else if (key == "exact_modes_delay_s") {
+      if (Status st = finite(key, s.exactModesDelayS); !st) return st.error();
     } else if (key == "match_error_target") {  // the World refuses an infinite one too
       if (Status st = finite(key, s.matchErrorTarget); !st) return st.error();
     } else if (key == "polynomial_mode_degree") {
@@ -123,6 +125,7 @@ std::string runtimeSettingsJson(const FractureSettings& s) {
                               {"exact_modes_max_dof", s.exactModesMaxDof},
                               {"exact_modes_budget_dof", s.exactModesBudgetDof},
                               {"exact_mode_count", s.exactModeCount},
+                              {"exact_modes_delay_s", s.exactModesDelayS},
                               {"match_error_target", s.matchErrorTarget},
                               {"polynomial_mode_degree", s.polynomialModeDegree},
                               {"mesh_ratio_max_dof", s.meshRatioMaxDof},

@@ -409,6 +409,24 @@ Result<std::shared_ptr<const Body>> matchedBody(const EntryCache& cache, const F
   return made;
 }
 
+// A matched body with the entry's shared static correction placed as the entry was placed
+// (x = L Rᵀ_frame x̂ + t), or its own correction scheduled: a matched piece's first body, and an
+// exact-path piece's before its analysis is due (FractureSettings::exactModesDelayS).
+Result<std::shared_ptr<const Body>> correctedMatchedBody(const EntryCache& cache, const EntryCorrections* shared,
+                                                         const FragmentMatch& m, const Material& material, int modeCount,
+                                                         bool correct, const TriangleMesh& surface, const MassProperties& mass,
+                                                         int degree, const MeshCheck& check, const FrequencyErrorModels& models) {
+  auto made = matchedBody(cache, m, material, modeCount, surface, mass, degree, check, models);
+  if (made && correct && shared) {
+    const auto entry = shared->get(m.entry, material, made.value()->modes);
+    if (*entry) {
+      made.value()->adoptStaticCorrection(entry->value().placed(m.queryFrame.rotation.transpose(), 1.0 / m.queryFrame.scalePerM));
+      return made;
+    }
+  }
+  return withCorrectionScheduled(std::move(made), correct);
+}
+
 // The database: the nearest entry and its placement (searched now, so that the result reports
 // it); the entry rescaled to the fragment is made later (BodySource).
 std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std::shared_ptr<const BrokenParent>& parent,
@@ -439,16 +457,7 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
   const FrequencyErrorModels* models = &frequencyModelsAt(*job.matcher, degree);
   auto make = [cache, shared, m, material, modeCount, correct, degree, models, mass = fr.massProperties](
                   const TriangleMesh& own, const MeshCheck& limit) -> Result<std::shared_ptr<const Body>> {
-    auto made = matchedBody(*cache, m, material, modeCount, own, mass, degree, limit, *models);
-    if (made && correct && shared) {
-      // The entry's correction placed as instantiateEntry placed the entry: x = L Rᵀ_frame x̂ + t.
-      const auto entry = shared->get(m.entry, material, made.value()->modes);
-      if (*entry) {
-        made.value()->adoptStaticCorrection(entry->value().placed(m.queryFrame.rotation.transpose(), 1.0 / m.queryFrame.scalePerM));
-        return made;
-      }
-    }
-    return withCorrectionScheduled(std::move(made), correct);
+    return correctedMatchedBody(*cache, shared, m, material, modeCount, correct, own, mass, degree, limit, *models);
   };
   // When the break has a time (a check needs the broken parent: without one there is nothing to
   // check later either):
@@ -516,9 +525,12 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
 // 922-tet slab's 0.47 ms (docs/realtime.md, "The exact path's cut on the workers"). Should either
 // fail (the cut only on inconsistent data: its checks), the object takes the fragment's database
 // match when there is a database, as it did when the analysis failed. The caller has checked its
-// size against exactModesMaxDof and the impact's budget.
+// size against exactModesMaxDof and the impact's budget. A timed break's piece, with a database
+// and FractureSettings::exactModesDelayS, is first its match (its Ritz values, no mesh check),
+// searched and placed on the workers too, and its analysis a later version due that long after
+// the break (FragmentResult::exactDueS); an analysis that fails leaves the match.
 std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::shared_ptr<const BrokenParent>& parent,
-                                              const FragmentResult& fr, size_t i) {
+                                              FragmentResult& fr, size_t i) {
   const FractureSettings& fs = *job.settings;
   ExactModesSettings es;
   es.modeCount = keptModeCount(fs.modeCount, fs.exactModeCount);
@@ -533,20 +545,41 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   const int degree = fs.polynomialModeDegree;
   const MeshCheck check{parent, static_cast<int>(i), fs.meshRatioMaxDof, fs.meshRatioElement};
   const EntryCache* cache = job.entryCache;
-  return BodySource::deferred([parent, label = static_cast<int>(i), es, modeCount, correct, scheduleMatch, kind, matcher, cache,
-                               degree, check, name = std::move(name), mass = fr.massProperties,
-                               surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
+  // The fragment's own solid cut out of its parent, and its modal analysis.
+  auto own = [parent, label = static_cast<int>(i), es, modeCount, correct, name = std::move(name)]() -> Result<std::shared_ptr<const Body>> {
     const Material& material = parent->body->material;
     const Body& body = *parent->body;
-    auto own = [&]() -> Result<std::shared_ptr<const Body>> {
-      auto mesh = fragmentSubMesh(body.asset.tetMesh, body.topology, parent->nodeLabels, parent->edgeCuts, label);
-      if (!mesh) return Error{mesh.error().code, "exact path: " + mesh.error().message};
-      ExactModesFactor factor;  // its modal analysis's factorisation: the static correction's too
-      auto asset = exactFragmentAsset(mesh.value(), material, es, name, correct ? &factor : nullptr);
-      if (!asset) return asset.error();
-      inheritContactSpread(body, asset.value());
-      return makeBody(std::move(asset).value(), material, modeCount, &factor);
+    auto mesh = fragmentSubMesh(body.asset.tetMesh, body.topology, parent->nodeLabels, parent->edgeCuts, label);
+    if (!mesh) return Error{mesh.error().code, "exact path: " + mesh.error().message};
+    ExactModesFactor factor;  // its modal analysis's factorisation: the static correction's too
+    auto asset = exactFragmentAsset(mesh.value(), material, es, name, correct ? &factor : nullptr);
+    if (!asset) return asset.error();
+    inheritContactSpread(body, asset.value());
+    return makeBody(std::move(asset).value(), material, modeCount, &factor);
+  };
+  if (fs.exactModesDelayS > 0.0 && std::isfinite(job.desc.timeS) && matcher && cache) {
+    const FrequencyErrorModels* models = &frequencyModelsAt(*matcher, degree);
+    const MeshCheck ritzOnly{parent, static_cast<int>(i), 0, fs.meshRatioElement};
+    auto first = [matcher, kind, cache, shared = job.entryCorrections, material = parent->body->material, modeCount,
+                  scheduleMatch, degree, models, ritzOnly, mass = fr.massProperties,
+                  surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
+      auto match = matcher->match(surface, kind, 1);
+      if (!match) return Error{match.error().code, "the exact path's first body, its match: " + match.error().message};
+      return correctedMatchedBody(*cache, shared, match.value().front(), material, modeCount, scheduleMatch, surface, mass,
+                                  degree, ritzOnly, *models);
     };
+    fr.exactDueS = job.desc.timeS + fs.exactModesDelayS;
+    std::vector<BodySource::Later> laters;
+    laters.push_back({[own](const Result<std::shared_ptr<const Body>>& match) -> Result<std::shared_ptr<const Body>> {
+                        auto made = own();
+                        return made || !match ? made : match;
+                      },
+                      fr.exactDueS});
+    return BodySource::deferred(std::move(first), std::move(laters));
+  }
+  return BodySource::deferred([own = std::move(own), modeCount, scheduleMatch, kind, matcher, cache, degree, check,
+                               material = parent->body->material, mass = fr.massProperties,
+                               surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
     Result<std::shared_ptr<const Body>> made = own();
     if (made || !matcher) return made;
     auto match = matcher->match(surface, kind, 1);

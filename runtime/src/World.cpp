@@ -288,6 +288,7 @@ Status validateWorldSettings(const WorldSettings& s) {
       !std::isfinite(f.ringDownPeriods) || !(f.debrisVolumeFraction >= 0.0 && f.debrisVolumeFraction < 1.0) ||
       !(f.contactSpreadFraction >= 0.0 && f.contactSpreadFraction < 1.0) ||
       f.exactModesMaxTets < 0 || f.exactModesMaxDof < 0 || f.exactModesBudgetDof < 0 || f.exactModeCount < 1 ||
+      !(f.exactModesDelayS >= 0.0 && std::isfinite(f.exactModesDelayS)) ||
       !(f.matchErrorTarget >= 0.0 && std::isfinite(f.matchErrorTarget)) || f.polynomialModeDegree < 0 ||
       f.polynomialModeDegree > kMaxPolynomialModeDegree || f.meshRatioMaxDof < 0 || f.meshRatioLateMaxDof < 0 ||
       !(f.meshRatioLateDelayS >= 0.0) || !std::isfinite(f.meshRatioLateDelayS) ||
@@ -296,7 +297,7 @@ Status validateWorldSettings(const WorldSettings& s) {
       !std::isfinite(f.frequencyErrorTarget) || !std::isfinite(f.meshRatioEscalationDelayS) ||
       !(f.meshRatioEscalationDelayS >= (f.frequencyErrorTarget > 0.0 ? f.meshRatioLateDelayS : 0.0))) {
     return invalidArgument("FractureSettings: modeCount ≥ 0, pulseSteps ≥ 2, ringDownSteps ≥ 0, ringDownPeriods ≥ 0 and finite, "
-               "debrisVolumeFraction and contactSpreadFraction in [0, 1), exactModesMaxTets ≥ 0, exactModesMaxDof ≥ 0, exactModesBudgetDof ≥ 0, exactModeCount ≥ 1, matchErrorTarget finite and ≥ 0, polynomialModeDegree in [0, 5], meshRatioMaxDof ≥ 0, meshRatioLateMaxDof ≥ 0, meshRatioLateDelayS finite and ≥ 0, meshRatioDelayS finite and ≥ 0, and ≤ meshRatioLateDelayS with a later check, frequencyErrorTarget finite and ≥ 0, meshRatioEscalationDelayS finite and ≥ 0, and ≥ meshRatioLateDelayS with a frequencyErrorTarget");
+               "debrisVolumeFraction and contactSpreadFraction in [0, 1), exactModesMaxTets ≥ 0, exactModesMaxDof ≥ 0, exactModesBudgetDof ≥ 0, exactModeCount ≥ 1, exactModesDelayS finite and ≥ 0, matchErrorTarget finite and ≥ 0, polynomialModeDegree in [0, 5], meshRatioMaxDof ≥ 0, meshRatioLateMaxDof ≥ 0, meshRatioLateDelayS finite and ≥ 0, meshRatioDelayS finite and ≥ 0, and ≤ meshRatioLateDelayS with a later check, frequencyErrorTarget finite and ≥ 0, meshRatioEscalationDelayS finite and ≥ 0, and ≥ meshRatioLateDelayS with a frequencyErrorTarget");
   }
   if (f.crack.maxCracks < 0 || std::isnan(f.crack.propagationStressRatio) || !(f.crack.directionBlend >= 0.0) ||
       !(f.crack.directionBlend <= 1.0) || !(f.crack.noiseRad >= 0.0) || !std::isfinite(f.crack.noiseRad)) {

@@ -17,6 +17,7 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   s.contactSpreadFraction = 0.12;
   s.exactModesMaxTets = 321;
   s.exactModeCount = 12;
+  s.exactModesDelayS = 0.4;
   s.polynomialModeDegree = 3;
   s.meshRatioMaxDof = 2345;
   s.meshRatioDelayS = 0.125;
@@ -35,6 +36,7 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   EXPECT_EQ(back.value().contactSpreadFraction, 0.12);
   EXPECT_EQ(back.value().exactModesMaxTets, 321);
   EXPECT_EQ(back.value().exactModeCount, 12);
+  EXPECT_EQ(back.value().exactModesDelayS, 0.4);
   EXPECT_EQ(back.value().polynomialModeDegree, 3);
   EXPECT_EQ(back.value().meshRatioMaxDof, 2345);
   EXPECT_EQ(back.value().meshRatioDelayS, 0.125);
@@ -84,6 +86,8 @@ TEST(RuntimeSettingsFile, BadFilesGiveTypedErrors) {
   EXPECT_EQ(code(R"({ "mesh_ratio_escalation_delay_s": -1 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "mesh_ratio_late_delay_s": -1 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "mesh_ratio_delay_s": -1 })"), "invalid_argument");
+  EXPECT_EQ(code(R"({ "exact_modes_delay_s": -1 })"), "invalid_argument");
+  EXPECT_EQ(code(R"({ "exact_modes_delay_s": 0 })"), "ok");
   EXPECT_EQ(code(R"({ "exact_modes_max_tets": 0 })"), "ok");
   EXPECT_EQ(code(R"({ "polynomial_mode_degree": 6 })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "polynomial_mode_degree": -1 })"), "invalid_argument");

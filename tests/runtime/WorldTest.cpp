@@ -579,6 +579,96 @@ TEST_F(WorldTest, ALaterCheckAppliesFromItsDueTime) {
   EXPECT_EQ(World::create(Pack(*sPack), negative).error().code, ErrorCode::InvalidArgument);
 }
 
+// A timed break's exact-path pieces (FractureSettings::exactModesDelayS) are their database match,
+// at their Ritz values, for impacts before the break's time plus the delay, and their own modal
+// analysis from then on: bit for bit the body a world giving it at birth makes, so that a piece
+// struck within frames of its birth never waits for an analysis. Without a time or a database
+// the analysis is the first body.
+TEST_F(WorldTest, ATimedBreaksExactPathPiecesTakeTheirOwnModesFromExactModesDelayS) {
+  WorldSettings delayedSettings;  // the default delay
+  ASSERT_EQ(delayedSettings.fracture.exactModesDelayS, 0.25);
+  WorldSettings atBirth;
+  atBirth.fracture.exactModesDelayS = 0.0;
+  World world = makeWorld(delayedSettings);
+  World exactFirst = makeWorld(atBirth);
+  ImpactDesc hit = ball(world.addObject({.asset = "plate"}).value(), 60.0);
+  hit.timeS = 2.0;
+  auto broken = world.impact(hit);
+  hit.object = exactFirst.addObject({.asset = "plate"}).value();
+  auto reference = exactFirst.impact(hit);
+  ASSERT_TRUE(broken && broken.value().broken && reference);
+  ASSERT_EQ(hashFragments(broken.value()), hashFragments(reference.value()));
+  const FragmentResult* largest = nullptr;
+  int exact = 0;
+  for (size_t i = 0; i < broken.value().fragments.size(); ++i) {
+    const FragmentResult& f = broken.value().fragments[i];
+    const FragmentResult& g = reference.value().fragments[i];
+    EXPECT_EQ(f.path, g.path);
+    if (f.path != FragmentPath::ExactModes) {
+      EXPECT_TRUE(std::isnan(f.exactDueS));
+      continue;
+    }
+    ++exact;
+    EXPECT_EQ(f.exactDueS, 2.25);
+    EXPECT_TRUE(std::isnan(g.exactDueS));
+    const ObjectAsset* before = world.objectAsset(f.object, 2.24).value();
+    const ObjectAsset* after = world.objectAsset(f.object, 2.25).value();
+    EXPECT_EQ(before, world.objectAsset(f.object).value());  // an impact without a time: the first body
+    EXPECT_NE(before, after);
+    EXPECT_NE(before->modal.frequenciesHz, after->modal.frequenciesHz);
+    EXPECT_EQ(after->modal.frequenciesHz, exactFirst.objectAsset(g.object).value()->modal.frequenciesHz);
+    EXPECT_EQ(after->tetMesh.tets, exactFirst.objectAsset(g.object).value()->tetMesh.tets);
+    EXPECT_EQ(world.frequencyError(f.object, 2.24).value().source, FrequencySource::Ritz);
+    EXPECT_EQ(world.frequencyError(f.object, 2.25).value().source, FrequencySource::Own);
+    EXPECT_EQ(exactFirst.frequencyError(g.object, 2.0).value().source, FrequencySource::Own);
+    if (!largest || f.massProperties.volumeM3 > largest->massProperties.volumeM3) largest = &f;
+  }
+  std::printf("%d exact-path pieces of %zu fragments\n", exact, broken.value().fragments.size());
+  ASSERT_GE(exact, 1);
+  // A soft hit on the largest of them: before the due time on the match, from it the reference's.
+  const size_t index = static_cast<size_t>(largest - broken.value().fragments.data());
+  const Points& nodes = world.objectAsset(largest->object, 2.25).value()->tetMesh.nodes;
+  Eigen::Index top;
+  nodes.col(2).maxCoeff(&top);
+  ImpactDesc soft = ball(largest->object, 0.05);
+  soft.pointWorld = nodes.row(top).transpose();
+  soft.pointToleranceM = 1.0;
+  ImpactDesc softReference = soft;
+  softReference.object = reference.value().fragments[index].object;
+  soft.timeS = softReference.timeS = 2.3;
+  auto late = world.impact(soft);
+  auto lateReference = exactFirst.impact(softReference);
+  ASSERT_TRUE(late && lateReference) << (late ? lateReference.error().message : late.error().message);
+  EXPECT_EQ(late.value().peakPrincipalStressPa, lateReference.value().peakPrincipalStressPa);
+  soft.timeS = 2.1;
+  auto early = world.impact(soft);
+  ASSERT_TRUE(early) << early.error().message;
+  EXPECT_NE(early.value().peakPrincipalStressPa, late.value().peakPrincipalStressPa);
+  // Without a time, or without a database, the analysis is the first body.
+  for (bool database : {true, false}) {
+    World other = makeWorld(delayedSettings, database);
+    ImpactDesc plain = ball(other.addObject({.asset = "plate"}).value(), 60.0);
+    if (!database) plain.timeS = 2.0;
+    auto r = other.impact(plain);
+    ASSERT_TRUE(r && r.value().broken);
+    int seen = 0;
+    for (const FragmentResult& f : r.value().fragments) {
+      EXPECT_TRUE(std::isnan(f.exactDueS));
+      if (f.path != FragmentPath::ExactModes) continue;
+      ++seen;
+      EXPECT_EQ(other.frequencyError(f.object, 100.0).value().source, FrequencySource::Own);
+      EXPECT_EQ(other.objectAsset(f.object, 100.0).value(), other.objectAsset(f.object).value());
+    }
+    EXPECT_GE(seen, 1) << database;
+  }
+  // Typed errors: a negative, infinite or NaN delay.
+  for (double delay : {-0.1, std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
+    WorldSettings wrong;
+    wrong.fracture.exactModesDelayS = delay;
+    EXPECT_EQ(World::create(Pack(*sPack), wrong).error().code, ErrorCode::InvalidArgument) << delay;
+  }
+}
+
 // A timed break's pieces get their check (within meshRatioMaxDof) from meshRatioDelayS after the
 // break: their first body has the Ritz values alone, so that an impact within frames of the
 // break never waits for a check, and the checked body is made right after the first bodies.

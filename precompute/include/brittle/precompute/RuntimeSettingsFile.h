@@ -8,6 +8,8 @@
 //     "exact_modes_max_dof": 2000,       // and its model's limit in degrees of freedom (0: none)
 //     "exact_modes_budget_dof": 2000,    // and the exact-path pieces' total per impact (0: none)
 //     "exact_mode_count": 20,
+//     "exact_modes_delay_s": 0.25,       // a timed break's exact-path pieces are their match until
+//                                        // this long after it (0: their analysis at birth)
 //     "match_error_target": 0,           // a small fragment's match within this predicted error is
 //                                        // taken instead of the exact path (0: size alone decides)
 //     "polynomial_mode_degree": 5,       // matched bodies ring at their fragment's own frequencies

@@ -100,7 +100,8 @@ struct FractureSettings {
   bool matchFragments = true;
   /// The exact path (FragmentModes.h): a fragment that holds a part of at most this many of the
   /// broken body's tets, and is not debris, gets its own modal analysis at runtime instead of the
-  /// database match (and can break again even without a database). 0: never. Chart 5 (docs/results/speed-accuracy.md),
+  /// database match (and can break again even without a database; after a timed break, from
+  /// exactModesDelayS on). 0: never. Chart 5 (docs/results/speed-accuracy.md),
   /// 20 modes: up to 150 tets the exact path costs 13.5 ms per fragment (p90 15.7 ms, within a
   /// 60 Hz frame; a match costs ~1.2 ms) and has the match's median frequency error (26 % against
   /// 24 %) but a bounded worst case (p90 38 % against 79 %); beyond, its cost grows about linearly
@@ -124,6 +125,16 @@ struct FractureSettings {
   /// than their parent, so fewer of their modes fall in an impact's band; the static correction
   /// covers the rest. 40 modes cost ~1.5× what 20 do (chart 5).
   int exactModeCount = 20;
+  /// ... when a timed break's exact-path piece (ImpactDesc::timeS) gets its own modal analysis:
+  /// its impacts at a host time at least this long after the break use it
+  /// (FragmentResult::exactDueS), the earlier ones its database match with its own polynomial
+  /// Ritz frequencies (polynomialModeDegree), made first on the background threads. Made as the
+  /// first body, the analysis (tens of ms of background time) kept every piece struck within
+  /// frames of its birth waiting: over eight fracture histories of the pane scene, every impact
+  /// that waited for its result waited for one (up to 22 ms past its latency; docs/realtime.md,
+  /// "The exact path on the host's clock"). A break without a time, a pack without a database,
+  /// or 0 here: the analysis is the first body. An analysis that fails leaves the match.
+  double exactModesDelayS = 0.25;
   /// The scene's target for a match's error: the relative error of its first three frequencies,
   /// as the database predicts it at the match's descriptor distance (its 90th percentile,
   /// MatchErrors.h). 0: not used; fragments take the exact path by size alone. Above 0: a fragment
@@ -367,7 +378,7 @@ struct FragmentResult {
   TriangleMesh surface;         ///< closed, outward; the broken object's local frame (m)
   MassProperties massProperties;  ///< exact, from the surface; local frame
   int64_t matchedEntry = -1;    ///< database entry, −1 if none
-  bool exactModes = false;      ///< object built by the exact path (its own modal analysis), not matched
+  bool exactModes = false;      ///< object built by the exact path (its own modal analysis, from exactDueS if that is set), not matched
   double matchDistance = 0.0;
   /// The match's predicted frequency error (median and 90th percentile, MatchErrors.h) when the
   /// fragment was matched or its match was weighed against the exact path; NaN otherwise.
@@ -386,6 +397,11 @@ struct FragmentResult {
   /// use the body checked in quadratic tets if its later body was predicted over the target (the
   /// later body otherwise). NaN: none.
   double escalationDueS = std::numeric_limits<double>::quiet_NaN();
+  /// An exact-path piece's own modal analysis (FractureSettings::exactModesDelayS): its impacts at a
+  /// timeS of at least this use it, the earlier ones its database match. NaN: the analysis is its
+  /// first body (the break had no time, no database, the delay is 0), or the piece is not on the
+  /// exact path.
+  double exactDueS = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct StageTimes {
