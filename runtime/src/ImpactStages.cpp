@@ -560,13 +560,12 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   if (fs.exactModesDelayS > 0.0 && std::isfinite(job.desc.timeS) && matcher && cache) {
     const FrequencyErrorModels* models = &frequencyModelsAt(*matcher, degree);
     const MeshCheck ritzOnly{parent, static_cast<int>(i), 0, fs.meshRatioElement};
-    auto first = [matcher, kind, cache, shared = job.entryCorrections, material = parent->body->material, modeCount,
-                  scheduleMatch, degree, models, ritzOnly, mass = fr.massProperties,
-                  surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
+    auto first = [parent, matcher, kind, cache, shared = job.entryCorrections, modeCount, scheduleMatch, degree, models,
+                  ritzOnly, mass = fr.massProperties, surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
       auto match = matcher->match(surface, kind, 1);
       if (!match) return Error{match.error().code, "the exact path's first body, its match: " + match.error().message};
-      return correctedMatchedBody(*cache, shared, match.value().front(), material, modeCount, scheduleMatch, surface, mass,
-                                  degree, ritzOnly, *models);
+      return correctedMatchedBody(*cache, shared, match.value().front(), parent->body->material, modeCount, scheduleMatch,
+                                  surface, mass, degree, ritzOnly, *models);
     };
     fr.exactDueS = job.desc.timeS + fs.exactModesDelayS;
     std::vector<BodySource::Later> laters;
@@ -577,15 +576,17 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
                       fr.exactDueS});
     return BodySource::deferred(std::move(first), std::move(laters));
   }
-  return BodySource::deferred([own = std::move(own), modeCount, scheduleMatch, kind, matcher, cache, degree, check,
-                               material = parent->body->material, mass = fr.massProperties,
-                               surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
+  // (The parent, not a copy of its material: a copy allocates its name, and the impact's
+  // allocations per exact piece are counted, HotPathAllocationTest.)
+  return BodySource::deferred([own = std::move(own), parent, modeCount, scheduleMatch, kind, matcher, cache, degree, check,
+                               mass = fr.massProperties, surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
     Result<std::shared_ptr<const Body>> made = own();
     if (made || !matcher) return made;
     auto match = matcher->match(surface, kind, 1);
     if (!match) return made.error();
     const FragmentMatch& m = match.value().front();
-    auto matched = matchedBody(*cache, m, material, modeCount, surface, mass, degree, check, frequencyModelsAt(*matcher, degree));
+    auto matched = matchedBody(*cache, m, parent->body->material, modeCount, surface, mass, degree, check,
+                               frequencyModelsAt(*matcher, degree));
     if (!matched) return made.error();
     return withCorrectionScheduled(std::move(matched), scheduleMatch);
   });

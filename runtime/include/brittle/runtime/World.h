@@ -300,8 +300,10 @@ struct ImpactDesc {
   Eigen::Vector3d pointWorld = Eigen::Vector3d::Zero();
   Eigen::Vector3d normalWorld = Eigen::Vector3d::UnitZ();
   double speedMps = 0.0;                 ///< normal approach speed, > 0
-  /// The host's clock at the impact (s), NaN: none. What it decides: whether a piece's later mesh
-  /// check applies (FractureSettings::meshRatioLateDelayS). Deterministic as the rest: the same
+  /// The host's clock at the impact (s), NaN: none. What it decides: which of a piece's versions
+  /// its impact uses (its mesh checks, FractureSettings::meshRatioDelayS and meshRatioLateDelayS;
+  /// its escalation; an exact-path piece's own analysis, exactModesDelayS), and when a break's
+  /// pieces get them. Deterministic as the rest: the same
   /// times give the same results whatever the machine did meanwhile.
   double timeS = std::numeric_limits<double>::quiet_NaN();
   double impactorMassKg = 1.0;           ///< +∞: an immovable impactor (the ground)
