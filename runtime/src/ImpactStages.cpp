@@ -528,7 +528,8 @@ std::shared_ptr<const BodySource> matchedSource(const ImpactJob& job, const std:
 // size against exactModesMaxDof and the impact's budget. A timed break's piece, with a database
 // and FractureSettings::exactModesDelayS, is first its match (its Ritz values, no mesh check),
 // searched and placed on the workers too, and its analysis a later version due that long after
-// the break (FragmentResult::exactDueS); an analysis that fails leaves the match.
+// the break (FragmentResult::exactDueS); an analysis that fails leaves the match, and a match
+// that cannot be made gives way to the analysis at once.
 std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::shared_ptr<const BrokenParent>& parent,
                                               FragmentResult& fr, size_t i) {
   const FractureSettings& fs = *job.settings;
@@ -560,18 +561,23 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
   if (fs.exactModesDelayS > 0.0 && std::isfinite(job.desc.timeS) && matcher && cache) {
     const FrequencyErrorModels* models = &frequencyModelsAt(*matcher, degree);
     const MeshCheck ritzOnly{parent, static_cast<int>(i), 0, fs.meshRatioElement};
-    auto first = [parent, matcher, kind, cache, shared = job.entryCorrections, modeCount, scheduleMatch, degree, models,
+    // The match; where it cannot be made (a sliver whose frame is undefined, an entry that fails),
+    // the analysis at once, as without the delay, and then no later version is made again.
+    auto first = [own, parent, matcher, kind, cache, shared = job.entryCorrections, modeCount, scheduleMatch, degree, models,
                   ritzOnly, mass = fr.massProperties, surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
-      auto match = matcher->match(surface, kind, 1);
-      if (!match) return Error{match.error().code, "the exact path's first body, its match: " + match.error().message};
-      return correctedMatchedBody(*cache, shared, match.value().front(), parent->body->material, modeCount, scheduleMatch,
-                                  surface, mass, degree, ritzOnly, *models);
+      if (auto match = matcher->match(surface, kind, 1)) {
+        auto made = correctedMatchedBody(*cache, shared, match.value().front(), parent->body->material, modeCount,
+                                         scheduleMatch, surface, mass, degree, ritzOnly, *models);
+        if (made) return made;
+      }
+      return own();
     };
     fr.exactDueS = job.desc.timeS + fs.exactModesDelayS;
     std::vector<BodySource::Later> laters;
-    laters.push_back({[own](const Result<std::shared_ptr<const Body>>& match) -> Result<std::shared_ptr<const Body>> {
+    laters.push_back({[own](const Result<std::shared_ptr<const Body>>& base) -> Result<std::shared_ptr<const Body>> {
+                        if (base && base.value()->frequencyError.source == FrequencySource::Own) return base;  // analysed already
                         auto made = own();
-                        return made || !match ? made : match;
+                        return made || !base ? made : base;
                       },
                       fr.exactDueS});
     return BodySource::deferred(std::move(first), std::move(laters));

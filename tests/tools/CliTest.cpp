@@ -179,6 +179,9 @@ TEST_F(CliTest, PlayWritesStatisticsAndAReplayAndReportsBadScenes) {
     if (i == 0) hash = s["summary"]["pose_hash"].get<std::string>();
     else EXPECT_EQ(s["summary"]["pose_hash"].get<std::string>(), hash);
   }
+  // ... another history where the box breaks: its cracks draw from the seed.
+  EXPECT_GE(doc["summary"]["breaks"].get<int>(), 1);
+  EXPECT_NE(hash, doc["summary"]["pose_hash"].get<std::string>());
   EXPECT_EQ(run("play " + path("box.h5") + " " + path("scene.json") + " --seed -3").exitCode, 2);
 
   const CliRun missing = run("play " + path("box.h5") + " " + path("no-scene.json"));

@@ -128,7 +128,13 @@ struct FractureSettings {
   /// ... when a timed break's exact-path piece (ImpactDesc::timeS) gets its own modal analysis:
   /// its impacts at a host time at least this long after the break use it
   /// (FragmentResult::exactDueS), the earlier ones its database match with its own polynomial
-  /// Ritz frequencies (polynomialModeDegree), made first on the background threads. Made as the
+  /// Ritz frequencies (polynomialModeDegree; 0: the entry's), made first on the background
+  /// threads (FragmentResult::matchedEntry stays −1: the match is searched there, from the
+  /// piece's surface). The analysis is queued behind every first body, as the later checks are;
+  /// an impact at or after the due time whose analysis is not made yet waits for it. A piece
+  /// whose match cannot be made gets the analysis at once. With matchErrorTarget, a piece sent to
+  /// the exact path because its match was predicted over the target still rings at that match
+  /// until the due time. Made as the
   /// first body, the analysis (tens of ms of background time) kept every piece struck within
   /// frames of its birth waiting: over eight fracture histories of the pane scene, every impact
   /// that waited for its result waited for one (up to 22 ms past its latency; docs/realtime.md,
@@ -340,7 +346,7 @@ std::string_view fragmentPathName(FragmentPath path);
 
 /// Where a body's lowest frequencies come from (World::frequencyError).
 enum class FrequencySource : uint8_t {
-  Own,      ///< its own modal analysis: a pack object, or a fragment on the exact path
+  Own,      ///< its own modal analysis: a pack object, or a fragment on the exact path (a timed break's from its exactDueS)
   Entry,    ///< its database entry's, placed on it (polynomialModeDegree 0, or the Ritz analysis failed)
   Ritz,     ///< the fragment's polynomial Ritz values (polynomialModeDegree)
   Checked,  ///< those, the lowest three corrected by the fragment's own mesh (meshRatioMaxDof or the later check)
