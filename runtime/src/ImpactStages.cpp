@@ -558,19 +558,26 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
     inheritContactSpread(body, asset.value());
     return makeBody(std::move(asset).value(), material, modeCount, &factor);
   };
+  // The fragment's database match, searched from its surface and placed on the workers, with the
+  // entry's shared static correction (correctedMatchedBody, as a matched piece's): a timed piece's
+  // first body, or what an analysis that fails gives way to. (The parent, not a copy of its
+  // material: a copy allocates its name, and the impact's allocations per exact piece are counted,
+  // HotPathAllocationTest.)
+  auto matchSurface = [parent, matcher, kind, cache, shared = job.entryCorrections, modeCount, scheduleMatch, degree,
+                       mass = fr.massProperties, surface = std::move(surface)](const MeshCheck& limit) -> Result<std::shared_ptr<const Body>> {
+    auto match = matcher->match(surface, kind, 1);
+    if (!match) return match.error();
+    return correctedMatchedBody(*cache, shared, match.value().front(), parent->body->material, modeCount, scheduleMatch, surface,
+                                mass, degree, limit, frequencyModelsAt(*matcher, degree));
+  };
   if (fs.exactModesDelayS > 0.0 && std::isfinite(job.desc.timeS) && matcher && cache) {
-    const FrequencyErrorModels* models = &frequencyModelsAt(*matcher, degree);
-    const MeshCheck ritzOnly{parent, static_cast<int>(i), 0, fs.meshRatioElement};
-    // The match; where it cannot be made (a sliver whose frame is undefined, an entry that fails),
-    // the analysis at once, as without the delay, and then no later version is made again.
-    auto first = [own, parent, matcher, kind, cache, shared = job.entryCorrections, modeCount, scheduleMatch, degree, models,
-                  ritzOnly, mass = fr.massProperties, surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
-      if (auto match = matcher->match(surface, kind, 1)) {
-        auto made = correctedMatchedBody(*cache, shared, match.value().front(), parent->body->material, modeCount,
-                                         scheduleMatch, surface, mass, degree, ritzOnly, *models);
-        if (made) return made;
-      }
-      return own();
+    // The match at its Ritz values (no mesh check); where it cannot be made (a sliver whose frame
+    // is undefined, an entry that fails), the analysis at once, as without the delay, and then the
+    // later version does not make it again.
+    auto first = [own, matchSurface = std::move(matchSurface),
+                  ritzOnly = MeshCheck{parent, static_cast<int>(i), 0, fs.meshRatioElement}]() -> Result<std::shared_ptr<const Body>> {
+      auto made = matchSurface(ritzOnly);
+      return made ? made : own();
     };
     fr.exactDueS = job.desc.timeS + fs.exactModesDelayS;
     std::vector<BodySource::Later> laters;
@@ -582,19 +589,11 @@ std::shared_ptr<const BodySource> exactSource(const ImpactJob& job, const std::s
                       fr.exactDueS});
     return BodySource::deferred(std::move(first), std::move(laters));
   }
-  // (The parent, not a copy of its material: a copy allocates its name, and the impact's
-  // allocations per exact piece are counted, HotPathAllocationTest.)
-  return BodySource::deferred([own = std::move(own), parent, modeCount, scheduleMatch, kind, matcher, cache, degree, check,
-                               mass = fr.massProperties, surface = std::move(surface)]() -> Result<std::shared_ptr<const Body>> {
+  return BodySource::deferred([own = std::move(own), matchSurface = std::move(matchSurface), matcher, check]() -> Result<std::shared_ptr<const Body>> {
     Result<std::shared_ptr<const Body>> made = own();
     if (made || !matcher) return made;
-    auto match = matcher->match(surface, kind, 1);
-    if (!match) return made.error();
-    const FragmentMatch& m = match.value().front();
-    auto matched = matchedBody(*cache, m, parent->body->material, modeCount, surface, mass, degree, check,
-                               frequencyModelsAt(*matcher, degree));
-    if (!matched) return made.error();
-    return withCorrectionScheduled(std::move(matched), scheduleMatch);
+    auto matched = matchSurface(check);
+    return matched ? matched : made.error();
   });
 }
 
