@@ -1,5 +1,7 @@
 #include "BackgroundThreads.h"
 
+#include "Cancellation.h"
+
 #include <atomic>
 #include <chrono>
 #include <utility>
@@ -31,9 +33,11 @@ bool becomeBackgroundThread() {
 
 }  // namespace
 
-BackgroundThreads::BackgroundThreads(int threads) {
+BackgroundThreads::BackgroundThreads(int threads, std::atomic<bool>* cancel) {
+  if (cancel != nullptr) mCancel = cancel;
   for (int i = 0; i < threads; ++i) {
     mThreads.emplace_back([this] {
+      tCancelFlag = mCancel;  // this thread's jobs end when it is set
       if (becomeBackgroundThread()) ++mIdleThreads;
       run();
     });
@@ -55,15 +59,22 @@ bool BackgroundThreads::idlePriority() const {
   return !mThreads.empty() && mIdleThreads.load() == static_cast<int>(mThreads.size());
 }
 
-BackgroundThreads::~BackgroundThreads() {
+void BackgroundThreads::cancel() {
+  std::deque<std::function<void()>> dropped[3];  // destroyed after the lock: their captures may be large
   {
     std::unique_lock lock(mMutex);
     mStop = true;
-    mFirstQueue.clear();  // not needed any more: their results die with the World
-    mQueue.clear();
-    mLaterQueue.clear();
+    dropped[0].swap(mFirstQueue);  // not needed any more: their results die with the World
+    dropped[1].swap(mQueue);
+    dropped[2].swap(mLaterQueue);
+    mCancel->store(true, std::memory_order_relaxed);
   }
   mWork.notify_all();
+  mIdleWait.notify_all();
+}
+
+BackgroundThreads::~BackgroundThreads() {
+  cancel();
   for (std::thread& t : mThreads) t.join();
 }
 
@@ -92,6 +103,8 @@ void BackgroundThreads::execute(std::function<void()>& job, bool later) {
   std::exception_ptr error;
   try {
     job();
+  } catch (const Cancelled&) {
+    // dropped: cancel() was called, and nobody wants its result
   } catch (...) {
     error = std::current_exception();
   }

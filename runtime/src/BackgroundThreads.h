@@ -38,9 +38,11 @@ namespace brittle::detail {
 
 class BackgroundThreads {
  public:
-  /// `threads` threads (0: none; jobs then run only when the host waits for them, in wait()).
-  explicit BackgroundThreads(int threads);
-  /// Drops the jobs not started, waits for those running, joins the threads.
+  /// `threads` threads (0: none; jobs then run only when the host waits for them, in wait()). Their
+  /// jobs are cancelled (Cancellation.h) through `cancel` when it is given (the owner's flag, which
+  /// must outlive this object), else through a flag of their own.
+  explicit BackgroundThreads(int threads, std::atomic<bool>* cancel = nullptr);
+  /// cancel(), then joins the threads: a running job ends at its next cancellation point.
   ~BackgroundThreads();
   BackgroundThreads(const BackgroundThreads&) = delete;
   BackgroundThreads& operator=(const BackgroundThreads&) = delete;
@@ -55,6 +57,10 @@ class BackgroundThreads {
   /// waiting for as long as other work keeps every core busy. Rethrows the first exception a job
   /// threw since the last wait.
   bool wait(bool untilStarved = false);
+  /// Drops the jobs not started, sets the cancellation flag (the running jobs throw Cancelled at
+  /// their next cancellationPoint() and are dropped) and lets the threads end; submit() queues
+  /// for nobody from then on. Returns at once.
+  void cancel();
   /// Whether every thread has lowered itself to idle priority (false where the system refused or
   /// has none, and until each has started).
   bool idlePriority() const;
@@ -77,6 +83,8 @@ class BackgroundThreads {
   bool mStop = false;
   std::atomic<int> mIdleThreads{0};
   std::exception_ptr mError;
+  std::atomic<bool> mOwnCancel{false};
+  std::atomic<bool>* mCancel = &mOwnCancel;
   std::vector<std::thread> mThreads;
   std::vector<clockid_t> mClocks;  // each thread's CPU clock, set by the constructor
 };

@@ -1,5 +1,7 @@
 #include "BackwardSolve.h"
 
+#include "Cancellation.h"
+
 #include "brittle/core/Simd.h"
 
 #include <oneapi/tbb/parallel_for.h>
@@ -212,6 +214,7 @@ BackwardSolvePlan BackwardSolvePlan::make(const Eigen::SparseMatrix<double>& low
   std::vector<double> subtreeWork(static_cast<size_t>(n), 0.0);
   double total = 0.0;
   for (int32_t j = 0; j < n; ++j) {  // children come before their parents, so sums are complete in order
+    if (j % 4096 == 0) cancellationPoint();  // made on a World's background threads (Cancellation.h)
     const auto [begin, end] = columnRange(lower, j);
     if (end > begin) parent[static_cast<size_t>(j)] = lower.innerIndexPtr()[begin];
     subtreeWork[static_cast<size_t>(j)] += static_cast<double>(end - begin) + 1.0;
@@ -342,7 +345,10 @@ void BackwardSolvePlan::copyValues(const Eigen::SparseMatrix<double>& lower) {
     // and a forward solve reading it went backwards through it and was slower than Eigen's doubles.
     const Eigen::Index size = lower.cols() > 0 ? columnRange(lower, lower.cols() - 1).second : 0;
     mForwardFloats.resize(static_cast<size_t>(size));
-    for (Eigen::Index p = 0; p < size; ++p) mForwardFloats[static_cast<size_t>(p)] = static_cast<float>(lower.valuePtr()[p]);
+    for (Eigen::Index p = 0; p < size; ++p) {
+      if (p % (1 << 20) == 0) cancellationPoint();
+      mForwardFloats[static_cast<size_t>(p)] = static_cast<float>(lower.valuePtr()[p]);
+    }
   } else {
     mValues.reserve(static_cast<size_t>(lower.nonZeros()));
   }
@@ -356,6 +362,7 @@ void BackwardSolvePlan::copyValues(const Eigen::SparseMatrix<double>& lower) {
       run.rowsAt = static_cast<int64_t>(mRows.size());
       mRows.insert(mRows.end(), lower.innerIndexPtr() + lastBegin, lower.innerIndexPtr() + lastEnd);
       for (int32_t j = run.end - 1; j >= run.first; --j) {
+        if (j % 1024 == 0) cancellationPoint();
         const auto [begin, end] = columnRange(lower, j);
         if (mFloatValues) {
           mOffset[static_cast<size_t>(j)] = static_cast<int64_t>(mFloats.size());

@@ -14,6 +14,7 @@
 #include <numeric>
 #include <random>
 
+#include "Cancellation.h"
 #include "FixedRanges.h"
 #include "brittle/core/Simd.h"
 
@@ -444,6 +445,7 @@ StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::Vect
   b.deviatorSpectralNorms.resize(t);
   Eigen::Matrix<double, 6, Eigen::Dynamic> a(6, modes);
   for (Eigen::Index e = 0; e < t; ++e) {
+    if (e % 256 == 0) detail::cancellationPoint();  // made on a World's background threads
     a.noalias() = kD.asDiagonal() * s.block(6 * e, 0, 6, modes);
     const Eigen::RowVectorXd pressure = a.topRows<3>().colwise().sum() / 3.0;
     b.pressureModes.row(e) = pressure;
@@ -501,6 +503,7 @@ StressBounds stressModeBounds(const MatrixXdRow& s, int modes, const Eigen::Vect
   }
   Eigen::Matrix<double, 6, Eigen::Dynamic> centre(6, modes);
   for (Eigen::Index g = 0; g < groups; ++g) {
+    if (g % 256 == 0) detail::cancellationPoint();
     const int32_t* first = b.groupPoints.data() + b.groupStart[static_cast<size_t>(g)];
     const int32_t* last = b.groupPoints.data() + b.groupStart[static_cast<size_t>(g) + 1];
     centre.setZero();

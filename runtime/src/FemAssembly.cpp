@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "Cancellation.h"
 #include "FixedRanges.h"
 #include "brittle/descriptors/MassProperties.h"
 #include "brittle/runtime/QuadraticTetMesh.h"
@@ -198,6 +199,7 @@ Result<FemSystem> assembleFem(const TetMesh& mesh, const Material& material, con
     }
   BlockAssembly<4> sys(n, mesh.tets, settings.lumpedMass);
   for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    if (t % 256 == 0) detail::cancellationPoint();  // assembled on a World's background threads
     std::array<int32_t, 4> v = {mesh.tets(t, 0), mesh.tets(t, 1), mesh.tets(t, 2), mesh.tets(t, 3)};
     double volume = 0.0;
     const auto b = tetStrainDisplacement(mesh.nodes.row(v[0]).transpose(), mesh.nodes.row(v[1]).transpose(),
@@ -335,6 +337,7 @@ Result<FemSystem> assembleFem(const QuadraticTetMesh& mesh, const Material& mate
   BlockAssembly<10> sys(n, mesh.tets, settings.lumpedMass);
   std::array<int32_t, 10> v{};
   for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    if (t % 64 == 0) detail::cancellationPoint();
     for (int a = 0; a < 10; ++a) v[static_cast<size_t>(a)] = mesh.tets(t, a);
     std::array<Eigen::Vector3d, 4> p;
     for (int a = 0; a < 4; ++a) p[static_cast<size_t>(a)] = mesh.nodes.row(v[static_cast<size_t>(a)]).transpose();

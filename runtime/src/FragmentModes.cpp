@@ -14,6 +14,7 @@
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/runtime/PolynomialModes.h"
 #include "brittle/runtime/TetTopology.h"
+#include "Cancellation.h"
 #include "SupernodalCholesky.h"
 
 namespace brittle {
@@ -37,6 +38,7 @@ class StandardFormOp {
   Eigen::Index rows() const { return mFactor.rows(); }
   Eigen::Index cols() const { return mFactor.rows(); }
   void perform_op(const double* x, double* y) const {
+    detail::cancellationPoint();  // a step of Lanczos: a World closing stops its analyses here
     std::copy(x, x + rows(), mT.data());
     mFactor.solveLt(mT.data());
     mFactor.permuteBack(mT.data(), mU.data());

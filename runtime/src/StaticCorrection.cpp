@@ -6,6 +6,7 @@
 #include <string>
 
 #include "BackwardSolve.h"
+#include "Cancellation.h"
 #include "SupernodalCholesky.h"
 #include "FixedRanges.h"
 #include "brittle/database/ScalingLaws.h"
@@ -49,6 +50,7 @@ Result<std::shared_ptr<const ShiftedFactor>> factorInOrder(const SparseMatrixd& 
   if (!(order.size() == 0 ? factor.compute(a) : factor.computeInOrder(a, order))) {
     return makeError(ErrorCode::FactorizationFailed, "the matrix did not factorise");
   }
+  detail::cancellationPoint();
   return detail::simplicialForm(factor);
 }
 
@@ -128,6 +130,7 @@ Result<StaticCorrection> StaticCorrection::fromFactor(const ObjectAsset& asset, 
   data->solver = std::move(factor);
   const ShiftedFactor& solver = *data->solver;
   data->inverseD = solver.vectorD().cwiseInverse();
+  detail::cancellationPoint();  // between the steps too: each reads all of L or H (tens of ms on the vase)
   const bool floats = storage == CorrectionStorage::Float;
   data->backward = detail::BackwardSolvePlan::make(solver.matrixL().nestedExpression(),
                                                    tbb::this_task_arena::max_concurrency(), floats);
@@ -135,12 +138,14 @@ Result<StaticCorrection> StaticCorrection::fromFactor(const ObjectAsset& asset, 
   // so an impact's forward solve stays as sparse as its load. (Not (K + μM)⁻¹MΨ after the whole
   // solve: that is Ψ/μ, and taking it away from (K + μM)⁻¹f would cancel six digits of the
   // elastic part.)
+  detail::cancellationPoint();
   data->massRigid = data->mass * data->rigid;
   const Eigen::Index dofs = 3 * data->femNodes;
   MatrixXdRow forward(dofs, 6 + r);
   forward.leftCols(6) = data->massRigid;
   forward.rightCols(r) = data->mass * asset.modal.modes.leftCols(r);
   if (solver.permutationP().size() > 0) forward = solver.permutationP() * forward;
+  detail::cancellationPoint();
   // Every column at once, in one pass over L: row i takes −L_ij (row j) for the columns j of L in
   // order, each entry Eigen's column-by-column forward solve's arithmetic in its order. With float
   // storage the impact's forward solve reads L rounded to float (BackwardSolvePlan), and H is made
@@ -149,11 +154,13 @@ Result<StaticCorrection> StaticCorrection::fromFactor(const ObjectAsset& asset, 
   const SparseMatrixd& lower = solver.matrixL().nestedExpression();
   const float* rounded = data->backward.forwardFloats();  // the forward solve's own values, or null
   for (Eigen::Index j = 0; j < lower.outerSize(); ++j) {
+    if (j % 256 == 0) detail::cancellationPoint();
     for (SparseMatrixd::InnerIterator it(lower, j); it; ++it) {
       const double l = rounded ? static_cast<double>(rounded[&it.value() - lower.valuePtr()]) : it.value();
       forward.row(it.index()) -= l * forward.row(j);
     }
   }
+  detail::cancellationPoint();
   if (floats) {
     data->loadsForwardFloat = forward.cast<float>();
   } else {

@@ -1,5 +1,7 @@
 #include "SupernodalCholesky.h"
 
+#include "Cancellation.h"
+
 #include "brittle/database/ObjectAsset.h"  // isPermutation
 
 #include <Eigen/Cholesky>
@@ -76,6 +78,7 @@ bool SupernodalCholesky::computeInOrder(const Eigen::SparseMatrix<double>& a, co
   const auto count = static_cast<size_t>(n);
   std::vector<int32_t> parent(count, -1), tag(count), below(count, 0);
   for (int32_t k = 0; k < static_cast<int32_t>(n); ++k) {
+    if (k % 4096 == 0) cancellationPoint();
     tag[static_cast<size_t>(k)] = k;
     for (Eigen::SparseMatrix<double>::InnerIterator it(ap, k); it; ++it) {
       for (auto i = static_cast<int32_t>(it.row()); i < k && tag[static_cast<size_t>(i)] != k; i = parent[static_cast<size_t>(i)]) {
@@ -116,6 +119,7 @@ bool SupernodalCholesky::computeInOrder(const Eigen::SparseMatrix<double>& a, co
   mValuesAt.assign(supernodes + 1, 0);
   size_t widest = 0;
   for (size_t s = 0; s < supernodes; ++s) {
+    if (s % 256 == 0) cancellationPoint();
     const int32_t f = mFirst[s], l = mFirst[s + 1];
     std::vector<int32_t>& rows = rowsBelow[s];
     auto add = [&](int32_t r) {
@@ -151,6 +155,7 @@ bool SupernodalCholesky::computeInOrder(const Eigen::SparseMatrix<double>& a, co
     for (int64_t i = mRowsAt[s]; i < mRowsAt[s + 1]; ++i) position[static_cast<size_t>(mRows[static_cast<size_t>(i)])] = static_cast<int32_t>(i - mRowsAt[s]);
   };
   for (size_t s = 0; s < supernodes; ++s) {
+    if (s % 256 == 0) cancellationPoint();
     place(s);
     const int32_t f = mFirst[s];
     const int64_t m = mRowsAt[s + 1] - mRowsAt[s];
@@ -165,6 +170,7 @@ bool SupernodalCholesky::computeInOrder(const Eigen::SparseMatrix<double>& a, co
   // supernodes that hold its rows below as columns.
   std::vector<double> update(widest * widest);
   for (size_t s = 0; s < supernodes; ++s) {
+    cancellationPoint();  // a World closing stops its background factorisations here
     const int32_t f = mFirst[s];
     const Eigen::Index k = mFirst[s + 1] - f, m = mRowsAt[s + 1] - mRowsAt[s], r = m - k;
     Eigen::Map<Eigen::MatrixXd> panel(mValues.data() + mValuesAt[s], m, k);
@@ -206,6 +212,7 @@ void SupernodalCholesky::toUnitLower(Eigen::SparseMatrix<double>& unitLower, Eig
   pivots.resize(mN);
   int64_t at = 0;
   for (size_t s = 0; s + 1 < mFirst.size(); ++s) {
+    if (s % 256 == 0) cancellationPoint();
     const int32_t f = mFirst[s];
     const Eigen::Index k = mFirst[s + 1] - f, m = mRowsAt[s + 1] - mRowsAt[s];
     const double* panel = mValues.data() + mValuesAt[s];

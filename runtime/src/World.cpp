@@ -14,6 +14,7 @@
 #include <string>
 
 #include "BackgroundThreads.h"
+#include "Cancellation.h"
 #include "Body.h"
 #include "ImpactStages.h"
 #include "brittle/core/EigenBlocking.h"
@@ -93,6 +94,9 @@ struct World::Impl {
   // cores impacts and the host leave. A host waiting for an impact helps with impacts only, never
   // with a background job, which would hold it for as long as that job runs (a fragment's modal
   // analysis, a placed object's factorisation).
+  // Set when the World closes: its background jobs and submitted impacts stop at their next
+  // cancellation point instead of being waited for (Cancellation.h).
+  std::atomic<bool> closing{false};
   std::unique_ptr<tbb::task_arena> arena;
   std::unique_ptr<detail::BackgroundThreads> backgroundThreads;
   std::map<uint64_t, std::unique_ptr<PendingImpact>> pending;
@@ -100,14 +104,17 @@ struct World::Impl {
   uint64_t nextTicket = 1;
 
   ~Impl() {
-    // Work still running reads this World's pack and bodies: wait for it.
+    // Nothing still to come is wanted (its results die with the World): background work not started
+    // is dropped, and the jobs and impacts running stop at their next cancellation point, a few ms
+    // at most, instead of running to their end (a placed object's preparation: seconds).
+    closing.store(true, std::memory_order_relaxed);
+    if (backgroundThreads) backgroundThreads->cancel();
+    // Work still running reads this World's pack and bodies: wait for it to stop.
     if (arena) {
       arena->execute([&] {
         for (auto& [ticket, p] : pending) p->group.wait();
       });
     }
-    // Background work not started yet is not needed any more (its results die with the World);
-    // the jobs running are waited for.
     backgroundThreads.reset();
   }
 
@@ -124,7 +131,7 @@ struct World::Impl {
   detail::BackgroundThreads& background() {
     if (!backgroundThreads) {
       const int threads = settings.workerThreads > 0 ? int{settings.workerThreads} : tbb::info::default_concurrency();
-      backgroundThreads = std::make_unique<detail::BackgroundThreads>(threads > 1 ? threads : 0);
+      backgroundThreads = std::make_unique<detail::BackgroundThreads>(threads > 1 ? threads : 0, &closing);
     }
     return *backgroundThreads;
   }
@@ -491,10 +498,13 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
     // Should scheduling throw, the impact is forgotten and the object is no longer pending (a task
     // not scheduled yet is released with its handle, before the catch below runs).
     recorded = ticket;
-    auto compute = [raw, ticket, &hook = w.settings.onImpactComputed] {
+    auto compute = [raw, ticket, &hook = w.settings.onImpactComputed, &closing = w.closing] {
       try {
+        const detail::CancelScope scope(&closing);  // a body it makes stops when the World closes
         raw->status = detail::computeImpact(raw->job, *raw->workspace, raw->result, raw->born);
         if (*raw->status && hook) hook(ticket, raw->result);
+      } catch (const detail::Cancelled&) {
+        raw->status = invalidArgument("the World closed before the impact was computed");
       } catch (const std::exception& e) {
         raw->status = invalidArgument(std::string("impact failed on a worker: ") + e.what());
       }
@@ -512,6 +522,8 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
           [source = raw->job.source, deferred, &arena = w.workers()] {
             try {
               Impl::prepare(*source);
+            } catch (const detail::Cancelled&) {
+              return;  // the World is closing: the impact is dropped with its handle
             } catch (...) {
               // the impact meets the same failure and returns it as its error
             }

@@ -1,8 +1,10 @@
 // The World's background threads (runtime/src/BackgroundThreads.h): jobs run beside the host at
 // idle priority on threads named brittle-bg, all of them at once when there are threads for them; without threads, only when
 // the host waits; a job's exception reaches the waiting host once; a host can stop waiting for a
-// starved job; jobs not started are dropped.
+// starved job; jobs not started are dropped; jobs running are cancelled at their next cancellation
+// point (Cancellation.h), and threads without a flag never are.
 #include "BackgroundThreads.h"
+#include "Cancellation.h"
 
 #include <gtest/gtest.h>
 
@@ -213,6 +215,69 @@ TEST(BackgroundThreads, JobsNotStartedAreDroppedWithThePool) {
   }
   releaser.join();
   EXPECT_EQ(ran.load(), 1);
+}
+
+// A job that would run for a minute unless cancelled: the pool's destructor stops it at its next
+// cancellation point, and the job behind it never starts. Cancelled is the job's own end, not an
+// error a host's wait() would rethrow.
+TEST(BackgroundThreads, ARunningJobStopsAtItsNextCancellationPointWhenThePoolIsDestroyed) {
+  std::atomic<bool> running{false};
+  std::atomic<int> points{0}, finished{0}, behind{0};
+  const auto start = std::chrono::steady_clock::now();
+  {
+    BackgroundThreads pool(1);
+    pool.submit([&] {
+      running = true;
+      while (std::chrono::steady_clock::now() - start < std::chrono::seconds(60)) {
+        cancellationPoint();
+        ++points;
+        std::this_thread::sleep_for(std::chrono::microseconds(100));
+      }
+      ++finished;
+    });
+    pool.submit([&] { ++behind; });
+    while (!running) std::this_thread::yield();
+  }
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(30));  // not run to its end
+  EXPECT_EQ(finished.load(), 0);
+  EXPECT_EQ(behind.load(), 0);
+}
+
+// cancel() returns at once, leaves the jobs' owner's flag set (the World's, which its submitted
+// impacts read too) and drops what is queued; the host's own thread is never cancelled, even while
+// its jobs are.
+TEST(BackgroundThreads, CancelSetsTheOwnersFlagAndNeverCancelsTheHost) {
+  std::atomic<bool> closing{false}, running{false}, stopped{false};
+  std::atomic<int> behind{0};
+  BackgroundThreads pool(1, &closing);
+  pool.submit([&] {
+    running = true;
+    try {
+      for (;;) {
+        cancellationPoint();
+        std::this_thread::yield();
+      }
+    } catch (const Cancelled&) {
+      stopped = true;
+      throw;
+    }
+  });
+  pool.submit([&] { ++behind; });
+  while (!running) std::this_thread::yield();
+  EXPECT_FALSE(closing.load());
+  pool.cancel();
+  EXPECT_TRUE(closing.load());
+  EXPECT_NO_THROW(cancellationPoint());  // this thread has no flag
+  {
+    const CancelScope scope(&closing);  // as a World's impact task on a worker
+    EXPECT_THROW(cancellationPoint(), Cancelled);
+  }
+  EXPECT_NO_THROW(cancellationPoint());  // the scope restored the thread's flag
+  const auto start = std::chrono::steady_clock::now();
+  while (!stopped && std::chrono::steady_clock::now() - start < std::chrono::seconds(20)) std::this_thread::yield();
+  EXPECT_TRUE(stopped.load());
+  EXPECT_TRUE(pool.wait());  // no error: a cancelled job is dropped, not failed
+  EXPECT_EQ(behind.load(), 0);
 }
 
 }  // namespace

@@ -1477,6 +1477,48 @@ TEST_F(WorldTest, PiecesStruckBeforeTheirBodiesAreMadeBreakAsOnceTheyAre) {
   (void)run(false, false);  // returns: the World waited for its pending impacts and their bodies
 }
 
+// A World closed while its background work and submitted impacts run (a placement's factorisation,
+// the pieces' bodies, impacts waiting for them) stops them at their next cancellation point instead
+// of running them to their end (Cancellation.h; the time it takes is measured in docs/realtime.md,
+// "A World destroyed without waiting"). What must hold: closing never fails or crashes at any of
+// those moments (the sanitizer suite runs this), and nothing of a closed World's stays behind in the
+// threads it used (a cancellation flag left set on a oneTBB worker would fail the next World's
+// impacts): a World made after them breaks the plate into the reference's bits.
+TEST_F(WorldTest, AWorldClosedWhileItsWorkRunsStopsItAndTheNextWorldBreaksAlike) {
+  auto fracture = [&] {
+    WorldSettings settings;
+    settings.workerThreads = 2;
+    World world = makeWorld(settings);
+    auto r = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
+    EXPECT_TRUE(r && r.value().broken);
+    return r ? hashFragments(r.value()) : 0;
+  };
+  const uint64_t reference = fracture();
+  for (int stage = 0; stage < 4; ++stage) {
+    WorldSettings settings;
+    settings.workerThreads = 2;
+    World world = makeWorld(settings);
+    auto id = world.addObject({.asset = "plate"});  // its preparation starts on a background thread
+    ASSERT_TRUE(id);
+    if (stage == 0) continue;  // closed while it is prepared
+    auto ticket = world.submitImpact(ball(id.value(), 60.0));
+    ASSERT_TRUE(ticket);
+    if (stage == 1) continue;  // closed while the impact waits for the preparation or runs
+    ImpactResult broken;
+    ASSERT_TRUE(world.collectImpact(ticket.value(), broken));
+    ASSERT_TRUE(broken.broken);
+    if (stage == 2) continue;  // closed while the pieces' bodies are made
+    for (const FragmentResult& f : broken.fragments) {  // closed with impacts waiting for those bodies
+      if (f.path != FragmentPath::Matched) continue;
+      ImpactDesc hit = ball(f.object, 30.0);
+      hit.pointWorld = f.surface.vertices.row(0).transpose();
+      hit.pointToleranceM = 1.0;
+      EXPECT_TRUE(world.submitImpact(hit));
+    }
+  }
+  EXPECT_EQ(fracture(), reference);
+}
+
 TEST_F(WorldTest, APendingObjectStaysAsItWasAndRefusesOtherCalls) {
   World world = makeWorld();
   const ObjectId id = world.addObject({.asset = "plate"}).value();

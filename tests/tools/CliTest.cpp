@@ -272,6 +272,29 @@ TEST_F(CliTest, ImpactBenchTimesEitherElementAndNamesItInItsCsv) {
   EXPECT_EQ(run("bench impact --element p3 --csv " + path("x.csv")).exitCode, 2);
 }
 
+// bench place: a row per pack object, the placement against its bytes' read, the background
+// preparation, and Worlds destroyed when prepared and midway through it, beside the preparation
+// left then (the reference: what the destructor waited for before it stopped running work).
+TEST_F(CliTest, PlacementBenchTimesPlacementPreparationAndWorldsDestroyedDuringIt) {
+  testing::writeOff(testing::makeBoxSurface(0.2, 0.1, 0.05), dir / "box.off");
+  ASSERT_EQ(run("bake --mesh " + path("box.off") + " --material glass --tets 800 --modes 6 --quiet --out " + path("box.h5")).exitCode, 0);
+  const CliRun bench = run("bench place " + path("box.h5") + " --repeats 2 --csv " + path("p.csv"));
+  ASSERT_EQ(bench.exitCode, 0) << bench.out;
+  EXPECT_NE(bench.out.find("destroyed: prepared"), std::string::npos) << bench.out;
+  const Csv csv = readCsv(dir / "p.csv");
+  EXPECT_EQ(csv.header,
+            "object,tets,read_share_ms,place_ms,place_over_read,background_prepare_ms,destroy_prepared_ms,"
+            "destroy_midway_ms,destroy_midway_max_ms,preparation_left_ms");
+  ASSERT_EQ(csv.rows.size(), 1u);
+  const std::vector<std::string>& c = csv.rows[0];
+  ASSERT_EQ(c.size(), 10u);
+  EXPECT_EQ(c[0], "box");
+  for (size_t i = 2; i < c.size(); ++i) EXPECT_GE(std::stod(c[i]), 0.0) << i;
+  EXPECT_GE(std::stod(c[8]), std::stod(c[7]));                             // the max is at least the median
+  EXPECT_NEAR(std::stod(c[9]), 0.5 * std::stod(c[5]), 2e-5 * std::stod(c[5]));  // left: 3/4, 1/2, 1/4 of it (6 digits)
+  EXPECT_EQ(run("bench place " + path("missing.h5")).exitCode, 2);
+}
+
 // bench elements: the beam (converged 526.0 Hz) in both orders. P1 converges from above and P2
 // at 446 tets is already closer than P1 at 2 071 (measured −4.4 % against +12.5 %).
 TEST_F(CliTest, ElementBenchComparesP1AndP2AgainstTheConvergedFrequency) {

@@ -4,9 +4,12 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <chrono>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <string>
+#include <thread>
 
 #include "brittle/core/Timing.h"
 #include "brittle/database/Pack.h"
@@ -155,32 +158,63 @@ Status runPlacementBench(const PlacementBenchSettings& s) {
   double total = 0.0;
   for (const ObjectAsset& a : pack.objects) total += arrayBytes(a);
   const double packReadS = percentile(reads, 0.5);
-  csv << "object,tets,read_share_ms,place_ms,place_over_read,background_prepare_ms\n";
+  csv << "object,tets,read_share_ms,place_ms,place_over_read,background_prepare_ms,destroy_prepared_ms,"
+         "destroy_midway_ms,destroy_midway_max_ms,preparation_left_ms\n";
   std::printf("pack read %.1f ms (median of %d)\n", 1e3 * packReadS, s.repeats);
   for (const ObjectAsset& a : pack.objects) {
-    std::vector<double> place, prepare;
-    for (int r = 0; r < s.repeats; ++r) {
+    std::vector<double> place, prepare, destroyPrepared, destroyMidway;
+    auto makeWorld = [&]() -> Result<std::unique_ptr<World>> {
       Pack one;
       one.materials = pack.materials;
       one.objects.push_back(a);
       auto world = World::create(std::move(one), WorldSettings{});
       if (!world) return world.error();
+      return std::make_unique<World>(std::move(world).value());
+    };
+    auto destroy = [](std::unique_ptr<World>& world) {
+      const auto t = SteadyClock::now();
+      world.reset();
+      return secondsSince(t);
+    };
+    for (int r = 0; r < s.repeats; ++r) {
+      auto world = makeWorld();
+      if (!world) return world.error();
       const auto t0 = SteadyClock::now();
-      auto id = world.value().addObject({.asset = a.name});
+      auto id = world.value()->addObject({.asset = a.name});
       place.push_back(secondsSince(t0));
       if (!id) return id.error();
       const auto t1 = SteadyClock::now();
-      if (Status st = world.value().waitUntilPrepared(); !st) return st.error();
+      if (Status st = world.value()->waitUntilPrepared(); !st) return st.error();
       prepare.push_back(secondsSince(t1));
+      destroyPrepared.push_back(destroy(world.value()));  // freeing what it holds: the floor
+    }
+    // A World destroyed a quarter, half and three quarters into the preparation: its destructor
+    // stops the preparation at its next cancellation point. Before, it waited for the rest of it,
+    // the reference (preparation_left_ms: the median preparation less the time waited).
+    const double prepareS = percentile(prepare, 0.5);
+    double leftS = 0.0;
+    for (int r = 0; r < s.repeats; ++r) {
+      for (double fraction : {0.25, 0.5, 0.75}) {
+        auto world = makeWorld();
+        if (!world) return world.error();
+        if (auto id = world.value()->addObject({.asset = a.name}); !id) return id.error();
+        std::this_thread::sleep_for(std::chrono::duration<double>(fraction * prepareS));
+        destroyMidway.push_back(destroy(world.value()));
+        leftS += (1.0 - fraction) * prepareS / 3.0 / s.repeats;
+      }
     }
     // Without the database, which an object's placement does not read, the pack's bytes are its objects'.
     const double shareS = packReadS * arrayBytes(a) / total;
     const double placeS = percentile(place, 0.5);
+    const double midwayMaxS = *std::max_element(destroyMidway.begin(), destroyMidway.end());
     csv << a.name << "," << a.tetMesh.tets.rows() << "," << 1e3 * shareS << "," << 1e3 * placeS << "," << placeS / shareS << ","
-        << 1e3 * percentile(prepare, 0.5) << "\n";
+        << 1e3 * prepareS << "," << 1e3 * percentile(destroyPrepared, 0.5) << "," << 1e3 * percentile(destroyMidway, 0.5) << ","
+        << 1e3 * midwayMaxS << "," << 1e3 * leftS << "\n";
     std::printf("%-16s %6lld tets: place %7.2f ms, its bytes read %7.2f ms (%.2fx); K factorised in the background %7.1f ms\n",
                 a.name.c_str(), static_cast<long long>(a.tetMesh.tets.rows()), 1e3 * placeS, 1e3 * shareS, placeS / shareS,
-                1e3 * percentile(prepare, 0.5));
+                1e3 * prepareS);
+    std::printf("%-16s              destroyed: prepared %6.1f ms, midway %6.1f ms (max %6.1f; the preparation left %7.1f ms)\n",
+                "", 1e3 * percentile(destroyPrepared, 0.5), 1e3 * percentile(destroyMidway, 0.5), 1e3 * midwayMaxS, 1e3 * leftS);
   }
   return Ok{};
 }

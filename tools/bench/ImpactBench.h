@@ -54,7 +54,10 @@ Status runImpactBench(const ImpactBenchSettings& settings);
 /// `brittle bench place PACK`: what placing each pack object costs the caller (World::addObject,
 /// its first instance: topology, stress bounds; the K factorisation starts on a worker), against
 /// the reference measured in the same run, reading the object's bytes from the pack (the pack's
-/// read time shared out by the objects' array bytes), and the background preparation it starts.
+/// read time shared out by the objects' array bytes), and the background preparation it starts;
+/// then what destroying a World costs its host when it is prepared (freeing its memory) and a
+/// quarter, half and three quarters into the preparation (which it stops), against the preparation
+/// left then, which the destructor waited for before.
 struct PlacementBenchSettings {
   std::filesystem::path pack;
   int repeats = 5;  ///< medians over this many fresh worlds

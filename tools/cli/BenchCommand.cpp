@@ -95,7 +95,7 @@ Runner addBenchCommand(CLI::App& app) {
   impact->add_option("--seed", is->seed, "Seed of the impact points and cracks")->capture_default_str();
   impact->add_option("--csv", is->csv, "Output CSV")->capture_default_str();
   auto pb = std::make_shared<bench::PlacementBenchSettings>();
-  auto* place = cmd->add_subcommand("place", "Placing each object of a pack against reading its bytes (and its background preparation)");
+  auto* place = cmd->add_subcommand("place", "Placing each object of a pack against reading its bytes (its background preparation, and a World destroyed during it)");
   place->add_option("pack", pb->pack, "The pack")->required()->check(CLI::ExistingFile);
   place->add_option("--repeats", pb->repeats, "Fresh worlds per object (medians)")->capture_default_str()->check(CLI::Range(1, 1000));
   place->add_option("--csv", pb->csv, "Output CSV")->capture_default_str();
