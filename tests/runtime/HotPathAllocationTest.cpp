@@ -1,6 +1,7 @@
 // The runtime's hot path allocates nothing after warm-up: an impact that does not break its body,
 // reported into a reused ImpactResult, makes no heap allocation once the World's buffers have grown;
-// one that breaks it allocates only what it hands over (per fragment, not per element).
+// one that breaks it allocates only what it hands over (per fragment, not per element), and with a
+// database and the host's clock, per piece its search and the sources of its bodies.
 //
 // Allocations are counted by interposing the C allocator (operator new, Eigen and the standard
 // containers all end in malloc), so this test has an executable of its own. Under AddressSanitizer,
@@ -9,10 +10,13 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <cstddef>
 
+#include "brittle/precompute/FragmentDatabaseBake.h"
 #include "brittle/runtime/World.h"
 #include "brittle/testing/BakeFixtures.h"
+#include "brittle/testing/DatabaseFixtures.h"
 
 #if defined(__SANITIZE_ADDRESS__)
 #define BRITTLE_COUNT_ALLOCATIONS 0
@@ -282,6 +286,60 @@ TEST_F(HotPathAllocationTest, TheExactPathCutsNothingInTheImpact) {
         << result.fragments.size() << " fragments, " << taken << " on the exact path";
   }
   EXPECT_GT(exact, 0) << "some pieces take the exact path";
+}
+
+// A host's breaks are timed (ImpactDesc::timeS, as the player's), with a database: each matched
+// piece and each exact-path piece (its match first, its own analysis from exactModesDelayS) is
+// searched in the impact (FragmentMatcher::match: its canonical frames, descriptors and the index's
+// query, about 20 blocks a piece, since the database's API returns its matches) and handed over as
+// a BodySource with its later versions (the checks, the analysis), all made on the background
+// threads. Measured: 55–59 blocks a piece. The bound is per piece, not per element: an allocation
+// per cut element or per triangle (thousands here) would break it.
+TEST_F(HotPathAllocationTest, TimedBreaksWithADatabaseAllocatePerPieceOnly) {
+  if (!BRITTLE_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are not counted under AddressSanitizer";
+  Pack pack = *sPack;
+  auto database = bakeFragmentDatabase(testing::shippedShapesDatabase({"box", "plate", "wedge"}, 12, 400, 12));
+  ASSERT_TRUE(database) << database.error().message;
+  pack.database = std::move(database).value();
+  WorldSettings settings;
+  settings.prepareInBackground = false;  // no factorisations queued behind the new bodies
+  auto world = World::create(std::move(pack), settings);
+  ASSERT_TRUE(world) << world.error().message;
+  ImpactDesc hit;
+  hit.pointWorld = Eigen::Vector3d(0.16, 0.13, 0.01);
+  hit.impactorMassKg = 0.1;
+  hit.impactorRadiusM = 0.02;
+  ImpactResult result;
+  int matched = 0, exact = 0;
+  for (int round = 0; round < 4; ++round) {
+    hit.speedMps = round == 0 ? 120.0 : 60.0;
+    hit.timeS = 10.0 * round;  // the host's clock
+    auto id = world.value().addObject({.asset = "plate"});
+    ASSERT_TRUE(id) << id.error().message;
+    hit.object = id.value();
+    ASSERT_TRUE(world.value().waitUntilPrepared());  // the last round's bodies made, off the count
+    const long before = gAllocations.load();
+    const Status st = world.value().impact(hit, result);
+    const long made = gAllocations.load() - before;
+    ASSERT_TRUE(st) << st.error().message;
+    ASSERT_TRUE(result.broken);
+    if (round == 0) continue;
+    int pieces = 0, versions = 0;
+    for (const FragmentResult& f : result.fragments) {
+      matched += f.path == FragmentPath::Matched;
+      exact += f.path == FragmentPath::ExactModes;
+      if (f.path == FragmentPath::Matched || f.path == FragmentPath::ExactModes) {
+        ++pieces;
+        versions += std::isfinite(f.lateCheckDueS) + std::isfinite(f.checkDueS) + std::isfinite(f.escalationDueS) +
+                    std::isfinite(f.exactDueS);
+      }
+    }
+    EXPECT_LE(made, 3 * static_cast<long>(result.fragments.size()) + 64 * pieces + 16)
+        << result.fragments.size() << " fragments, " << pieces << " pieces with bodies, " << versions << " later versions";
+    EXPECT_GT(static_cast<long>(result.fracture.cutElements.size()), 64 * pieces) << "the bound is below one a cut element";
+    EXPECT_GT(versions, pieces) << "the pieces have later versions: the breaks are timed";
+  }
+  EXPECT_GT(matched, 0) << "some pieces are matched";
 }
 
 }  // namespace
