@@ -38,6 +38,10 @@ const TetMoments& Body::tetMoments() const {
   return mTetMoments.get([this] { return tetVolumeMoments(asset.tetMesh, centreM); });
 }
 
+void BodySource::abandon() const {
+  for (const BodySource* s = this; s != nullptr; s = s->mLate.get()) s->mAbandoned.store(true, std::memory_order_relaxed);
+}
+
 std::shared_ptr<const BodySource> BodySource::ready(std::shared_ptr<const Body> body) {
   auto source = std::make_shared<BodySource>();
   source->mBody.install(std::move(body));

@@ -119,8 +119,16 @@ class BodySource {
   /// The body, made now if it was not; its errors are the maker's.
   const Result<std::shared_ptr<const Body>>& get() const;
   bool isMade() const { return mBody.ready(); }
+  /// Marks this version and every later one as wanted by nobody (the object they are for was
+  /// removed or broken): background jobs for them are skipped, or stop at their next cancellation
+  /// point (Cancellation.h). Only a source no other object shares may be abandoned.
+  void abandon() const;
+  bool abandoned() const { return mAbandoned.load(std::memory_order_relaxed); }
+  /// The flag a job making this version runs with (Cancellation.h's tJobCancelFlag).
+  const std::atomic<bool>* abandonedFlag() const { return &mAbandoned; }
 
  private:
+  mutable std::atomic<bool> mAbandoned{false};
   mutable Maker mMake;  // released once made and no thread is in it
   OnceValue<Result<std::shared_ptr<const Body>>> mBody;
   std::shared_ptr<const BodySource> mLate;

@@ -9,7 +9,8 @@
 // a std::exception, so the handlers that turn a failure into a typed error let it pass: a value
 // being made stays unmade (OnceValue.h) instead of becoming an error. Threads without a flag (the
 // host's, oneTBB's workers outside a World's jobs, the bake's) are never cancelled, and a flag is set
-// only when its World closes, so no fracture changes.
+// only when its World closes or for a body nobody can use any more (a removed or broken fragment's
+// versions, BodySource::abandon), so no fracture changes.
 #pragma once
 
 #include <atomic>
@@ -20,25 +21,32 @@ namespace brittle::detail {
 /// impact task).
 struct Cancelled {};
 
-/// The calling thread's cancellation flag (null: it is never cancelled).
+/// The calling thread's cancellation flags (null: none): its World's (set when the World closes)
+/// and the job's own (a body nobody can use any more: BodySource::abandon).
 inline thread_local const std::atomic<bool>* tCancelFlag = nullptr;
+inline thread_local const std::atomic<bool>* tJobCancelFlag = nullptr;
 
-/// Throws Cancelled when the calling thread's flag is set. A relaxed load of a thread-local
-/// pointer and of the flag: cheap enough for a loop's every few hundred iterations.
+/// Throws Cancelled when one of the calling thread's flags is set. Relaxed loads of thread-local
+/// pointers and of the flags: cheap enough for a loop's every few hundred iterations.
 inline void cancellationPoint() {
-  const std::atomic<bool>* flag = tCancelFlag;
-  if (flag != nullptr && flag->load(std::memory_order_relaxed)) throw Cancelled{};
+  const std::atomic<bool>* world = tCancelFlag;
+  const std::atomic<bool>* job = tJobCancelFlag;
+  if ((world != nullptr && world->load(std::memory_order_relaxed)) || (job != nullptr && job->load(std::memory_order_relaxed))) {
+    throw Cancelled{};
+  }
 }
 
-/// Sets the calling thread's flag for its lifetime, then restores the one before.
+/// Sets one of the calling thread's flags (`slot`: tCancelFlag or tJobCancelFlag) to `flag` for
+/// its lifetime, then restores the one before.
 class CancelScope {
  public:
-  explicit CancelScope(const std::atomic<bool>* flag) : mPrevious(tCancelFlag) { tCancelFlag = flag; }
-  ~CancelScope() { tCancelFlag = mPrevious; }
+  CancelScope(const std::atomic<bool>*& slot, const std::atomic<bool>* flag) : mSlot(slot), mPrevious(slot) { slot = flag; }
+  ~CancelScope() { mSlot = mPrevious; }
   CancelScope(const CancelScope&) = delete;
   CancelScope& operator=(const CancelScope&) = delete;
 
  private:
+  const std::atomic<bool>*& mSlot;
   const std::atomic<bool>* mPrevious;
 };
 

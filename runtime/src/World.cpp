@@ -34,6 +34,7 @@ struct Slot {
   bool alive = false;
   bool pending = false;  // a submitted impact on it is not collected yet
   std::shared_ptr<const BodySource> source;
+  bool ownsSource = false;  // a fragment's: no other object shares it, so it is abandoned with the object
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
 };
@@ -150,7 +151,10 @@ struct World::Impl {
     return freeSlots.size() + freed + (static_cast<size_t>(settings.maxObjects) - std::min(slots.size(), static_cast<size_t>(settings.maxObjects)));
   }
 
-  Result<ObjectId> place(std::shared_ptr<const BodySource> source, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& t) {
+  // `ownsSource`: a fragment's source, which no other object shares (a pack object's is shared by
+  // its instances).
+  Result<ObjectId> place(std::shared_ptr<const BodySource> source, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& t,
+                         bool ownsSource = false) {
     uint32_t index;
     if (!freeSlots.empty()) {
       index = freeSlots.back();
@@ -167,6 +171,7 @@ struct World::Impl {
     s.alive = true;
     s.pending = false;
     s.source = std::move(source);
+    s.ownsSource = ownsSource;
     s.rotation = rotation;
     s.translation = t;
     ++live;
@@ -175,8 +180,13 @@ struct World::Impl {
 
   void remove(ObjectId id) {
     Slot& s = slots[id.index];
+    // A fragment's versions not made yet are nobody's any more: their background jobs are skipped or
+    // stopped (a broken pane piece's checks and own analysis: up to hundreds of ms of a background
+    // thread each, which a new break's first bodies wait behind).
+    if (s.ownsSource && s.source) s.source->abandon();
     s.alive = false;
     s.pending = false;
+    s.ownsSource = false;
     s.source.reset();
     ++s.generation;
     freeSlots.push_back(id.index);
@@ -208,7 +218,11 @@ struct World::Impl {
 
   // A body made, with what every impact on it reads first: its stress bounds and, where scheduled,
   // its static correction (on the background threads).
+  // Makes a version on a background thread; skipped, or stopped at a cancellation point, once
+  // nobody can use it (its object was removed or broken: abandon()).
   static void prepare(const BodySource& source) {
+    if (source.abandoned()) return;
+    const detail::CancelScope scope(detail::tJobCancelFlag, source.abandonedFlag());
     const auto& body = source.get();
     if (!body) return;
     (void)body.value()->stressBounds();
@@ -234,7 +248,7 @@ struct World::Impl {
     remove(object);
     for (size_t i = 0; i < newBodies.size(); ++i) {
       if (!newBodies[i]) continue;
-      auto id = place(newBodies[i], job.rotation, job.translation);
+      auto id = place(newBodies[i], job.rotation, job.translation, /*ownsSource=*/true);
       if (!id) return id.error();  // unreachable: capacity checked above
       result.fragments[i].object = id.value();
     }
@@ -500,7 +514,7 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
     recorded = ticket;
     auto compute = [raw, ticket, &hook = w.settings.onImpactComputed, &closing = w.closing] {
       try {
-        const detail::CancelScope scope(&closing);  // a body it makes stops when the World closes
+        const detail::CancelScope scope(detail::tCancelFlag, &closing);  // a body it makes stops when the World closes
         raw->status = detail::computeImpact(raw->job, *raw->workspace, raw->result, raw->born);
         if (*raw->status && hook) hook(ticket, raw->result);
       } catch (const detail::Cancelled&) {

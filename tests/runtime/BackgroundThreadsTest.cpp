@@ -269,7 +269,7 @@ TEST(BackgroundThreads, CancelSetsTheOwnersFlagAndNeverCancelsTheHost) {
   EXPECT_TRUE(closing.load());
   EXPECT_NO_THROW(cancellationPoint());  // this thread has no flag
   {
-    const CancelScope scope(&closing);  // as a World's impact task on a worker
+    const CancelScope scope(tCancelFlag, &closing);  // as a World's impact task on a worker
     EXPECT_THROW(cancellationPoint(), Cancelled);
   }
   EXPECT_NO_THROW(cancellationPoint());  // the scope restored the thread's flag
