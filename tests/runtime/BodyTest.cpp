@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "Body.h"
+#include "Cancellation.h"
 #include "brittle/precompute/TetMesher.h"
 #include "brittle/runtime/FemAssembly.h"
 #include "brittle/database/Material.h"
@@ -37,6 +38,47 @@ std::shared_ptr<const detail::Body> twoModeBody(const Eigen::VectorXd& correctio
   auto body = detail::makeBody(asset, testing::presetGlass(), 0, nullptr, correctionEigenvalues);
   EXPECT_TRUE(body) << body.error().message;
   return body ? body.value() : nullptr;
+}
+
+// abandon() marks a version and every later one (a removed fragment's chain: its checks, its own
+// analysis), not the ones before it nor another chain; a job making an abandoned version runs with
+// its flag (Cancellation.h) and stops at its next cancellation point, leaving the version unmade.
+TEST(Body, AbandonMarksAVersionAndItsLaterOnesAndStopsTheirMaking) {
+  using detail::Body;
+  using detail::BodySource;
+  using detail::CancelScope;
+  using detail::Cancelled;
+  using detail::cancellationPoint;
+  using detail::tJobCancelFlag;
+  auto failing = [] { return Result<std::shared_ptr<const Body>>(makeError(ErrorCode::InvalidArgument, "no body")); };
+  auto later = [](const Result<std::shared_ptr<const Body>>& base) { return base; };
+  auto chain = BodySource::deferred(failing, {{later, 1.0, true}, {later, 2.0, false}});
+  auto other = BodySource::deferred(failing, {{later, 1.0, true}});
+  ASSERT_TRUE(chain->late() && chain->late()->late());
+  EXPECT_FALSE(chain->abandoned());
+  chain->late()->abandon();
+  EXPECT_FALSE(chain->abandoned());  // the version before it is still someone's
+  EXPECT_TRUE(chain->late()->abandoned());
+  EXPECT_TRUE(chain->late()->late()->abandoned());
+  chain->abandon();
+  EXPECT_TRUE(chain->abandoned());
+  EXPECT_FALSE(other->abandoned());
+  EXPECT_FALSE(other->late()->abandoned());
+
+  int steps = 0;
+  auto stopped = BodySource::deferred([&steps]() -> Result<std::shared_ptr<const Body>> {
+    for (;;) {
+      cancellationPoint();
+      if (++steps == 3) return makeError(ErrorCode::InvalidArgument, "not stopped");
+    }
+  });
+  stopped->abandon();
+  {
+    const CancelScope scope(tJobCancelFlag, stopped->abandonedFlag());
+    EXPECT_THROW((void)stopped->get(), Cancelled);
+  }
+  EXPECT_EQ(steps, 0);
+  EXPECT_FALSE(stopped->isMade());  // unmade, not made into an error
 }
 
 TEST(Body, ALaterVersionRingsAtItsOwnFrequenciesOnItsBasesMeshAndShapes) {

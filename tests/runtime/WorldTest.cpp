@@ -1519,6 +1519,66 @@ TEST_F(WorldTest, AWorldClosedWhileItsWorkRunsStopsItAndTheNextWorldBreaksAlike)
   EXPECT_EQ(fracture(), reference);
 }
 
+// Removing a fragment, or breaking it, abandons its versions not made yet (its checks, its
+// escalation, its own analysis): their background jobs are skipped or stopped (BodySource::abandon).
+// Those jobs share per-entry values with the other pieces' (an entry's placement, its static
+// correction), which a stopped job leaves unmade for the next to make: the pieces left get every
+// version bit for bit as in a world where nothing was removed.
+TEST_F(WorldTest, RemovedAndBrokenPiecesVersionsAreAbandonedAndTheOthersKeepTheirBits) {
+  auto breakPlate = [&](World& world) {
+    ImpactDesc hit = ball(world.addObject({.asset = "plate"}).value(), 60.0);
+    hit.timeS = 1.0;
+    auto r = world.impact(hit);
+    EXPECT_TRUE(r && r.value().broken);
+    return r ? std::move(r).value() : ImpactResult{};
+  };
+  WorldSettings settings;
+  settings.workerThreads = 2;
+  World reference = makeWorld(settings);
+  World world = makeWorld(settings);
+  const ImpactResult kept = breakPlate(reference);
+  const ImpactResult broken = breakPlate(world);
+  ASSERT_EQ(hashFragments(broken), hashFragments(kept));
+  // At once, while the pieces' bodies and versions are made: every other matched piece removed,
+  // one broken again.
+  std::vector<size_t> left;
+  int removed = 0, rebroken = 0;
+  for (size_t i = 0; i < broken.fragments.size(); ++i) {
+    const FragmentResult& f = broken.fragments[i];
+    if (f.path != FragmentPath::Matched) continue;
+    if (rebroken == 0 && !std::isnan(f.checkDueS)) {
+      ImpactDesc hit = ball(f.object, 120.0);
+      hit.pointWorld = f.surface.vertices.row(0).transpose();
+      hit.pointToleranceM = 1.0;
+      hit.timeS = 1.01;
+      auto again = world.impact(hit);
+      ASSERT_TRUE(again) << again.error().message;
+      rebroken += again.value().broken;
+      if (again.value().broken) continue;
+    }
+    if ((i % 2) == 0) {
+      ASSERT_TRUE(world.removeObject(f.object));
+      ++removed;
+    } else {
+      left.push_back(i);
+    }
+  }
+  EXPECT_GT(removed, 0);
+  EXPECT_EQ(rebroken, 1);
+  ASSERT_FALSE(left.empty());
+  ASSERT_TRUE(world.waitUntilPrepared());
+  ASSERT_TRUE(reference.waitUntilPrepared());
+  for (size_t i : left) {
+    for (double t : {1.0, 1.3, 10.0}) {  // the first body, the checks, the last version
+      auto mine = world.objectAsset(broken.fragments[i].object, t);
+      auto theirs = reference.objectAsset(kept.fragments[i].object, t);
+      ASSERT_TRUE(mine && theirs);
+      EXPECT_EQ(mine.value()->modal.frequenciesHz, theirs.value()->modal.frequenciesHz) << i << " at " << t << " s";
+      EXPECT_EQ(mine.value()->stressModes, theirs.value()->stressModes) << i << " at " << t << " s";
+    }
+  }
+}
+
 TEST_F(WorldTest, APendingObjectStaysAsItWasAndRefusesOtherCalls) {
   World world = makeWorld();
   const ObjectId id = world.addObject({.asset = "plate"}).value();

@@ -477,7 +477,8 @@ class World {
   /// maxObjects reached), those of building the object's topology, and without prepareInBackground those of
   /// StaticCorrection::build.
   Result<ObjectId> addObject(const ObjectDesc& desc);
-  /// Errors: InvalidArgument (stale or invalid id).
+  /// A fragment's versions not made yet (its checks, its own analysis) are abandoned: their
+  /// background work is skipped or stopped. Errors: InvalidArgument (stale or invalid id).
   Status removeObject(ObjectId id);
   bool isAlive(ObjectId id) const;
   int32_t objectCount() const;
