@@ -12,10 +12,10 @@
 #include <cmath>
 #include <cstring>
 #include <numeric>
-#include <random>
 
 #include "Cancellation.h"
 #include "FixedRanges.h"
+#include "brittle/core/Random.h"
 #include "brittle/core/Simd.h"
 
 namespace brittle {
@@ -1219,8 +1219,7 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
   w.seedNormals.clear();  // per crack: the plane it started on
   w.phi.clear();
   w.cutBy.clear();
-  std::mt19937_64 rng(settings.seed);
-  std::normal_distribution<double> gauss(0.0, 1.0);
+  SplitMix64 draws(settings.seed);  // the seeded turns (nearNormal: the same bits on every platform)
 
   // Each crack is the zero set of a nodal level set φ_c, piecewise linear over the tets. A cut
   // element gives its plane's signed distance to those of its nodes that have no value yet; the
@@ -1333,8 +1332,9 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
     // stress is low its direction means little, and the crack runs on straight.
     const double steer = (1.0 - settings.directionBlend) * std::clamp(s1 / sigmaT, 0.0, 1.0);
     Eigen::Vector3d n = (1.0 - steer) * start + steer * dir;
-    // Seeded turn: a random tangent direction scaled by noiseRad (one draw per statement).
-    const double gx = gauss(rng), gy = gauss(rng), gz = gauss(rng);
+    // Seeded turn: a random tangent direction scaled by noiseRad (one draw per statement), each
+    // component of unit variance (nearNormal).
+    const double gx = nearNormal(draws.next()), gy = nearNormal(draws.next()), gz = nearNormal(draws.next());
     Eigen::Vector3d turn(gx, gy, gz);
     n = n.normalized();
     turn -= turn.dot(n) * n;

@@ -21,6 +21,19 @@ constexpr uint64_t splitmix64(uint64_t x) {
 /// The top 53 bits of `bits` as a double in [0, 1), every value a multiple of 2⁻⁵³.
 constexpr double unitInterval(uint64_t bits) { return static_cast<double>(bits >> 11) * 0x1.0p-53; }
 
+/// A draw of unit variance near the standard normal from the 64 bits of one draw: their four
+/// 16-bit quarters b_i as the uniforms (b_i + ½)/2¹⁶, summed (Irwin–Hall, n = 4), centred and
+/// scaled by √3. It lies within ±2√3 (the normal's 3.46σ), with kurtosis 2.7 (the normal's 3). An
+/// integer sum and one product by a constant: the same bits on every platform, where
+/// std::normal_distribution leaves its algorithm to each standard library, and a few nanoseconds
+/// (libstdc++'s polar method takes a logarithm, a square root and a rejection loop). Crack growth
+/// draws its seeded turns with it.
+constexpr double nearNormal(uint64_t bits) {
+  const uint64_t sum = (bits & 0xffffu) + ((bits >> 16) & 0xffffu) + ((bits >> 32) & 0xffffu) + (bits >> 48);
+  // Σu_i − 2 = (2·sum + 4 − 2¹⁸)/2¹⁷, exact in a double (|·| < 2¹⁸); √3·2⁻¹⁷ is one rounding of √3.
+  return static_cast<double>(static_cast<int64_t>(2 * sum) - 262140) * (1.7320508075688772 * 0x1.0p-17);
+}
+
 /// The splitmix64 sequence from `seed`: next() returns splitmix64(seed), splitmix64(seed + γ), ...
 /// with γ the golden-ratio increment; a fixed stream for tests and sampling.
 class SplitMix64 {
