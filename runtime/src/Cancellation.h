@@ -17,6 +17,12 @@
 
 namespace brittle::detail {
 
+// An invariant the flags rely on: a thread waiting inside a oneTBB parallel loop may run other
+// tasks of its arena under its own flags. That is safe because a background thread's implicit
+// arena holds only its own job's tasks, the World's arena only that World's impacts (whose only flag
+// is that World's), and no parallel loop's body has a cancellation point. A point put inside one
+// would need the loop isolated (tbb::this_task_arena::isolate).
+
 /// What cancellationPoint() throws; caught only where a job starts (BackgroundThreads, a World's
 /// impact task).
 struct Cancelled {};

@@ -513,12 +513,19 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
     // not scheduled yet is released with its handle, before the catch below runs).
     recorded = ticket;
     auto compute = [raw, ticket, &hook = w.settings.onImpactComputed, &closing = w.closing] {
+      const Error closed{ErrorCode::InvalidArgument, "the World closed before the impact was computed"};
       try {
-        const detail::CancelScope scope(detail::tCancelFlag, &closing);  // a body it makes stops when the World closes
-        raw->status = detail::computeImpact(raw->job, *raw->workspace, raw->result, raw->born);
-        if (*raw->status && hook) hook(ticket, raw->result);
+        if (closing.load(std::memory_order_relaxed)) {
+          raw->status = closed;  // not started before the World closed: nobody will collect it
+        } else {
+          {
+            const detail::CancelScope scope(detail::tCancelFlag, &closing);  // a body it makes stops when the World closes
+            raw->status = detail::computeImpact(raw->job, *raw->workspace, raw->result, raw->born);
+          }
+          if (*raw->status && hook) hook(ticket, raw->result);  // the host's code: never under the World's flag
+        }
       } catch (const detail::Cancelled&) {
-        raw->status = invalidArgument("the World closed before the impact was computed");
+        raw->status = closed;
       } catch (const std::exception& e) {
         raw->status = invalidArgument(std::string("impact failed on a worker: ") + e.what());
       }
@@ -533,7 +540,7 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
       auto deferred = std::make_shared<tbb::task_handle>();
       w.workers().execute([&] { *deferred = raw->group.defer(std::move(compute)); });
       w.backgroundThreads->submit(
-          [source = raw->job.source, deferred, &arena = w.workers()] {
+          [source = raw->job.source, deferred, &arena = w.workers(), &closing = w.closing] {
             try {
               Impl::prepare(*source);
             } catch (const detail::Cancelled&) {
@@ -541,6 +548,7 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
             } catch (...) {
               // the impact meets the same failure and returns it as its error
             }
+            if (closing.load(std::memory_order_relaxed)) return;  // made as it closed: dropped alike
             arena.enqueue(std::move(*deferred));
           },
           detail::BackgroundThreads::Urgency::First);

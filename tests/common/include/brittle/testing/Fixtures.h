@@ -39,7 +39,8 @@ Material makeGlassMaterial(const std::string& name = "glass");
 /// Writes a mesh as OFF (vertices and triangles only).
 void writeOff(const TriangleMesh& mesh, const std::filesystem::path& path);
 
-/// A fresh, empty directory under the system temp directory, unique to this test process.
+/// A fresh, empty directory under the system temp directory, unique to this test process, and
+/// removed with everything in it when the process exits (BRITTLE_KEEP_TEST_DIRS=1 keeps it).
 std::filesystem::path makeTempDir(const std::string& tag);
 
 /// Flips four bytes in the middle of the stored chunk of `dataset` (an HDF5 path) that holds row
