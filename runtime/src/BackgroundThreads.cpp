@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <utility>
 
 #if defined(__linux__)
@@ -60,13 +61,14 @@ bool BackgroundThreads::idlePriority() const {
 }
 
 void BackgroundThreads::cancel() {
-  std::deque<std::function<void()>> dropped[3];  // destroyed after the lock: their captures may be large
+  std::deque<std::function<void()>> dropped[2];  // destroyed after the lock: their captures may be large
+  std::multimap<double, std::function<void()>> droppedLater;
   {
     std::unique_lock lock(mMutex);
     mStop = true;
     dropped[0].swap(mFirstQueue);  // not needed any more: their results die with the World
     dropped[1].swap(mQueue);
-    dropped[2].swap(mLaterQueue);
+    droppedLater.swap(mLaterQueue);
     mCancel->store(true, std::memory_order_relaxed);
   }
   mWork.notify_all();
@@ -78,10 +80,14 @@ BackgroundThreads::~BackgroundThreads() {
   for (std::thread& t : mThreads) t.join();
 }
 
-void BackgroundThreads::submit(std::function<void()> job, Urgency urgency) {
+void BackgroundThreads::submit(std::function<void()> job, Urgency urgency, double dueS) {
   {
     std::lock_guard lock(mMutex);
-    (urgency == Urgency::First ? mFirstQueue : urgency == Urgency::Now ? mQueue : mLaterQueue).push_back(std::move(job));
+    if (urgency == Urgency::Later) {
+      mLaterQueue.emplace(std::isnan(dueS) ? std::numeric_limits<double>::infinity() : dueS, std::move(job));
+    } else {
+      (urgency == Urgency::First ? mFirstQueue : mQueue).push_back(std::move(job));
+    }
   }
   mWork.notify_one();
   mIdleWait.notify_all();  // a host in wait() takes it too
@@ -90,9 +96,14 @@ void BackgroundThreads::submit(std::function<void()> job, Urgency urgency) {
 bool BackgroundThreads::take(std::function<void()>& job, bool& later, bool host) {
   later = mFirstQueue.empty() && mQueue.empty();
   if (later && (mLaterQueue.empty() || (!host && mRunningLater >= laterThreads()))) return false;
-  std::deque<std::function<void()>>& queue = later ? mLaterQueue : !mFirstQueue.empty() ? mFirstQueue : mQueue;
-  job = std::move(queue.front());
-  queue.pop_front();
+  if (later) {
+    job = std::move(mLaterQueue.begin()->second);  // the earliest due
+    mLaterQueue.erase(mLaterQueue.begin());
+  } else {
+    std::deque<std::function<void()>>& queue = !mFirstQueue.empty() ? mFirstQueue : mQueue;
+    job = std::move(queue.front());
+    queue.pop_front();
+  }
   ++mRunning;
   later = later && !host;  // the host's own are not the threads' to count
   if (later) ++mRunningLater;

@@ -28,6 +28,8 @@
 #include <deque>
 #include <exception>
 #include <functional>
+#include <limits>
+#include <map>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -48,7 +50,12 @@ class BackgroundThreads {
   BackgroundThreads& operator=(const BackgroundThreads&) = delete;
 
   enum class Urgency { First, Now, Later };
-  void submit(std::function<void()> job, Urgency urgency = Urgency::Now);
+  /// Later jobs run earliest `dueS` first (the host's time from which their result is used; ties in
+  /// submission order): a 13-break history queues each break's escalations (due 2 s after it)
+  /// before the next break's checks and analyses (due 0.25 s after that one), and an impact at a
+  /// version's due time waits for it. The other urgencies run in submission order.
+  void submit(std::function<void()> job, Urgency urgency = Urgency::Now,
+              double dueS = std::numeric_limits<double>::infinity());
   /// Runs queued jobs on the calling thread too (a host waiting on a loading screen helps), until
   /// none is queued or running: true. With `untilStarved`, it also stops once none is queued and
   /// the threads running jobs are starved (together under kStarvedShare of a core since the host
@@ -73,7 +80,8 @@ class BackgroundThreads {
 
   std::mutex mMutex;
   std::condition_variable mWork, mIdleWait;
-  std::deque<std::function<void()>> mFirstQueue, mQueue, mLaterQueue;
+  std::deque<std::function<void()>> mFirstQueue, mQueue;
+  std::multimap<double, std::function<void()>> mLaterQueue;  // by due time; equal keys in insertion order
   int mRunning = 0;
   int mRunningLater = 0;  // of mRunning, Later jobs; at most laterThreads() on the threads
   int laterThreads() const { return std::max(1, static_cast<int>(mThreads.size()) - 1); }

@@ -255,19 +255,25 @@ struct World::Impl {
     // The fragments' modal data, stress bounds and (where scheduled) static corrections are made on
     // the workers from now on (an impact or objectAsset that needs one first makes or waits for it).
     // Later versions (FractureSettings::meshRatioDelayS, meshRatioLateMaxDof, frequencyErrorTarget) after every first one.
-    auto prepare = [&makers](std::shared_ptr<const BodySource> source, detail::BackgroundThreads::Urgency urgency) {
-      makers.submit([source = std::move(source)] { Impl::prepare(*source); }, urgency);
+    auto prepare = [&makers](std::shared_ptr<const BodySource> source, detail::BackgroundThreads::Urgency urgency, double dueS) {
+      makers.submit([source = std::move(source)] { Impl::prepare(*source); }, urgency, dueS);
     };
     // Each version of the chain after every one before it (escalations last); all but the first
-    // bodies and the checks due soon can wait behind the next break's first bodies
-    // (BackgroundThreads::Urgency).
-    for (bool any = true; any;) {
+    // bodies and the checks due soon can wait behind the next break's first bodies, earliest due
+    // first (BackgroundThreads::Urgency).
+    auto urgency = [](const BodySource& source) {
+      return source.wantedSoon() ? detail::BackgroundThreads::Urgency::Now : detail::BackgroundThreads::Urgency::Later;
+    };
+    for (auto& source : newBodies) {
+      if (source) prepare(source, urgency(*source), job.desc.timeS);
+    }
+    for (bool any = true; any;) {  // newBodies[i]: the version submitted last
       any = false;
       for (auto& source : newBodies) {
-        if (!source) continue;
-        prepare(source, source->wantedSoon() ? detail::BackgroundThreads::Urgency::Now : detail::BackgroundThreads::Urgency::Later);
+        if (!source || !source->late()) continue;
+        prepare(source->late(), urgency(*source->late()), source->lateDueS());  // due from the one before's lateDueS
         source = source->late();
-        any = any || source != nullptr;
+        any = true;
       }
     }
     newBodies.clear();

@@ -12,6 +12,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -186,6 +187,26 @@ TEST(BackgroundThreads, FirstJobsGoAheadOfEveryQueuedJob) {
   pool.submit([&] { order.push_back("first 2"); }, BackgroundThreads::Urgency::First);
   pool.wait();
   EXPECT_EQ(order, (std::vector<std::string>{"first 1", "first 2", "now 1", "now 2", "later"}));
+}
+
+// Later jobs run earliest due first (a later break's checks, due sooner, before an earlier
+// break's escalations), equal due times in submission order, no due time (NaN or none) last; Now
+// jobs keep their submission order whatever time they are given.
+TEST(BackgroundThreads, LaterJobsRunEarliestDueFirst) {
+  BackgroundThreads pool(0);
+  std::vector<std::string> order;
+  using U = BackgroundThreads::Urgency;
+  pool.submit([&] { order.push_back("escalation of break 1, due 2.1"); }, U::Later, 2.1);
+  pool.submit([&] { order.push_back("no due time"); }, U::Later, std::numeric_limits<double>::quiet_NaN());
+  pool.submit([&] { order.push_back("check of break 2, due 0.5"); }, U::Later, 0.5);
+  pool.submit([&] { order.push_back("analysis of break 2, due 0.5"); }, U::Later, 0.5);
+  pool.submit([&] { order.push_back("later check of break 1, due 0.35"); }, U::Later, 0.35);
+  pool.submit([&] { order.push_back("now, due 9"); }, U::Now, 9.0);
+  pool.submit([&] { order.push_back("now, due 1"); }, U::Now, 1.0);
+  pool.wait();
+  EXPECT_EQ(order, (std::vector<std::string>{"now, due 9", "now, due 1", "later check of break 1, due 0.35",
+                                             "check of break 2, due 0.5", "analysis of break 2, due 0.5",
+                                             "escalation of break 1, due 2.1", "no due time"}));
 }
 
 TEST(BackgroundThreads, JobsNotStartedAreDroppedWithThePool) {
