@@ -1,8 +1,8 @@
 // Cancellation.h — stopping background work nobody wants any more. Private to the runtime.
 //
 // Why: a World being destroyed waited for the background jobs running on its threads: destroyed
-// right after placing the default vase, for its preparation (the factorisation of K and the stress
-// bounds), 1.7 s on the host's thread; right after a break, 40–60 ms for a fragment's body
+// while the default vase was prepared (the factorisation of K, H, the stress bounds), 1.1–1.4 s on
+// the host's thread; after a timed break, up to 0.5 s for a piece's later version
 // (docs/realtime.md, "A World destroyed without waiting"). Long computations now call
 // cancellationPoint() between steps of a few ms at most. On a thread whose work was cancelled it
 // throws Cancelled, which unwinds the job up to BackgroundThreads, which drops it. Cancelled is not
