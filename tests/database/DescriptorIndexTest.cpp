@@ -747,6 +747,40 @@ std::vector<float> randomBits(int64_t rows, int64_t dims, uint32_t seed) {
 // Binary codes: the flat Hamming scan is brute force on 0/1 vectors, distances and ties included
 // (100 values a row: the last byte is padded); the binary graph finds most nearest rows and is
 // reproducible; a value other than 0 or 1 is refused at build and at query.
+// The binary graph codes only the columns whose value differs between indexed rows (the
+// occupancy grids' corners and core are the same in every fragment: 929 of 4 096 columns vary
+// over 9 000 grids). A query that differs from the rows in the other columns gets those columns'
+// share added back: exhaustive (ef = rows), single queries and sets of two frames give brute
+// force's ids, distances and rows.
+TEST(DescriptorIndex, HnswBinaryLeavesOutColumnsEveryRowSharesAndAddsThemBack) {
+  const int64_t rows = 600, dims = 200, shared = 150, queries = 60, k = 3;
+  auto data = randomBits(rows, dims, 11);
+  for (int64_t r = 0; r < rows; ++r)
+    for (int64_t c = 0; c < shared; ++c) data[r * dims + c] = static_cast<float>((c / 3) % 2);  // one value a column
+  const auto q = randomBits(queries, dims, 12);  // differs from the rows in the shared columns too
+  DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+  DescriptorIndexSettings all = settingsFor(Kind::HnswBinary, static_cast<int>(rows));
+  all.trees = 16;
+  DescriptorIndex graph = buildOrDie(data, dims, all);
+  std::vector<int64_t> exactIds(queries * k), graphIds(queries * k);
+  std::vector<float> exactD(queries * k), graphD(queries * k);
+  ASSERT_TRUE(exact.queryBatch(q.data(), queries, k, exactIds.data(), exactD.data()).ok());
+  ASSERT_TRUE(graph.queryBatch(q.data(), queries, k, graphIds.data(), graphD.data()).ok());
+  EXPECT_EQ(graphIds, exactIds);
+  EXPECT_EQ(graphD, exactD);
+  EXPECT_GT(exactD[0], 40.0f) << "the shared columns count: a random query differs in about half of them";
+  for (int64_t i = 0; i + 1 < queries; i += 2) {  // two frames a set, which differ in the shared columns
+    int64_t ids[1], exactSetIds[1];
+    float d[1], exactSetD[1];
+    int32_t row[1], exactRow[1];
+    ASSERT_TRUE(graph.queryNearestOfSet(q.data() + i * dims, 2, 1, ids, d, row).ok());
+    ASSERT_TRUE(exact.queryNearestOfSet(q.data() + i * dims, 2, 1, exactSetIds, exactSetD, exactRow).ok());
+    EXPECT_EQ(ids[0], exactSetIds[0]) << i;
+    EXPECT_EQ(d[0], exactSetD[0]) << i;
+    EXPECT_EQ(row[0], exactRow[0]) << i;
+  }
+}
+
 TEST(DescriptorIndex, FaissBinaryEqualsBruteForceOnZeroOneDescriptors) {
   const int64_t rows = 1500, dims = 100, queries = 200, k = 5;
   auto data = randomBits(rows, dims, 3);
