@@ -290,16 +290,19 @@ std::vector<Scored> walkSet(const hnswlib::HierarchicalNSW<float>& graph, const 
   return out;  // ascending (distance, id): the max-heap popped farthest first, ties higher id first
 }
 
-// The columns of 0/1 rows whose value is not the same in every row, ascending.
+// The columns of 0/1 rows whose value is not the same in every row, ascending: the bits where
+// some row's code differs from the first's.
 std::vector<int32_t> varyingColumns(const float* data, int64_t rows, int64_t dims) {
+  const auto words = static_cast<size_t>(codeBytes(dims, 8) / 8);
+  std::vector<uint64_t> first(words), code(words), differ(words, 0);
+  if (rows > 0) packBits(data, 1, dims, 8, reinterpret_cast<uint8_t*>(first.data()));
+  for (int64_t r = 1; r < rows; ++r) {
+    packBits(data + r * dims, 1, dims, 8, reinterpret_cast<uint8_t*>(code.data()));
+    for (size_t w = 0; w < words; ++w) differ[w] |= code[w] ^ first[w];
+  }
   std::vector<int32_t> out;
-  for (int64_t j = 0; j < dims; ++j) {
-    for (int64_t r = 1; r < rows; ++r) {
-      if ((data[r * dims + j] > 0.5f) != (data[j] > 0.5f)) {
-        out.push_back(static_cast<int32_t>(j));
-        break;
-      }
-    }
+  for (size_t j = 0; j < words * 64; ++j) {
+    if ((differ[j / 64] >> (j % 64)) & 1u) out.push_back(static_cast<int32_t>(j));
   }
   return out;
 }
@@ -327,7 +330,6 @@ class HnswBackend final : public Backend {
       mOutside.assign(words, ~uint64_t{0});
       if (rows > 0) packBits(data, 1, dims, 8, reinterpret_cast<uint8_t*>(mConstant.data()));
       for (int32_t j : mVarying) mOutside[static_cast<size_t>(j) / 64] &= ~(uint64_t{1} << (j % 64));
-      if (dims % 64 != 0) mOutside.back() &= (uint64_t{1} << (dims % 64)) - 1;  // no bits past the row
     }
     // Rows inserted in order with a seeded level draw: the same graph in any process.
     std::vector<uint64_t> full(kBinary ? static_cast<size_t>(codeBytes(dims, 8) / 8) : 0), code(kBinary ? mWords : 0);

@@ -217,9 +217,8 @@ struct World::Impl {
   }
 
   // A body made, with what every impact on it reads first: its stress bounds and, where scheduled,
-  // its static correction (on the background threads).
-  // Makes a version on a background thread; skipped, or stopped at a cancellation point, once
-  // nobody can use it (its object was removed or broken: abandon()).
+  // its static correction (on the background threads); skipped, or stopped at a cancellation point,
+  // once nobody can use it (its object was removed or broken: abandon()).
   static void prepare(const BodySource& source) {
     if (source.abandoned()) return;
     const detail::CancelScope scope(detail::tJobCancelFlag, source.abandonedFlag());
@@ -519,10 +518,11 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
     // not scheduled yet is released with its handle, before the catch below runs).
     recorded = ticket;
     auto compute = [raw, ticket, &hook = w.settings.onImpactComputed, &closing = w.closing] {
-      const Error closed{ErrorCode::InvalidArgument, "the World closed before the impact was computed"};
+      // made only when needed: an error's text allocates, and this runs on every submitted impact
+      auto closed = [] { return invalidArgument("the World closed before the impact was computed"); };
       try {
         if (closing.load(std::memory_order_relaxed)) {
-          raw->status = closed;  // not started before the World closed: nobody will collect it
+          raw->status = closed();  // not started before the World closed: nobody will collect it
         } else {
           {
             const detail::CancelScope scope(detail::tCancelFlag, &closing);  // a body it makes stops when the World closes
@@ -531,7 +531,7 @@ Result<ImpactTicket> World::submitImpact(const ImpactDesc& desc) {
           if (*raw->status && hook) hook(ticket, raw->result);  // the host's code: never under the World's flag
         }
       } catch (const detail::Cancelled&) {
-        raw->status = closed;
+        raw->status = closed();
       } catch (const std::exception& e) {
         raw->status = invalidArgument(std::string("impact failed on a worker: ") + e.what());
       }
