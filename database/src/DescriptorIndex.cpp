@@ -103,6 +103,35 @@ void packBits(const float* values, int64_t rows, int64_t dims, int64_t wordBytes
   }
 }
 
+VaryingColumns::VaryingColumns(const float* data, int64_t rows, int64_t dims)
+    : mDims(dims), mConstant(static_cast<size_t>(codeBytes(dims, 8) / 8), 0), mOutside(mConstant.size(), ~uint64_t{0}) {
+  // A column varies where some row's code differs from the first's.
+  std::vector<uint64_t> code(mConstant.size()), differ(mConstant.size(), 0);
+  if (rows > 0) packBits(data, 1, dims, 8, reinterpret_cast<uint8_t*>(mConstant.data()));
+  for (int64_t r = 1; r < rows; ++r) {
+    packBits(data + r * dims, 1, dims, 8, reinterpret_cast<uint8_t*>(code.data()));
+    for (size_t w = 0; w < code.size(); ++w) differ[w] |= code[w] ^ mConstant[w];
+  }
+  for (size_t j = 0; j < differ.size() * 64; ++j) {
+    if ((differ[j / 64] >> (j % 64)) & 1u) {
+      mColumns.push_back(static_cast<int32_t>(j));
+      mOutside[j / 64] &= ~(uint64_t{1} << (j % 64));
+    }
+  }
+}
+
+int VaryingColumns::code(const float* row, uint64_t* full, uint64_t* code) const {
+  packBits(row, 1, mDims, 8, reinterpret_cast<uint8_t*>(full));
+  std::fill(code, code + words(), uint64_t{0});
+  for (size_t k = 0; k < mColumns.size(); ++k) {
+    const auto j = static_cast<size_t>(mColumns[k]);
+    code[k / 64] |= ((full[j / 64] >> (j % 64)) & 1u) << (k % 64);
+  }
+  int outside = 0;
+  for (size_t w = 0; w < mOutside.size(); ++w) outside += __builtin_popcountll((full[w] ^ mConstant[w]) & mOutside[w]);
+  return outside;
+}
+
 PrincipalAxes principalAxes(const Eigen::MatrixXd& points) {
   const Eigen::Index n = points.rows(), samples = points.cols();
   PrincipalAxes out;
@@ -134,6 +163,7 @@ const char* descriptorIndexKindName(DescriptorIndexSettings::Kind kind) {
     case DescriptorIndexSettings::Kind::HnswPooled: return "hnsw-pooled";
     case DescriptorIndexSettings::Kind::HnswPrincipal: return "hnsw-principal";
     case DescriptorIndexSettings::Kind::Ivf: return "ivf";
+    case DescriptorIndexSettings::Kind::IvfBinary: return "ivf-binary";
     case DescriptorIndexSettings::Kind::FaissHnsw: return "faiss-hnsw";
     case DescriptorIndexSettings::Kind::FaissIvf: return "faiss-ivf";
     case DescriptorIndexSettings::Kind::FaissBinaryFlat: return "faiss-binary-flat";
@@ -202,6 +232,7 @@ Result<DescriptorIndex> DescriptorIndex::build(const float* data, int64_t rows, 
     case Kind::HnswPooled:
     case Kind::HnswPrincipal: backend = search::buildHnsw(result.mData.data(), rows, dims, settings); break;
     case Kind::Ivf: backend = search::buildIvf(result.mData.data(), rows, dims, settings); break;
+    case Kind::IvfBinary: backend = search::buildIvfBinary(result.mData.data(), rows, dims, settings); break;
     case Kind::FaissHnsw:
     case Kind::FaissIvf:
     case Kind::FaissBinaryFlat:

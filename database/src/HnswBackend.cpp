@@ -290,53 +290,25 @@ std::vector<Scored> walkSet(const hnswlib::HierarchicalNSW<float>& graph, const 
   return out;  // ascending (distance, id): the max-heap popped farthest first, ties higher id first
 }
 
-// The columns of 0/1 rows whose value is not the same in every row, ascending: the bits where
-// some row's code differs from the first's.
-std::vector<int32_t> varyingColumns(const float* data, int64_t rows, int64_t dims) {
-  const auto words = static_cast<size_t>(codeBytes(dims, 8) / 8);
-  std::vector<uint64_t> first(words), code(words), differ(words, 0);
-  if (rows > 0) packBits(data, 1, dims, 8, reinterpret_cast<uint8_t*>(first.data()));
-  for (int64_t r = 1; r < rows; ++r) {
-    packBits(data + r * dims, 1, dims, 8, reinterpret_cast<uint8_t*>(code.data()));
-    for (size_t w = 0; w < words; ++w) differ[w] |= code[w] ^ first[w];
-  }
-  std::vector<int32_t> out;
-  for (size_t j = 0; j < words * 64; ++j) {
-    if ((differ[j / 64] >> (j % 64)) & 1u) out.push_back(static_cast<int32_t>(j));
-  }
-  return out;
-}
-
 // Float rows are inserted as they are; 0/1 rows as the binary codes (8-byte words) of their
-// varying columns only. A column with one value in every indexed row adds the same 0 or 1 to a
-// query's distance from each of them, so it changes neither the graph (0 between any two rows) nor
-// a query's ranking: it is left out of the codes and added back to the distances returned, which
-// are the whole rows' Hamming distances as before. On 9 000 occupancy grids (16³) 929 of the 4 096
-// columns vary: 120-byte codes instead of 512, the same answers (docs/results/fragment-database.md).
+// varying columns only (VaryingColumns): the same graph and answers as over whole rows, with the
+// left-out columns' share added back to the distances returned. On 9 000 occupancy grids (16³):
+// 120-byte codes instead of 512 (docs/results/fragment-database.md).
 template <typename Space, bool kBinary>
 class HnswBackend final : public Backend {
  public:
   HnswBackend(const float* data, int64_t rows, int64_t dims, const DescriptorIndexSettings& settings)
       : mDims(dims),
-        mVarying(kBinary ? varyingColumns(data, rows, dims) : std::vector<int32_t>{}),
-        mWords(std::max<size_t>(1, (mVarying.size() + 63) / 64)),
+        mVarying(kBinary ? VaryingColumns(data, rows, dims) : VaryingColumns()),
+        mWords(mVarying.words()),
         mSpace(kBinary ? mWords : static_cast<size_t>(dims)),
         mGraph(&mSpace, static_cast<size_t>(rows), static_cast<size_t>(settings.trees), size_t{200},
                static_cast<size_t>(settings.seed)) {
-    if constexpr (kBinary) {
-      // The left-out columns' values (those of the first row), and a mask of them, as full codes.
-      const auto words = static_cast<size_t>(codeBytes(dims, 8) / 8);
-      mConstant.assign(words, 0);
-      mOutside.assign(words, ~uint64_t{0});
-      if (rows > 0) packBits(data, 1, dims, 8, reinterpret_cast<uint8_t*>(mConstant.data()));
-      for (int32_t j : mVarying) mOutside[static_cast<size_t>(j) / 64] &= ~(uint64_t{1} << (j % 64));
-    }
     // Rows inserted in order with a seeded level draw: the same graph in any process.
-    std::vector<uint64_t> full(kBinary ? static_cast<size_t>(codeBytes(dims, 8) / 8) : 0), code(kBinary ? mWords : 0);
+    std::vector<uint64_t> full(kBinary ? mVarying.fullWords() : 0), code(kBinary ? mWords : 0);
     for (int64_t r = 0; r < rows; ++r) {
       if constexpr (kBinary) {
-        packBits(data + r * dims, 1, dims, 8, reinterpret_cast<uint8_t*>(full.data()));
-        (void)compact(full.data(), code.data());
+        (void)mVarying.code(data + r * dims, full.data(), code.data());
         mGraph.addPoint(code.data(), static_cast<hnswlib::labeltype>(r));
       } else {
         mGraph.addPoint(data + r * dims, static_cast<hnswlib::labeltype>(r));
@@ -370,10 +342,10 @@ class HnswBackend final : public Backend {
       std::vector<uint64_t> codes(kBinary ? mWords * static_cast<size_t>(count) : 0);
       std::vector<float> offsets(kBinary ? static_cast<size_t>(count) : 0);
       if constexpr (kBinary) {
-        std::vector<uint64_t> full(static_cast<size_t>(codeBytes(mDims, 8) / 8));
+        std::vector<uint64_t> full(mVarying.fullWords());
         for (int64_t q = 0; q < count; ++q) {
-          packBits(descriptors + q * mDims, 1, mDims, 8, reinterpret_cast<uint8_t*>(full.data()));
-          offsets[static_cast<size_t>(q)] = static_cast<float>(compact(full.data(), codes.data() + static_cast<size_t>(q) * mWords));
+          offsets[static_cast<size_t>(q)] =
+              static_cast<float>(mVarying.code(descriptors + q * mDims, full.data(), codes.data() + static_cast<size_t>(q) * mWords));
         }
       }
       const auto* base = kBinary ? reinterpret_cast<const unsigned char*>(codes.data()) : reinterpret_cast<const unsigned char*>(descriptors);
@@ -393,27 +365,12 @@ class HnswBackend final : public Backend {
   }
 
   // Level 0 (links, its own copy of the data, labels) plus the upper levels' links.
-  int64_t memoryBytes() const override { return graphBytes(mGraph); }
+  int64_t memoryBytes() const override { return graphBytes(mGraph) + mVarying.memoryBytes(); }
 
  private:
-  // A row's full code to its code over the varying columns; returns how many left-out columns
-  // differ from the indexed rows' value there (the distance the code leaves out).
-  int compact(const uint64_t* full, uint64_t* code) const {
-    std::fill(code, code + mWords, uint64_t{0});
-    for (size_t k = 0; k < mVarying.size(); ++k) {
-      const auto j = static_cast<size_t>(mVarying[k]);
-      code[k / 64] |= ((full[j / 64] >> (j % 64)) & 1u) << (k % 64);
-    }
-    int outside = 0;
-    for (size_t w = 0; w < mOutside.size(); ++w) outside += __builtin_popcountll((full[w] ^ mConstant[w]) & mOutside[w]);
-    return outside;
-  }
-
   int64_t mDims;
-  std::vector<int32_t> mVarying;    // 0/1 rows: the columns in the codes
-  size_t mWords;                    // 0/1 rows: 8-byte words per code
-  std::vector<uint64_t> mConstant;  // 0/1 rows: the first row's full code (the left-out columns' value)
-  std::vector<uint64_t> mOutside;   // 0/1 rows: the left-out columns, as a full code's mask
+  VaryingColumns mVarying;  // 0/1 rows: the columns in the codes
+  size_t mWords;            // 0/1 rows: 8-byte words per code
   Space mSpace;  // declared before the graph, which keeps a pointer to it
   hnswlib::HierarchicalNSW<float> mGraph;
 };

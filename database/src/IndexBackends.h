@@ -2,15 +2,17 @@
 //
 // DescriptorIndex validates the data, the settings it shares between backends and every query,
 // keeps the row-major float copy of the data and runs brute force itself. Everything else is a
-// Backend: FLANN (FlannBackend.cpp), hnswlib (HnswBackend.cpp), the inverted file (IvfBackend.cpp) and
-// FAISS (FaissBackend.cpp). A
+// Backend: FLANN (FlannBackend.cpp), hnswlib (HnswBackend.cpp), the inverted files (IvfBackend.cpp,
+// IvfBinaryBackend.cpp) and FAISS (FaissBackend.cpp). A
 // backend answers the k nearest rows of one query, nearest first, ties by lower id, with squared L2
 // distances, and never runs threads of its own (queries are called from the World's workers).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <algorithm>
 #include <memory>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -48,6 +50,8 @@ Result<std::unique_ptr<Backend>> buildHnsw(const float* data, int64_t rows, int6
                                            const DescriptorIndexSettings& settings);
 Result<std::unique_ptr<Backend>> buildIvf(const float* data, int64_t rows, int64_t dims,
                                           const DescriptorIndexSettings& settings);
+Result<std::unique_ptr<Backend>> buildIvfBinary(const float* data, int64_t rows, int64_t dims,
+                                                const DescriptorIndexSettings& settings);
 Result<std::unique_ptr<Backend>> buildFaiss(const float* data, int64_t rows, int64_t dims,
                                             const DescriptorIndexSettings& settings);
 
@@ -97,5 +101,32 @@ Popcount fastestPopcount();
 /// The Hamming distance of two codes of `words` 8-byte words (any alignment), as a float (exact).
 float hammingDistance(Popcount form, const uint8_t* a, const uint8_t* b, size_t words);
 void packBits(const float* values, int64_t rows, int64_t dims, int64_t wordBytes, uint8_t* codes);
+
+/// The columns of indexed 0/1 rows that do not hold one value in every row, and codes over them
+/// (hnsw-binary, ivf-binary). A column with one value in every indexed row adds the same 0 or 1 to
+/// a query's distance from each of them, so it changes no ranking: the codes leave it out, and a
+/// query counts it once (`code`'s return), so that distances stay the whole rows' Hamming
+/// distances. On 10⁴ occupancy grids (16³) 929 of 4 096 columns vary, on 10⁵ 1 106.
+class VaryingColumns {
+ public:
+  VaryingColumns() = default;
+  /// Over `rows` validated 0/1 rows of `dims` values.
+  VaryingColumns(const float* data, int64_t rows, int64_t dims);
+  const std::vector<int32_t>& columns() const { return mColumns; }
+  /// 8-byte words of a code over the varying columns (at least one).
+  size_t words() const { return std::max<size_t>(1, (mColumns.size() + 63) / 64); }
+  /// 8-byte words of a whole row's code (packBits).
+  size_t fullWords() const { return mConstant.size(); }
+  /// One row of dims 0/1 values to its code (words() words), through `full` (fullWords() words of
+  /// scratch); returns how many left-out columns differ from the indexed rows' value there.
+  int code(const float* row, uint64_t* full, uint64_t* code) const;
+  int64_t memoryBytes() const { return static_cast<int64_t>(mColumns.size() * 4 + 2 * mConstant.size() * 8); }
+
+ private:
+  int64_t mDims = 0;
+  std::vector<int32_t> mColumns;    // ascending
+  std::vector<uint64_t> mConstant;  // the first row's full code: the left-out columns' value
+  std::vector<uint64_t> mOutside;   // the left-out columns, as a full code's mask
+};
 
 }  // namespace brittle::search

@@ -146,6 +146,12 @@ double searchBytesCompared(const DescriptorIndexSettings& index, int64_t rows, i
       const double scanned = std::min(n, index.checks * std::ceil(n / index.trees));
       return 4.0 * (index.trees * key + scanned * key) + rowBytes;
     }
+    case Kind::IvfBinary: {
+      // IvfBinaryBackend.cpp: 32-byte keys of the centroids and of the probed lists' rows, and a code
+      // for the few rows the key cannot rule out (counted as one row).
+      const double scanned = std::min(n, index.checks * std::ceil(n / index.trees));
+      return 32.0 * (index.trees + scanned) + rowBytes;
+    }
     case Kind::FaissIvf: return (index.trees + std::min(n, index.checks * std::ceil(n / index.trees))) * rowBytes;
   }
   return n * rowBytes;

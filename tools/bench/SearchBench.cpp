@@ -68,7 +68,7 @@ Result<IndexChoice> parseIndexChoice(const std::string& text) {
   const auto bad = [&] {
     return makeError(ErrorCode::InvalidArgument,
                      "index '" + text + "': expected kd-forest:TREES:CHECKS, hnsw:M:EF[:set], hnsw-binary:M:EF[:set], hnsw-pooled:M:EF[:set], hnsw-principal:M:EF[:set], faiss-hnsw:M:EF, "
-                     "faiss-ivf:LISTS:PROBES, faiss-binary-hnsw:M:EF, autotuned:PRECISION, brute-force or "
+                     "ivf:LISTS:PROBES, ivf-binary:LISTS:PROBES, faiss-ivf:LISTS:PROBES, faiss-binary-hnsw:M:EF, autotuned:PRECISION, brute-force or "
                      "faiss-binary-flat");
   };
   if (!kind) return bad();
@@ -328,6 +328,7 @@ Status runSearchBench(const SearchBenchSettings& s) {
         if ((choice.settings.kind == DescriptorIndexSettings::Kind::HnswPooled ||
              choice.settings.kind == DescriptorIndexSettings::Kind::HnswPrincipal) && kind == DescriptorKind::Moment) continue;  // grids only
         const bool inverted = choice.settings.kind == DescriptorIndexSettings::Kind::Ivf ||
+                              choice.settings.kind == DescriptorIndexSettings::Kind::IvfBinary ||
                               choice.settings.kind == DescriptorIndexSettings::Kind::FaissIvf;
         if (inverted && choice.settings.trees > n) {  // more lists than entries: the setting is for larger sizes
           log(s.quiet, "%7lld %-14s %-22s skipped: %d lists for %lld entries\n", static_cast<long long>(n),

@@ -34,6 +34,13 @@
 //     is exact; the lists probed decide the recall. k-means starts from evenly spaced rows and draws
 //     nothing, so a build is the same in any process; `seed` is not used. For the moment kind at
 //     10⁵ entries, where a graph's walk waits on memory.
+//   - IvfBinary: the inverted file over 0/1 rows as bit codes (IvfBinaryBackend.cpp): `trees`
+//     k-majority lists of the rows' codes over their varying columns, of which the `checks` whose
+//     centroids are nearest are scanned by a 256-bit key (a lower bound of the code's distance), and
+//     the rows the key cannot rule out ranked by their code. Within the probed lists the answer is
+//     exact; the lists probed decide the recall. No random draw, so a build is the same in any
+//     process; `seed` is not used. For the occupancy voxels at 10⁴–10⁵ entries, where a graph's
+//     walk is long.
 //   - FAISS (Debian's libfaiss-dev), the standard baselines for descriptor research:
 //     FaissHnsw (IndexHNSWFlat: `trees` is M, `checks` efSearch, efConstruction 200), FaissIvf
 //     (IndexIVFFlat: `trees` inverted lists from k-means, `checks` lists probed), and on binary
@@ -80,13 +87,13 @@ class Backend;
 }
 
 struct DescriptorIndexSettings {
-  enum class Kind { BruteForce, KdForest, Autotuned, Hnsw, HnswBinary, FaissHnsw, FaissIvf, FaissBinaryFlat, FaissBinaryHnsw, HnswPooled, HnswPrincipal, Ivf };
+  enum class Kind { BruteForce, KdForest, Autotuned, Hnsw, HnswBinary, FaissHnsw, FaissIvf, FaissBinaryFlat, FaissBinaryHnsw, HnswPooled, HnswPrincipal, Ivf, IvfBinary };
   Kind kind = Kind::KdForest;
   /// KdForest: number of randomized kd-trees, ≥ 1. Hnsw, HnswBinary, HnswPooled, HnswPrincipal and the FAISS graphs: M, in
-  /// [2, 1024]. Ivf and FaissIvf: inverted lists, in [1, rows].
+  /// [2, 1024]. Ivf, IvfBinary and FaissIvf: inverted lists, in [1, rows].
   int trees = 4;
   /// KdForest: leaves visited per query, ≥ 1 (more: slower, better). Hnsw and the FAISS graphs:
-  /// ef, ≥ 1. Ivf and FaissIvf: lists probed, in [1, trees].
+  /// ef, ≥ 1. Ivf, IvfBinary and FaissIvf: lists probed, in [1, trees].
   int checks = 64;
   float targetPrecision = 0.95f;  ///< Autotuned: wanted fraction of exact neighbours, in (0, 1].
   uint64_t seed = 1;              ///< seed of every randomised build (FLANN uses the low 32 bits).
@@ -97,12 +104,13 @@ inline constexpr DescriptorIndexSettings::Kind kAllDescriptorIndexKinds[] = {
     DescriptorIndexSettings::Kind::Autotuned,       DescriptorIndexSettings::Kind::Hnsw,
     DescriptorIndexSettings::Kind::HnswBinary,      DescriptorIndexSettings::Kind::HnswPooled,
     DescriptorIndexSettings::Kind::HnswPrincipal,   DescriptorIndexSettings::Kind::Ivf,
+    DescriptorIndexSettings::Kind::IvfBinary,
     DescriptorIndexSettings::Kind::FaissHnsw,       DescriptorIndexSettings::Kind::FaissIvf,
     DescriptorIndexSettings::Kind::FaissBinaryFlat, DescriptorIndexSettings::Kind::FaissBinaryHnsw};
 
-/// The kinds that index 0/1 descriptors as bits (HnswBinary and the FAISS binary kinds).
+/// The kinds that index 0/1 descriptors as bits (HnswBinary, IvfBinary and the FAISS binary kinds).
 constexpr bool indexTakesBits(DescriptorIndexSettings::Kind kind) {
-  return kind == DescriptorIndexSettings::Kind::HnswBinary || kind == DescriptorIndexSettings::Kind::FaissBinaryFlat ||
+  return kind == DescriptorIndexSettings::Kind::HnswBinary || kind == DescriptorIndexSettings::Kind::IvfBinary || kind == DescriptorIndexSettings::Kind::FaissBinaryFlat ||
          kind == DescriptorIndexSettings::Kind::FaissBinaryHnsw;
 }
 

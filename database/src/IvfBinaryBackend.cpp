@@ -1,0 +1,359 @@
+// IvfBinaryBackend.cpp — an inverted file over 0/1 descriptors (the occupancy voxels): lists of
+// rows scanned by a short key in wide registers, the rows the key cannot rule out ranked by their
+// whole codes.
+//
+// Why it exists: at 10⁵ occupancy grids the graph over their codes (hnsw-binary) needs ef 48 for
+// recall 0.99, 35–45 µs a query. The walk is long, not its steps: the nearest grid has thousands
+// close behind it, and each hop waits on memory for a node's links and then its neighbours' codes.
+// An inverted file reads a few lists of rows that lie next to each other instead, which the
+// hardware prefetcher streams (the moment descriptors' `ivf` answers the same way,
+// IvfBackend.cpp).
+//
+// Codes. A row's code holds its varying columns only (VaryingColumns: 1 106 of 4 096 on 10⁵ grids).
+// Its key holds the kKeyBits columns of those whose values are most evenly split between 0 and 1
+// over the indexed rows (the fewer of the two counts, largest first; ties by lower column): 256
+// bits, one AVX2 register. The key's columns are a subset of the code's, so a key's Hamming distance
+// is a lower bound of the code's. The columns left out of the key are those that a few rows set,
+// and they add a few bits at most to a near pair's distance.
+//
+// Build (deterministic: no random draw, no threads, ties by lower index):
+//   - Lists by k-majority (Lloyd's k-means under the Hamming distance, a centroid bit the majority
+//     of its rows' bits, 0 on a tie), over the codes of up to kMajoritySamplePerList·lists rows spaced
+//     evenly, started from evenly spaced ones, for kMajorityIterations rounds; a centroid without rows keeps
+//     its place. Every row is then filed under its nearest centroid, in row order.
+//   - A list's keys lie in blocks of eight rows, word by word (word w of rows 0–7, then word w + 1),
+//     so that one AVX-512 register (two AVX2 ones) holds one word of eight rows, and the popcount of
+//     its XOR with the query's word adds to eight distances at once.
+// Query: the `checks` lists whose centroids' keys are nearest the query's (ties by lower index) are
+// scanned, or more, in that order, while they hold fewer than k rows. A row whose key distance
+// exceeds the k-th best code distance found so far cannot be among the k nearest, and is passed;
+// any other gets its code's distance. So within the probed lists the answer is exact, and the lists
+// probed decide the recall. Distances returned are whole rows' Hamming distances (the left-out
+// columns' share added), which are the 0/1 vectors' squared L2 distances, as brute force's.
+//
+// The same answer on any CPU: every popcount form (AVX-512 VPOPCNTDQ, AVX2 look-ups, popcnt, portable)
+// counts the same integers.
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <exception>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
+#include "IndexBackends.h"
+
+namespace brittle::search {
+namespace {
+
+constexpr int kKeyWords = 4;  // 256 key bits
+constexpr int kKeyBits = 64 * kKeyWords;
+constexpr int kBlock = 8;     // rows a block of keys
+constexpr int64_t kMajoritySamplePerList = 32;  // as the float lists' k-means (IvfBackend.cpp)
+constexpr int kMajorityIterations = 10;
+
+// out[l] ← the key distance of `query` to lane l of each of `blocks` blocks (8 per block).
+void keyDistancesPortable(const uint64_t* query, const uint64_t* keys, int64_t blocks, uint32_t* out) {
+  for (int64_t b = 0; b < blocks; ++b) {
+    const uint64_t* block = keys + b * kKeyWords * kBlock;
+    for (int l = 0; l < kBlock; ++l) {
+      uint32_t sum = 0;
+      for (int w = 0; w < kKeyWords; ++w) sum += static_cast<uint32_t>(__builtin_popcountll(block[w * kBlock + l] ^ query[w]));
+      out[b * kBlock + l] = sum;
+    }
+  }
+}
+
+#if defined(__x86_64__)
+__attribute__((target("popcnt"))) void keyDistancesPopcnt(const uint64_t* query, const uint64_t* keys, int64_t blocks,
+                                                          uint32_t* out) {
+  for (int64_t b = 0; b < blocks; ++b) {
+    const uint64_t* block = keys + b * kKeyWords * kBlock;
+    for (int l = 0; l < kBlock; ++l) {
+      uint64_t sum = 0;
+      for (int w = 0; w < kKeyWords; ++w) sum += static_cast<uint64_t>(_mm_popcnt_u64(block[w * kBlock + l] ^ query[w]));
+      out[b * kBlock + l] = static_cast<uint32_t>(sum);
+    }
+  }
+}
+
+// Four rows a register: each byte's count from two 4-bit look-ups, summed per 8 bytes (one row's
+// word) by psadbw (Mula, Kurz & Lemire 2018).
+__attribute__((target("avx2"))) void keyDistancesAvx2(const uint64_t* query, const uint64_t* keys, int64_t blocks,
+                                                      uint32_t* out) {
+  const __m256i table = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4,  //
+                                         0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
+  const __m256i low = _mm256_set1_epi8(0x0f);
+  __m256i q[kKeyWords];
+  for (int w = 0; w < kKeyWords; ++w) q[w] = _mm256_set1_epi64x(static_cast<long long>(query[w]));
+  for (int64_t b = 0; b < blocks; ++b) {
+    const uint64_t* block = keys + b * kKeyWords * kBlock;
+    for (int half = 0; half < 2; ++half) {
+      __m256i counts = _mm256_setzero_si256();
+      for (int w = 0; w < kKeyWords; ++w) {
+        const __m256i d = _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(block + w * kBlock + 4 * half)), q[w]);
+        counts = _mm256_add_epi8(counts, _mm256_add_epi8(_mm256_shuffle_epi8(table, _mm256_and_si256(d, low)),
+                                                         _mm256_shuffle_epi8(table, _mm256_and_si256(_mm256_srli_epi16(d, 4), low))));
+      }
+      // A byte holds at most 4 words × 8 bits = 32: no overflow before the sums.
+      alignas(32) uint64_t lanes[4];
+      _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), _mm256_sad_epu8(counts, _mm256_setzero_si256()));
+      for (int l = 0; l < 4; ++l) out[b * kBlock + 4 * half + l] = static_cast<uint32_t>(lanes[l]);
+    }
+  }
+}
+
+__attribute__((target("avx512f,avx512vpopcntdq"))) void keyDistancesAvx512(const uint64_t* query, const uint64_t* keys,
+                                                                           int64_t blocks, uint32_t* out) {
+  __m512i q[kKeyWords];
+  for (int w = 0; w < kKeyWords; ++w) q[w] = _mm512_set1_epi64(static_cast<long long>(query[w]));
+  for (int64_t b = 0; b < blocks; ++b) {
+    const uint64_t* block = keys + b * kKeyWords * kBlock;
+    __m512i sums = _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(block), q[0]));
+    for (int w = 1; w < kKeyWords; ++w)
+      sums = _mm512_add_epi64(sums, _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(block + w * kBlock), q[w])));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + b * kBlock), _mm512_mask_cvtepi64_epi32(_mm256_setzero_si256(), 0xff, sums));
+  }
+}
+#endif
+
+using KeyDistances = void (*)(const uint64_t*, const uint64_t*, int64_t, uint32_t*);
+
+KeyDistances keyDistancesFor(Popcount form) {
+  switch (form) {
+#if defined(__x86_64__)
+    case Popcount::Avx512: return &keyDistancesAvx512;
+    case Popcount::Avx2: return &keyDistancesAvx2;
+    case Popcount::Popcnt: return &keyDistancesPopcnt;
+#endif
+    default: return &keyDistancesPortable;
+  }
+}
+
+int64_t blocksOf(int64_t rows) { return (rows + kBlock - 1) / kBlock; }
+
+class IvfBinaryBackend final : public Backend {
+ public:
+  IvfBinaryBackend(const float* data, int64_t rows, int64_t dims, int lists, int probes)
+      : mVarying(data, rows, dims),
+        mWords(mVarying.words()),
+        mLists(lists),
+        mProbes(probes),
+        mForm(fastestPopcount()),
+        mKeyDistances(keyDistancesFor(mForm)) {
+    std::vector<uint64_t> codes(static_cast<size_t>(rows) * mWords), full(mVarying.fullWords());
+    for (int64_t r = 0; r < rows; ++r) (void)mVarying.code(data + r * dims, full.data(), codes.data() + r * mWords);
+    chooseKeyColumns(codes, rows);
+    const std::vector<uint64_t> centroids = kMajority(codes, rows);
+    fileRows(codes, rows, centroids);
+  }
+
+  Status validateQuery(const float* descriptor, int64_t dims) const override { return checkZeroOne(descriptor, 1, dims, true); }
+
+  Status query(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const override {
+    try {
+      std::vector<uint64_t> full(mVarying.fullWords()), code(mWords);
+      const int outside = mVarying.code(descriptor, full.data(), code.data());
+      std::array<uint64_t, kKeyWords> key{};
+      keyOf(code.data(), key.data());
+      // The lists in order of their centroid's key distance, ties by lower index (a counting sort:
+      // distances are at most kKeyBits).
+      std::vector<uint32_t> distances(static_cast<size_t>(blocksOf(mLists) * kBlock));
+      mKeyDistances(key.data(), mCentroidKeys.data(), blocksOf(mLists), distances.data());
+      std::array<int32_t, kKeyBits + 2> first{};
+      for (int c = 0; c < mLists; ++c) ++first[distances[static_cast<size_t>(c)] + 1];
+      for (int d = 1; d <= kKeyBits + 1; ++d) first[d] += first[d - 1];
+      std::vector<int32_t> order(static_cast<size_t>(mLists));
+      for (int c = 0; c < mLists; ++c) order[static_cast<size_t>(first[distances[static_cast<size_t>(c)]]++)] = c;
+
+      // The k best (distance, id) so far, ascending.
+      std::vector<std::pair<uint32_t, int64_t>> best;
+      best.reserve(static_cast<size_t>(k) + 1);
+      std::vector<uint32_t> rowKeys(static_cast<size_t>(mLargestListBlocks * kBlock));
+      int64_t scanned = 0;
+      for (int i = 0; i < mLists && (i < mProbes || scanned < k); ++i) {
+        const auto c = static_cast<size_t>(order[static_cast<size_t>(i)]);
+        const int64_t begin = mListStart[c], count = mListRows[c];
+        mKeyDistances(key.data(), mKeys.data() + begin * kKeyWords, blocksOf(count), rowKeys.data());
+        for (int64_t j = 0; j < count; ++j) {
+          const uint32_t bound = static_cast<int>(best.size()) < k ? std::numeric_limits<uint32_t>::max() : best.back().first;
+          if (rowKeys[static_cast<size_t>(j)] > bound) continue;  // its code is no nearer than its key
+          const int64_t at = begin + j;
+          const auto d = static_cast<uint32_t>(hammingDistance(mForm, reinterpret_cast<const uint8_t*>(code.data()),
+                                                               reinterpret_cast<const uint8_t*>(mCodes.data() + at * mWords), mWords));
+          const std::pair<uint32_t, int64_t> found{d, mIds[static_cast<size_t>(at)]};
+          if (static_cast<int>(best.size()) == k && !(found < best.back())) continue;
+          best.insert(std::upper_bound(best.begin(), best.end(), found), found);
+          if (static_cast<int>(best.size()) > k) best.pop_back();
+        }
+        scanned += count;
+      }
+      for (int i = 0; i < k; ++i) {
+        ids[i] = best[static_cast<size_t>(i)].second;
+        squaredDistances[i] = static_cast<float>(best[static_cast<size_t>(i)].first + static_cast<uint32_t>(outside));  // exact: < 2^24
+      }
+    } catch (const std::exception& e) {
+      return invalidArgument(std::string("DescriptorIndex query: ivf-binary search failed: ") + e.what());
+    }
+    return Ok{};
+  }
+
+  int64_t memoryBytes() const override {
+    return static_cast<int64_t>((mCodes.size() + mKeys.size() + mCentroidKeys.size()) * 8 + mIds.size() * 8 +
+                                (mListStart.size() + mListRows.size()) * 8 + mKeyColumns.size() * 4) +
+           mVarying.memoryBytes();
+  }
+
+ private:
+  // The kKeyBits code positions whose column is most evenly split over the rows.
+  void chooseKeyColumns(const std::vector<uint64_t>& codes, int64_t rows) {
+    const size_t bits = mVarying.columns().size();
+    std::vector<int64_t> ones(bits, 0);
+    for (int64_t r = 0; r < rows; ++r) {
+      const uint64_t* code = codes.data() + r * mWords;
+      for (size_t w = 0; w < mWords; ++w) {
+        for (uint64_t word = code[w]; word != 0; word &= word - 1) ++ones[w * 64 + static_cast<size_t>(__builtin_ctzll(word))];
+      }
+    }
+    std::vector<int32_t> order(bits);
+    for (size_t b = 0; b < bits; ++b) order[b] = static_cast<int32_t>(b);
+    const auto minority = [&](int32_t b) { return std::min(ones[static_cast<size_t>(b)], rows - ones[static_cast<size_t>(b)]); };
+    std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return minority(a) > minority(b); });
+    order.resize(std::min<size_t>(bits, kKeyBits));
+    mKeyColumns = std::move(order);
+  }
+
+  void keyOf(const uint64_t* code, uint64_t* key) const {
+    std::fill(key, key + kKeyWords, uint64_t{0});
+    for (size_t k = 0; k < mKeyColumns.size(); ++k) {
+      const auto b = static_cast<size_t>(mKeyColumns[k]);
+      key[k / 64] |= ((code[b / 64] >> (b % 64)) & 1u) << (k % 64);
+    }
+  }
+
+  // Key words into a block layout: row `slot` of `keys` (blocks of kBlock rows, word by word).
+  static void storeKey(const uint64_t* key, int64_t slot, std::vector<uint64_t>& keys) {
+    const int64_t block = slot / kBlock, lane = slot % kBlock;
+    for (int w = 0; w < kKeyWords; ++w) keys[static_cast<size_t>((block * kKeyWords + w) * kBlock + lane)] = key[w];
+  }
+
+  // The nearest of `count` codes (ties by lower index) to `code`.
+  int nearest(const uint64_t* code, const std::vector<uint64_t>& centroids) const {
+    int best = 0;
+    float bestDistance = std::numeric_limits<float>::infinity();
+    for (int c = 0; c < mLists; ++c) {
+      const float d = hammingDistance(mForm, reinterpret_cast<const uint8_t*>(code),
+                                      reinterpret_cast<const uint8_t*>(centroids.data() + static_cast<size_t>(c) * mWords), mWords);
+      if (d < bestDistance) bestDistance = d, best = c;
+    }
+    return best;
+  }
+
+  std::vector<uint64_t> kMajority(const std::vector<uint64_t>& codes, int64_t rows) const {
+    const int64_t samples = std::min<int64_t>(rows, kMajoritySamplePerList * mLists);
+    std::vector<int64_t> sample(static_cast<size_t>(samples));
+    for (int64_t i = 0; i < samples; ++i) sample[static_cast<size_t>(i)] = i * rows / samples;
+    std::vector<uint64_t> centroids(static_cast<size_t>(mLists) * mWords);
+    for (int c = 0; c < mLists; ++c) {
+      const int64_t r = sample[static_cast<size_t>(static_cast<int64_t>(c) * samples / mLists)];
+      std::copy_n(codes.data() + r * mWords, mWords, centroids.data() + static_cast<size_t>(c) * mWords);
+    }
+    const size_t bits = mWords * 64;
+    std::vector<int32_t> counts(static_cast<size_t>(mLists) * bits), sizes(static_cast<size_t>(mLists));
+    for (int iteration = 0; iteration < kMajorityIterations; ++iteration) {
+      std::fill(counts.begin(), counts.end(), 0);
+      std::fill(sizes.begin(), sizes.end(), 0);
+      for (int64_t r : sample) {
+        const uint64_t* code = codes.data() + r * mWords;
+        const auto c = static_cast<size_t>(nearest(code, centroids));
+        ++sizes[c];
+        for (size_t w = 0; w < mWords; ++w) {
+          for (uint64_t word = code[w]; word != 0; word &= word - 1) ++counts[c * bits + w * 64 + static_cast<size_t>(__builtin_ctzll(word))];
+        }
+      }
+      for (size_t c = 0; c < static_cast<size_t>(mLists); ++c) {
+        if (sizes[c] == 0) continue;  // keeps its place
+        uint64_t* centroid = centroids.data() + c * mWords;
+        std::fill_n(centroid, mWords, uint64_t{0});
+        for (size_t b = 0; b < bits; ++b) {
+          if (2 * counts[c * bits + b] > sizes[c]) centroid[b / 64] |= uint64_t{1} << (b % 64);
+        }
+      }
+    }
+    return centroids;
+  }
+
+  void fileRows(const std::vector<uint64_t>& codes, int64_t rows, const std::vector<uint64_t>& centroids) {
+    std::vector<int32_t> list(static_cast<size_t>(rows));
+    mListRows.assign(static_cast<size_t>(mLists), 0);
+    for (int64_t r = 0; r < rows; ++r) {
+      list[static_cast<size_t>(r)] = nearest(codes.data() + r * mWords, centroids);
+      ++mListRows[static_cast<size_t>(list[static_cast<size_t>(r)])];
+    }
+    // Each list starts on a block; its rows in row order.
+    mListStart.assign(static_cast<size_t>(mLists), 0);
+    int64_t slots = 0;
+    for (size_t c = 0; c < mListRows.size(); ++c) {
+      mListStart[c] = slots;
+      slots += blocksOf(mListRows[c]) * kBlock;
+      mLargestListBlocks = std::max(mLargestListBlocks, blocksOf(mListRows[c]));
+    }
+    mKeys.assign(static_cast<size_t>(slots * kKeyWords), 0);
+    mCodes.assign(static_cast<size_t>(slots) * mWords, 0);
+    mIds.assign(static_cast<size_t>(slots), -1);
+    std::vector<int64_t> next = mListStart;
+    std::array<uint64_t, kKeyWords> key{};
+    for (int64_t r = 0; r < rows; ++r) {
+      const int64_t slot = next[static_cast<size_t>(list[static_cast<size_t>(r)])]++;
+      keyOf(codes.data() + r * mWords, key.data());
+      storeKey(key.data(), slot, mKeys);
+      std::copy_n(codes.data() + r * mWords, mWords, mCodes.data() + slot * mWords);
+      mIds[static_cast<size_t>(slot)] = r;
+    }
+    mCentroidKeys.assign(static_cast<size_t>(blocksOf(mLists) * kBlock * kKeyWords), 0);
+    for (int c = 0; c < mLists; ++c) {
+      keyOf(centroids.data() + static_cast<size_t>(c) * mWords, key.data());
+      storeKey(key.data(), c, mCentroidKeys);
+    }
+  }
+
+  VaryingColumns mVarying;
+  size_t mWords;  // 8-byte words per code
+  int mLists, mProbes;
+  Popcount mForm;
+  KeyDistances mKeyDistances;
+  std::vector<int32_t> mKeyColumns;     // code positions of the key's bits
+  std::vector<uint64_t> mCentroidKeys;  // the lists' centroids' keys, in blocks
+  std::vector<int64_t> mListStart;      // each list's first slot (a multiple of kBlock)
+  std::vector<int64_t> mListRows;
+  int64_t mLargestListBlocks = 0;
+  std::vector<uint64_t> mKeys;   // every slot's key, in blocks
+  std::vector<uint64_t> mCodes;  // every slot's code
+  std::vector<int64_t> mIds;     // every slot's row (-1: padding)
+};
+
+}  // namespace
+
+Result<std::unique_ptr<Backend>> buildIvfBinary(const float* data, int64_t rows, int64_t dims,
+                                                const DescriptorIndexSettings& settings) {
+  if (Status st = checkZeroOne(data, rows, dims, false); !st) return st.error();
+  if (settings.trees < 1 || settings.trees > rows)
+    return invalidArgument("DescriptorIndex: settings.trees (ivf-binary lists) must be in [1, rows = " + std::to_string(rows) +
+                           "], got " + std::to_string(settings.trees));
+  if (settings.checks < 1 || settings.checks > settings.trees)
+    return invalidArgument("DescriptorIndex: settings.checks (ivf-binary lists probed) must be in [1, trees], got " +
+                           std::to_string(settings.checks));
+  try {
+    return std::unique_ptr<Backend>(std::make_unique<IvfBinaryBackend>(data, rows, dims, settings.trees, settings.checks));
+  } catch (const std::exception& e) {
+    return invalidArgument(std::string("DescriptorIndex: ivf-binary build failed: ") + e.what());
+  }
+}
+
+}  // namespace brittle::search
