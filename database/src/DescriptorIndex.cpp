@@ -15,6 +15,10 @@
 #include <Eigen/Eigenvalues>
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#if defined(__x86_64__)
+#include <cpuid.h>
+#include <immintrin.h>
+#endif
 #endif
 
 #include "IndexBackends.h"
@@ -103,6 +107,53 @@ void packBits(const float* values, int64_t rows, int64_t dims, int64_t wordBytes
   }
 }
 
+namespace {
+
+bool pextRunsFast() {
+#if defined(__x86_64__)
+  static const bool fast = [] {
+    if (!__builtin_cpu_supports("bmi2")) return false;
+    if (!__builtin_cpu_is("amd")) return true;
+    unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+    if (!__get_cpuid(1, &eax, &ebx, &ecx, &edx)) return false;
+    const unsigned family = ((eax >> 8) & 0xfu) + ((eax >> 20) & 0xffu);
+    return family >= 0x19;  // Zen 3 and later run pext in hardware
+  }();
+  return fast;
+#else
+  return false;
+#endif
+}
+
+#if defined(__x86_64__)
+__attribute__((target("bmi2,popcnt"))) void gatherBitsPext(const uint64_t* in, const uint64_t* mask, size_t words, uint64_t* out) {
+  size_t at = 0;
+  for (size_t w = 0; w < words; ++w) {
+    if (mask[w] == 0) continue;
+    const uint64_t bits = _pext_u64(in[w], mask[w]);
+    const auto count = static_cast<size_t>(_mm_popcnt_u64(mask[w]));
+    out[at / 64] |= bits << (at % 64);
+    if (at % 64 + count > 64) out[at / 64 + 1] |= bits >> (64 - at % 64);
+    at += count;
+  }
+}
+#endif
+
+}  // namespace
+
+void gatherBits(const uint64_t* in, const uint64_t* mask, size_t words, uint64_t* out, size_t outWords) {
+  std::fill(out, out + outWords, uint64_t{0});
+#if defined(__x86_64__)
+  if (pextRunsFast()) return gatherBitsPext(in, mask, words, out);
+#endif
+  size_t at = 0;
+  for (size_t w = 0; w < words; ++w) {
+    for (uint64_t m = mask[w]; m != 0; m &= m - 1, ++at) {
+      out[at / 64] |= ((in[w] >> __builtin_ctzll(m)) & 1u) << (at % 64);
+    }
+  }
+}
+
 VaryingColumns::VaryingColumns(const float* data, int64_t rows, int64_t dims)
     : mDims(dims), mConstant(static_cast<size_t>(codeBytes(dims, 8) / 8), 0), mOutside(mConstant.size(), ~uint64_t{0}) {
   // A column varies where some row's code differs from the first's.
@@ -113,20 +164,15 @@ VaryingColumns::VaryingColumns(const float* data, int64_t rows, int64_t dims)
     for (size_t w = 0; w < code.size(); ++w) differ[w] |= code[w] ^ mConstant[w];
   }
   for (size_t j = 0; j < differ.size() * 64; ++j) {
-    if ((differ[j / 64] >> (j % 64)) & 1u) {
-      mColumns.push_back(static_cast<int32_t>(j));
-      mOutside[j / 64] &= ~(uint64_t{1} << (j % 64));
-    }
+    if ((differ[j / 64] >> (j % 64)) & 1u) mColumns.push_back(static_cast<int32_t>(j));
   }
+  mInside = differ;
+  for (size_t w = 0; w < differ.size(); ++w) mOutside[w] = ~differ[w];
 }
 
 int VaryingColumns::code(const float* row, uint64_t* full, uint64_t* code) const {
   packBits(row, 1, mDims, 8, reinterpret_cast<uint8_t*>(full));
-  std::fill(code, code + words(), uint64_t{0});
-  for (size_t k = 0; k < mColumns.size(); ++k) {
-    const auto j = static_cast<size_t>(mColumns[k]);
-    code[k / 64] |= ((full[j / 64] >> (j % 64)) & 1u) << (k % 64);
-  }
+  gatherBits(full, mInside.data(), mInside.size(), code, words());
   int outside = 0;
   for (size_t w = 0; w < mOutside.size(); ++w) outside += __builtin_popcountll((full[w] ^ mConstant[w]) & mOutside[w]);
   return outside;

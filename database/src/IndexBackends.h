@@ -102,6 +102,12 @@ Popcount fastestPopcount();
 float hammingDistance(Popcount form, const uint8_t* a, const uint8_t* b, size_t words);
 void packBits(const float* values, int64_t rows, int64_t dims, int64_t wordBytes, uint8_t* codes);
 
+/// out ← the bits of `in` (`words` 8-byte words) where `mask` has a 1, in ascending order, packed
+/// from bit 0 (out has room for them all; its bits past them are 0). BMI2's pext where it runs
+/// fast (not on AMD CPUs before Zen 3, which microcode it), else a loop over the mask's bits: the
+/// same bits either way.
+void gatherBits(const uint64_t* in, const uint64_t* mask, size_t words, uint64_t* out, size_t outWords);
+
 /// The columns of indexed 0/1 rows that do not hold one value in every row, and codes over them
 /// (hnsw-binary, ivf-binary). A column with one value in every indexed row adds the same 0 or 1 to
 /// a query's distance from each of them, so it changes no ranking: the codes leave it out, and a
@@ -120,13 +126,14 @@ class VaryingColumns {
   /// One row of dims 0/1 values to its code (words() words), through `full` (fullWords() words of
   /// scratch); returns how many left-out columns differ from the indexed rows' value there.
   int code(const float* row, uint64_t* full, uint64_t* code) const;
-  int64_t memoryBytes() const { return static_cast<int64_t>(mColumns.size() * 4 + 2 * mConstant.size() * 8); }
+  int64_t memoryBytes() const { return static_cast<int64_t>(mColumns.size() * 4 + 3 * mConstant.size() * 8); }
 
  private:
   int64_t mDims = 0;
   std::vector<int32_t> mColumns;    // ascending
   std::vector<uint64_t> mConstant;  // the first row's full code: the left-out columns' value
   std::vector<uint64_t> mOutside;   // the left-out columns, as a full code's mask
+  std::vector<uint64_t> mInside;    // the varying columns, as a full code's mask
 };
 
 }  // namespace brittle::search

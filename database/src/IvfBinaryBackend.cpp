@@ -58,8 +58,9 @@ constexpr int kBlock = 8;     // rows a block of keys
 constexpr int64_t kMajoritySamplePerList = 32;  // as the float lists' k-means (IvfBackend.cpp)
 constexpr int kMajorityIterations = 10;
 
-// out[l] ← the key distance of `query` to lane l of each of `blocks` blocks (8 per block).
-void keyDistancesPortable(const uint64_t* query, const uint64_t* keys, int64_t blocks, uint32_t* out) {
+// out[8b + l] ← the key distance of `query` to lane l of block b, for each of `blocks` blocks, and
+// least[b] ← the smallest of block b's eight.
+void keyDistancesPortable(const uint64_t* query, const uint64_t* keys, int64_t blocks, uint32_t* out, uint32_t* least) {
   for (int64_t b = 0; b < blocks; ++b) {
     const uint64_t* block = keys + b * kKeyWords * kBlock;
     for (int l = 0; l < kBlock; ++l) {
@@ -67,12 +68,13 @@ void keyDistancesPortable(const uint64_t* query, const uint64_t* keys, int64_t b
       for (int w = 0; w < kKeyWords; ++w) sum += static_cast<uint32_t>(__builtin_popcountll(block[w * kBlock + l] ^ query[w]));
       out[b * kBlock + l] = sum;
     }
+    least[b] = *std::min_element(out + b * kBlock, out + (b + 1) * kBlock);
   }
 }
 
 #if defined(__x86_64__)
 __attribute__((target("popcnt"))) void keyDistancesPopcnt(const uint64_t* query, const uint64_t* keys, int64_t blocks,
-                                                          uint32_t* out) {
+                                                          uint32_t* out, uint32_t* least) {
   for (int64_t b = 0; b < blocks; ++b) {
     const uint64_t* block = keys + b * kKeyWords * kBlock;
     for (int l = 0; l < kBlock; ++l) {
@@ -80,13 +82,14 @@ __attribute__((target("popcnt"))) void keyDistancesPopcnt(const uint64_t* query,
       for (int w = 0; w < kKeyWords; ++w) sum += static_cast<uint64_t>(_mm_popcnt_u64(block[w * kBlock + l] ^ query[w]));
       out[b * kBlock + l] = static_cast<uint32_t>(sum);
     }
+    least[b] = *std::min_element(out + b * kBlock, out + (b + 1) * kBlock);
   }
 }
 
 // Four rows a register: each byte's count from two 4-bit look-ups, summed per 8 bytes (one row's
 // word) by psadbw (Mula, Kurz & Lemire 2018).
 __attribute__((target("avx2"))) void keyDistancesAvx2(const uint64_t* query, const uint64_t* keys, int64_t blocks,
-                                                      uint32_t* out) {
+                                                      uint32_t* out, uint32_t* least) {
   const __m256i table = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4,  //
                                          0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
   const __m256i low = _mm256_set1_epi8(0x0f);
@@ -106,11 +109,12 @@ __attribute__((target("avx2"))) void keyDistancesAvx2(const uint64_t* query, con
       _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), _mm256_sad_epu8(counts, _mm256_setzero_si256()));
       for (int l = 0; l < 4; ++l) out[b * kBlock + 4 * half + l] = static_cast<uint32_t>(lanes[l]);
     }
+    least[b] = *std::min_element(out + b * kBlock, out + (b + 1) * kBlock);
   }
 }
 
 __attribute__((target("avx512f,avx512vpopcntdq"))) void keyDistancesAvx512(const uint64_t* query, const uint64_t* keys,
-                                                                           int64_t blocks, uint32_t* out) {
+                                                                           int64_t blocks, uint32_t* out, uint32_t* least) {
   __m512i q[kKeyWords];
   for (int w = 0; w < kKeyWords; ++w) q[w] = _mm512_set1_epi64(static_cast<long long>(query[w]));
   for (int64_t b = 0; b < blocks; ++b) {
@@ -118,12 +122,17 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) void keyDistancesAvx512(const
     __m512i sums = _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(block), q[0]));
     for (int w = 1; w < kKeyWords; ++w)
       sums = _mm512_add_epi64(sums, _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(block + w * kBlock), q[w])));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + b * kBlock), _mm512_mask_cvtepi64_epi32(_mm256_setzero_si256(), 0xff, sums));
+    const __m256i narrow = _mm512_mask_cvtepi64_epi32(_mm256_setzero_si256(), 0xff, sums);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + b * kBlock), narrow);
+    __m128i m = _mm_min_epu32(_mm256_castsi256_si128(narrow), _mm256_extracti128_si256(narrow, 1));
+    m = _mm_min_epu32(m, _mm_shuffle_epi32(m, 0x4e));
+    m = _mm_min_epu32(m, _mm_shuffle_epi32(m, 0xb1));
+    least[b] = static_cast<uint32_t>(_mm_cvtsi128_si32(m));
   }
 }
 #endif
 
-using KeyDistances = void (*)(const uint64_t*, const uint64_t*, int64_t, uint32_t*);
+using KeyDistances = void (*)(const uint64_t*, const uint64_t*, int64_t, uint32_t*, uint32_t*);
 
 KeyDistances keyDistancesFor(Popcount form) {
   switch (form) {
@@ -158,45 +167,49 @@ class IvfBinaryBackend final : public Backend {
 
   Status query(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const override {
     try {
-      std::vector<uint64_t> full(mVarying.fullWords()), code(mWords);
-      const int outside = mVarying.code(descriptor, full.data(), code.data());
+      Scratch x;
+      x.full.resize(mVarying.fullWords());
+      x.code.resize(mWords);
+      const int outside = mVarying.code(descriptor, x.full.data(), x.code.data());
       std::array<uint64_t, kKeyWords> key{};
-      keyOf(code.data(), key.data());
-      // The lists in order of their centroid's key distance, ties by lower index (a counting sort:
-      // distances are at most kKeyBits).
-      std::vector<uint32_t> distances(static_cast<size_t>(blocksOf(mLists) * kBlock));
-      mKeyDistances(key.data(), mCentroidKeys.data(), blocksOf(mLists), distances.data());
-      std::array<int32_t, kKeyBits + 2> first{};
-      for (int c = 0; c < mLists; ++c) ++first[distances[static_cast<size_t>(c)] + 1];
-      for (int d = 1; d <= kKeyBits + 1; ++d) first[d] += first[d - 1];
-      std::vector<int32_t> order(static_cast<size_t>(mLists));
-      for (int c = 0; c < mLists; ++c) order[static_cast<size_t>(first[distances[static_cast<size_t>(c)]]++)] = c;
+      keyOf(x.code.data(), key.data());
+      x.distances.resize(static_cast<size_t>(blocksOf(mLists) * kBlock));
+      x.least.resize(static_cast<size_t>(std::max(blocksOf(mLists), mLargestListBlocks)));
+      mKeyDistances(key.data(), mCentroidKeys.data(), blocksOf(mLists), x.distances.data(), x.least.data());
+      orderLists(x, mProbes);
 
       // The k best (distance, id) so far, ascending.
-      std::vector<std::pair<uint32_t, int64_t>> best;
-      best.reserve(static_cast<size_t>(k) + 1);
-      std::vector<uint32_t> rowKeys(static_cast<size_t>(mLargestListBlocks * kBlock));
+      x.best.reserve(static_cast<size_t>(k) + 1);
+      x.rowKeys.resize(static_cast<size_t>(mLargestListBlocks * kBlock));
       int64_t scanned = 0;
+      uint32_t bound = std::numeric_limits<uint32_t>::max();  // the k-th best distance, once k are found
       for (int i = 0; i < mLists && (i < mProbes || scanned < k); ++i) {
-        const auto c = static_cast<size_t>(order[static_cast<size_t>(i)]);
-        const int64_t begin = mListStart[c], count = mListRows[c];
-        mKeyDistances(key.data(), mKeys.data() + begin * kKeyWords, blocksOf(count), rowKeys.data());
-        for (int64_t j = 0; j < count; ++j) {
-          const uint32_t bound = static_cast<int>(best.size()) < k ? std::numeric_limits<uint32_t>::max() : best.back().first;
-          if (rowKeys[static_cast<size_t>(j)] > bound) continue;  // its code is no nearer than its key
-          const int64_t at = begin + j;
-          const auto d = static_cast<uint32_t>(hammingDistance(mForm, reinterpret_cast<const uint8_t*>(code.data()),
-                                                               reinterpret_cast<const uint8_t*>(mCodes.data() + at * mWords), mWords));
-          const std::pair<uint32_t, int64_t> found{d, mIds[static_cast<size_t>(at)]};
-          if (static_cast<int>(best.size()) == k && !(found < best.back())) continue;
-          best.insert(std::upper_bound(best.begin(), best.end(), found), found);
-          if (static_cast<int>(best.size()) > k) best.pop_back();
+        if (i == static_cast<int>(x.order.size())) orderLists(x, mLists);  // the probed lists hold fewer than k rows
+        const auto c = static_cast<size_t>(x.order[static_cast<size_t>(i)]);
+        const int64_t begin = mListStart[c], count = mListRows[c], blocks = blocksOf(count);
+        mKeyDistances(key.data(), mKeys.data() + begin * kKeyWords, blocks, x.rowKeys.data(), x.least.data());
+        for (int64_t block = 0; block < blocks; ++block) {
+          if (x.least[static_cast<size_t>(block)] > bound) continue;  // no code in it is nearer than its key
+          for (int64_t j = block * kBlock, end = std::min(count, j + kBlock); j < end; ++j) {
+            if (x.rowKeys[static_cast<size_t>(j)] > bound) continue;
+            const int64_t at = begin + j;
+            const auto d = static_cast<uint32_t>(hammingDistance(mForm, reinterpret_cast<const uint8_t*>(x.code.data()),
+                                                                 reinterpret_cast<const uint8_t*>(mCodes.data() + at * mWords), mWords));
+            const std::pair<uint32_t, int64_t> found{d, mIds[static_cast<size_t>(at)]};
+            if (static_cast<int>(x.best.size()) == k) {
+              if (!(found < x.best.back())) continue;
+              x.best.pop_back();
+            }
+            x.best.push_back(found);
+            for (size_t b = x.best.size() - 1; b > 0 && found < x.best[b - 1]; --b) std::swap(x.best[b], x.best[b - 1]);
+            if (static_cast<int>(x.best.size()) == k) bound = x.best.back().first;
+          }
         }
         scanned += count;
       }
       for (int i = 0; i < k; ++i) {
-        ids[i] = best[static_cast<size_t>(i)].second;
-        squaredDistances[i] = static_cast<float>(best[static_cast<size_t>(i)].first + static_cast<uint32_t>(outside));  // exact: < 2^24
+        ids[i] = x.best[static_cast<size_t>(i)].second;
+        squaredDistances[i] = static_cast<float>(x.best[static_cast<size_t>(i)].first + static_cast<uint32_t>(outside));  // exact: < 2^24
       }
     } catch (const std::exception& e) {
       return invalidArgument(std::string("DescriptorIndex query: ivf-binary search failed: ") + e.what());
@@ -206,11 +219,44 @@ class IvfBinaryBackend final : public Backend {
 
   int64_t memoryBytes() const override {
     return static_cast<int64_t>((mCodes.size() + mKeys.size() + mCentroidKeys.size()) * 8 + mIds.size() * 8 +
-                                (mListStart.size() + mListRows.size()) * 8 + mKeyColumns.size() * 4) +
+                                (mListStart.size() + mListRows.size() + mKeyMask.size()) * 8) +
            mVarying.memoryBytes();
   }
 
  private:
+  struct Scratch {
+    std::vector<uint64_t> full, code;
+    std::vector<uint32_t> distances, rowKeys, least;
+    std::vector<int32_t> order;
+    std::vector<std::pair<uint32_t, int64_t>> best;
+  };
+
+  // x.order ← at least the `wanted` lists nearest the query (x.distances: their centroids' key
+  // distances), ordered by (distance, index). The lists up to the wanted one's distance are
+  // gathered in index order (a count of each distance finds it), then sorted: a sort of ~wanted
+  // lists instead of all of them.
+  void orderLists(Scratch& x, int wanted) const {
+    // Four tables, so that runs of one distance do not wait on each other's increments.
+    std::array<std::array<int32_t, kKeyBits + 1>, 4> count{};
+    const uint32_t* d = x.distances.data();
+    int c = 0;
+    for (; c + 4 <= mLists; c += 4) {
+      ++count[0][d[c]], ++count[1][d[c + 1]], ++count[2][d[c + 2]], ++count[3][d[c + 3]];
+    }
+    for (; c < mLists; ++c) ++count[0][d[c]];
+    uint32_t last = 0;
+    for (int32_t sum = 0; last < kKeyBits; ++last) {
+      sum += count[0][last] + count[1][last] + count[2][last] + count[3][last];
+      if (sum >= wanted) break;
+    }
+    x.order.clear();
+    for (c = 0; c < mLists; ++c) {
+      if (d[c] <= last) x.order.push_back(static_cast<int32_t>(d[c] << 16 | static_cast<uint32_t>(c)));
+    }
+    std::sort(x.order.begin(), x.order.end());  // (distance, index): lists < 2^16
+    for (int32_t& o : x.order) o &= 0xffff;
+  }
+
   // The kKeyBits code positions whose column is most evenly split over the rows.
   void chooseKeyColumns(const std::vector<uint64_t>& codes, int64_t rows) {
     const size_t bits = mVarying.columns().size();
@@ -226,16 +272,12 @@ class IvfBinaryBackend final : public Backend {
     const auto minority = [&](int32_t b) { return std::min(ones[static_cast<size_t>(b)], rows - ones[static_cast<size_t>(b)]); };
     std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return minority(a) > minority(b); });
     order.resize(std::min<size_t>(bits, kKeyBits));
-    mKeyColumns = std::move(order);
+    mKeyMask.assign(mWords, 0);
+    for (int32_t b : order) mKeyMask[static_cast<size_t>(b) / 64] |= uint64_t{1} << (b % 64);
   }
 
-  void keyOf(const uint64_t* code, uint64_t* key) const {
-    std::fill(key, key + kKeyWords, uint64_t{0});
-    for (size_t k = 0; k < mKeyColumns.size(); ++k) {
-      const auto b = static_cast<size_t>(mKeyColumns[k]);
-      key[k / 64] |= ((code[b / 64] >> (b % 64)) & 1u) << (k % 64);
-    }
-  }
+  // The key: the code's bits at the key's positions, in ascending order.
+  void keyOf(const uint64_t* code, uint64_t* key) const { gatherBits(code, mKeyMask.data(), mWords, key, kKeyWords); }
 
   // Key words into a block layout: row `slot` of `keys` (blocks of kBlock rows, word by word).
   static void storeKey(const uint64_t* key, int64_t slot, std::vector<uint64_t>& keys) {
@@ -328,7 +370,7 @@ class IvfBinaryBackend final : public Backend {
   int mLists, mProbes;
   Popcount mForm;
   KeyDistances mKeyDistances;
-  std::vector<int32_t> mKeyColumns;     // code positions of the key's bits
+  std::vector<uint64_t> mKeyMask;       // the key's positions in a code
   std::vector<uint64_t> mCentroidKeys;  // the lists' centroids' keys, in blocks
   std::vector<int64_t> mListStart;      // each list's first slot (a multiple of kBlock)
   std::vector<int64_t> mListRows;
@@ -343,9 +385,9 @@ class IvfBinaryBackend final : public Backend {
 Result<std::unique_ptr<Backend>> buildIvfBinary(const float* data, int64_t rows, int64_t dims,
                                                 const DescriptorIndexSettings& settings) {
   if (Status st = checkZeroOne(data, rows, dims, false); !st) return st.error();
-  if (settings.trees < 1 || settings.trees > rows)
-    return invalidArgument("DescriptorIndex: settings.trees (ivf-binary lists) must be in [1, rows = " + std::to_string(rows) +
-                           "], got " + std::to_string(settings.trees));
+  if (settings.trees < 1 || settings.trees > rows || settings.trees > 65535)
+    return invalidArgument("DescriptorIndex: settings.trees (ivf-binary lists) must be in [1, min(rows = " + std::to_string(rows) +
+                           ", 65535)], got " + std::to_string(settings.trees));
   if (settings.checks < 1 || settings.checks > settings.trees)
     return invalidArgument("DescriptorIndex: settings.checks (ivf-binary lists probed) must be in [1, trees], got " +
                            std::to_string(settings.checks));
