@@ -33,8 +33,9 @@ DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entrie
   DescriptorIndexSettings s;
   s.checks = 32;
   if (kind == DescriptorKind::Voxel) {
-    s.kind = Kind::HnswBinary;
-    s.trees = 16;
+    s.kind = Kind::IvfBinary;
+    s.trees = static_cast<int>(std::clamp<int64_t>(entries / kIvfBinaryRowsPerList, 1, 1024));  // the pack's bound on trees
+    s.checks = std::min(s.trees, 32);
   } else if (voxelResolution % 8 == 0) {
     s.kind = Kind::HnswPrincipal;
     s.trees = 32;

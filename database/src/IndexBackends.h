@@ -102,6 +102,13 @@ Popcount fastestPopcount();
 float hammingDistance(Popcount form, const uint8_t* a, const uint8_t* b, size_t words);
 void packBits(const float* values, int64_t rows, int64_t dims, int64_t wordBytes, uint8_t* codes);
 
+/// ivf-binary's key distances (IvfBinaryBackend.cpp): 256-bit keys in blocks of eight, word by word
+/// (word w of the block's 8 keys at [32b + 8w, 32b + 8w + 8)). out[8b + l] ← the Hamming distance of
+/// `query` (4 words) to key l of block b; least[b] ← the block's smallest. The same integers in
+/// every form.
+void ivfBinaryKeyDistances(Popcount form, const uint64_t* query, const uint64_t* keys, int64_t blocks, uint32_t* out,
+                           uint32_t* least);
+
 /// out ← the bits of `in` (`words` 8-byte words) where `mask` has a 1, in ascending order, packed
 /// from bit 0 (out has room for them all; its bits past them are 0). BMI2's pext where it runs
 /// fast (not on AMD CPUs before Zen 3, which microcode it), else a loop over the mask's bits: the

@@ -183,27 +183,40 @@ class IvfBinaryBackend final : public Backend {
       x.rowKeys.resize(static_cast<size_t>(mLargestListBlocks * kBlock));
       int64_t scanned = 0;
       uint32_t bound = std::numeric_limits<uint32_t>::max();  // the k-th best distance, once k are found
+      const auto keysOf = [&](size_t list) { return mKeys.data() + mListStart[list] * kKeyWords; };
+      const auto prefetchKeys = [&](size_t list) {  // a cold list's keys (the next one's, while this one is scanned)
+        prefetchBytes(keysOf(list), keysOf(list) + blocksOf(mListRows[list]) * kBlock * kKeyWords);
+      };
+      prefetchKeys(static_cast<size_t>(x.order[0]));
       for (int i = 0; i < mLists && (i < mProbes || scanned < k); ++i) {
-        if (i == static_cast<int>(x.order.size())) orderLists(x, mLists);  // the probed lists hold fewer than k rows
+        // The probed lists hold fewer than k rows: all of them in order (the first ones as before).
+        if (i == static_cast<int>(x.order.size())) orderLists(x, mLists);
         const auto c = static_cast<size_t>(x.order[static_cast<size_t>(i)]);
+        if (i + 1 < static_cast<int>(x.order.size())) prefetchKeys(static_cast<size_t>(x.order[static_cast<size_t>(i) + 1]));
         const int64_t begin = mListStart[c], count = mListRows[c], blocks = blocksOf(count);
-        mKeyDistances(key.data(), mKeys.data() + begin * kKeyWords, blocks, x.rowKeys.data(), x.least.data());
+        mKeyDistances(key.data(), keysOf(c), blocks, x.rowKeys.data(), x.least.data());
+        // The rows the bound so far admits, their codes asked of the cache before any is compared.
+        x.admitted.clear();
         for (int64_t block = 0; block < blocks; ++block) {
           if (x.least[static_cast<size_t>(block)] > bound) continue;  // no code in it is nearer than its key
           for (int64_t j = block * kBlock, end = std::min(count, j + kBlock); j < end; ++j) {
             if (x.rowKeys[static_cast<size_t>(j)] > bound) continue;
-            const int64_t at = begin + j;
-            const auto d = static_cast<uint32_t>(hammingDistance(mForm, reinterpret_cast<const uint8_t*>(x.code.data()),
-                                                                 reinterpret_cast<const uint8_t*>(mCodes.data() + at * mWords), mWords));
-            const std::pair<uint32_t, int64_t> found{d, mIds[static_cast<size_t>(at)]};
-            if (static_cast<int>(x.best.size()) == k) {
-              if (!(found < x.best.back())) continue;
-              x.best.pop_back();
-            }
-            x.best.push_back(found);
-            for (size_t b = x.best.size() - 1; b > 0 && found < x.best[b - 1]; --b) std::swap(x.best[b], x.best[b - 1]);
-            if (static_cast<int>(x.best.size()) == k) bound = x.best.back().first;
+            x.admitted.push_back(begin + j);
+            prefetchBytes(mCodes.data() + (begin + j) * mWords, mCodes.data() + (begin + j + 1) * mWords);
           }
+        }
+        for (int64_t at : x.admitted) {
+          if (x.rowKeys[static_cast<size_t>(at - begin)] > bound) continue;  // the bound has tightened since
+          const auto d = static_cast<uint32_t>(hammingDistance(mForm, reinterpret_cast<const uint8_t*>(x.code.data()),
+                                                               reinterpret_cast<const uint8_t*>(mCodes.data() + at * mWords), mWords));
+          const std::pair<uint32_t, int64_t> found{d, mIds[static_cast<size_t>(at)]};
+          if (static_cast<int>(x.best.size()) == k) {
+            if (!(found < x.best.back())) continue;
+            x.best.pop_back();
+          }
+          x.best.push_back(found);
+          for (size_t b = x.best.size() - 1; b > 0 && found < x.best[b - 1]; --b) std::swap(x.best[b], x.best[b - 1]);
+          if (static_cast<int>(x.best.size()) == k) bound = x.best.back().first;
         }
         scanned += count;
       }
@@ -229,6 +242,7 @@ class IvfBinaryBackend final : public Backend {
     std::vector<uint32_t> distances, rowKeys, least;
     std::vector<int32_t> order;
     std::vector<std::pair<uint32_t, int64_t>> best;
+    std::vector<int64_t> admitted;  // slots of one list whose key the bound admits
   };
 
   // x.order ← at least the `wanted` lists nearest the query (x.distances: their centroids' key
@@ -381,6 +395,11 @@ class IvfBinaryBackend final : public Backend {
 };
 
 }  // namespace
+
+void ivfBinaryKeyDistances(Popcount form, const uint64_t* query, const uint64_t* keys, int64_t blocks, uint32_t* out,
+                           uint32_t* least) {
+  keyDistancesFor(form)(query, keys, blocks, out, least);
+}
 
 Result<std::unique_ptr<Backend>> buildIvfBinary(const float* data, int64_t rows, int64_t dims,
                                                 const DescriptorIndexSettings& settings) {

@@ -163,7 +163,7 @@ DescriptorIndexSettings indexAtPrecision(const DescriptorIndexSettings& stored, 
   DescriptorIndexSettings s = stored;
   if (s.kind == Kind::BruteForce || s.kind == Kind::FaissBinaryFlat || s.kind == Kind::Autotuned) return s;
   const double scaled = std::max(1.0, std::round(precision * s.checks));
-  const bool lists = s.kind == Kind::Ivf || s.kind == Kind::FaissIvf;
+  const bool lists = s.kind == Kind::Ivf || s.kind == Kind::IvfBinary || s.kind == Kind::FaissIvf;
   s.checks = static_cast<int>(std::min(scaled, lists ? static_cast<double>(s.trees) : 1e9));
   return s;
 }

@@ -781,6 +781,136 @@ TEST(DescriptorIndex, HnswBinaryLeavesOutColumnsEveryRowSharesAndAddsThemBack) {
   }
 }
 
+// The binary inverted file. Rows of 600 bits, 150 of them one value in every row: 450 vary, so
+// the 256-bit key is a strict part of the code and the key's bound decides which rows are ranked.
+// Probing every list is brute force, ids, distances (the shared columns' share included) and ties;
+// fewer lists find the near copies of rows (clustered, as grids of like shapes are), draw nothing (two builds answer alike), and every distance they
+// return is the row's own.
+TEST(DescriptorIndex, InvertedFileOverBitsWithEveryListProbedIsBruteForce) {
+  const int64_t rows = 1200, shared = 150, queries = 80, k = 4;
+  for (int64_t dims : {int64_t{600}, int64_t{200}}) {  // 450 varying columns, then 50 (a key of them all)
+    // Rows around 30 prototypes (a tenth of their bits flipped), as grids of like shapes cluster.
+    const auto prototypes = randomBits(30, dims, 21);
+    std::vector<float> data(static_cast<size_t>(rows * dims));
+    std::mt19937 flips(23);
+    for (int64_t r = 0; r < rows; ++r) {
+      for (int64_t c = 0; c < dims; ++c) {
+        const float p = prototypes[static_cast<size_t>((r % 30) * dims + c)];
+        data[static_cast<size_t>(r * dims + c)] = c < shared ? static_cast<float>((c / 5) % 2) : (flips() % 10 == 0 ? 1.0f - p : p);
+      }
+    }
+    auto q = randomBits(queries, dims, 22);
+    for (int64_t i = 0; i < queries / 2; ++i) {  // half near copies of rows (a few bits flipped), half random
+      for (int64_t c = 0; c < dims; ++c) q[i * dims + c] = data[(13 * i) * dims + c];
+      for (int64_t f = 0; f < 3; ++f) q[i * dims + (7 * i + 31 * f) % dims] = 1.0f - q[i * dims + (7 * i + 31 * f) % dims];
+    }
+    DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+    std::vector<int64_t> exactIds(queries * k), ids(queries * k);
+    std::vector<float> exactD(queries * k), d(queries * k);
+    ASSERT_TRUE(exact.queryBatch(q.data(), queries, k, exactIds.data(), exactD.data()).ok());
+    DescriptorIndexSettings all = settingsFor(Kind::IvfBinary, 24);
+    all.trees = 24;
+    DescriptorIndex every = buildOrDie(data, dims, all);
+    ASSERT_TRUE(every.queryBatch(q.data(), queries, k, ids.data(), d.data()).ok());
+    EXPECT_EQ(ids, exactIds) << dims;
+    EXPECT_EQ(d, exactD) << dims;
+
+    DescriptorIndexSettings few = settingsFor(Kind::IvfBinary, 3);
+    few.trees = 24;
+    const DescriptorIndex a = buildOrDie(data, dims, few);
+    few.seed = 99;  // not used: nothing is drawn
+    const DescriptorIndex b = buildOrDie(data, dims, few);
+    std::vector<int64_t> ia(queries * k), ib(ia.size());
+    std::vector<float> da(ia.size()), db(ia.size());
+    ASSERT_TRUE(a.queryBatch(q.data(), queries, k, ia.data(), da.data()).ok());
+    ASSERT_TRUE(b.queryBatch(q.data(), queries, k, ib.data(), db.data()).ok());
+    EXPECT_EQ(ia, ib);
+    EXPECT_EQ(da, db);
+    EXPECT_EQ(a.memoryBytes(), b.memoryBytes());
+    int found = 0;
+    for (int64_t i = 0; i < queries; ++i) {
+      for (int64_t j = 0; j < k; ++j) {
+        const auto id = ia[static_cast<size_t>(i * k + j)];
+        float own = 0.0f;
+        for (int64_t c = 0; c < dims; ++c) own += q[i * dims + c] != data[id * dims + c] ? 1.0f : 0.0f;
+        EXPECT_EQ(da[static_cast<size_t>(i * k + j)], own) << "query " << i << ", rank " << j;
+        if (j > 0) {
+          EXPECT_LE(da[static_cast<size_t>(i * k + j - 1)], da[static_cast<size_t>(i * k + j)]);
+        }
+      }
+      if (i < queries / 2) found += ia[static_cast<size_t>(i * k)] == 13 * i;
+    }
+    EXPECT_GE(found, queries / 2 - 1) << "near copies found by 3 of 24 lists, " << dims << " values a row";
+  }
+}
+
+// A list smaller than k: the file probes on in centroid order until it holds k rows, and the
+// answer is then brute force's over those lists (here every row: 6 rows, 3 lists, k 6).
+TEST(DescriptorIndex, InvertedFileOverBitsProbesOnUntilItHoldsK) {
+  const int64_t dims = 70;
+  const auto data = randomBits(6, dims, 31);
+  const auto q = randomBits(1, dims, 32);
+  DescriptorIndexSettings s = settingsFor(Kind::IvfBinary, 1);
+  s.trees = 3;
+  const DescriptorIndex file = buildOrDie(data, dims, s);
+  const DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+  int64_t ids[6], exactIds[6];
+  float d[6], exactD[6];
+  ASSERT_TRUE(file.query(q.data(), 6, ids, d).ok());
+  ASSERT_TRUE(exact.query(q.data(), 6, exactIds, exactD).ok());
+  EXPECT_EQ(std::vector<int64_t>(ids, ids + 6), std::vector<int64_t>(exactIds, exactIds + 6));
+  EXPECT_EQ(std::vector<float>(d, d + 6), std::vector<float>(exactD, exactD + 6));
+}
+
+// Every popcount form gives the key distances and each block's least, counted bit by bit.
+TEST(DescriptorIndex, InvertedFileOverBitsKeyDistancesSameIntegersInEveryForm) {
+  std::mt19937_64 rng(41);
+  const int64_t blocks = 5;
+  std::vector<uint64_t> keys(static_cast<size_t>(blocks * 32)), query(4);
+  for (auto& w : keys) w = rng();
+  for (auto& w : query) w = rng();
+  for (int w = 0; w < 4; ++w) keys[static_cast<size_t>(3 * 32 + w * 8 + 5)] = query[static_cast<size_t>(w)];  // a key at distance 0
+  std::vector<uint32_t> expected(static_cast<size_t>(blocks * 8)), least(static_cast<size_t>(blocks));
+  for (int64_t b = 0; b < blocks; ++b) {
+    for (int l = 0; l < 8; ++l) {
+      uint32_t bits = 0;
+      for (int w = 0; w < 4; ++w) bits += static_cast<uint32_t>(std::popcount(keys[static_cast<size_t>(b * 32 + w * 8 + l)] ^ query[static_cast<size_t>(w)]));
+      expected[static_cast<size_t>(b * 8 + l)] = bits;
+    }
+  }
+  for (auto form : {search::Popcount::Portable, search::Popcount::Popcnt, search::Popcount::Avx2, search::Popcount::Avx512}) {
+    if (!search::cpuRuns(form)) continue;
+    std::vector<uint32_t> out(expected.size(), 999);
+    search::ivfBinaryKeyDistances(form, query.data(), keys.data(), blocks, out.data(), least.data());
+    EXPECT_EQ(out, expected) << "form " << static_cast<int>(form);
+    for (int64_t b = 0; b < blocks; ++b)
+      EXPECT_EQ(least[static_cast<size_t>(b)], *std::min_element(expected.begin() + b * 8, expected.begin() + b * 8 + 8));
+    EXPECT_EQ(least[3], 0u);
+  }
+}
+
+// gatherBits packs the masked bits in order, whichever way (pext or a loop) this CPU takes.
+TEST(DescriptorIndex, GatherBitsPacksTheMaskedBitsInOrder) {
+  std::mt19937_64 rng(43);
+  for (int round = 0; round < 50; ++round) {
+    const size_t words = 1 + static_cast<size_t>(round % 9);
+    std::vector<uint64_t> in(words), mask(words);
+    for (size_t w = 0; w < words; ++w) {
+      in[w] = rng();
+      mask[w] = round % 3 == 0 ? rng() & rng() : (round % 3 == 1 ? rng() : ~uint64_t{0} >> (round % 64));
+    }
+    std::vector<uint64_t> expected(words, 0), out(words, ~uint64_t{0});
+    size_t at = 0;
+    for (size_t j = 0; j < 64 * words; ++j) {
+      if (!((mask[j / 64] >> (j % 64)) & 1u)) continue;
+      expected[at / 64] |= ((in[j / 64] >> (j % 64)) & 1u) << (at % 64);
+      ++at;
+    }
+    search::gatherBits(in.data(), mask.data(), words, out.data(), words);
+    EXPECT_EQ(out, expected) << "round " << round;
+  }
+}
+
 TEST(DescriptorIndex, FaissBinaryEqualsBruteForceOnZeroOneDescriptors) {
   const int64_t rows = 1500, dims = 100, queries = 200, k = 5;
   auto data = randomBits(rows, dims, 3);
@@ -826,17 +956,25 @@ TEST(DescriptorIndex, FaissBinaryEqualsBruteForceOnZeroOneDescriptors) {
 
   DescriptorIndexSettings hs = settingsFor(Kind::HnswBinary, 64);
   hs.trees = 16;
+  DescriptorIndexSettings file = settingsFor(Kind::IvfBinary, 4);
+  file.trees = 16;
+  const DescriptorIndex lists = buildOrDie(data, dims, file);
   data[3 * dims + 9] = 0.5f;
-  const auto refused = DescriptorIndex::build(data.data(), rows, dims, hs);
-  ASSERT_FALSE(refused.ok());
-  EXPECT_EQ(refused.error().code, ErrorCode::InvalidArgument);
-  EXPECT_NE(refused.error().message.find("row 3, column 9"), std::string::npos) << refused.error().message;
+  for (const DescriptorIndexSettings& s : {hs, file}) {
+    const auto refused = DescriptorIndex::build(data.data(), rows, dims, s);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_EQ(refused.error().code, ErrorCode::InvalidArgument);
+    EXPECT_NE(refused.error().message.find("row 3, column 9"), std::string::npos) << refused.error().message;
+  }
   q[11] = 2.0f;
   int64_t id;
   float d;
-  const Status badQuery = flat.query(q.data(), 1, &id, &d);
-  ASSERT_FALSE(badQuery.ok());
-  EXPECT_NE(badQuery.error().message.find("column 11"), std::string::npos) << badQuery.error().message;
+  for (const DescriptorIndex* index : std::initializer_list<const DescriptorIndex*>{&flat, &lists}) {
+    const Status badQuery = index->query(q.data(), 1, &id, &d);
+    ASSERT_FALSE(badQuery.ok());
+    EXPECT_EQ(badQuery.error().code, ErrorCode::InvalidArgument);
+    EXPECT_NE(badQuery.error().message.find("column 11"), std::string::npos) << badQuery.error().message;
+  }
 }
 
 TEST(DescriptorIndex, AutotunedBuildsAndFindsItself) {
@@ -900,6 +1038,14 @@ TEST(DescriptorIndex, BuildErrors) {
     ivf.checks = 0;
     expectInvalid(DescriptorIndex::build(data.data(), 10, 3, ivf), "lists probed");
   }
+  const auto bits = randomBits(10, 3, 2);
+  auto binaryFile = settingsFor(Kind::IvfBinary, 2);
+  binaryFile.trees = 11;
+  expectInvalid(DescriptorIndex::build(bits.data(), 10, 3, binaryFile), "ivf-binary lists");
+  binaryFile.trees = 4;
+  binaryFile.checks = 5;
+  expectInvalid(DescriptorIndex::build(bits.data(), 10, 3, binaryFile), "ivf-binary lists probed");
+  EXPECT_EQ(parseDescriptorIndexKind("ivf-binary").value(), Kind::IvfBinary);
   auto graph = settingsFor(Kind::FaissHnsw);
   graph.trees = 1;
   expectInvalid(DescriptorIndex::build(data.data(), 10, 3, graph), "M");

@@ -63,14 +63,16 @@ TEST_F(FragmentMatcherTest, SelfRetrievalUnderSimilarityTransforms) {
 }
 
 // The bake stores its default indexes (defaultIndexSettings): the moments' inverted file, one
-// list at 70 entries, which is exact, and the voxel kinds' graphs (over bits; over floats at 12³).
+// list at 70 entries, which is exact, the occupancy voxels' inverted file over bits (every list
+// probed, exact) and the improved voxels' graph (over floats at 12³).
 TEST_F(FragmentMatcherTest, StoredDefaultIndexFindsTheExactAnswerOnSelfQueries) {
   const DescriptorIndexSettings& moment = database->indexSettings[static_cast<size_t>(DescriptorKind::Moment)];
   EXPECT_EQ(moment.kind, DescriptorIndexSettings::Kind::Ivf);
   EXPECT_EQ(moment.trees, 1);
   EXPECT_EQ(moment.checks, 1);
-  EXPECT_EQ(database->indexSettings[static_cast<size_t>(DescriptorKind::Voxel)].kind,
-            DescriptorIndexSettings::Kind::HnswBinary);
+  const DescriptorIndexSettings& voxel = database->indexSettings[static_cast<size_t>(DescriptorKind::Voxel)];
+  EXPECT_EQ(voxel.kind, DescriptorIndexSettings::Kind::IvfBinary);
+  EXPECT_EQ(voxel.checks, voxel.trees);  // every list probed below 330 entries: exact
   EXPECT_EQ(database->indexSettings[static_cast<size_t>(DescriptorKind::VoxelImproved)].kind,
             DescriptorIndexSettings::Kind::Hnsw);  // the fixture's 12³ grids: no principal keys
   auto matcher = FragmentMatcher::build(*database);
@@ -81,7 +83,8 @@ TEST_F(FragmentMatcherTest, StoredDefaultIndexFindsTheExactAnswerOnSelfQueries) 
 }
 
 // The moments' default index is sized to the database: about kIvfRowsPerList rows a list, four
-// probed, one list below 2 · kIvfRowsPerList entries, at most 1 024 lists (the pack's bound).
+// probed, one list below 2 · kIvfRowsPerList entries, at most 1 024 lists (the pack's bound); the
+// occupancy voxels' likewise, with kIvfBinaryRowsPerList rows a list.
 TEST(DefaultIndexSettings, InvertedFileSizedToTheEntriesForMomentsGraphsForVoxels) {
   struct Case {
     int64_t entries;
@@ -94,15 +97,16 @@ TEST(DefaultIndexSettings, InvertedFileSizedToTheEntriesForMomentsGraphsForVoxel
     EXPECT_EQ(s.trees, c.lists) << c.entries;
     EXPECT_EQ(s.checks, c.probes) << c.entries;
   }
-  // The voxel kinds: graphs, the improved kind's principal keys only on grids they can pool.
+  // The voxel kinds: the occupancy voxels' inverted file over bits, the improved kind's graph with
+  // principal keys only on grids they can pool.
   struct VoxelCase {
     DescriptorKind kind;
     int resolution;
     DescriptorIndexSettings::Kind index;
     int m;
   };
-  for (const VoxelCase c : {VoxelCase{DescriptorKind::Voxel, 16, DescriptorIndexSettings::Kind::HnswBinary, 16},
-                            VoxelCase{DescriptorKind::Voxel, 12, DescriptorIndexSettings::Kind::HnswBinary, 16},
+  for (const VoxelCase c : {VoxelCase{DescriptorKind::Voxel, 16, DescriptorIndexSettings::Kind::IvfBinary, 1024},
+                            VoxelCase{DescriptorKind::Voxel, 12, DescriptorIndexSettings::Kind::IvfBinary, 1024},
                             VoxelCase{DescriptorKind::VoxelImproved, 16, DescriptorIndexSettings::Kind::HnswPrincipal, 32},
                             VoxelCase{DescriptorKind::VoxelImproved, 12, DescriptorIndexSettings::Kind::Hnsw, 16}}) {
     const DescriptorIndexSettings s = defaultIndexSettings(c.kind, 100000, c.resolution);
@@ -113,7 +117,15 @@ TEST(DefaultIndexSettings, InvertedFileSizedToTheEntriesForMomentsGraphsForVoxel
     const int64_t dims = int64_t(c.resolution) * c.resolution * c.resolution;
     std::vector<float> grids(static_cast<size_t>(20 * dims));
     for (size_t i = 0; i < grids.size(); ++i) grids[i] = float((i * 7 / 5 + i / static_cast<size_t>(dims)) % 2);
-    EXPECT_TRUE(DescriptorIndex::build(grids.data(), 20, dims, s).ok()) << c.resolution;
+    EXPECT_TRUE(DescriptorIndex::build(grids.data(), 20, dims, defaultIndexSettings(c.kind, 20, c.resolution)).ok()) << c.resolution;
+  }
+  // The occupancy voxels' inverted file: about kIvfBinaryRowsPerList rows a list, 32 probed, every
+  // list below 330 entries, at most 1 024 lists.
+  for (const Case c : {Case{0, 1, 1}, Case{70, 7, 7}, Case{329, 32, 32}, Case{330, 33, 32}, Case{10000, 1000, 32},
+                       Case{10000000, 1024, 32}}) {
+    const DescriptorIndexSettings s = defaultIndexSettings(DescriptorKind::Voxel, c.entries);
+    EXPECT_EQ(s.trees, c.lists) << c.entries;
+    EXPECT_EQ(s.checks, c.probes) << c.entries;
   }
 }
 

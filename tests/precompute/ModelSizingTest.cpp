@@ -245,8 +245,8 @@ TEST_F(ModelSizingTest, FragmentsGiveTheDebrisThresholdAndTheSearch) {
   ASSERT_TRUE(loose) << loose.error().message;
   EXPECT_TRUE(loose.value().targetMet);
   // Per kind: the stored index at ¼ and 4× its checks, then brute force; a precision that lands
-  // on an index already tried is not tried again (the moments' one-list inverted file probes its
-  // one list at any precision).
+  // on an index already tried is not tried again (the one-list inverted files, the moments' and the
+  // occupancy voxels', probe their one list at any precision).
   using Kind = DescriptorIndexSettings::Kind;
   size_t expectedTrials = 0;
   for (DescriptorKind kind : kAllDescriptorKinds) {
@@ -255,7 +255,7 @@ TEST_F(ModelSizingTest, FragmentsGiveTheDebrisThresholdAndTheSearch) {
     for (const SearchTrial& t : loose.value().trials)
       if (t.kind == kind) ofKind.push_back(&t);
     SCOPED_TRACE(descriptorKindName(kind));
-    if (stored.kind == Kind::Ivf) {
+    if (stored.kind == Kind::Ivf || stored.kind == Kind::IvfBinary) {
       ASSERT_EQ(stored.trees, 1);
       ASSERT_EQ(ofKind.size(), 2u);
       EXPECT_EQ(ofKind[0]->index.checks, 1);
@@ -346,10 +346,14 @@ TEST(SearchSizingTest, BytesComparedGrowWithPrecisionAndStayBelowTheExactSearch)
       previous = bytes;
     }
   }
-  DescriptorIndexSettings binary = defaultIndexSettings(DescriptorKind::Voxel, kRows, 16);
-  ASSERT_EQ(binary.kind, DescriptorIndexSettings::Kind::HnswBinary);
+  DescriptorIndexSettings binary{.kind = DescriptorIndexSettings::Kind::HnswBinary, .trees = 16, .checks = 32};
   EXPECT_EQ(searchBytesCompared(binary, kRows, 4096), 32.0 * 16.0 * 512.0);
   EXPECT_EQ(searchBytesCompared(binary, 100, 4096), 100.0 * 512.0);  // the walk cannot read more rows than there are
+  // The occupancy voxels' stored inverted file: 32-byte keys of the centroids and the probed rows.
+  const DescriptorIndexSettings bits = defaultIndexSettings(DescriptorKind::Voxel, kRows, 16);
+  ASSERT_EQ(bits.kind, DescriptorIndexSettings::Kind::IvfBinary);
+  EXPECT_EQ(searchBytesCompared(bits, kRows, 4096), 32.0 * (bits.trees + bits.checks * std::ceil(double(kRows) / bits.trees)) + 512.0);
+  EXPECT_EQ(indexAtPrecision(bits, 1000.0).checks, bits.trees);
   // An inverted file probes at most its lists; the exact kinds have no precision to scale.
   const DescriptorIndexSettings ivf = sizedInvertedFile(kRows);
   EXPECT_EQ(indexAtPrecision(ivf, 1000.0).checks, ivf.trees);

@@ -98,9 +98,12 @@ struct FragmentDatabase {
 ///   0.995 at 8.9 µs in `bench search` (docs/results/fragment-database.md). Below 780 entries it is
 ///   one list, which is every row ranked by the key's bounds, so exact. Lists are capped at 1 024
 ///   (the pack's limit on trees), so past ~4·10⁵ entries a query compares more rows.
-/// - The occupancy voxels (0/1): the graph over their bit codes (`hnsw-binary`, M 16, ef 32): at
-///   10⁵ entries recall@1 0.990 at 43.5 µs, where the kd-forest stored before (4 trees, 64 checks)
-///   found 0.81 at 10⁴.
+/// - The occupancy voxels (0/1): the inverted file over their bit codes (`ivf-binary`), about
+///   kIvfBinaryRowsPerList rows a list (at most 1 024 lists) and 32 probed: in `bench search` at 10⁴
+///   entries recall@1 0.995 at 9.4 µs, at 10⁵ 0.995 at 15.3 µs, where the graph over the codes
+///   stored before (`hnsw-binary`, M 16, ef 32) took 21.9 and 71.7 µs for 0.993 and 0.990 in the
+///   same run (docs/results/fragment-database.md). Below 330 entries every list is probed, which
+///   is exact.
 /// - The improved voxels (a clamped distance): the graph over their block sums' principal
 ///   components, re-ranked exactly (`hnsw-principal`, M 32, ef 32: 0.998 at 117 µs at 10⁴, where the
 ///   kd-forest needs 8 × 512 and 1.7 ms for 0.985), when `voxelResolution` is a multiple of 8, which
@@ -111,6 +114,8 @@ DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entrie
 /// (also what `query --index ivf` builds for any kind).
 DescriptorIndexSettings sizedInvertedFile(int64_t entries);
 inline constexpr int64_t kIvfRowsPerList = 390;
+/// Rows a list of the occupancy voxels' default inverted file (defaultIndexSettings).
+inline constexpr int64_t kIvfBinaryRowsPerList = 10;
 
 /// Checks one entry against the database's reference material: its material, its base volume
 /// fraction and its surface (at least 4 vertices and faces, finite, indices in range). Error:
