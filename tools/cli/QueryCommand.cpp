@@ -48,7 +48,7 @@ Runner addQueryCommand(CLI::App& app) {
   std::vector<std::string> backends;
   for (auto kind : kAllDescriptorIndexKinds) backends.push_back(descriptorIndexKindName(kind));
   cmd->add_option("--index", o->index,
-                  "Override the stored index: brute-force (exact), kd-forest, autotuned, hnsw, hnsw-binary, hnsw-pooled, hnsw-principal, ivf, faiss-hnsw, "
+                  "Override the stored index: brute-force (exact), kd-forest, autotuned, hnsw, hnsw-binary, hnsw-pooled, hnsw-principal, ivf, ivf-binary, faiss-hnsw, "
                   "faiss-ivf, faiss-binary-flat or faiss-binary-hnsw (kd-forest: 4 trees, 64 checks; graphs: M 16, ef 64; ivf: "
                   "n/390 lists, 4 probed, as a bake sizes it; faiss-ivf: √n lists, a quarter probed; the binary kinds: voxel only)")
       ->check(CLI::IsMember(backends));
