@@ -100,9 +100,9 @@ struct FragmentDatabase {
 ///   (the pack's limit on trees), so past ~4·10⁵ entries a query compares more rows.
 /// - The occupancy voxels (0/1): the inverted file over their bit codes (`ivf-binary`), about
 ///   kIvfBinaryRowsPerList rows a list (at most 1 024 lists) and 32 probed: in `bench search` at 10⁴
-///   entries recall@1 0.995 at 9.4 µs, at 10⁵ 0.995 at 15.3 µs, where the graph over the codes
-///   stored before (`hnsw-binary`, M 16, ef 32) took 21.9 and 71.7 µs for 0.993 and 0.990 in the
-///   same run (docs/results/fragment-database.md). Below 330 entries every list is probed, which
+///   entries recall@1 0.995 at 9.2–10.9 µs, at 10⁵ 0.995 at 15.3–16.6 µs, where the graph over the
+///   codes stored before (`hnsw-binary`, M 16, ef 32) took 21.4–24.2 and 45.6–71.7 µs for 0.993 and
+///   0.990 in the same runs (docs/results/fragment-database.md). Below 330 entries every list is probed, which
 ///   is exact.
 /// - The improved voxels (a clamped distance): the graph over their block sums' principal
 ///   components, re-ranked exactly (`hnsw-principal`, M 32, ef 32: 0.998 at 117 µs at 10⁴, where the
