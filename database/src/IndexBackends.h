@@ -55,6 +55,10 @@ Result<std::unique_ptr<Backend>> buildIvfBinary(const float* data, int64_t rows,
 Result<std::unique_ptr<Backend>> buildFaiss(const float* data, int64_t rows, int64_t dims,
                                             const DescriptorIndexSettings& settings);
 
+/// An inverted file's settings: `trees` lists in [1, min(rows, maxLists)], `checks` probed in
+/// [1, trees]; else InvalidArgument naming the kind (`what`: "IVF", "ivf-binary").
+Status checkInvertedFileSettings(const DescriptorIndexSettings& settings, int64_t rows, int64_t maxLists, const char* what);
+
 /// The squared L2 distance of two rows of `dims` floats, accumulated in double: brute force's
 /// distance, which re-ranking backends reproduce exactly.
 inline float exactSquaredL2(const float* a, const float* b, int64_t dims) {

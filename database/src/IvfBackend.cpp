@@ -509,15 +509,23 @@ void ivfSquaredDistances(Lanes lanes, const float* query, const float* rows, int
   }
 }
 
+Status checkInvertedFileSettings(const DescriptorIndexSettings& settings, int64_t rows, int64_t maxLists, const char* what) {
+  const int64_t most = std::min(rows, maxLists);
+  if (settings.trees < 1 || settings.trees > most)
+    return invalidArgument(std::string("DescriptorIndex: settings.trees (") + what + " lists) must be in [1, " +
+                           (most < rows ? "min(rows = " + std::to_string(rows) + ", " + std::to_string(maxLists) + ")"
+                                        : "rows = " + std::to_string(rows)) +
+                           "], got " + std::to_string(settings.trees));
+  if (settings.checks < 1 || settings.checks > settings.trees)
+    return invalidArgument(std::string("DescriptorIndex: settings.checks (") + what + " lists probed) must be in [1, trees], got " +
+                           std::to_string(settings.checks));
+  return Ok{};
+}
+
 Result<std::unique_ptr<Backend>> buildIvf(const float* data, int64_t rows, int64_t dims,
                                           const DescriptorIndexSettings& settings) {
   if (rows > std::numeric_limits<int32_t>::max()) return invalidArgument("DescriptorIndex: ivf needs rows <= INT32_MAX");
-  if (settings.trees < 1 || settings.trees > rows)
-    return invalidArgument("DescriptorIndex: settings.trees (IVF lists) must be in [1, rows = " + std::to_string(rows) +
-                           "], got " + std::to_string(settings.trees));
-  if (settings.checks < 1 || settings.checks > settings.trees)
-    return invalidArgument("DescriptorIndex: settings.checks (IVF lists probed) must be in [1, trees], got " +
-                           std::to_string(settings.checks));
+  if (Status st = checkInvertedFileSettings(settings, rows, std::numeric_limits<int64_t>::max(), "IVF"); !st) return st.error();
   try {
     return std::unique_ptr<Backend>(std::make_unique<IvfBackend>(data, rows, dims, settings.trees, settings.checks));
   } catch (const std::exception& e) {

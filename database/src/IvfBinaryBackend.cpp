@@ -404,12 +404,8 @@ void ivfBinaryKeyDistances(Popcount form, const uint64_t* query, const uint64_t*
 Result<std::unique_ptr<Backend>> buildIvfBinary(const float* data, int64_t rows, int64_t dims,
                                                 const DescriptorIndexSettings& settings) {
   if (Status st = checkZeroOne(data, rows, dims, false); !st) return st.error();
-  if (settings.trees < 1 || settings.trees > rows || settings.trees > 65535)
-    return invalidArgument("DescriptorIndex: settings.trees (ivf-binary lists) must be in [1, min(rows = " + std::to_string(rows) +
-                           ", 65535)], got " + std::to_string(settings.trees));
-  if (settings.checks < 1 || settings.checks > settings.trees)
-    return invalidArgument("DescriptorIndex: settings.checks (ivf-binary lists probed) must be in [1, trees], got " +
-                           std::to_string(settings.checks));
+  // Lists below 2^16: a query orders them by (distance << 16 | list) (orderLists).
+  if (Status st = checkInvertedFileSettings(settings, rows, 65535, "ivf-binary"); !st) return st.error();
   try {
     return std::unique_ptr<Backend>(std::make_unique<IvfBinaryBackend>(data, rows, dims, settings.trees, settings.checks));
   } catch (const std::exception& e) {
