@@ -36,12 +36,11 @@ DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entrie
     s.kind = Kind::IvfBinary;
     s.trees = static_cast<int>(std::clamp<int64_t>(entries / kIvfBinaryRowsPerList, 1, 1024));  // the pack's bound on trees
     s.checks = std::min(s.trees, 32);
-  } else if (voxelResolution % 8 == 0) {
-    s.kind = Kind::HnswPrincipal;
-    s.trees = 32;
   } else {
-    s.kind = Kind::Hnsw;
-    s.trees = 16;
+    (void)voxelResolution;  // the inverted file takes any resolution (the graph before it needed multiples of 8)
+    s.kind = Kind::Ivf;
+    s.trees = static_cast<int>(std::clamp<int64_t>(entries / kIvfWideRowsPerList, 1, 1024));  // the pack's bound on trees
+    s.checks = std::min(s.trees, 40);
   }
   return s;
 }

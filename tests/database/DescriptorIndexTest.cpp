@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace brittle {
@@ -548,12 +549,8 @@ TEST(DescriptorIndex, InvertedFileWithEveryListProbedIsBruteForce) {
         ASSERT_EQ(got[i], want[i]) << "dims " << dims << " k " << k << " result " << i;
         ASSERT_EQ(gotD[i], wantD[i]) << "dims " << dims << " k " << k << " result " << i;
         const int64_t query = static_cast<int64_t>(i) / k;
-        double sum = 0.0;
-        for (int64_t c = 0; c < dims; ++c) {
-          const double diff = double(q[static_cast<size_t>(query * dims + c)]) - double(data[static_cast<size_t>(few[i] * dims + c)]);
-          sum += diff * diff;
-        }
-        EXPECT_EQ(fewD[i], static_cast<float>(sum)) << "one list: an answer's distance is its exact distance";
+        EXPECT_EQ(fewD[i], search::exactSquaredL2(q.data() + query * dims, data.data() + few[i] * dims, dims))
+            << "one list: an answer's distance is its exact distance";
         if (i % static_cast<size_t>(k) > 0) {
           EXPECT_LE(fewD[i - 1], fewD[i]) << "nearest first";
         }
@@ -561,6 +558,90 @@ TEST(DescriptorIndex, InvertedFileWithEveryListProbedIsBruteForce) {
       }
       EXPECT_GT(hits, 0);
     }
+  }
+}
+
+// Clamped signed distances, as the improved voxel descriptor makes them: smooth fields through
+// their median, scaled and clamped to [−1, 1], so most values are exactly ±1.
+std::vector<float> clampedGrids(int64_t rows, uint32_t seed) {
+  std::vector<float> m = smoothGrids(rows, seed, false);
+  const int64_t dims = 4096;
+  for (int64_t r = 0; r < rows; ++r) {
+    float* row = m.data() + r * dims;
+    std::vector<float> sorted(row, row + dims);
+    std::nth_element(sorted.begin(), sorted.begin() + dims / 2, sorted.end());
+    const float median = sorted[static_cast<size_t>(dims / 2)];
+    for (int64_t c = 0; c < dims; ++c) row[c] = std::clamp((row[c] - median) * 20.0f, -1.0f, 1.0f);
+  }
+  return m;
+}
+
+// Rows wider than the moments (the 16³ grids) are filed by 64 principal components and bounds of
+// the rest: with every list probed the answer is brute force's, ids and distances, for any k;
+// with a few lists, each answer is its row's exact distance and near copies are still found; two
+// builds answer alike. Also with fewer rows than directions (the basis completed by unit vectors)
+// and with rows that repeat or equal the reference of ±1 everywhere.
+TEST(DescriptorIndex, InvertedFileOverWideRowsWithEveryListProbedIsBruteForce) {
+  const int64_t dims = 4096, queries = 24;
+  for (int64_t rows : {int64_t{600}, int64_t{40}}) {
+    SCOPED_TRACE("rows " + std::to_string(rows));
+    auto data = clampedGrids(rows, 81);
+    std::fill(data.begin() + 3 * dims, data.begin() + 4 * dims, 1.0f);  // a row of +1 only
+    std::copy(data.begin(), data.begin() + dims, data.begin() + 5 * dims);  // a repeat of row 0
+    auto q = clampedGrids(queries, 82);
+    for (int64_t i = 0; i < 6; ++i) {  // near copies of rows: a few values moved
+      std::copy_n(data.begin() + (7 * i + 1) * dims, dims, q.begin() + i * dims);
+      for (int64_t c = 100 * i; c < 100 * i + 40; ++c) q[static_cast<size_t>(i * dims + c)] *= 0.9f;
+    }
+    const DescriptorIndex exact = buildOrDie(data, dims, settingsFor(Kind::BruteForce));
+    DescriptorIndexSettings all = settingsFor(Kind::Ivf, 12);
+    all.trees = 12;
+    DescriptorIndexSettings few = all;
+    few.checks = 2;
+    const DescriptorIndex ivf = buildOrDie(data, dims, all), narrow = buildOrDie(data, dims, few),
+                          again = buildOrDie(data, dims, few);
+    for (int k : {1, 5}) {
+      std::vector<int64_t> want(static_cast<size_t>(queries * k)), got(want.size()), fewIds(want.size()), againIds(want.size());
+      std::vector<float> wantD(want.size()), gotD(want.size()), fewD(want.size()), againD(want.size());
+      ASSERT_TRUE(exact.queryBatch(q.data(), queries, k, want.data(), wantD.data()).ok());
+      ASSERT_TRUE(ivf.queryBatch(q.data(), queries, k, got.data(), gotD.data()).ok());
+      ASSERT_TRUE(narrow.queryBatch(q.data(), queries, k, fewIds.data(), fewD.data()).ok());
+      ASSERT_TRUE(again.queryBatch(q.data(), queries, k, againIds.data(), againD.data()).ok());
+      EXPECT_EQ(got, want) << "k " << k;
+      EXPECT_EQ(gotD, wantD) << "k " << k;
+      EXPECT_EQ(fewIds, againIds);
+      EXPECT_EQ(fewD, againD);
+      for (size_t i = 0; i < want.size(); ++i) {
+        const int64_t query = static_cast<int64_t>(i) / k;
+        EXPECT_EQ(fewD[i], search::exactSquaredL2(q.data() + query * dims, data.data() + fewIds[i] * dims, dims)) << i;
+        if (i % static_cast<size_t>(k) > 0) EXPECT_LE(fewD[i - 1], fewD[i]) << "nearest first";
+      }
+      for (int64_t i = 0; i < 6; ++i) {
+        EXPECT_EQ(fewIds[static_cast<size_t>(i * k)], 7 * i + 1) << "the near copy of row " << 7 * i + 1 << " is found";
+      }
+    }
+    int64_t id = -1;
+    float d = -1.0f;
+    ASSERT_TRUE(narrow.query(data.data() + 3 * dims, 1, &id, &d).ok());
+    EXPECT_EQ(id, 3);
+    EXPECT_EQ(d, 0.0f);
+  }
+}
+
+// Brute force's distance sums in eight double lanes: the same bits in 128-bit and 256-bit
+// registers, and within double rounding of one running sum, for every tail length.
+TEST(DescriptorIndex, ExactDistanceSameBitsInEitherLanes) {
+  for (int64_t dims : {1, 7, 8, 13, 28, 4096}) {
+    const auto a = randomMatrix(1, dims, 91), b = randomMatrix(1, dims, 92);
+    double sum = 0.0;
+    for (int64_t c = 0; c < dims; ++c) sum += (double(a[size_t(c)]) - double(b[size_t(c)])) * (double(a[size_t(c)]) - double(b[size_t(c)]));
+    const double narrow = search::detail::squaredL2Narrow(a.data(), b.data(), dims);
+    EXPECT_NEAR(narrow, sum, 1e-13 * sum) << dims;
+    if (widestLanes() == Lanes::Wide) {
+      EXPECT_EQ(std::bit_cast<uint64_t>(search::detail::squaredL2Wide(a.data(), b.data(), dims)), std::bit_cast<uint64_t>(narrow))
+          << dims;
+    }
+    EXPECT_EQ(search::exactSquaredL2(a.data(), b.data(), dims), static_cast<float>(narrow));
   }
 }
 

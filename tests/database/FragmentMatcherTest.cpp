@@ -97,22 +97,22 @@ TEST(DefaultIndexSettings, InvertedFileSizedToTheEntriesForMomentsGraphsForVoxel
     EXPECT_EQ(s.trees, c.lists) << c.entries;
     EXPECT_EQ(s.checks, c.probes) << c.entries;
   }
-  // The voxel kinds: the occupancy voxels' inverted file over bits, the improved kind's graph with
-  // principal keys only on grids they can pool.
+  // The voxel kinds: the occupancy voxels' inverted file over bits, the improved kind's inverted
+  // file over principal components, on any grid.
   struct VoxelCase {
     DescriptorKind kind;
     int resolution;
     DescriptorIndexSettings::Kind index;
-    int m;
+    int probes;
   };
-  for (const VoxelCase c : {VoxelCase{DescriptorKind::Voxel, 16, DescriptorIndexSettings::Kind::IvfBinary, 1024},
-                            VoxelCase{DescriptorKind::Voxel, 12, DescriptorIndexSettings::Kind::IvfBinary, 1024},
-                            VoxelCase{DescriptorKind::VoxelImproved, 16, DescriptorIndexSettings::Kind::HnswPrincipal, 32},
-                            VoxelCase{DescriptorKind::VoxelImproved, 12, DescriptorIndexSettings::Kind::Hnsw, 16}}) {
+  for (const VoxelCase c : {VoxelCase{DescriptorKind::Voxel, 16, DescriptorIndexSettings::Kind::IvfBinary, 32},
+                            VoxelCase{DescriptorKind::Voxel, 12, DescriptorIndexSettings::Kind::IvfBinary, 32},
+                            VoxelCase{DescriptorKind::VoxelImproved, 16, DescriptorIndexSettings::Kind::Ivf, 40},
+                            VoxelCase{DescriptorKind::VoxelImproved, 12, DescriptorIndexSettings::Kind::Ivf, 40}}) {
     const DescriptorIndexSettings s = defaultIndexSettings(c.kind, 100000, c.resolution);
     EXPECT_EQ(s.kind, c.index) << c.resolution;
-    EXPECT_EQ(s.trees, c.m);
-    EXPECT_EQ(s.checks, 32);
+    EXPECT_EQ(s.trees, 1024);
+    EXPECT_EQ(s.checks, c.probes);
     // and the index builds on such grids
     const int64_t dims = int64_t(c.resolution) * c.resolution * c.resolution;
     std::vector<float> grids(static_cast<size_t>(20 * dims));
@@ -124,6 +124,15 @@ TEST(DefaultIndexSettings, InvertedFileSizedToTheEntriesForMomentsGraphsForVoxel
   for (const Case c : {Case{0, 1, 1}, Case{70, 7, 7}, Case{329, 32, 32}, Case{330, 33, 32}, Case{10000, 1000, 32},
                        Case{10000000, 1024, 32}}) {
     const DescriptorIndexSettings s = defaultIndexSettings(DescriptorKind::Voxel, c.entries);
+    EXPECT_EQ(s.trees, c.lists) << c.entries;
+    EXPECT_EQ(s.checks, c.probes) << c.entries;
+  }
+  // The improved voxels' inverted file: about kIvfWideRowsPerList rows a list, 40 probed, every
+  // list below 410 entries, at most 1 024 lists.
+  for (const Case c : {Case{0, 1, 1}, Case{70, 7, 7}, Case{409, 40, 40}, Case{410, 41, 40}, Case{10000, 1000, 40},
+                       Case{10000000, 1024, 40}}) {
+    const DescriptorIndexSettings s = defaultIndexSettings(DescriptorKind::VoxelImproved, c.entries);
+    EXPECT_EQ(s.kind, DescriptorIndexSettings::Kind::Ivf) << c.entries;
     EXPECT_EQ(s.trees, c.lists) << c.entries;
     EXPECT_EQ(s.checks, c.probes) << c.entries;
   }

@@ -673,9 +673,9 @@ TEST_F(CliTest, BakeDbThenQueryFindsTheEntryInAnotherPose) {
   const Eigen::Matrix3d r = Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   query.vertices = ((query.vertices * r.transpose()) * 0.3).rowwise() + Eigen::RowVector3d(1, 2, 3);
   testing::writeOff(query, dir / "query.off");
-  // The bake's default indexes: the moments' inverted file (one list at 6 entries), the improved voxels' principal graph.
+  // The bake's default indexes: the inverted files of the moments and of the improved voxels (one list at 6 entries).
   EXPECT_EQ(db.indexSettings[static_cast<size_t>(DescriptorKind::Moment)].kind, DescriptorIndexSettings::Kind::Ivf);
-  EXPECT_EQ(db.indexSettings[static_cast<size_t>(DescriptorKind::VoxelImproved)].kind, DescriptorIndexSettings::Kind::HnswPrincipal);
+  EXPECT_EQ(db.indexSettings[static_cast<size_t>(DescriptorKind::VoxelImproved)].kind, DescriptorIndexSettings::Kind::Ivf);
   // Every index, stored or given in place of the stored one (with its own defaults), finds it.
   for (const char* descriptor : {"moment", "voxel-improved"}) {
     for (const char* index : {"brute-force", "kd-forest", "ivf"}) {
