@@ -73,8 +73,9 @@ TEST_F(FragmentMatcherTest, StoredDefaultIndexFindsTheExactAnswerOnSelfQueries) 
   const DescriptorIndexSettings& voxel = database->indexSettings[static_cast<size_t>(DescriptorKind::Voxel)];
   EXPECT_EQ(voxel.kind, DescriptorIndexSettings::Kind::IvfBinary);
   EXPECT_EQ(voxel.checks, voxel.trees);  // every list probed below 330 entries: exact
-  EXPECT_EQ(database->indexSettings[static_cast<size_t>(DescriptorKind::VoxelImproved)].kind,
-            DescriptorIndexSettings::Kind::Hnsw);  // the fixture's 12³ grids: no principal keys
+  const DescriptorIndexSettings& improved = database->indexSettings[static_cast<size_t>(DescriptorKind::VoxelImproved)];
+  EXPECT_EQ(improved.kind, DescriptorIndexSettings::Kind::Ivf);  // the fixture's 12³ grids: wide rows, filed by components
+  EXPECT_EQ(improved.checks, improved.trees);                     // every list probed below 410 entries: exact
   auto matcher = FragmentMatcher::build(*database);
   ASSERT_TRUE(matcher);
   EXPECT_EQ(selfRetrievalRate(matcher.value(), DescriptorKind::Moment), 1.0);
@@ -84,8 +85,8 @@ TEST_F(FragmentMatcherTest, StoredDefaultIndexFindsTheExactAnswerOnSelfQueries) 
 
 // The moments' default index is sized to the database: about kIvfRowsPerList rows a list, four
 // probed, one list below 2 · kIvfRowsPerList entries, at most 1 024 lists (the pack's bound); the
-// occupancy voxels' likewise, with kIvfBinaryRowsPerList rows a list.
-TEST(DefaultIndexSettings, InvertedFileSizedToTheEntriesForMomentsGraphsForVoxels) {
+// voxel kinds' likewise, with kIvfBinaryRowsPerList and kIvfWideRowsPerList rows a list.
+TEST(DefaultIndexSettings, InvertedFilesSizedToTheEntries) {
   struct Case {
     int64_t entries;
     int lists, probes;

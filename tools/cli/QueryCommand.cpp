@@ -82,8 +82,10 @@ Runner addQueryCommand(CLI::App& app) {
         index.kind = wanted;
         index.seed = seed;
         const auto entries = static_cast<int64_t>(db.entries.size());
-        if (index.kind == Kind::Ivf) {
-          const DescriptorIndexSettings sized = sizedInvertedFile(entries);
+        if (index.kind == Kind::Ivf) {  // sized as a bake sizes it for the moments, or for the wide grids
+          const DescriptorIndexSettings sized = kind == DescriptorKind::VoxelImproved
+                                                    ? defaultIndexSettings(kind, entries)
+                                                    : sizedInvertedFile(entries);
           index.trees = sized.trees;
           index.checks = sized.checks;
         } else if (index.kind == Kind::FaissIvf) {
