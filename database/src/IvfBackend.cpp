@@ -84,6 +84,7 @@ constexpr int64_t kPrincipalSample = 8192;  // rows the principal directions are
 constexpr int64_t kWideKeyDims = 64;        // wide rows: 64 of 4096 directions keep 94 % of the clamped distances' variance
 constexpr int64_t kWidePrefixDims = 16;     // wide rows: a key's first values, scanned first (a quarter of its bytes)
 constexpr int64_t kWideRestDims = kWideKeyDims - kWidePrefixDims;
+constexpr int64_t kWideListDims = 32;       // wide rows: a centroid's first values, which choose the lists probed
 constexpr int64_t kWideSample = 2048;       // wide rows: sample of the subspace iteration
 constexpr int kWideRounds = 4;              // wide rows: rounds of subspace iteration
 constexpr int64_t kWideBlock = 64;          // wide rows: values summed in float before a double sum
@@ -583,7 +584,7 @@ class IvfBackend final : public Backend {
 
   int64_t memoryBytes() const override {
     return mProjection.bytes() +
-           static_cast<int64_t>((mCentroids.size() + mRows.size() + mResiduals.size() + mNorms.size() + mWidePrefix.size() +
+           static_cast<int64_t>((mCentroids.size() + mCentroidPrefix.size() + mRows.size() + mResiduals.size() + mNorms.size() + mWidePrefix.size() +
                                  mWideRest.size() + mWideErrors.size() + mWideLows.size() + mWideHighs.size() +
                                  mWidePrefixLows.size() + mWidePrefixHighs.size()) * sizeof(float) +
                                 (mBasis.size() + mBasisAcross.size() + mMean.size()) * sizeof(double) +
@@ -614,7 +615,7 @@ class IvfBackend final : public Backend {
     w.query.assign(static_cast<size_t>(mStride), 0.0f);
     const WideRest q = mProjection.key(descriptor, w.query.data());
     w.toCentroids.resize(static_cast<size_t>(mLists));
-    distances(w.query.data(), mCentroids.data(), mLists, mStride, w.toCentroids.data());
+    distances(w.query.data(), mCentroidPrefix.data(), mLists, kWideListDims, w.toCentroids.data());
     const int64_t rows = probe(w.toCentroids, k, w.probed);
     w.lower.resize(static_cast<size_t>(rows));
     w.upper.resize(static_cast<size_t>(rows));
@@ -817,6 +818,10 @@ class IvfBackend final : public Backend {
     mWidePrefixLows.resize(wide);
     mWidePrefixHighs.resize(wide);
     mWidePrefix.resize(wide * kWidePrefixDims);
+    mCentroidPrefix.resize(mWide ? static_cast<size_t>(mLists * kWideListDims) : 0);
+    for (int64_t c = 0; mWide && c < mLists; ++c) {
+      std::copy_n(mCentroids.data() + c * mStride, kWideListDims, mCentroidPrefix.data() + c * kWideListDims);
+    }
     mWideRest.resize(wide * kWideRestDims);
     mRows.resize(mWide ? 0 : static_cast<size_t>(rows * mStride));
     for (int64_t r = 0; r < rows; ++r) {
@@ -852,6 +857,7 @@ class IvfBackend final : public Backend {
   std::vector<float> mResiduals;   // each filed row's norm outside its key (0 without a projection)
   std::vector<float> mNorms;       // each filed row's centred norm (0 without a projection)
   WideProjection mProjection;      // wide rows: their directions
+  std::vector<float> mCentroidPrefix;  // wide rows: each centroid's first kWideListDims values
   std::vector<float> mWidePrefix, mWideRest;  // wide rows: their keys' first kWidePrefixDims values and the rest, list after list
   std::vector<float> mWideErrors, mWideLows, mWideHighs, mWidePrefixLows, mWidePrefixHighs;  // wide rows: each filed row's WideRest
   std::vector<int32_t> mIds;       // each filed row's id
