@@ -106,6 +106,9 @@ inline float exactSquaredL2(const float* a, const float* b, int64_t dims) {
 /// each of `count` consecutive rows of `stride` floats, stride a multiple of 8 (rows padded with
 /// zeros). The same bits with either lanes: eight lanes, added in one fixed order.
 void ivfSquaredDistances(Lanes lanes, const float* query, const float* rows, int64_t count, int64_t stride, float* out);
+/// The inverted file's wide-row kernel (IvfBackend.cpp): out[i] ← Σ_j weights[j]·rows[index[j]·64 + i]
+/// for i < 64, each a float sum over j in order: the same bits with either lanes.
+void ivfWeightedRowSum(Lanes lanes, const float* rows, const int32_t* index, const float* weights, int64_t count, float* out);
 
 /// The principal axes of `points` (a column per sample): their mean, and the covariance's
 /// eigenvectors as columns, the largest eigenvalue's first. In double, the covariance summed in

@@ -34,18 +34,24 @@
 // Wide rows (more than kMaxProjectedDims values: the 16³ voxel grids) are filed by kWideKeyDims
 // principal components too, which the 4096² covariance would make slow to find and a query's
 // 4096 × kWideKeyDims double products slow to use. So (WideProjection below):
-//   - the directions come from a few rounds of subspace iteration on an evenly spaced sample,
-//     every product a loop in a fixed order (no random draw: the start is a splitmix64 stream),
-//     then rounded to float: any orthonormal directions give valid bounds, the leading ones tight;
-//   - a key is the float basis times the row, summed in float over blocks of kWideBlock values and
-//     the blocks in double, less the mean's key; the residual comes from the norms, not a second
-//     pass. Each row keeps the bounds of its rounding: its key lies within e = kWideKeyError‖x‖ of
-//     the exact projection, and its residual r between lo and hi (±kWideResidualError‖x‖² on r²).
-//   - A query's lower bound on a row's distance is (√d̂ − e_q − e_x)² + gap², gap = the distance
-//     between the two residual intervals. The rows of the smallest k bounds are measured exactly,
-//     and then every row whose bound is within the k-th best exact distance, best bound first:
-//     on 10⁴ clamped distances a query measures 3 rows in the median (64 directions keep 94 % of
-//     their variance), where the upper bounds' admission above would measure dozens.
+//   - the directions come from kWideRounds rounds of subspace iteration on an evenly spaced sample
+//     (in float, every sum in a fixed order; the start a splitmix64 stream, no draw), made
+//     orthonormal in double and rounded to float: any orthonormal directions give valid bounds,
+//     the leading ones tight bounds;
+//   - a key sums the float directions' rows of the values where the row differs from a reference
+//     of ±1 (a clamped distance differs in ~800 of 4 096), in float over blocks of kWideBlock values
+//     and the blocks in double; the residual comes from the norms, not a second pass. Each row
+//     keeps the bounds of its rounding: its key lies within e of the exact projection, and its
+//     residual r in [lo, hi], both for the whole key and for its first kWidePrefixDims values.
+//   - A query's lower bound on a row's distance is (√d̂ − e_q − e_x)² + gap², gap the distance
+//     between the two residual intervals. The lists probed are those whose centroids' first
+//     kWideListDims values are nearest. Their rows are bounded from their keys' first
+//     kWidePrefixDims values (a quarter of the bytes), the k smallest bounds' rows measured
+//     exactly, and then, in the order scanned, every row whose bound is within the k-th best exact
+//     distance is bounded again from its whole key and, if still within, measured. At 10⁵ clamped
+//     distances (32 lists of ~100 rows probed) a query bounds 3 300 rows by their first values,
+//     135 by their whole keys and measures 10; the upper bounds' admission above would measure
+//     hundreds, since a 4 096-value row's residual is not small.
 //
 // Same bits with SSE2 and AVX: both forms keep eight float lanes, lane l summing (a − b)² over the
 // values l, l + 8, ..., and add the lanes in one fixed order at the end (Simd.h). So the probed
@@ -871,6 +877,14 @@ void ivfSquaredDistances(Lanes lanes, const float* query, const float* rows, int
     distancesWide(query, rows, count, stride, out);
   } else {
     distancesNarrow(query, rows, count, stride, out);
+  }
+}
+
+void ivfWeightedRowSum(Lanes lanes, const float* rows, const int32_t* index, const float* weights, int64_t count, float* out) {
+  if (lanes == Lanes::Wide) {
+    weightedRowSumWide(rows, index, weights, count, out);
+  } else {
+    weightedRowSumNarrow(rows, index, weights, count, out);
   }
 }
 

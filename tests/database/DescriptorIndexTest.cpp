@@ -628,6 +628,31 @@ TEST(DescriptorIndex, InvertedFileOverWideRowsWithEveryListProbedIsBruteForce) {
   }
 }
 
+// The wide rows' keys are sums of the directions' rows weighted by a grid's values: the same bits
+// in 128-bit and 256-bit lanes (so the keys, lists and answers do not depend on the CPU), and within
+// float rounding of a double sum; gathered rows in any order of the index.
+TEST(DescriptorIndex, InvertedFileWideKeySameBitsInEitherLanes) {
+  const int64_t rows = 300, count = 211;
+  const auto basis = randomMatrix(rows, 64, 93), weights = randomMatrix(1, count, 94);
+  std::vector<int32_t> index(static_cast<size_t>(count));
+  for (int64_t j = 0; j < count; ++j) index[static_cast<size_t>(j)] = static_cast<int32_t>((j * 37) % rows);
+  std::vector<float> narrow(64), wide(64);
+  search::ivfWeightedRowSum(Lanes::Narrow, basis.data(), index.data(), weights.data(), count, narrow.data());
+  if (widestLanes() == Lanes::Wide) {
+    search::ivfWeightedRowSum(Lanes::Wide, basis.data(), index.data(), weights.data(), count, wide.data());
+    for (int i = 0; i < 64; ++i) EXPECT_EQ(std::bit_cast<uint32_t>(narrow[size_t(i)]), std::bit_cast<uint32_t>(wide[size_t(i)])) << i;
+  }
+  for (int i = 0; i < 64; ++i) {
+    double sum = 0.0, magnitude = 0.0;
+    for (int64_t j = 0; j < count; ++j) {
+      const double term = double(weights[size_t(j)]) * double(basis[size_t(index[size_t(j)] * 64 + i)]);
+      sum += term;
+      magnitude += std::abs(term);
+    }
+    EXPECT_NEAR(narrow[size_t(i)], sum, 1e-5 * magnitude) << i;
+  }
+}
+
 // Brute force's distance sums in eight double lanes: the same bits in 128-bit and 256-bit
 // registers, and within double rounding of one running sum, for every tail length.
 TEST(DescriptorIndex, ExactDistanceSameBitsInEitherLanes) {

@@ -42,14 +42,14 @@ Runner addBenchCommand(CLI::App& app) {
   auto kinds = std::make_shared<std::vector<std::string>>(std::vector<std::string>{"moment", "voxel", "voxel-improved"});
   auto indices = std::make_shared<std::vector<std::string>>(
       std::vector<std::string>{"kd-forest:1:8", "kd-forest:4:32", "kd-forest:4:128", "kd-forest:8:512", "hnsw:16:16",
-                               "hnsw:16:16:set", "hnsw:16:64", "hnsw-binary:16:16", "hnsw-binary:16:64", "hnsw-binary:16:64:set", "hnsw-pooled:16:32", "hnsw-pooled:16:64", "hnsw-principal:16:32", "hnsw-principal:16:64", "faiss-hnsw:16:16", "faiss-hnsw:16:64", "ivf:256:4", "ivf:1024:8", "ivf-binary:1024:32", "faiss-ivf:256:8", "faiss-ivf:256:32",
+                               "hnsw:16:16:set", "hnsw:16:64", "hnsw-binary:16:16", "hnsw-binary:16:64", "hnsw-binary:16:64:set", "hnsw-pooled:16:32", "hnsw-pooled:16:64", "hnsw-principal:16:32", "hnsw-principal:16:64", "faiss-hnsw:16:16", "faiss-hnsw:16:64", "ivf:256:4", "ivf:1024:8", "ivf:1024:40", "ivf-binary:1024:32", "faiss-ivf:256:8", "faiss-ivf:256:32",
                                "faiss-binary-flat", "faiss-binary-hnsw:16:64"});
   search->add_option("--shapes", *shapes, "Base shape definitions (JSON)")->capture_default_str();
   search->add_option("--sizes", s->sizes, "Database sizes")->delimiter(',')->capture_default_str();
   search->add_option("--kinds", *kinds, "Descriptor kinds")->delimiter(',')->capture_default_str()
       ->check(CLI::IsMember({"moment", "voxel", "voxel-improved"}));
   auto* voxelSizeLimit = search->add_option("--voxel-size-limit", s->voxelSizeLimit, "Largest database size for the voxel kinds")->capture_default_str();
-  search->add_option("--index", *indices, "Index settings: kd-forest:TREES:CHECKS, hnsw:M:EF, hnsw-binary:M:EF, hnsw-pooled:M:EF (the voxel kinds: a graph over 8x8x8 block sums, the ef nearest re-ranked exactly; hnsw-principal:M:EF the same over their 64 principal components; a graph with :set searches a fragment's candidate frames in one walk instead of one by one), ivf:LISTS:PROBES (an inverted file; the moments' default), ivf-binary:LISTS:PROBES (an inverted file over the occupancy bits, their default), autotuned:PRECISION, brute-force; FAISS's "
+  search->add_option("--index", *indices, "Index settings: kd-forest:TREES:CHECKS, hnsw:M:EF, hnsw-binary:M:EF, hnsw-pooled:M:EF (the voxel kinds: a graph over 8x8x8 block sums, the ef nearest re-ranked exactly; hnsw-principal:M:EF the same over their 64 principal components; a graph with :set searches a fragment's candidate frames in one walk instead of one by one), ivf:LISTS:PROBES (an inverted file over principal components; the moments' and the improved voxels' default), ivf-binary:LISTS:PROBES (an inverted file over the occupancy bits, their default), autotuned:PRECISION, brute-force; FAISS's "
                      "faiss-hnsw:M:EF, faiss-ivf:LISTS:PROBES, faiss-binary-flat, faiss-binary-hnsw:M:EF (the binary kinds, hnsw-binary and ivf-binary too: "
                      "voxel kind only)")
       ->delimiter(',')->capture_default_str();

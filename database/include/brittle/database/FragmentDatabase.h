@@ -106,11 +106,11 @@ struct FragmentDatabase {
 ///   is exact.
 /// - The improved voxels (a clamped distance): the inverted file (`ivf`) over their first 64
 ///   principal components and bounds of the rest, about kIvfWideRowsPerList rows a list (at most
-///   1 024 lists) and 40 probed: in `bench search` at 10⁴ entries recall@1 0.993 at 40.8 µs, at 10⁵
-///   0.993–0.998 at 87–106 µs (32–48 probed), where the graph over their block sums' principal
-///   components stored before (`hnsw-principal`, M 32, ef 32) took 105.7 and 139.2 µs for 0.998 and
-///   0.995 in the same runs, and builds 5× slower. Below 410 entries every list is probed, which is
-///   exact.
+///   1 024 lists) and 40 probed: in `bench search` at 10⁴ entries recall@1 0.993 at 37.8 µs, at 10⁵
+///   0.998 at 75.2–81.5 µs (two runs), where the graph over their block sums' principal components
+///   stored before (`hnsw-principal`, M 32, ef 32) took 93.5 and 138.0 µs for 0.998 and 0.995 in the
+///   same run, and builds 5× slower (4.7 against 22.8 s at 10⁵). Below 410 entries every list is
+///   probed, which is exact.
 /// Every build is deterministic (the same data give the same index in any process).
 DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entries, int voxelResolution = 16);
 /// The inverted file sized to `entries` rows, as defaultIndexSettings gives it to the moments
