@@ -91,7 +91,8 @@ constexpr int64_t kWideKeyDims = 64;        // wide rows: 64 of 4096 directions 
 constexpr int64_t kWidePrefixDims = 16;     // wide rows: a key's first values, scanned first (a quarter of its bytes)
 constexpr int64_t kWideRestDims = kWideKeyDims - kWidePrefixDims;
 constexpr int64_t kWideListDims = 32;       // wide rows: a centroid's first values, which choose the lists probed
-constexpr int64_t kWideSample = 2048;       // wide rows: sample of the subspace iteration
+constexpr int64_t kWideSample = 2048;       // wide rows: sample of the subspace iteration, at most
+constexpr int64_t kWideSampleValues = int64_t{1} << 23;  // ... this many values (32 MB a copy: 64³ grids get 32 rows)
 constexpr int kWideRounds = 4;              // wide rows: rounds of subspace iteration
 constexpr int64_t kWideBlock = 64;          // wide rows: values summed in float before a double sum
 // Bounds of a wide key's rounding, relative to the row's norm (see WideProjection::key): a block's
@@ -341,7 +342,7 @@ class WideProjection {
   // orthonormal in double.
   WideProjection(const float* data, int64_t rows, int64_t dims) : mDims(dims) {
     constexpr int64_t m = kWideKeyDims;
-    const int64_t n = dims, samples = std::min(rows, kWideSample);
+    const int64_t n = dims, samples = std::min({rows, kWideSample, std::max<int64_t>(1, kWideSampleValues / dims)});
     std::vector<double> mean(static_cast<size_t>(n), 0.0);
     for (int64_t s = 0; s < samples; ++s) {
       const float* row = data + (s * rows / samples) * n;
