@@ -17,32 +17,30 @@ bool FragmentDatabase::hasPhysics() const {
   return !entries.empty();
 }
 
-DescriptorIndexSettings sizedInvertedFile(int64_t entries) {
-  constexpr int64_t kMaxLists = 1024;  // PackReader's bound on trees
-  constexpr int kProbes = 4;
+namespace {
+
+// An inverted file of about `rowsPerList` rows a list, at most 1 024 lists (PackReader's bound on
+// trees), `probes` of them probed (all of them while there are fewer).
+DescriptorIndexSettings listsOf(DescriptorIndexSettings::Kind kind, int64_t entries, int64_t rowsPerList, int probes) {
+  constexpr int64_t kMaxLists = 1024;
   DescriptorIndexSettings s;
-  s.kind = DescriptorIndexSettings::Kind::Ivf;
-  s.trees = static_cast<int>(std::clamp<int64_t>(entries / kIvfRowsPerList, 1, kMaxLists));
-  s.checks = std::min(s.trees, kProbes);
+  s.kind = kind;
+  s.trees = static_cast<int>(std::clamp<int64_t>(entries / rowsPerList, 1, kMaxLists));
+  s.checks = std::min(s.trees, probes);
   return s;
 }
 
-DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entries, int voxelResolution) {
-  if (kind == DescriptorKind::Moment) return sizedInvertedFile(entries);
-  using Kind = DescriptorIndexSettings::Kind;
-  DescriptorIndexSettings s;
-  s.checks = 32;
-  if (kind == DescriptorKind::Voxel) {
-    s.kind = Kind::IvfBinary;
-    s.trees = static_cast<int>(std::clamp<int64_t>(entries / kIvfBinaryRowsPerList, 1, 1024));  // the pack's bound on trees
-    s.checks = std::min(s.trees, 32);
-  } else {
-    (void)voxelResolution;  // the inverted file takes any resolution (the graph before it needed multiples of 8)
-    s.kind = Kind::Ivf;
-    s.trees = static_cast<int>(std::clamp<int64_t>(entries / kIvfWideRowsPerList, 1, 1024));  // the pack's bound on trees
-    s.checks = std::min(s.trees, 40);
-  }
-  return s;
+}  // namespace
+
+DescriptorIndexSettings sizedInvertedFile(int64_t entries, DescriptorKind kind) {
+  // The moments' rows are filed by 16 components, the grids' by 64 (IvfBackend.cpp).
+  if (kind == DescriptorKind::Moment) return listsOf(DescriptorIndexSettings::Kind::Ivf, entries, kIvfRowsPerList, 4);
+  return listsOf(DescriptorIndexSettings::Kind::Ivf, entries, kIvfWideRowsPerList, 40);
+}
+
+DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entries) {
+  if (kind == DescriptorKind::Voxel) return listsOf(DescriptorIndexSettings::Kind::IvfBinary, entries, kIvfBinaryRowsPerList, 32);
+  return sizedInvertedFile(entries, kind);
 }
 
 namespace {

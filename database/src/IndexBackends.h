@@ -73,8 +73,8 @@ template <int L>
   for (; c + 8 <= dims; c += 8) {
     for (int r = 0; r < kRegisters; ++r) {
       Floats x, y;
-      std::memcpy(&x, a + c + r * L, sizeof x);
-      std::memcpy(&y, b + c + r * L, sizeof y);
+      loadLanes<L>(a + c + r * L, x);
+      loadLanes<L>(b + c + r * L, y);
       const Doubles d = __builtin_convertvector(x, Doubles) - __builtin_convertvector(y, Doubles);
       sums[r] += d * d;
     }

@@ -511,6 +511,7 @@ class IvfBackend final : public Backend {
     }
     train(keys, rows);
     file(keys, rests, wideRests, rows);
+    if (mWide) mCentroids = std::vector<float>();  // a query reads their first values only (mCentroidPrefix)
   }
 
   Status query(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const override {
@@ -604,7 +605,7 @@ class IvfBackend final : public Backend {
     int64_t id;
   };
   struct Scratch {
-    std::vector<float> query, toCentroids, lower, upper, heap;
+    std::vector<float> query, toCentroids, lower, upper, heap, prefix;  // prefix: wide rows' key-prefix distances
     std::vector<double> centred;
     std::vector<int32_t> probed, scanned;
     std::vector<Ranked> ranked;
@@ -625,10 +626,10 @@ class IvfBackend final : public Backend {
     distances(w.query.data(), mCentroidPrefix.data(), mLists, kWideListDims, w.toCentroids.data());
     const int64_t rows = probe(w.toCentroids, k, w.probed);
     w.lower.resize(static_cast<size_t>(rows));
-    w.upper.resize(static_cast<size_t>(rows));
+    w.prefix.resize(static_cast<size_t>(rows));
     w.scanned.resize(static_cast<size_t>(rows));
     float* const lower = w.lower.data();
-    float* const prefixDistance = w.upper.data();
+    float* const prefixDistance = w.prefix.data();
     int64_t n = 0;
     for (int32_t list : w.probed) {
       const int64_t begin = mOffsets[static_cast<size_t>(list)], count = listSize(list);

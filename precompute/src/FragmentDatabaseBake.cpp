@@ -321,8 +321,7 @@ FragmentDatabase databaseOf(const DatabaseBakeSettings& settings, std::vector<Fr
   const auto count = static_cast<Eigen::Index>(entries.size());
   for (DescriptorKind kind : kAllDescriptorKinds) {
     const auto k = static_cast<size_t>(kind);
-    const int resolution = kind == DescriptorKind::Voxel ? settings.descriptors.voxel.resolution : settings.descriptors.voxelImproved.resolution;
-    db.indexSettings[k] = settings.index[k].value_or(defaultIndexSettings(kind, count, resolution));
+    db.indexSettings[k] = settings.index[k].value_or(defaultIndexSettings(kind, count));
   }
   db.entries = std::move(entries);
   for (DescriptorKind kind : kAllDescriptorKinds) {

@@ -110,7 +110,7 @@ TEST(DefaultIndexSettings, InvertedFilesSizedToTheEntries) {
                             VoxelCase{DescriptorKind::Voxel, 12, DescriptorIndexSettings::Kind::IvfBinary, 32},
                             VoxelCase{DescriptorKind::VoxelImproved, 16, DescriptorIndexSettings::Kind::Ivf, 40},
                             VoxelCase{DescriptorKind::VoxelImproved, 12, DescriptorIndexSettings::Kind::Ivf, 40}}) {
-    const DescriptorIndexSettings s = defaultIndexSettings(c.kind, 100000, c.resolution);
+    const DescriptorIndexSettings s = defaultIndexSettings(c.kind, 100000);
     EXPECT_EQ(s.kind, c.index) << c.resolution;
     EXPECT_EQ(s.trees, 1024);
     EXPECT_EQ(s.checks, c.probes);
@@ -118,7 +118,7 @@ TEST(DefaultIndexSettings, InvertedFilesSizedToTheEntries) {
     const int64_t dims = int64_t(c.resolution) * c.resolution * c.resolution;
     std::vector<float> grids(static_cast<size_t>(20 * dims));
     for (size_t i = 0; i < grids.size(); ++i) grids[i] = float((i * 7 / 5 + i / static_cast<size_t>(dims)) % 2);
-    EXPECT_TRUE(DescriptorIndex::build(grids.data(), 20, dims, defaultIndexSettings(c.kind, 20, c.resolution)).ok()) << c.resolution;
+    EXPECT_TRUE(DescriptorIndex::build(grids.data(), 20, dims, defaultIndexSettings(c.kind, 20)).ok()) << c.resolution;
   }
   // The occupancy voxels' inverted file: about kIvfBinaryRowsPerList rows a list, 32 probed, every
   // list below 330 entries, at most 1 024 lists.
@@ -136,6 +136,11 @@ TEST(DefaultIndexSettings, InvertedFilesSizedToTheEntries) {
     EXPECT_EQ(s.kind, DescriptorIndexSettings::Kind::Ivf) << c.entries;
     EXPECT_EQ(s.trees, c.lists) << c.entries;
     EXPECT_EQ(s.checks, c.probes) << c.entries;
+    // `query --index ivf` on the occupancy grids: the same 4 096-value rows, sized the same.
+    const DescriptorIndexSettings occupancy = sizedInvertedFile(c.entries, DescriptorKind::Voxel);
+    EXPECT_EQ(occupancy.kind, DescriptorIndexSettings::Kind::Ivf) << c.entries;
+    EXPECT_EQ(occupancy.trees, c.lists) << c.entries;
+    EXPECT_EQ(occupancy.checks, c.probes) << c.entries;
   }
 }
 

@@ -332,7 +332,7 @@ TEST(SearchSizingTest, BytesComparedGrowWithPrecisionAndStayBelowTheExactSearch)
       {DescriptorKind::Moment, 30}, {DescriptorKind::Voxel, 4096}, {DescriptorKind::VoxelImproved, 4096}};
   for (const auto& [kind, cols] : kinds) {
     SCOPED_TRACE(descriptorKindName(kind));
-    const DescriptorIndexSettings stored = defaultIndexSettings(kind, kRows, 16);
+    const DescriptorIndexSettings stored = defaultIndexSettings(kind, kRows);
     const double exact = searchBytesCompared(indexAtPrecision(stored, 0.0), kRows, cols);
     EXPECT_EQ(exact, 4.0 * kRows * cols);
     double previous = 0.0;
@@ -350,7 +350,7 @@ TEST(SearchSizingTest, BytesComparedGrowWithPrecisionAndStayBelowTheExactSearch)
   EXPECT_EQ(searchBytesCompared(binary, kRows, 4096), 32.0 * 16.0 * 512.0);
   EXPECT_EQ(searchBytesCompared(binary, 100, 4096), 100.0 * 512.0);  // the walk cannot read more rows than there are
   // The occupancy voxels' stored inverted file: 32-byte keys of the centroids and the probed rows.
-  const DescriptorIndexSettings bits = defaultIndexSettings(DescriptorKind::Voxel, kRows, 16);
+  const DescriptorIndexSettings bits = defaultIndexSettings(DescriptorKind::Voxel, kRows);
   ASSERT_EQ(bits.kind, DescriptorIndexSettings::Kind::IvfBinary);
   EXPECT_EQ(searchBytesCompared(bits, kRows, 4096), 32.0 * (bits.trees + bits.checks * std::ceil(double(kRows) / bits.trees)) + 512.0);
   EXPECT_EQ(indexAtPrecision(bits, 1000.0).checks, bits.trees);

@@ -50,7 +50,7 @@ Runner addQueryCommand(CLI::App& app) {
   cmd->add_option("--index", o->index,
                   "Override the stored index: brute-force (exact), kd-forest, autotuned, hnsw, hnsw-binary, hnsw-pooled, hnsw-principal, ivf, ivf-binary, faiss-hnsw, "
                   "faiss-ivf, faiss-binary-flat or faiss-binary-hnsw (kd-forest: 4 trees, 64 checks; graphs: M 16, ef 64; ivf: "
-                  "as a bake sizes it, the moments n/390 lists, 4 probed, the improved voxels n/10, 40; faiss-ivf: √n lists, a quarter probed; the binary kinds: voxel only)")
+                  "as a bake sizes it, the moments n/390 lists, 4 probed, the voxel grids n/10, 40; faiss-ivf: √n lists, a quarter probed; the binary kinds: voxel only)")
       ->check(CLI::IsMember(backends));
   cmd->add_option("--material", o->material,
                   "Material of the query (preset or JSON file) to rescale the physics to; default: the reference");
@@ -82,10 +82,8 @@ Runner addQueryCommand(CLI::App& app) {
         index.kind = wanted;
         index.seed = seed;
         const auto entries = static_cast<int64_t>(db.entries.size());
-        if (index.kind == Kind::Ivf) {  // sized as a bake sizes it for the moments, or for the wide grids
-          const DescriptorIndexSettings sized = kind == DescriptorKind::VoxelImproved
-                                                    ? defaultIndexSettings(kind, entries)
-                                                    : sizedInvertedFile(entries);
+        if (index.kind == Kind::Ivf) {
+          const DescriptorIndexSettings sized = sizedInvertedFile(entries, kind);
           index.trees = sized.trees;
           index.checks = sized.checks;
         } else if (index.kind == Kind::FaissIvf) {

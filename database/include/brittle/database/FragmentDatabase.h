@@ -110,12 +110,13 @@ struct FragmentDatabase {
 ///   0.998 at 75.2–81.5 µs (two runs), where the graph over their block sums' principal components
 ///   stored before (`hnsw-principal`, M 32, ef 32) took 93.5 and 138.0 µs for 0.998 and 0.995 in the
 ///   same run, and builds 5× slower (4.7 against 22.8 s at 10⁵). Below 410 entries every list is
-///   probed, which is exact.
+///   probed, which is exact. It takes a grid of any resolution (the graph needed multiples of 8).
 /// Every build is deterministic (the same data give the same index in any process).
-DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entries, int voxelResolution = 16);
-/// The inverted file sized to `entries` rows, as defaultIndexSettings gives it to the moments
-/// (also what `query --index ivf` builds for any kind).
-DescriptorIndexSettings sizedInvertedFile(int64_t entries);
+DescriptorIndexSettings defaultIndexSettings(DescriptorKind kind, int64_t entries);
+/// The inverted file (`ivf`) sized to `entries` rows of `kind`, as defaultIndexSettings gives it to
+/// the moments and the improved voxels (also what `query --index ivf` builds, the occupancy grids
+/// sized as the improved ones: both are 4 096-value rows, filed by 64 components).
+DescriptorIndexSettings sizedInvertedFile(int64_t entries, DescriptorKind kind = DescriptorKind::Moment);
 inline constexpr int64_t kIvfRowsPerList = 390;
 /// Rows a list of the occupancy voxels' default inverted file (defaultIndexSettings).
 inline constexpr int64_t kIvfBinaryRowsPerList = 10;

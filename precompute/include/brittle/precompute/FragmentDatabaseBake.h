@@ -51,7 +51,7 @@ struct DatabaseBakeSettings {
   /// Kinds to compute. A disabled kind leaves a 0-column matrix, which FragmentMatcher cannot
   /// search and writePack rejects: for benchmarks that need one kind on a huge database.
   std::array<bool, kDescriptorKindCount> kinds = {true, true, true};
-  /// Per kind, the index the database stores; unset: defaultIndexSettings(kind, entries, the kind's voxel resolution).
+  /// Per kind, the index the database stores; unset: defaultIndexSettings(kind, entries).
   std::array<std::optional<DescriptorIndexSettings>, kDescriptorKindCount> index;
   int threads = 0;  ///< worker threads; 0 = TBB's default (all cores)
   /// Runtime fracture as a second source of fragments (fraction 0: every entry is cut).
