@@ -22,6 +22,7 @@
 #endif
 
 #include "IndexBackends.h"
+#include "brittle/core/Simd.h"
 
 namespace brittle {
 
@@ -45,14 +46,34 @@ void sortByDistanceThenId(int k, int64_t* ids, float* distances) {
 
 namespace {
 
-// Where a per-value check must start: the first block of four values (an SSE2 register) not all
-// of which pass `test`, or the last values short of a block. The checks of a 4096-value voxel
-// query then cost a compare per block instead of a branch per value; the scalar check from there
-// finds and names the value. Without SSE2, 0: every value is checked one by one.
+// Where a per-value check must start: the first block of values (eight to an AVX register, four
+// to an SSE2 one) not all of which pass `test`, or the last values short of a block. The checks of a
+// 4096-value voxel query then cost a compare per block instead of a branch per value; the scalar
+// check from there finds and names the value. Without SSE2, 0: every value is checked one by one.
 enum class BlockTest { Finite, ZeroOrOne };
+#if defined(__x86_64__)
+BRITTLE_TARGET_AVX int64_t leadingWideBlocksPassing(const float* values, int64_t count, BlockTest test) {
+  const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+  int64_t c = 0;
+  if (test == BlockTest::Finite) {
+    // v · 0 = 0: finite (an ordered compare: NaN fails)
+    while (c + 8 <= count && _mm256_movemask_ps(_mm256_cmp_ps(_mm256_mul_ps(_mm256_loadu_ps(values + c), zero), zero, _CMP_EQ_OQ)) == 0xff) c += 8;
+  } else {
+    while (c + 8 <= count) {
+      const __m256 v = _mm256_loadu_ps(values + c);
+      if (_mm256_movemask_ps(_mm256_or_ps(_mm256_cmp_ps(v, zero, _CMP_EQ_OQ), _mm256_cmp_ps(v, one, _CMP_EQ_OQ))) != 0xff) break;
+      c += 8;
+    }
+  }
+  return c;
+}
+#endif
 int64_t leadingBlocksPassing([[maybe_unused]] const float* values, [[maybe_unused]] int64_t count,
                              [[maybe_unused]] BlockTest test) {
   int64_t c = 0;
+#if defined(__x86_64__)
+  if (widestLanes() == Lanes::Wide) c = leadingWideBlocksPassing(values, count, test);
+#endif
 #if defined(__SSE2__)
   const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
   const auto passes = [&](__m128 v) {
@@ -85,6 +106,19 @@ Status checkZeroOne(const float* values, int64_t rows, int64_t dims, bool isQuer
 
 int64_t codeBytes(int64_t dims, int64_t wordBytes) { return (dims + 8 * wordBytes - 1) / (8 * wordBytes) * wordBytes; }
 
+#if defined(__x86_64__)
+namespace {
+// code[i] ← the bits (value ≠ 0) of values [8i, 8i + 8), for the whole bytes of `dims`; returns
+// where they end. The same bits as the loops in packBits.
+BRITTLE_TARGET_AVX int64_t packWideBytes(const float* row, int64_t dims, uint8_t* code) {
+  const __m256 zero = _mm256_setzero_ps();
+  int64_t c = 0;
+  for (; c + 8 <= dims; c += 8) code[c / 8] = static_cast<uint8_t>(_mm256_movemask_ps(_mm256_cmp_ps(_mm256_loadu_ps(row + c), zero, _CMP_NEQ_UQ)));
+  return c;
+}
+}  // namespace
+#endif
+
 void packBits(const float* values, int64_t rows, int64_t dims, int64_t wordBytes, uint8_t* codes) {
   const int64_t bytes = codeBytes(dims, wordBytes);
   std::fill(codes, codes + rows * bytes, uint8_t{0});
@@ -92,6 +126,9 @@ void packBits(const float* values, int64_t rows, int64_t dims, int64_t wordBytes
     const float* row = values + r * dims;
     uint8_t* code = codes + r * bytes;
     int64_t c = 0;
+#if defined(__x86_64__)
+    if (widestLanes() == Lanes::Wide) c = packWideBytes(row, dims, code);
+#endif
 #if defined(__SSE2__)
     // A byte from eight compares' signs (the same test as below: value ≠ 0).
     const __m128 zero = _mm_setzero_ps();
@@ -300,6 +337,9 @@ Status DescriptorIndex::validateQuery(const float* descriptor, int k, int64_t qu
   if (k > mRows)
     return invalidArgument("DescriptorIndex query: k = " + std::to_string(k) + " exceeds the " +
                    std::to_string(mRows) + " entries");
+  // A backend's own check that implies finite values runs first: when it passes, the finite check
+  // is not repeated; when it fails, the finite check names a non-finite value first, as always.
+  if (mBackend && mBackend->validatesFiniteValues() && mBackend->validateQuery(descriptor, mDims)) return Ok{};
   for (int64_t c = search::leadingBlocksPassing(descriptor, mDims, search::BlockTest::Finite); c < mDims; ++c) {
     if (!std::isfinite(descriptor[c]))
       return invalidArgument("DescriptorIndex query: non-finite value " +

@@ -96,6 +96,7 @@ class BinaryBackend final : public Backend {
   BinaryBackend(std::unique_ptr<faiss::IndexBinary> index, int64_t dims) : mIndex(std::move(index)), mDims(dims) {}
 
   Status validateQuery(const float* descriptor, int64_t dims) const override { return checkZeroOne(descriptor, 1, dims, true); }
+  bool validatesFiniteValues() const override { return true; }
 
   Status query(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const override {
     std::vector<uint8_t> code(static_cast<size_t>(codeBytes(mDims, 1)));

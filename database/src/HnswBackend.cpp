@@ -321,6 +321,7 @@ class HnswBackend final : public Backend {
     if constexpr (kBinary) return checkZeroOne(descriptor, 1, dims, true);
     return Ok{};
   }
+  bool validatesFiniteValues() const override { return kBinary; }
 
   // One query is a set of one row: walkSet's level-0 search is hnswlib's searchKnn, node for node
   // where no two distances tie (DescriptorIndex.GraphWalkIsHnswlibsSearch; on ties the walk expands

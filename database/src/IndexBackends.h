@@ -12,6 +12,8 @@
 #include <cstdint>
 #include <cstring>
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <memory>
 #include <vector>
 
@@ -23,11 +25,59 @@
 
 namespace brittle::search {
 
+/// A query's working memory kept for the next query: a few slots, each taken and returned by one
+/// atomic exchange, so that concurrent queries each get their own and a query on a warm index makes
+/// no allocation. (A thread_local scratch cost __tls_get_addr in a shared library.) The user resets
+/// what a lease holds; its vectors keep their capacity.
+template <class T>
+class ScratchPool {
+ public:
+  class Lease {
+   public:
+    Lease(ScratchPool& pool, T* held) : mPool(pool), mHeld(held) {}
+    Lease(const Lease&) = delete;
+    Lease& operator=(const Lease&) = delete;
+    ~Lease() { mPool.give(mHeld); }
+    T& operator*() const { return *mHeld; }
+
+   private:
+    ScratchPool& mPool;
+    T* mHeld;
+  };
+
+  ScratchPool() = default;
+  ScratchPool(const ScratchPool&) = delete;
+  ScratchPool& operator=(const ScratchPool&) = delete;
+  ~ScratchPool() {
+    for (auto& slot : mSlots) delete slot.load(std::memory_order_acquire);
+  }
+  /// Throws std::bad_alloc when no slot holds one and none can be made.
+  Lease lease() {
+    for (auto& slot : mSlots) {
+      if (T* held = slot.exchange(nullptr, std::memory_order_acquire)) return Lease(*this, held);
+    }
+    return Lease(*this, new T());
+  }
+
+ private:
+  void give(T* held) {
+    for (auto& slot : mSlots) {
+      T* empty = nullptr;
+      if (slot.compare_exchange_strong(empty, held, std::memory_order_release, std::memory_order_relaxed)) return;
+    }
+    delete held;
+  }
+  std::array<std::atomic<T*>, 4> mSlots{};
+};
+
 class Backend {
  public:
   virtual ~Backend() = default;
   /// Checks what the backend needs of one query beyond finite values (binary codes need 0 or 1).
   virtual Status validateQuery(const float* /*descriptor*/, int64_t /*dims*/) const { return Ok{}; }
+  /// Whether a query that passes validateQuery() has finite values too (0/1 values do), so that
+  /// DescriptorIndex need not check them again.
+  virtual bool validatesFiniteValues() const { return false; }
   virtual Status query(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const = 0;
   /// Whether querySet() searches a set of queries in one pass (DescriptorIndex::queryNearestOfSet
   /// merges per-row answers otherwise).
@@ -81,9 +131,9 @@ template <int L>
   }
   double lanes[8];
   std::memcpy(lanes, sums, sizeof lanes);
-  for (; c < dims; ++c) {
-    const double d = static_cast<double>(a[c]) - static_cast<double>(b[c]);
-    lanes[c & 7] += d * d;
+  for (int i = 0; i < 8 && c + i < dims; ++i) {  // c is a multiple of 8: value c + i is lane i's
+    const double d = static_cast<double>(a[c + i]) - static_cast<double>(b[c + i]);
+    lanes[i] += d * d;
   }
   return ((lanes[0] + lanes[1]) + (lanes[2] + lanes[3])) + ((lanes[4] + lanes[5]) + (lanes[6] + lanes[7]));
 }

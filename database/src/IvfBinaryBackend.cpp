@@ -25,11 +25,15 @@
 //     so that one AVX-512 register (two AVX2 ones) holds one word of eight rows, and the popcount of
 //     its XOR with the query's word adds to eight distances at once.
 // Query: the `checks` lists whose centroids' keys are nearest the query's (ties by lower index) are
-// scanned, or more, in that order, while they hold fewer than k rows. A row whose key distance
-// exceeds the k-th best code distance found so far cannot be among the k nearest, and is passed;
-// any other gets its code's distance. So within the probed lists the answer is exact, and the lists
-// probed decide the recall. Distances returned are whole rows' Hamming distances (the left-out
-// columns' share added), which are the 0/1 vectors' squared L2 distances, as brute force's.
+// probed, or more, in that order, while they hold fewer than k rows. Every probed row's key distance
+// is computed first, list after list. Then the first k rows whose key is no farther than the k-th
+// smallest block's least are ranked by their codes, which sets a bound (the k-th best code distance),
+// and every other row whose key is within the bound is ranked too, while the bound tightens. A key's
+// distance is a lower bound of its code's, so no row left out can be among the k nearest: within the
+// probed lists the answer is exact, and the lists probed decide the recall. (Ranking the nearest key
+// first ranks 45 codes a query at 10⁵ where ranking list by list ranked 64.) Distances returned
+// are whole rows' Hamming distances (the left-out columns' share added), which are the 0/1 vectors'
+// squared L2 distances, as brute force's.
 //
 // The same answer on any CPU: every popcount form (AVX-512 VPOPCNTDQ, AVX2 look-ups, popcnt, portable)
 // counts the same integers.
@@ -57,6 +61,7 @@ constexpr int kKeyBits = 64 * kKeyWords;
 constexpr int kBlock = 8;     // rows a block of keys
 constexpr int64_t kMajoritySamplePerList = 32;  // as the float lists' k-means (IvfBackend.cpp)
 constexpr int kMajorityIterations = 10;
+constexpr uint32_t kFar = std::numeric_limits<uint32_t>::max();  // a key distance never admitted
 
 // out[8b + l] ← the key distance of `query` to lane l of block b, for each of `blocks` blocks, and
 // least[b] ← the smallest of block b's eight.
@@ -132,6 +137,43 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) void keyDistancesAvx512(const
 }
 #endif
 
+// out ← (d[c] << 16 | c) for each list c whose distance d[c] is at most `last`, in order of c;
+// returns how many. Without a branch per list: which pass is not predictable.
+size_t listsWithinPortable(const uint32_t* d, int begin, int end, uint32_t last, int32_t* out) {
+  size_t n = 0;
+  for (int c = begin; c < end; ++c) {
+    out[n] = static_cast<int32_t>(d[c] << 16 | static_cast<uint32_t>(c));
+    n += d[c] <= last ? 1 : 0;
+  }
+  return n;
+}
+
+#if defined(__x86_64__)
+__attribute__((target("avx512f"))) size_t listsWithinAvx512(const uint32_t* d, int lists, uint32_t last, int32_t* out) {
+  const __m512i bound = _mm512_set1_epi32(static_cast<int>(last)), step = _mm512_set1_epi32(16);
+  __m512i index = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  size_t n = 0;
+  int c = 0;
+  for (; c + 16 <= lists; c += 16, index = _mm512_add_epi32(index, step)) {
+    const __m512i v = _mm512_loadu_si512(d + c);
+    const __mmask16 within = _mm512_cmple_epu32_mask(v, bound);
+    // Compressed in a register and stored whole (a compressing store to memory is microcoded on
+    // AMD Zen 4): lanes past the kept ones land below out + c + 16, which is within the lists.
+    _mm512_storeu_si512(out + n, _mm512_maskz_compress_epi32(within, _mm512_or_si512(_mm512_maskz_slli_epi32(0xffff, v, 16), index)));
+    n += static_cast<size_t>(__builtin_popcount(within));
+  }
+  return n + listsWithinPortable(d, c, lists, last, out + n);
+}
+#endif
+
+size_t listsWithin(Popcount form, const uint32_t* d, int lists, uint32_t last, int32_t* out) {
+#if defined(__x86_64__)
+  if (form == Popcount::Avx512) return listsWithinAvx512(d, lists, last, out);
+#endif
+  (void)form;
+  return listsWithinPortable(d, 0, lists, last, out);
+}
+
 using KeyDistances = void (*)(const uint64_t*, const uint64_t*, int64_t, uint32_t*, uint32_t*);
 
 KeyDistances keyDistancesFor(Popcount form) {
@@ -164,62 +206,77 @@ class IvfBinaryBackend final : public Backend {
   }
 
   Status validateQuery(const float* descriptor, int64_t dims) const override { return checkZeroOne(descriptor, 1, dims, true); }
+  bool validatesFiniteValues() const override { return true; }
 
   Status query(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const override {
     try {
-      Scratch x;
+      const auto lease = mScratch.lease();
+      Scratch& x = *lease;
+      x.probed.clear();
+      x.best.clear();
       x.full.resize(mVarying.fullWords());
       x.code.resize(mWords);
       const int outside = mVarying.code(descriptor, x.full.data(), x.code.data());
       std::array<uint64_t, kKeyWords> key{};
       keyOf(x.code.data(), key.data());
       x.distances.resize(static_cast<size_t>(blocksOf(mLists) * kBlock));
-      x.least.resize(static_cast<size_t>(std::max(blocksOf(mLists), mLargestListBlocks)));
+      x.least.resize(static_cast<size_t>(blocksOf(mLists)));
       mKeyDistances(key.data(), mCentroidKeys.data(), blocksOf(mLists), x.distances.data(), x.least.data());
       orderLists(x, mProbes);
 
-      // The k best (distance, id) so far, ascending.
-      x.best.reserve(static_cast<size_t>(k) + 1);
-      x.rowKeys.resize(static_cast<size_t>(mLargestListBlocks * kBlock));
-      int64_t scanned = 0;
-      uint32_t bound = std::numeric_limits<uint32_t>::max();  // the k-th best distance, once k are found
-      const auto keysOf = [&](size_t list) { return mKeys.data() + mListStart[list] * kKeyWords; };
-      const auto prefetchKeys = [&](size_t list) {  // a cold list's keys (the next one's, while this one is scanned)
-        prefetchBytes(keysOf(list), keysOf(list) + blocksOf(mListRows[list]) * kBlock * kKeyWords);
-      };
-      prefetchKeys(static_cast<size_t>(x.order[0]));
-      for (int i = 0; i < mLists && (i < mProbes || scanned < k); ++i) {
-        // The probed lists hold fewer than k rows: all of them in order (the first ones as before).
+      // The lists probed: the first mProbes, or more while they hold fewer than k rows; each one's
+      // slots in the scratch from `at` on.
+      int64_t rows = 0, slots = 0;
+      for (int i = 0; i < mLists && (i < mProbes || rows < k); ++i) {
         if (i == static_cast<int>(x.order.size())) orderLists(x, mLists);
         const auto c = static_cast<size_t>(x.order[static_cast<size_t>(i)]);
-        if (i + 1 < static_cast<int>(x.order.size())) prefetchKeys(static_cast<size_t>(x.order[static_cast<size_t>(i) + 1]));
-        const int64_t begin = mListStart[c], count = mListRows[c], blocks = blocksOf(count);
-        mKeyDistances(key.data(), keysOf(c), blocks, x.rowKeys.data(), x.least.data());
-        // The rows the bound so far admits, their codes asked of the cache before any is compared.
-        x.admitted.clear();
-        for (int64_t block = 0; block < blocks; ++block) {
-          if (x.least[static_cast<size_t>(block)] > bound) continue;  // no code in it is nearer than its key
-          for (int64_t j = block * kBlock, end = std::min(count, j + kBlock); j < end; ++j) {
-            if (x.rowKeys[static_cast<size_t>(j)] > bound) continue;
-            x.admitted.push_back(begin + j);
-            prefetchBytes(mCodes.data() + (begin + j) * mWords, mCodes.data() + (begin + j + 1) * mWords);
-          }
-        }
-        for (int64_t at : x.admitted) {
-          if (x.rowKeys[static_cast<size_t>(at - begin)] > bound) continue;  // the bound has tightened since
-          const auto d = static_cast<uint32_t>(hammingDistance(mForm, reinterpret_cast<const uint8_t*>(x.code.data()),
-                                                               reinterpret_cast<const uint8_t*>(mCodes.data() + at * mWords), mWords));
-          const std::pair<uint32_t, int64_t> found{d, mIds[static_cast<size_t>(at)]};
-          if (static_cast<int>(x.best.size()) == k) {
-            if (!(found < x.best.back())) continue;
-            x.best.pop_back();
-          }
-          x.best.push_back(found);
-          for (size_t b = x.best.size() - 1; b > 0 && found < x.best[b - 1]; --b) std::swap(x.best[b], x.best[b - 1]);
-          if (static_cast<int>(x.best.size()) == k) bound = x.best.back().first;
-        }
-        scanned += count;
+        x.probed.push_back({c, slots});
+        rows += mListRows[c];
+        slots += blocksOf(mListRows[c]) * kBlock;
       }
+
+      // Pass 1: every probed row's key distance, list after list, the next list's keys asked of
+      // the cache while one is scanned. A list's padding lanes get the largest distance, so that
+      // they are never admitted, and a block's least is its rows' alone.
+      x.rowKeys.resize(static_cast<size_t>(slots));
+      x.least.resize(static_cast<size_t>(slots / kBlock));
+      x.blockSlot.resize(x.least.size());
+      const auto keysOf = [&](size_t list) { return mKeys.data() + mListStart[list] * kKeyWords; };
+      const auto prefetchKeys = [&](size_t list) {
+        prefetchBytes(keysOf(list), keysOf(list) + blocksOf(mListRows[list]) * kBlock * kKeyWords);
+      };
+      prefetchKeys(x.probed.front().list);
+      for (size_t p = 0; p < x.probed.size(); ++p) {
+        if (p + 1 < x.probed.size()) prefetchKeys(x.probed[p + 1].list);
+        const Probed& l = x.probed[p];
+        const int64_t count = mListRows[l.list], blocks = blocksOf(count);
+        uint32_t* rowKeys = x.rowKeys.data() + l.at;
+        mKeyDistances(key.data(), keysOf(l.list), blocks, rowKeys, x.least.data() + l.at / kBlock);
+        for (int64_t b = 0; b < blocks; ++b) x.blockSlot[static_cast<size_t>(l.at / kBlock + b)] = mListStart[l.list] + b * kBlock;
+        if (count % kBlock != 0) {
+          std::fill(rowKeys + count, rowKeys + blocks * kBlock, kFar);
+          x.least[static_cast<size_t>(l.at / kBlock + blocks - 1)] = *std::min_element(rowKeys + (blocks - 1) * kBlock, rowKeys + count);
+        }
+      }
+
+      // Pass 2: the first k rows (in slot order) whose key distance is at most the k-th smallest
+      // block's least, which are at least k rows. None is measured in vain: the k nearest rows'
+      // keys are no farther than the k-th best code distance, so neither is that least.
+      uint32_t first = kFar;
+      if (k == 1) {
+        first = *std::min_element(x.least.begin(), x.least.end());
+      } else if (static_cast<size_t>(k) <= x.least.size()) {
+        std::vector<uint32_t> least = x.least;
+        std::nth_element(least.begin(), least.begin() + (k - 1), least.end());
+        first = least[static_cast<size_t>(k - 1)];
+      }
+      uint32_t bound = kFar;  // the k-th best distance, once k are found
+      admit(x, first, k);
+      measure(x, k, bound);
+      // Pass 3: the rows the bound admits that pass 2 did not measure (their keys are now kFar),
+      // while it tightens.
+      admit(x, bound, std::numeric_limits<int64_t>::max());
+      measure(x, k, bound);
       for (int i = 0; i < k; ++i) {
         ids[i] = x.best[static_cast<size_t>(i)].second;
         squaredDistances[i] = static_cast<float>(x.best[static_cast<size_t>(i)].first + static_cast<uint32_t>(outside));  // exact: < 2^24
@@ -237,21 +294,81 @@ class IvfBinaryBackend final : public Backend {
   }
 
  private:
+  struct Probed {
+    size_t list;
+    int64_t at;  // its first slot in the scratch's rowKeys (a multiple of kBlock)
+  };
   struct Scratch {
     std::vector<uint64_t> full, code;
-    std::vector<uint32_t> distances, rowKeys, least;
+    std::vector<uint32_t> distances, rowKeys, least;  // least: of each probed block (of the centroids' at first)
     std::vector<int32_t> order;
-    std::vector<std::pair<uint32_t, int64_t>> best;
-    std::vector<int64_t> admitted;  // slots of one list whose key the bound admits
+    std::vector<Probed> probed;
+    std::vector<int64_t> blockSlot;  // each probed block's first slot in the index
+    std::vector<int32_t> blocks;     // probed blocks that a bound admits
+    std::vector<std::pair<uint32_t, int64_t>> best;  // the k best (distance, id) so far, ascending
+    std::vector<std::pair<int64_t, int64_t>> admitted;  // (scratch slot, index slot) of rows to measure
   };
+
+  // x.admitted ← the probed rows whose key distance is at most `high`, in slot order, at most
+  // `most` of them, their codes asked of the cache before any is compared. For many, blocks are
+  // picked without branches: which pass is not predictable. (kFar is never admitted: padding, or a
+  // row measured already.)
+  void admit(Scratch& x, uint32_t high, int64_t most) const {
+    high = std::min(high, kFar - 1);
+    x.admitted.clear();
+    const auto admitBlock = [&](size_t b) {
+      for (size_t j = b * kBlock; j < (b + 1) * kBlock && static_cast<int64_t>(x.admitted.size()) < most; ++j) {
+        if (x.rowKeys[j] > high) continue;
+        const int64_t slot = x.blockSlot[b] + static_cast<int64_t>(j - b * kBlock);
+        x.admitted.emplace_back(static_cast<int64_t>(j), slot);
+        prefetchBytes(mCodes.data() + slot * mWords, mCodes.data() + (slot + 1) * mWords);
+      }
+    };
+    if (most < kBlock) {  // a few rows (pass 2): blocks in order until they are found
+      for (size_t b = 0; b < x.least.size() && static_cast<int64_t>(x.admitted.size()) < most; ++b) {
+        if (x.least[b] <= high) admitBlock(b);
+      }
+      return;
+    }
+    x.blocks.resize(x.least.size());
+    size_t n = 0;
+    for (size_t b = 0; b < x.least.size(); ++b) {
+      x.blocks[n] = static_cast<int32_t>(b);
+      n += x.least[b] <= high ? 1 : 0;
+    }
+    for (size_t i = 0; i < n && static_cast<int64_t>(x.admitted.size()) < most; ++i) admitBlock(static_cast<size_t>(x.blocks[i]));
+  }
+
+  // The admitted rows whose key is still within the bound ranked by their codes into x.best, each
+  // key then set to kFar (a row is measured once); the bound becomes the k-th best distance once k
+  // are found.
+  void measure(Scratch& x, int k, uint32_t& bound) const {
+    for (const auto& [at, slot] : x.admitted) {
+      const uint32_t key = x.rowKeys[static_cast<size_t>(at)];
+      x.rowKeys[static_cast<size_t>(at)] = kFar;
+      if (key > bound) continue;  // the bound has tightened since
+      const auto d = static_cast<uint32_t>(hammingDistance(mForm, reinterpret_cast<const uint8_t*>(x.code.data()),
+                                                           reinterpret_cast<const uint8_t*>(mCodes.data() + slot * mWords), mWords));
+      if (d > bound) continue;  // before its id is read (a cold load)
+      const std::pair<uint32_t, int64_t> found{d, mIds[static_cast<size_t>(slot)]};
+      if (static_cast<int>(x.best.size()) == k) {
+        if (!(found < x.best.back())) continue;
+        x.best.pop_back();
+      }
+      x.best.push_back(found);
+      for (size_t b = x.best.size() - 1; b > 0 && found < x.best[b - 1]; --b) std::swap(x.best[b], x.best[b - 1]);
+      if (static_cast<int>(x.best.size()) == k) bound = x.best.back().first;
+    }
+  }
 
   // x.order ← at least the `wanted` lists nearest the query (x.distances: their centroids' key
   // distances), ordered by (distance, index). The lists up to the wanted one's distance are
   // gathered in index order (a count of each distance finds it), then sorted: a sort of ~wanted
   // lists instead of all of them.
   void orderLists(Scratch& x, int wanted) const {
-    // Four tables, so that runs of one distance do not wait on each other's increments.
-    std::array<std::array<int32_t, kKeyBits + 1>, 4> count{};
+    // Four tables, so that runs of one distance do not wait on each other's increments (counts
+    // below 2^16: lists are).
+    std::array<std::array<uint16_t, kKeyBits + 1>, 4> count{};
     const uint32_t* d = x.distances.data();
     int c = 0;
     for (; c + 4 <= mLists; c += 4) {
@@ -263,10 +380,8 @@ class IvfBinaryBackend final : public Backend {
       sum += count[0][last] + count[1][last] + count[2][last] + count[3][last];
       if (sum >= wanted) break;
     }
-    x.order.clear();
-    for (c = 0; c < mLists; ++c) {
-      if (d[c] <= last) x.order.push_back(static_cast<int32_t>(d[c] << 16 | static_cast<uint32_t>(c)));
-    }
+    x.order.resize(static_cast<size_t>(mLists));
+    x.order.resize(listsWithin(mForm, d, mLists, last, x.order.data()));
     std::sort(x.order.begin(), x.order.end());  // (distance, index): lists < 2^16
     for (int32_t& o : x.order) o &= 0xffff;
   }
@@ -358,7 +473,6 @@ class IvfBinaryBackend final : public Backend {
     for (size_t c = 0; c < mListRows.size(); ++c) {
       mListStart[c] = slots;
       slots += blocksOf(mListRows[c]) * kBlock;
-      mLargestListBlocks = std::max(mLargestListBlocks, blocksOf(mListRows[c]));
     }
     mKeys.assign(static_cast<size_t>(slots * kKeyWords), 0);
     mCodes.assign(static_cast<size_t>(slots) * mWords, 0);
@@ -388,10 +502,10 @@ class IvfBinaryBackend final : public Backend {
   std::vector<uint64_t> mCentroidKeys;  // the lists' centroids' keys, in blocks
   std::vector<int64_t> mListStart;      // each list's first slot (a multiple of kBlock)
   std::vector<int64_t> mListRows;
-  int64_t mLargestListBlocks = 0;
   std::vector<uint64_t> mKeys;   // every slot's key, in blocks
   std::vector<uint64_t> mCodes;  // every slot's code
   std::vector<int64_t> mIds;     // every slot's row (-1: padding)
+  mutable ScratchPool<Scratch> mScratch;
 };
 
 }  // namespace

@@ -21,6 +21,8 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <thread>
+#include <utility>
 #include <vector>
 
 namespace brittle {
@@ -614,7 +616,9 @@ TEST(DescriptorIndex, InvertedFileOverWideRowsWithEveryListProbedIsBruteForce) {
       for (size_t i = 0; i < want.size(); ++i) {
         const int64_t query = static_cast<int64_t>(i) / k;
         EXPECT_EQ(fewD[i], search::exactSquaredL2(q.data() + query * dims, data.data() + fewIds[i] * dims, dims)) << i;
-        if (i % static_cast<size_t>(k) > 0) EXPECT_LE(fewD[i - 1], fewD[i]) << "nearest first";
+        if (i % static_cast<size_t>(k) > 0) {
+          EXPECT_LE(fewD[i - 1], fewD[i]) << "nearest first";
+        }
       }
       for (int64_t i = 0; i < 6; ++i) {
         EXPECT_EQ(fewIds[static_cast<size_t>(i * k)], 7 * i + 1) << "the near copy of row " << 7 * i + 1 << " is found";
@@ -893,8 +897,8 @@ TEST(DescriptorIndex, HnswBinaryLeavesOutColumnsEveryRowSharesAndAddsThemBack) {
 // fewer lists find the near copies of rows (clustered, as grids of like shapes are), draw nothing (two builds answer alike), and every distance they
 // return is the row's own.
 TEST(DescriptorIndex, InvertedFileOverBitsWithEveryListProbedIsBruteForce) {
-  const int64_t rows = 1200, shared = 150, queries = 80, k = 4;
-  for (int64_t dims : {int64_t{600}, int64_t{200}}) {  // 450 varying columns, then 50 (a key of them all)
+  const int64_t rows = 1200, shared = 150, queries = 80;
+  for (auto [dims, k] : {std::pair<int64_t, int64_t>{600, 4}, {200, 4}, {600, 1}}) {  // 450 varying columns, then 50 (a key of them all)
     // Rows around 30 prototypes (a tenth of their bits flipped), as grids of like shapes cluster.
     const auto prototypes = randomBits(30, dims, 21);
     std::vector<float> data(static_cast<size_t>(rows * dims));
@@ -918,8 +922,8 @@ TEST(DescriptorIndex, InvertedFileOverBitsWithEveryListProbedIsBruteForce) {
     all.trees = 24;
     DescriptorIndex every = buildOrDie(data, dims, all);
     ASSERT_TRUE(every.queryBatch(q.data(), queries, k, ids.data(), d.data()).ok());
-    EXPECT_EQ(ids, exactIds) << dims;
-    EXPECT_EQ(d, exactD) << dims;
+    EXPECT_EQ(ids, exactIds) << dims << " values, k " << k;
+    EXPECT_EQ(d, exactD) << dims << " values, k " << k;
 
     DescriptorIndexSettings few = settingsFor(Kind::IvfBinary, 3);
     few.trees = 24;
@@ -947,6 +951,44 @@ TEST(DescriptorIndex, InvertedFileOverBitsWithEveryListProbedIsBruteForce) {
       if (i < queries / 2) found += ia[static_cast<size_t>(i * k)] == 13 * i;
     }
     EXPECT_GE(found, queries / 2 - 1) << "near copies found by 3 of 24 lists, " << dims << " values a row";
+  }
+}
+
+// Queries from several threads at once (each takes its own scratch from the index's pool) give the
+// answers of the same queries one after another.
+TEST(DescriptorIndex, InvertedFileOverBitsSameAnswersFromConcurrentQueries) {
+  const int64_t rows = 900, dims = 300, queries = 60, k = 3;
+  const auto data = randomBits(rows, dims, 51);
+  const auto q = randomBits(queries, dims, 52);
+  DescriptorIndexSettings s = settingsFor(Kind::IvfBinary, 4);
+  s.trees = 30;
+  const DescriptorIndex file = buildOrDie(data, dims, s);
+  std::vector<int64_t> serialIds(queries * k);
+  std::vector<float> serialD(serialIds.size());
+  ASSERT_TRUE(file.queryBatch(q.data(), queries, k, serialIds.data(), serialD.data()).ok());
+  constexpr int kThreads = 6;
+  std::vector<std::vector<int64_t>> ids(kThreads, std::vector<int64_t>(serialIds.size()));
+  std::vector<std::vector<float>> d(kThreads, std::vector<float>(serialIds.size()));
+  std::vector<int> failures(kThreads, 0);
+  {
+    std::vector<std::thread> threads;
+    for (int t = 0; t < kThreads; ++t) {
+      threads.emplace_back([&, t] {
+        for (int round = 0; round < 5; ++round) {
+          for (int64_t i = 0; i < queries; ++i) {
+            const int64_t at = (i + 7 * t) % queries;  // each thread in its own order
+            failures[static_cast<size_t>(t)] += file.query(q.data() + at * dims, k, ids[static_cast<size_t>(t)].data() + at * k,
+                                                           d[static_cast<size_t>(t)].data() + at * k).ok() ? 0 : 1;
+          }
+        }
+      });
+    }
+    for (auto& thread : threads) thread.join();
+  }
+  for (int t = 0; t < kThreads; ++t) {
+    EXPECT_EQ(failures[static_cast<size_t>(t)], 0);
+    EXPECT_EQ(ids[static_cast<size_t>(t)], serialIds) << "thread " << t;
+    EXPECT_EQ(d[static_cast<size_t>(t)], serialD) << "thread " << t;
   }
 }
 
@@ -1160,6 +1202,31 @@ TEST(DescriptorIndex, BuildErrors) {
   auto badPrecision = settingsFor(Kind::Autotuned);
   badPrecision.targetPrecision = 1.5f;
   expectInvalid(DescriptorIndex::build(data.data(), 10, 3, badPrecision), "targetPrecision");
+}
+
+// The binary indexes check 0/1 values (which are finite) in place of the finite check, but a
+// non-finite value is still named as such, and a value that is neither 0 nor 1 by its column,
+// wherever it lies in the row's blocks of eight.
+TEST(DescriptorIndex, BinaryQueryErrorsNameTheValue) {
+  const int64_t dims = 45;
+  const auto data = randomBits(40, dims, 61);
+  for (Kind kind : {Kind::IvfBinary, Kind::HnswBinary, Kind::FaissBinaryFlat}) {
+    DescriptorIndexSettings s = settingsFor(kind, 4);
+    if (kind == Kind::IvfBinary) s.trees = 4;
+    const DescriptorIndex index = buildOrDie(data, dims, s);
+    int64_t id = -1;
+    float d = -1.0f;
+    for (int64_t column : {int64_t{0}, int64_t{17}, int64_t{44}}) {
+      auto q = randomBits(1, dims, 62);
+      ASSERT_TRUE(index.query(q.data(), 1, &id, &d).ok()) << descriptorIndexKindName(kind);
+      q[static_cast<size_t>(column)] = std::numeric_limits<float>::quiet_NaN();
+      expectInvalid(index.query(q.data(), 1, &id, &d), ("non-finite value at column " + std::to_string(column)).c_str());
+      q[static_cast<size_t>(column)] = -std::numeric_limits<float>::infinity();
+      expectInvalid(index.query(q.data(), 1, &id, &d), ("non-finite value at column " + std::to_string(column)).c_str());
+      q[static_cast<size_t>(column)] = 0.5f;
+      expectInvalid(index.query(q.data(), 1, &id, &d), ("column " + std::to_string(column) + " is 0.5").c_str());
+    }
+  }
 }
 
 TEST(DescriptorIndex, QueryErrors) {
