@@ -207,12 +207,21 @@ VaryingColumns::VaryingColumns(const float* data, int64_t rows, int64_t dims)
   for (size_t w = 0; w < differ.size(); ++w) mOutside[w] = ~differ[w];
 }
 
+namespace {
+// The bits where a and b differ within `mask`: one popcnt instruction a word where the CPU has it
+// (GCC picks the clone when the library loads), else libgcc's loop.
+__attribute__((target_clones("popcnt", "default"))) int maskedDifferences(const uint64_t* a, const uint64_t* b,
+                                                                           const uint64_t* mask, size_t words) {
+  int count = 0;
+  for (size_t w = 0; w < words; ++w) count += __builtin_popcountll((a[w] ^ b[w]) & mask[w]);
+  return count;
+}
+}  // namespace
+
 int VaryingColumns::code(const float* row, uint64_t* full, uint64_t* code) const {
   packBits(row, 1, mDims, 8, reinterpret_cast<uint8_t*>(full));
   gatherBits(full, mInside.data(), mInside.size(), code, words());
-  int outside = 0;
-  for (size_t w = 0; w < mOutside.size(); ++w) outside += __builtin_popcountll((full[w] ^ mConstant[w]) & mOutside[w]);
-  return outside;
+  return maskedDifferences(full, mConstant.data(), mOutside.data(), mOutside.size());
 }
 
 PrincipalAxes principalAxes(const Eigen::MatrixXd& points) {

@@ -301,7 +301,7 @@ class IvfBinaryBackend final : public Backend {
   struct Scratch {
     std::vector<uint64_t> full, code;
     std::vector<uint32_t> distances, rowKeys, least;  // least: of each probed block (of the centroids' at first)
-    std::vector<int32_t> order;
+    std::vector<int32_t> order, gathered;  // lists in probing order; those within the threshold
     std::vector<Probed> probed;
     std::vector<int64_t> blockSlot;  // each probed block's first slot in the index
     std::vector<int32_t> blocks;     // probed blocks that a bound admits
@@ -363,8 +363,8 @@ class IvfBinaryBackend final : public Backend {
 
   // x.order ← at least the `wanted` lists nearest the query (x.distances: their centroids' key
   // distances), ordered by (distance, index). The lists up to the wanted one's distance are
-  // gathered in index order (a count of each distance finds it), then sorted: a sort of ~wanted
-  // lists instead of all of them.
+  // gathered in index order (a count of each distance finds it), then placed by the same counts:
+  // ~wanted lists moved instead of all of them sorted.
   void orderLists(Scratch& x, int wanted) const {
     // Four tables, so that runs of one distance do not wait on each other's increments (counts
     // below 2^16: lists are).
@@ -380,10 +380,20 @@ class IvfBinaryBackend final : public Backend {
       sum += count[0][last] + count[1][last] + count[2][last] + count[3][last];
       if (sum >= wanted) break;
     }
-    x.order.resize(static_cast<size_t>(mLists));
-    x.order.resize(listsWithin(mForm, d, mLists, last, x.order.data()));
-    std::sort(x.order.begin(), x.order.end());  // (distance, index): lists < 2^16
-    for (int32_t& o : x.order) o &= 0xffff;
+    // The lists within `last`, in index order, then placed by distance from the counts (a
+    // counting sort: stable, so (distance, index) order).
+    x.gathered.resize(static_cast<size_t>(mLists));
+    const size_t n = listsWithin(mForm, d, mLists, last, x.gathered.data());
+    std::array<int32_t, kKeyBits + 1> at{};
+    for (uint32_t v = 1, sum = 0; v <= last; ++v) {
+      sum += count[0][v - 1] + count[1][v - 1] + count[2][v - 1] + count[3][v - 1];
+      at[v] = static_cast<int32_t>(sum);
+    }
+    x.order.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      const auto g = static_cast<uint32_t>(x.gathered[i]);
+      x.order[static_cast<size_t>(at[g >> 16]++)] = static_cast<int32_t>(g & 0xffff);
+    }
   }
 
   // The kKeyBits code positions whose column is most evenly split over the rows.
