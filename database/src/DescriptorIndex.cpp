@@ -208,10 +208,19 @@ VaryingColumns::VaryingColumns(const float* data, int64_t rows, int64_t dims)
 }
 
 namespace {
-// The bits where a and b differ within `mask`: one popcnt instruction a word where the CPU has it
-// (GCC picks the clone when the library loads), else libgcc's loop.
-__attribute__((target_clones("popcnt", "default"))) int maskedDifferences(const uint64_t* a, const uint64_t* b,
-                                                                           const uint64_t* mask, size_t words) {
+// The bits where a and b differ within `mask`: one popcnt instruction a word where the CPU has it,
+// else libgcc's loop. The same count either way.
+#if defined(__x86_64__)
+__attribute__((target("popcnt"))) int maskedDifferencesPopcnt(const uint64_t* a, const uint64_t* b, const uint64_t* mask, size_t words) {
+  int64_t count = 0;
+  for (size_t w = 0; w < words; ++w) count += _mm_popcnt_u64((a[w] ^ b[w]) & mask[w]);
+  return static_cast<int>(count);
+}
+#endif
+int maskedDifferences(const uint64_t* a, const uint64_t* b, const uint64_t* mask, size_t words) {
+#if defined(__x86_64__)
+  if (fastestPopcount() != Popcount::Portable) return maskedDifferencesPopcnt(a, b, mask, words);
+#endif
   int count = 0;
   for (size_t w = 0; w < words; ++w) count += __builtin_popcountll((a[w] ^ b[w]) & mask[w]);
   return count;
