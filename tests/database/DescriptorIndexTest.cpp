@@ -898,7 +898,9 @@ TEST(DescriptorIndex, HnswBinaryLeavesOutColumnsEveryRowSharesAndAddsThemBack) {
 // return is the row's own.
 TEST(DescriptorIndex, InvertedFileOverBitsWithEveryListProbedIsBruteForce) {
   const int64_t rows = 1200, shared = 150, queries = 80;
-  for (auto [dims, k] : {std::pair<int64_t, int64_t>{600, 4}, {200, 4}, {600, 1}}) {  // 450 varying columns, then 50 (a key of them all)
+  // k of 1, 4 and 10: the first rows ranked are found block by block below eight, by the admitted
+  // blocks' list from eight on.
+  for (auto [dims, k] : {std::pair<int64_t, int64_t>{600, 4}, {200, 4}, {600, 1}, {600, 10}}) {  // 450 varying columns, then 50 (a key of them all)
     // Rows around 30 prototypes (a tenth of their bits flipped), as grids of like shapes cluster.
     const auto prototypes = randomBits(30, dims, 21);
     std::vector<float> data(static_cast<size_t>(rows * dims));
