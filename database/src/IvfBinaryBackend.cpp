@@ -266,9 +266,9 @@ class IvfBinaryBackend final : public Backend {
       if (k == 1) {
         first = *std::min_element(x.least.begin(), x.least.end());
       } else if (static_cast<size_t>(k) <= x.least.size()) {
-        std::vector<uint32_t> least = x.least;
-        std::nth_element(least.begin(), least.begin() + (k - 1), least.end());
-        first = least[static_cast<size_t>(k - 1)];
+        x.smallest = x.least;
+        std::nth_element(x.smallest.begin(), x.smallest.begin() + (k - 1), x.smallest.end());
+        first = x.smallest[static_cast<size_t>(k - 1)];
       }
       uint32_t bound = kFar;  // the k-th best distance, once k are found
       admit(x, first, k);
@@ -301,6 +301,7 @@ class IvfBinaryBackend final : public Backend {
   struct Scratch {
     std::vector<uint64_t> full, code;
     std::vector<uint32_t> distances, rowKeys, least;  // least: of each probed block (of the centroids' at first)
+    std::vector<uint32_t> smallest;                   // k > 1: the blocks' least, partly sorted
     std::vector<int32_t> order, gathered;  // lists in probing order; those within the threshold
     std::vector<Probed> probed;
     std::vector<int64_t> blockSlot;  // each probed block's first slot in the index

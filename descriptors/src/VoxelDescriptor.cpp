@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "SurfaceChecks.h"
+#include "brittle/core/TriangleGeometry.h"
 
 namespace brittle {
 namespace {
@@ -114,45 +115,13 @@ std::vector<float> occupancyByParity(const Points& canonical, const Triangles& f
   return out;
 }
 
-// Squared distance from p to the triangle (a, b, c): the closest point by its Voronoi region
-// (vertex, edge or face; Ericson, Real-Time Collision Detection, §5.1.5). A triangle without area
-// has no face region: its edges decide.
-double squaredDistanceToTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                 const Eigen::Vector3d& c) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return ap.squaredNorm();
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.0 && d4 <= d3) return bp.squaredNorm();
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return (ap - d1 / (d1 - d3) * ab).squaredNorm();
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.0 && d5 <= d6) return cp.squaredNorm();
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return (ap - d2 / (d2 - d6) * ac).squaredNorm();
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) return (bp - (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b)).squaredNorm();
-  const double sum = va + vb + vc;
-  if (!(sum > 0.0)) {  // no area: the nearest of its three edges
-    const auto toSegment = [&](const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
-      const Eigen::Vector3d e = v - u, up = p - u;
-      const double length2 = e.squaredNorm();
-      const double t = length2 > 0.0 ? std::clamp(e.dot(up) / length2, 0.0, 1.0) : 0.0;
-      return (up - t * e).squaredNorm();
-    };
-    return std::min({toSegment(a, b), toSegment(b, c), toSegment(c, a)});
-  }
-  return (ap - vb / sum * ab - vc / sum * ac).squaredNorm();
-}
-
 // The signed distance at the k³ voxel centres, clamped to ±reach and divided by it (negative
 // inside), in grid order. Only centres within `reach` of the surface need a distance: each triangle
-// visits the centres of its bounding box grown by `reach`, and measures one only where the bound
-// from its enclosing sphere (|p − m| − R) could beat the centre's nearest so far. A centre no
-// triangle comes within `reach` of reads exactly ±1. The sign is the parity fill's (exact). Every
-// distance is exact in double; the fixed face order and a minimum make it the same in any process.
+// visits the centres that can be within reach of it (below), and measures one (its closest point,
+// brittle/core/TriangleGeometry.h) only where the bound from its enclosing sphere (|p − m| − R)
+// could beat the centre's nearest so far. A centre no triangle comes within `reach` of reads
+// exactly ±1. The sign is the parity fill's (exact). Every distance is exact in double; the fixed
+// face order and a minimum make it the same in any process.
 std::vector<float> clampedSignedDistance(const Points& canonical, const Triangles& faces, int k, double c, double reach) {
   const double h = 2.0 * c / k;
   std::vector<double> centres(static_cast<size_t>(k));
@@ -162,12 +131,10 @@ std::vector<float> clampedSignedDistance(const Points& canonical, const Triangle
   const auto cells = static_cast<size_t>(k) * static_cast<size_t>(k) * static_cast<size_t>(k);
   const std::array<int64_t, 3> stride{int64_t{k} * k, k, 1};
   std::vector<double> nearest(cells, reach);  // each centre's distance to the surface so far, at most reach
-  // Every centre within `grow` of triangle f whose nearest so far the triangle's enclosing sphere
-  // (|p − m| − R) could beat gets the exact distance. The centres visited: the columns along the
-  // normal's largest axis w within R + grow of m, each cut to the slab of the plane (a centre
-  // within grow of the triangle lies within grow of its plane: |t − t_plane| ≤ grow/|n̂_w|) and to
-  // the sphere of radius R + grow.
-  const auto visit = [&](Eigen::Index f, double grow) {
+  // The centres a triangle visits: the columns along its normal's largest axis w within R + reach
+  // of its centroid m, each cut to the slab of its plane (a centre within reach of the triangle lies
+  // within reach of its plane: |t − t_plane| ≤ reach/|n̂_w|) and to the sphere of radius R + reach.
+  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
     const Eigen::Vector3d a = canonical.row(faces(f, 0)).transpose(), b = canonical.row(faces(f, 1)).transpose(),
                           v = canonical.row(faces(f, 2)).transpose();
     const Eigen::Vector3d low = a.cwiseMin(b).cwiseMin(v), high = a.cwiseMax(b).cwiseMax(v);
@@ -178,10 +145,10 @@ std::vector<float> clampedSignedDistance(const Points& canonical, const Triangle
     for (int x = 1; x < 3; ++x) w = std::abs(normal[x]) > std::abs(normal[w]) ? x : w;
     const int u = (w + 1) % 3, t = (w + 2) % 3;
     const bool flat = normal[w] != 0.0;  // else no area: every centre of the box
-    const double slack = flat ? grow * normal.norm() / std::abs(normal[w]) : 0.0;
-    const int u0 = first(low[u] - grow), u1 = last(high[u] + grow), t0 = first(low[t] - grow), t1 = last(high[t] + grow);
-    const int wLow = first(low[w] - grow), wHigh = last(high[w] + grow);
-    const double sphere2 = (radius + grow) * (radius + grow);
+    const double slack = flat ? reach * normal.norm() / std::abs(normal[w]) : 0.0;
+    const int u0 = first(low[u] - reach), u1 = last(high[u] + reach), t0 = first(low[t] - reach), t1 = last(high[t] + reach);
+    const int wLow = first(low[w] - reach), wHigh = last(high[w] + reach);
+    const double sphere2 = (radius + reach) * (radius + reach);
     for (int iu = u0; iu <= u1; ++iu) {
       const double pu = centres[static_cast<size_t>(iu)], du = pu - m[u];
       for (int it = t0; it <= t1; ++it) {
@@ -203,13 +170,13 @@ std::vector<float> clampedSignedDistance(const Points& canonical, const Triangle
           if (du * du + dt * dt + dw * dw > reachable * reachable) continue;  // no point of the triangle is nearer
           Eigen::Vector3d p;
           p[u] = pu, p[t] = pt, p[w] = centres[static_cast<size_t>(iw)];
-          const double d2 = squaredDistanceToTriangle(p, a, b, v);
+          Eigen::Vector3d bary;
+          const double d2 = (closestOnTriangle(p, a, b, v, bary) - p).squaredNorm();
           if (d2 < nearest[n] * nearest[n]) nearest[n] = std::sqrt(d2);
         }
       }
     }
-  };
-  for (Eigen::Index f = 0; f < faces.rows(); ++f) visit(f, reach);
+  }
   const std::vector<float> inside = occupancyByParity(canonical, faces, k, c);
   std::vector<float> out(cells);
   for (size_t n = 0; n < cells; ++n) {

@@ -7,41 +7,6 @@
 
 namespace brittle::detail {
 
-Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                  const Eigen::Vector3d& c, Eigen::Vector3d& bary) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) { bary = {1, 0, 0}; return a; }
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) { bary = {0, 1, 0}; return b; }
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const double v = d1 / (d1 - d3);
-    bary = {1 - v, v, 0};
-    return a + v * ab;
-  }
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) { bary = {0, 0, 1}; return c; }
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const double w = d2 / (d2 - d6);
-    bary = {1 - w, 0, w};
-    return a + w * ac;
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    bary = {0, 1 - w, w};
-    return b + w * (c - b);
-  }
-  const double denom = 1.0 / (va + vb + vc);
-  const double v = vb * denom, w = vc * denom;
-  bary = {1 - v - w, v, w};
-  return a + ab * v + ac * w;
-}
-
 Result<ContactSite> locateContact(const Body& body, const Eigen::Vector3d& p, double toleranceM) {
   const Points& x = body.asset.tetMesh.nodes;
   const Triangles& tri = body.topology.boundaryTriangles;

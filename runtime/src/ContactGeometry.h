@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "Body.h"
+#include "brittle/core/TriangleGeometry.h"
 
 namespace brittle::detail {
 
@@ -47,9 +48,8 @@ struct ContactSite {
   double distanceM = 0.0;                         ///< from the reported point to the surface
 };
 
-/// The closest point of triangle abc to p, with its barycentric weights (a, b, c's) in `bary`.
-Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                  const Eigen::Vector3d& c, Eigen::Vector3d& bary);
+/// The closest point of triangle abc to p (brittle/core/TriangleGeometry.h).
+using brittle::closestOnTriangle;
 
 /// The closest boundary point to `pointLocal` (body frame, m). Errors: InvalidArgument when it is
 /// farther than `toleranceM` or the body has no boundary.
