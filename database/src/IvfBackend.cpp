@@ -46,12 +46,14 @@
 //   - A query's lower bound on a row's distance is (√d̂ − e_q − e_x)² + gap², gap the distance
 //     between the two residual intervals. The lists probed are those whose centroids' first
 //     kWideListDims values are nearest. Their rows are bounded from their keys' first
-//     kWidePrefixDims values (a quarter of the bytes), the k smallest bounds' rows measured
-//     exactly, and then, in the order scanned, every row whose bound is within the k-th best exact
-//     distance is bounded again from its whole key and, if still within, measured. At 10⁵ clamped
-//     distances (32 lists of ~100 rows probed) a query bounds 3 300 rows by their first values,
-//     135 by their whole keys and measures 10; the upper bounds' admission above would measure
-//     hundreds, since a 4 096-value row's residual is not small.
+//     kWidePrefixDims values (a quarter of the bytes) and the k smallest bounds' rows measured
+//     exactly. Every row whose bound is within the k-th best exact distance is then bounded again
+//     from its whole key (its other values and rounding bounds in one record, fetched ahead), and
+//     those still within are measured in the order of their bounds, nearest first, until the next
+//     bound passes the k-th best. At 10⁵ clamped distances (40 lists probed) a query bounds 4 080
+//     rows by their first values, 48 by their whole keys and measures 7 (6.4 of them within the
+//     final k-th best, so no order measures fewer); the upper bounds' admission above would
+//     measure hundreds, since a 4 096-value row's residual is not small.
 //
 // Same bits with SSE2 and AVX: both forms keep eight float lanes, lane l summing (a − b)² over the
 // values l, l + 8, ..., and add the lanes in one fixed order at the end (Simd.h). So the probed
@@ -90,11 +92,16 @@ constexpr int64_t kPrincipalSample = 8192;  // rows the principal directions are
 constexpr int64_t kWideKeyDims = 64;        // wide rows: 64 of 4096 directions keep 94 % of the clamped distances' variance
 constexpr int64_t kWidePrefixDims = 16;     // wide rows: a key's first values, scanned first (a quarter of its bytes)
 constexpr int64_t kWideRestDims = kWideKeyDims - kWidePrefixDims;
+// A wide row's record for its second bound: its key's other values, then its WideRest's error, low
+// and high, so that a row reached at random costs one fetch (apart, they were four cache misses).
+constexpr int64_t kWideRecord = kWideRestDims + 8;
+constexpr int64_t kWideRecordError = kWideRestDims, kWideRecordLow = kWideRestDims + 1, kWideRecordHigh = kWideRestDims + 2;
 constexpr int64_t kWideListDims = 32;       // wide rows: a centroid's first values, which choose the lists probed
 constexpr int64_t kWideSample = 2048;       // wide rows: sample of the subspace iteration, at most
 constexpr int64_t kWideSampleValues = int64_t{1} << 23;  // ... this many values (32 MB a copy: 64³ grids get 32 rows)
 constexpr int kWideRounds = 4;              // wide rows: rounds of subspace iteration
 constexpr int64_t kWideBlock = 64;          // wide rows: values summed in float before a double sum
+constexpr int64_t kWideNextPrefetch = 256;  // wide rows: values of the next row to measure fetched ahead
 // Bounds of a wide key's rounding, relative to the row's norm (see WideProjection::key): a block's
 // float sum is within γ₆₄ ≈ 3.8e-6 of exact (Cauchy–Schwarz over ‖b_i‖ = 1), √64 coordinates give
 // 3.1e-5, the float basis's departure from orthonormal (≤ 64 ulp) adds 4e-6 of ‖x‖² to r²: each
@@ -593,7 +600,7 @@ class IvfBackend final : public Backend {
   int64_t memoryBytes() const override {
     return mProjection.bytes() +
            static_cast<int64_t>((mCentroids.size() + mCentroidPrefix.size() + mRows.size() + mResiduals.size() + mNorms.size() + mWidePrefix.size() +
-                                 mWideRest.size() + mWideErrors.size() + mWideLows.size() + mWideHighs.size() +
+                                 mWideRecords.size() + mWideErrors.size() +
                                  mWidePrefixLows.size() + mWidePrefixHighs.size()) * sizeof(float) +
                                 (mBasis.size() + mBasisAcross.size() + mMean.size()) * sizeof(double) +
                                 mIds.size() * sizeof(int32_t) + mOffsets.size() * sizeof(int64_t));
@@ -615,9 +622,9 @@ class IvfBackend final : public Backend {
 
   // A wide row's query (see the file comment). Each probed row's lower bound from its key's first
   // kWidePrefixDims values (a quarter of its bytes); the exact distances of the k smallest; then
-  // for every row whose bound is within the k-th best exact distance, in the order scanned, the
-  // bound from its whole key, and if that is within too, its exact distance, the k-th best
-  // tightening as better rows are found.
+  // for every row whose bound is within the k-th best exact distance, the bound from its whole key,
+  // and the rows still within measured nearest bound first, the k-th best tightening as better
+  // rows are found.
   void queryWide(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const {
     Scratch& w = scratch();
     w.query.assign(static_cast<size_t>(mStride), 0.0f);
@@ -654,21 +661,40 @@ class IvfBackend final : public Backend {
     std::vector<Ranked>& best = w.ranked;  // a max-heap of the k best by (distance, id)
     best.clear();
     for (const auto& [bound, i] : smallest) {
-      const int64_t id = mIds[static_cast<size_t>(w.scanned[static_cast<size_t>(i)])];
-      best.push_back({exactSquaredL2(descriptor, mData + id * mDims, mDims), id});
+      const int64_t at = w.scanned[static_cast<size_t>(i)];
+      best.push_back({exactWide(descriptor, at), mIds[static_cast<size_t>(at)]});
       std::push_heap(best.begin(), best.end(), before);
       lower[i] = std::numeric_limits<float>::infinity();  // measured
     }
-    for (int64_t i = 0; i < rows; ++i) {
-      if (lower[i] > best.front().distance) continue;
+    // The rows still within the k-th best by their first values: their rest keys fetched, then
+    // their bounds from the whole key, and those within measured in the order of their bounds, so
+    // that the nearest rows come first and the k-th best is tight before the rest are reached.
+    std::vector<std::pair<float, int64_t>>& candidates = w.smallest;  // (bound, position), reused
+    candidates.clear();
+    forEachWithin(lower, rows, best.front().distance, [&](int64_t i) {
+      const float* record = mWideRecords.data() + w.scanned[static_cast<size_t>(i)] * kWideRecord;
+      prefetchBytes(record, record + kWideRecord);
+      candidates.emplace_back(0.0f, i);
+    });
+    size_t kept = 0;
+    for (const auto& [unused, i] : candidates) {
       const int64_t at = w.scanned[static_cast<size_t>(i)];
       float whole = 0.0f;  // the key's distance: its first values' plus the rest's
-      distances(w.query.data() + kWidePrefixDims, mWideRest.data() + at * kWideRestDims, 1, kWideRestDims, &whole);
+      const float* record = mWideRecords.data() + at * kWideRecord;
+      distances(w.query.data() + kWidePrefixDims, record, 1, kWideRestDims, &whole);
       whole += prefixDistance[i];
-      wideLowerBounds(q.error, q.low, q.high, mWideErrors.data() + at, mWideLows.data() + at, mWideHighs.data() + at, 1, &whole);
+      wideLowerBounds(q.error, q.low, q.high, record + kWideRecordError, record + kWideRecordLow, record + kWideRecordHigh, 1,
+                      &whole);
       if (whole > best.front().distance) continue;
-      const int64_t id = mIds[static_cast<size_t>(at)];
-      const Ranked candidate{exactSquaredL2(descriptor, mData + id * mDims, mDims), id};
+      candidates[kept++] = {whole, i};
+    }
+    candidates.resize(kept);
+    std::sort(candidates.begin(), candidates.end());
+    for (size_t c = 0; c < candidates.size(); ++c) {
+      if (candidates[c].first > best.front().distance) break;  // and so are all after it
+      const int64_t at = w.scanned[static_cast<size_t>(candidates[c].second)];
+      if (c + 1 < candidates.size()) prefetchWide(w.scanned[static_cast<size_t>(candidates[c + 1].second)]);
+      const Ranked candidate{exactWide(descriptor, at), mIds[static_cast<size_t>(at)]};
       if (!before(candidate, best.front())) continue;
       std::pop_heap(best.begin(), best.end(), before);
       best.back() = candidate;
@@ -680,6 +706,16 @@ class IvfBackend final : public Backend {
       squaredDistances[r] = best[static_cast<size_t>(r)].distance;
     }
   }
+  // Brute force's distance to the row filed at `at`.
+  float exactWide(const float* descriptor, int64_t at) const {
+    return exactSquaredL2(descriptor, mData + static_cast<int64_t>(mIds[static_cast<size_t>(at)]) * mDims, mDims);
+  }
+  // The start of that row, asked for while another is measured.
+  void prefetchWide(int64_t at) const {
+    const float* row = mData + static_cast<int64_t>(mIds[static_cast<size_t>(at)]) * mDims;
+    prefetchBytes(row, row + kWideNextPrefetch);
+  }
+
   [[gnu::noinline]] static Scratch& scratch() {
     thread_local Scratch perThread;
     return perThread;
@@ -821,8 +857,6 @@ class IvfBackend final : public Backend {
     mResiduals.resize(kept);
     mNorms.resize(kept);
     mWideErrors.resize(wide);
-    mWideLows.resize(wide);
-    mWideHighs.resize(wide);
     mWidePrefixLows.resize(wide);
     mWidePrefixHighs.resize(wide);
     mWidePrefix.resize(wide * kWidePrefixDims);
@@ -830,20 +864,22 @@ class IvfBackend final : public Backend {
     for (int64_t c = 0; mWide && c < mLists; ++c) {
       std::copy_n(mCentroids.data() + c * mStride, kWideListDims, mCentroidPrefix.data() + c * kWideListDims);
     }
-    mWideRest.resize(wide * kWideRestDims);
+    mWideRecords.assign(wide * kWideRecord, 0.0f);
     mRows.resize(mWide ? 0 : static_cast<size_t>(rows * mStride));
     for (int64_t r = 0; r < rows; ++r) {
       const int64_t at = next[static_cast<size_t>(listOf[static_cast<size_t>(r)])]++;
       mIds[static_cast<size_t>(at)] = static_cast<int32_t>(r);
       if (mWide) {
         mWideErrors[static_cast<size_t>(at)] = wideRests[static_cast<size_t>(r)].error;
-        mWideLows[static_cast<size_t>(at)] = wideRests[static_cast<size_t>(r)].low;
-        mWideHighs[static_cast<size_t>(at)] = wideRests[static_cast<size_t>(r)].high;
         mWidePrefixLows[static_cast<size_t>(at)] = wideRests[static_cast<size_t>(r)].prefixLow;
         mWidePrefixHighs[static_cast<size_t>(at)] = wideRests[static_cast<size_t>(r)].prefixHigh;
         const float* key = keys.data() + r * mStride;
         std::copy_n(key, kWidePrefixDims, mWidePrefix.data() + at * kWidePrefixDims);
-        std::copy_n(key + kWidePrefixDims, kWideRestDims, mWideRest.data() + at * kWideRestDims);
+        float* record = mWideRecords.data() + at * kWideRecord;
+        std::copy_n(key + kWidePrefixDims, kWideRestDims, record);
+        record[kWideRecordError] = wideRests[static_cast<size_t>(r)].error;
+        record[kWideRecordLow] = wideRests[static_cast<size_t>(r)].low;
+        record[kWideRecordHigh] = wideRests[static_cast<size_t>(r)].high;
         continue;
       }
       mResiduals[static_cast<size_t>(at)] = rests[static_cast<size_t>(r)].residual;
@@ -866,8 +902,9 @@ class IvfBackend final : public Backend {
   std::vector<float> mNorms;       // each filed row's centred norm (0 without a projection)
   WideProjection mProjection;      // wide rows: their directions
   std::vector<float> mCentroidPrefix;  // wide rows: each centroid's first kWideListDims values
-  std::vector<float> mWidePrefix, mWideRest;  // wide rows: their keys' first kWidePrefixDims values and the rest, list after list
-  std::vector<float> mWideErrors, mWideLows, mWideHighs, mWidePrefixLows, mWidePrefixHighs;  // wide rows: each filed row's WideRest
+  std::vector<float> mWidePrefix;   // wide rows: their keys' first kWidePrefixDims values, list after list
+  std::vector<float> mWideRecords;  // wide rows: each filed row's record (kWideRecord floats), list after list
+  std::vector<float> mWideErrors, mWidePrefixLows, mWidePrefixHighs;  // wide rows: each filed row's WideRest for the first bound
   std::vector<int32_t> mIds;       // each filed row's id
   std::vector<int64_t> mOffsets;   // list c is filed rows [mOffsets[c], mOffsets[c + 1])
 };
