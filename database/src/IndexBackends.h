@@ -159,6 +159,12 @@ void ivfSquaredDistances(Lanes lanes, const float* query, const float* rows, int
 /// The inverted file's wide-row kernel (IvfBackend.cpp): out[i] ← Σ_j weights[j]·rows[index[j]·64 + i]
 /// for i < 64, each a float sum over j in order: the same bits with either lanes.
 void ivfWeightedRowSum(Lanes lanes, const float* rows, const int32_t* index, const float* weights, int64_t count, float* out);
+/// The wide rows' lower bounds (IvfBackend.cpp), for the tests: an inverted file of `lists` lists
+/// built over `data` (rows of dims > 128 values), and each row's first bound (its key's first
+/// values) and second bound (its whole key) on its squared distance to `query`, by row id, the
+/// key distances in the given lanes.
+Status ivfWideBounds(Lanes lanes, const float* data, int64_t rows, int64_t dims, int lists, const float* query,
+                     std::vector<float>& first, std::vector<float>& second);
 
 /// The principal axes of `points` (a column per sample): their mean, and the covariance's
 /// eigenvectors as columns, the largest eigenvalue's first. In double, the covariance summed in

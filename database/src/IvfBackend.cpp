@@ -597,6 +597,32 @@ class IvfBackend final : public Backend {
     return Ok{};
   }
 
+  // Every row's first and second lower bounds for `descriptor` (by row id), as queryWide makes
+  // them, in the given lanes: for the tests (ivfWideBounds).
+  void wideBounds(Lanes lanes, const float* descriptor, std::vector<float>& first, std::vector<float>& second) const {
+    std::vector<float> key(static_cast<size_t>(mStride), 0.0f);
+    const WideRest q = mProjection.key(descriptor, key.data());
+    const auto rows = static_cast<int64_t>(mIds.size());
+    std::vector<float> prefix(static_cast<size_t>(rows));
+    first.assign(static_cast<size_t>(rows), 0.0f);
+    second.assign(static_cast<size_t>(rows), 0.0f);
+    ivfSquaredDistances(lanes, key.data(), mWidePrefix.data(), rows, kWidePrefixDims, prefix.data());
+    std::vector<float> lower = prefix;
+    wideLowerBounds(q.error, q.prefixLow, q.prefixHigh, mWideErrors.data(), mWidePrefixLows.data(), mWidePrefixHighs.data(), rows,
+                    lower.data());
+    for (int64_t at = 0; at < rows; ++at) {
+      const float* record = mWideRecords.data() + at * kWideRecord;
+      float whole = 0.0f;
+      ivfSquaredDistances(lanes, key.data() + kWidePrefixDims, record, 1, kWideRestDims, &whole);
+      whole += prefix[static_cast<size_t>(at)];
+      wideLowerBounds(q.error, q.low, q.high, record + kWideRecordError, record + kWideRecordLow, record + kWideRecordHigh, 1,
+                      &whole);
+      const auto id = static_cast<size_t>(mIds[static_cast<size_t>(at)]);
+      first[id] = lower[static_cast<size_t>(at)];
+      second[id] = whole;
+    }
+  }
+
   int64_t memoryBytes() const override {
     return mProjection.bytes() +
            static_cast<int64_t>((mCentroids.size() + mCentroidPrefix.size() + mRows.size() + mResiduals.size() + mNorms.size() + mWidePrefix.size() +
@@ -925,6 +951,17 @@ void ivfWeightedRowSum(Lanes lanes, const float* rows, const int32_t* index, con
   } else {
     weightedRowSumNarrow(rows, index, weights, count, out);
   }
+}
+
+Status ivfWideBounds(Lanes lanes, const float* data, int64_t rows, int64_t dims, int lists, const float* query,
+                     std::vector<float>& first, std::vector<float>& second) {
+  if (dims <= kMaxProjectedDims) return invalidArgument("ivfWideBounds: rows of more than 128 values are wide");
+  try {
+    IvfBackend(data, rows, dims, lists, lists).wideBounds(lanes, query, first, second);
+  } catch (const std::exception& e) {
+    return invalidArgument(std::string("ivfWideBounds: ") + e.what());
+  }
+  return Ok{};
 }
 
 Status checkInvertedFileSettings(const DescriptorIndexSettings& settings, int64_t rows, int64_t maxLists, const char* what) {

@@ -632,6 +632,36 @@ TEST(DescriptorIndex, InvertedFileOverWideRowsWithEveryListProbedIsBruteForce) {
   }
 }
 
+// Both lower bounds of the wide rows hold for every row and query, a query equal to a row
+// included: the first from the keys' first values, the second from the whole key, each widened by
+// its roundings; they are the same bits in 128-bit and 256-bit lanes; and they bound: at the median
+// a bound is at least a third of the distance, so a bound made 0 fails here as one made too large
+// does.
+TEST(DescriptorIndex, InvertedFileWideBoundsHoldForEveryRow) {
+  const int64_t dims = 4096, rows = 500;
+  auto data = clampedGrids(rows, 83);
+  const auto queries = clampedGrids(6, 84);
+  std::vector<float> query(queries.begin(), queries.begin() + dims);
+  for (int64_t q = 0; q < 6; ++q) {
+    std::copy_n(queries.begin() + q * dims, dims, query.begin());
+    if (q == 5) std::copy_n(data.begin() + 17 * dims, dims, query.begin());  // a row itself: distance 0
+    std::vector<float> first, second, firstNarrow, secondNarrow;
+    ASSERT_TRUE(search::ivfWideBounds(widestLanes(), data.data(), rows, dims, 7, query.data(), first, second).ok());
+    ASSERT_TRUE(search::ivfWideBounds(Lanes::Narrow, data.data(), rows, dims, 7, query.data(), firstNarrow, secondNarrow).ok());
+    std::vector<double> ratios;
+    for (int64_t r = 0; r < rows; ++r) {
+      const float exact = search::exactSquaredL2(query.data(), data.data() + r * dims, dims);
+      EXPECT_LE(first[size_t(r)], exact) << "query " << q << " row " << r;
+      EXPECT_LE(second[size_t(r)], exact) << "query " << q << " row " << r;
+      EXPECT_EQ(std::bit_cast<uint32_t>(first[size_t(r)]), std::bit_cast<uint32_t>(firstNarrow[size_t(r)])) << r;
+      EXPECT_EQ(std::bit_cast<uint32_t>(second[size_t(r)]), std::bit_cast<uint32_t>(secondNarrow[size_t(r)])) << r;
+      if (exact > 0.0f) ratios.push_back(std::max(first[size_t(r)], second[size_t(r)]) / exact);
+    }
+    std::nth_element(ratios.begin(), ratios.begin() + ratios.size() / 2, ratios.end());
+    EXPECT_GT(ratios[ratios.size() / 2], 1.0 / 3.0) << "query " << q;  // measured 0.91–0.93
+  }
+}
+
 // The wide rows' keys are sums of the directions' rows weighted by a grid's values: the same bits
 // in 128-bit and 256-bit lanes (so the keys, lists and answers do not depend on the CPU), and within
 // float rounding of a double sum; gathered rows in any order of the index.
