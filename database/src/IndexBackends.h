@@ -159,6 +159,9 @@ void ivfSquaredDistances(Lanes lanes, const float* query, const float* rows, int
 /// The inverted file's wide-row kernel (IvfBackend.cpp): out[i] ← Σ_j weights[j]·rows[index[j]·64 + i]
 /// for i < 64, each a float sum over j in order: the same bits with either lanes.
 void ivfWeightedRowSum(Lanes lanes, const float* rows, const int32_t* index, const float* weights, int64_t count, float* out);
+/// The inverted file's choice of lists (IvfBackend.cpp): best ← the `probes` smallest `distances`
+/// (of `lists`, each ≥ 0) by (distance, index), in that order, by insertion or by selection.
+void ivfNearestLists(const float* distances, int lists, int probes, bool insertion, std::vector<int32_t>& best);
 /// The wide rows' lower bounds (IvfBackend.cpp), for the tests: an inverted file of `lists` lists
 /// built over `data` (rows of dims > 128 values), and each row's first bound (its key's first
 /// values) and second bound (its whole key) on its squared distance to `query`, by row id, the

@@ -632,6 +632,26 @@ TEST(DescriptorIndex, InvertedFileOverWideRowsWithEveryListProbedIsBruteForce) {
   }
 }
 
+// The lists probed are the nearest centroids by (distance, index), the same whether chosen by
+// insertion (a few) or by selection (many): every count, with ties, zeros and one list.
+TEST(DescriptorIndex, InvertedFileChoosesTheSameListsEitherWay) {
+  for (int lists : {1, 9, 200, 1024}) {
+    std::vector<float> distances(static_cast<size_t>(lists));
+    for (int c = 0; c < lists; ++c) distances[size_t(c)] = static_cast<float>((c * 7919) % 37) * 0.25f;  // ties, and zeros
+    for (int probes = 1; probes <= lists; probes += probes < 12 ? 1 : 97) {
+      std::vector<int32_t> inserted, selected;
+      search::ivfNearestLists(distances.data(), lists, probes, true, inserted);
+      search::ivfNearestLists(distances.data(), lists, probes, false, selected);
+      ASSERT_EQ(inserted.size(), static_cast<size_t>(probes));
+      EXPECT_EQ(inserted, selected) << lists << " lists, " << probes << " probed";
+      for (size_t i = 1; i < selected.size(); ++i) {
+        const float a = distances[size_t(selected[i - 1])], b = distances[size_t(selected[i])];
+        EXPECT_TRUE(a < b || (a == b && selected[i - 1] < selected[i])) << i;
+      }
+    }
+  }
+}
+
 // Both lower bounds of the wide rows hold for every row and query, a query equal to a row
 // included: the first from the keys' first values, the second from the whole key, each widened by
 // its roundings; they are the same bits in 128-bit and 256-bit lanes; and they bound: at the median
