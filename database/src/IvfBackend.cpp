@@ -72,6 +72,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "IndexBackends.h"
@@ -102,6 +103,7 @@ constexpr int64_t kWideSample = 2048;       // wide rows: sample of the subspace
 constexpr int64_t kWideSampleValues = int64_t{1} << 23;  // ... this many values (32 MB a copy: 64³ grids get 32 rows)
 constexpr int kWideRounds = 4;              // wide rows: rounds of subspace iteration
 constexpr int64_t kWideBlock = 64;          // wide rows: values summed in float before a double sum
+constexpr size_t kRecordsAhead = 8;         // wide rows: second-bound records fetched ahead of their bound
 constexpr int kInsertedProbes = 8;          // lists probed up to which they are chosen by insertion, not selection
 constexpr int64_t kWideNextPrefetch = 256;  // wide rows: values of the next row to measure fetched ahead
 // Bounds of a wide key's rounding, relative to the row's norm (see WideProjection::key): a block's
@@ -322,15 +324,51 @@ struct WideRest {
 // Each scanned wide row's lower bound on its squared distance, from its key distance d̂ (in
 // `lower` on entry): (√d̂ − e)² + gap², e = e_q + e_x, gap the distance between the residuals'
 // intervals. (√d̂ − e)² ≥ d̂(1 − e) − e (as √d̂ ≤ (d̂ + 1)/2), which keeps the loop free of roots;
-// the float sums' rounding is a relative δ.
-void wideLowerBounds(float qError, float qLow, float qHigh, const float* errors, const float* lows, const float* highs,
-                     int64_t count, float* lower) {
+// the float sums' rounding is a relative δ. Eight rows to an AVX register where `lanes` is Wide,
+// else four to an SSE2 one: the same bits (InvertedFileWideBoundsHoldForEveryRow).
+// L rows to a register, each lane the scalar loop's operations (max as std::max's a < b ? b : a):
+// the same bits with 4 or 8 lanes, or one.
+template <int L>
+[[gnu::always_inline]] inline void wideLowerBoundsInLanes(float qError, float qLow, float qHigh, const float* errors,
+                                                          const float* lows, const float* highs, int64_t count,
+                                                          float* lower) {
   constexpr float kDelta = 1e-3f;
-  for (int64_t i = 0; i < count; ++i) {
-    const float e = qError + errors[i];
-    const float key = lower[i] * (1.0f - e) - e;
-    const float gap = std::max(std::max(qLow - highs[i], lows[i] - qHigh), 0.0f);
-    lower[i] = (std::max(key, 0.0f) + gap * gap) * (1.0f - kDelta);
+  // (References in and out: a 256-bit value passed or returned by value changes the ABI outside AVX.)
+  const auto bound = [&](const auto& d, const auto& error, const auto& low, const auto& high, auto& out) {
+    using T = std::remove_cvref_t<decltype(d)>;
+    const T zero{};
+    const T e = qError + error;
+    T key = d * (1.0f - e) - e;
+    const T below = qLow - high, above = low - qHigh;
+    T gap = below < above ? above : below;
+    gap = gap < zero ? zero : gap;
+    key = key < zero ? zero : key;
+    out = (key + gap * gap) * (1.0f - kDelta);
+  };
+  using V = VectorOf<float, L>;
+  int64_t i = 0;
+  for (; i + L <= count; i += L) {
+    V d, error, low, high;
+    loadLanes<L>(lower + i, d);
+    loadLanes<L>(errors + i, error);
+    loadLanes<L>(lows + i, low);
+    loadLanes<L>(highs + i, high);
+    V out;
+    bound(d, error, low, high, out);
+    std::memcpy(lower + i, &out, sizeof out);
+  }
+  for (; i < count; ++i) bound(lower[i], errors[i], lows[i], highs[i], lower[i]);
+}
+BRITTLE_TARGET_AVX void wideLowerBoundsWide(float qError, float qLow, float qHigh, const float* errors, const float* lows,
+                                            const float* highs, int64_t count, float* lower) {
+  wideLowerBoundsInLanes<8>(qError, qLow, qHigh, errors, lows, highs, count, lower);
+}
+void wideLowerBounds(Lanes lanes, float qError, float qLow, float qHigh, const float* errors, const float* lows,
+                     const float* highs, int64_t count, float* lower) {
+  if (count >= 8 && lanes == Lanes::Wide) {
+    wideLowerBoundsWide(qError, qLow, qHigh, errors, lows, highs, count, lower);
+  } else {
+    wideLowerBoundsInLanes<4>(qError, qLow, qHigh, errors, lows, highs, count, lower);
   }
 }
 
@@ -640,14 +678,14 @@ class IvfBackend final : public Backend {
     second.assign(static_cast<size_t>(rows), 0.0f);
     ivfSquaredDistances(lanes, key.data(), mWidePrefix.data(), rows, kWidePrefixDims, prefix.data());
     std::vector<float> lower = prefix;
-    wideLowerBounds(q.error, q.prefixLow, q.prefixHigh, mWideErrors.data(), mWidePrefixLows.data(), mWidePrefixHighs.data(), rows,
+    wideLowerBounds(lanes, q.error, q.prefixLow, q.prefixHigh, mWideErrors.data(), mWidePrefixLows.data(), mWidePrefixHighs.data(), rows,
                     lower.data());
     for (int64_t at = 0; at < rows; ++at) {
       const float* record = mWideRecords.data() + at * kWideRecord;
       float whole = 0.0f;
       ivfSquaredDistances(lanes, key.data() + kWidePrefixDims, record, 1, kWideRestDims, &whole);
       whole += prefix[static_cast<size_t>(at)];
-      wideLowerBounds(q.error, q.low, q.high, record + kWideRecordError, record + kWideRecordLow, record + kWideRecordHigh, 1,
+      wideLowerBounds(lanes, q.error, q.low, q.high, record + kWideRecordError, record + kWideRecordLow, record + kWideRecordHigh, 1,
                       &whole);
       const auto id = static_cast<size_t>(mIds[static_cast<size_t>(at)]);
       first[id] = lower[static_cast<size_t>(at)];
@@ -701,7 +739,7 @@ class IvfBackend final : public Backend {
       const int64_t begin = mOffsets[static_cast<size_t>(list)], count = listSize(list);
       distances(w.query.data(), mWidePrefix.data() + begin * kWidePrefixDims, count, kWidePrefixDims, prefixDistance + n);
       std::copy_n(prefixDistance + n, count, lower + n);
-      wideLowerBounds(q.error, q.prefixLow, q.prefixHigh, mWideErrors.data() + begin, mWidePrefixLows.data() + begin,
+      wideLowerBounds(widestLanes(), q.error, q.prefixLow, q.prefixHigh, mWideErrors.data() + begin, mWidePrefixLows.data() + begin,
                       mWidePrefixHighs.data() + begin, count, lower + n);
       for (int64_t i = 0; i < count; ++i) w.scanned[static_cast<size_t>(n + i)] = static_cast<int32_t>(begin + i);
       n += count;
@@ -730,19 +768,19 @@ class IvfBackend final : public Backend {
     // that the nearest rows come first and the k-th best is tight before the rest are reached.
     std::vector<std::pair<float, int64_t>>& candidates = w.smallest;  // (bound, position), reused
     candidates.clear();
-    forEachWithin(lower, rows, best.front().distance, [&](int64_t i) {
-      const float* record = mWideRecords.data() + w.scanned[static_cast<size_t>(i)] * kWideRecord;
-      prefetchBytes(record, record + kWideRecord);
-      candidates.emplace_back(0.0f, i);
-    });
+    forEachWithin(lower, rows, best.front().distance, [&](int64_t i) { candidates.emplace_back(0.0f, i); });
+    const auto recordOf = [&](size_t c) { return mWideRecords.data() + w.scanned[static_cast<size_t>(candidates[c].second)] * kWideRecord; };
+    for (size_t c = 0; c < std::min(candidates.size(), kRecordsAhead); ++c) prefetchBytes(recordOf(c), recordOf(c) + kWideRecord);
     size_t kept = 0;
-    for (const auto& [unused, i] : candidates) {
+    for (size_t c = 0; c < candidates.size(); ++c) {
+      if (c + kRecordsAhead < candidates.size()) prefetchBytes(recordOf(c + kRecordsAhead), recordOf(c + kRecordsAhead) + kWideRecord);
+      const int64_t i = candidates[c].second;
       const int64_t at = w.scanned[static_cast<size_t>(i)];
       float whole = 0.0f;  // the key's distance: its first values' plus the rest's
       const float* record = mWideRecords.data() + at * kWideRecord;
       distances(w.query.data() + kWidePrefixDims, record, 1, kWideRestDims, &whole);
       whole += prefixDistance[i];
-      wideLowerBounds(q.error, q.low, q.high, record + kWideRecordError, record + kWideRecordLow, record + kWideRecordHigh, 1,
+      wideLowerBounds(widestLanes(), q.error, q.low, q.high, record + kWideRecordError, record + kWideRecordLow, record + kWideRecordHigh, 1,
                       &whole);
       if (whole > best.front().distance) continue;
       candidates[kept++] = {whole, i};
