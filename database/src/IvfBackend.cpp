@@ -325,9 +325,8 @@ struct WideRest {
 // `lower` on entry): (√d̂ − e)² + gap², e = e_q + e_x, gap the distance between the residuals'
 // intervals. (√d̂ − e)² ≥ d̂(1 − e) − e (as √d̂ ≤ (d̂ + 1)/2), which keeps the loop free of roots;
 // the float sums' rounding is a relative δ. Eight rows to an AVX register where `lanes` is Wide,
-// else four to an SSE2 one: the same bits (InvertedFileWideBoundsHoldForEveryRow).
-// L rows to a register, each lane the scalar loop's operations (max as std::max's a < b ? b : a):
-// the same bits with 4 or 8 lanes, or one.
+// else four to an SSE2 one, each lane the scalar tail's operations (max as std::max's a < b ? b : a):
+// the same bits either way (InvertedFileWideBoundsHoldForEveryRow).
 template <int L>
 [[gnu::always_inline]] inline void wideLowerBoundsInLanes(float qError, float qLow, float qHigh, const float* errors,
                                                           const float* lows, const float* highs, int64_t count,
@@ -667,29 +666,20 @@ class IvfBackend final : public Backend {
     return Ok{};
   }
 
-  // Every row's first and second lower bounds for `descriptor` (by row id), as queryWide makes
-  // them, in the given lanes: for the tests (ivfWideBounds).
+  // Every row's first and second lower bounds for `descriptor` (by row id), by queryWide's own
+  // firstBounds and secondBound, in the given lanes: for the tests (ivfWideBounds).
   void wideBounds(Lanes lanes, const float* descriptor, std::vector<float>& first, std::vector<float>& second) const {
     std::vector<float> key(static_cast<size_t>(mStride), 0.0f);
     const WideRest q = mProjection.key(descriptor, key.data());
     const auto rows = static_cast<int64_t>(mIds.size());
-    std::vector<float> prefix(static_cast<size_t>(rows));
+    std::vector<float> prefix(static_cast<size_t>(rows)), lower(static_cast<size_t>(rows));
+    firstBounds(lanes, key.data(), q, 0, rows, prefix.data(), lower.data());
     first.assign(static_cast<size_t>(rows), 0.0f);
     second.assign(static_cast<size_t>(rows), 0.0f);
-    ivfSquaredDistances(lanes, key.data(), mWidePrefix.data(), rows, kWidePrefixDims, prefix.data());
-    std::vector<float> lower = prefix;
-    wideLowerBounds(lanes, q.error, q.prefixLow, q.prefixHigh, mWideErrors.data(), mWidePrefixLows.data(), mWidePrefixHighs.data(), rows,
-                    lower.data());
     for (int64_t at = 0; at < rows; ++at) {
-      const float* record = mWideRecords.data() + at * kWideRecord;
-      float whole = 0.0f;
-      ivfSquaredDistances(lanes, key.data() + kWidePrefixDims, record, 1, kWideRestDims, &whole);
-      whole += prefix[static_cast<size_t>(at)];
-      wideLowerBounds(lanes, q.error, q.low, q.high, record + kWideRecordError, record + kWideRecordLow, record + kWideRecordHigh, 1,
-                      &whole);
       const auto id = static_cast<size_t>(mIds[static_cast<size_t>(at)]);
       first[id] = lower[static_cast<size_t>(at)];
-      second[id] = whole;
+      second[id] = secondBound(lanes, key.data(), q, at, prefix[static_cast<size_t>(at)]);
     }
   }
 
@@ -737,10 +727,7 @@ class IvfBackend final : public Backend {
     int64_t n = 0;
     for (int32_t list : w.probed) {
       const int64_t begin = mOffsets[static_cast<size_t>(list)], count = listSize(list);
-      distances(w.query.data(), mWidePrefix.data() + begin * kWidePrefixDims, count, kWidePrefixDims, prefixDistance + n);
-      std::copy_n(prefixDistance + n, count, lower + n);
-      wideLowerBounds(widestLanes(), q.error, q.prefixLow, q.prefixHigh, mWideErrors.data() + begin, mWidePrefixLows.data() + begin,
-                      mWidePrefixHighs.data() + begin, count, lower + n);
+      firstBounds(widestLanes(), w.query.data(), q, begin, count, prefixDistance + n, lower + n);
       for (int64_t i = 0; i < count; ++i) w.scanned[static_cast<size_t>(n + i)] = static_cast<int32_t>(begin + i);
       n += count;
     }
@@ -776,12 +763,7 @@ class IvfBackend final : public Backend {
       if (c + kRecordsAhead < candidates.size()) prefetchBytes(recordOf(c + kRecordsAhead), recordOf(c + kRecordsAhead) + kWideRecord);
       const int64_t i = candidates[c].second;
       const int64_t at = w.scanned[static_cast<size_t>(i)];
-      float whole = 0.0f;  // the key's distance: its first values' plus the rest's
-      const float* record = mWideRecords.data() + at * kWideRecord;
-      distances(w.query.data() + kWidePrefixDims, record, 1, kWideRestDims, &whole);
-      whole += prefixDistance[i];
-      wideLowerBounds(widestLanes(), q.error, q.low, q.high, record + kWideRecordError, record + kWideRecordLow, record + kWideRecordHigh, 1,
-                      &whole);
+      const float whole = secondBound(widestLanes(), w.query.data(), q, at, prefixDistance[i]);
       if (whole > best.front().distance) continue;
       candidates[kept++] = {whole, i};
     }
@@ -803,6 +785,27 @@ class IvfBackend final : public Backend {
       squaredDistances[r] = best[static_cast<size_t>(r)].distance;
     }
   }
+  // The first bounds of the `count` rows filed from `begin`: their keys' first values' distances
+  // to the query's key into `prefix`, and the bounds from them into `lower`.
+  void firstBounds(Lanes lanes, const float* key, const WideRest& q, int64_t begin, int64_t count, float* prefix,
+                   float* lower) const {
+    ivfSquaredDistances(lanes, key, mWidePrefix.data() + begin * kWidePrefixDims, count, kWidePrefixDims, prefix);
+    std::copy_n(prefix, count, lower);
+    wideLowerBounds(lanes, q.error, q.prefixLow, q.prefixHigh, mWideErrors.data() + begin, mWidePrefixLows.data() + begin,
+                    mWidePrefixHighs.data() + begin, count, lower);
+  }
+  // The second bound of the row filed at `at`, from its whole key: its first values' distance
+  // `prefix` (firstBounds') plus its record's rest, and the record's rounding bounds.
+  float secondBound(Lanes lanes, const float* key, const WideRest& q, int64_t at, float prefix) const {
+    const float* record = mWideRecords.data() + at * kWideRecord;
+    float whole = 0.0f;
+    ivfSquaredDistances(lanes, key + kWidePrefixDims, record, 1, kWideRestDims, &whole);
+    whole += prefix;
+    wideLowerBounds(lanes, q.error, q.low, q.high, record + kWideRecordError, record + kWideRecordLow, record + kWideRecordHigh, 1,
+                    &whole);
+    return whole;
+  }
+
   // Brute force's distance to the row filed at `at`.
   float exactWide(const float* descriptor, int64_t at) const {
     return exactSquaredL2(descriptor, mData + static_cast<int64_t>(mIds[static_cast<size_t>(at)]) * mDims, mDims);
@@ -877,24 +880,14 @@ class IvfBackend final : public Backend {
   // The lists to scan: the mProbes nearest centroids, ties by lower index, and more in centroid
   // order while they hold fewer than k rows. Returns the rows they hold.
   int64_t probe(const std::vector<float>& toCentroids, int k, std::vector<int32_t>& best, std::vector<uint64_t>& order) const {
-    const auto before = [&](int32_t a, int32_t b) {
-      const float da = toCentroids[static_cast<size_t>(a)], db = toCentroids[static_cast<size_t>(b)];
-      return da != db ? da < db : a < b;
-    };
     nearestLists(toCentroids.data(), mLists, mProbes, mProbes <= kInsertedProbes, best, order);
     int64_t held = 0;
     for (int32_t list : best) held += listSize(list);
     if (held >= k) return held;
-    std::vector<int32_t> all(static_cast<size_t>(mLists));
-    for (int32_t c = 0; c < mLists; ++c) all[static_cast<size_t>(c)] = c;
-    std::sort(all.begin(), all.end(), before);
-    best.clear();
-    held = 0;
-    for (int32_t list : all) {
-      if (held >= k) break;
-      best.push_back(list);
-      held += listSize(list);
-    }
+    nearestLists(toCentroids.data(), mLists, mLists, false, best, order);  // every list, nearest first
+    size_t taken = 0;
+    for (held = 0; taken < best.size() && held < k; ++taken) held += listSize(best[taken]);
+    best.resize(taken);
     return held;
   }
 
