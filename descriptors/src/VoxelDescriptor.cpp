@@ -4,11 +4,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include "SurfaceChecks.h"
-#include "brittle/core/TriangleGeometry.h"
+#include "TriangleDistances.h"
+#include "brittle/core/Simd.h"
 
 namespace brittle {
 namespace {
@@ -122,18 +124,40 @@ std::vector<float> occupancyByParity(const Points& canonical, const Triangles& f
 // could beat the centre's nearest so far. A centre no triangle comes within `reach` of reads
 // exactly ±1. The sign is the parity fill's (exact). Every distance is exact in double; the fixed
 // face order and a minimum make it the same in any process.
+//
+// The visits only bound which centres are measured. A centre is measured whenever the sphere bound
+// lets it; the box, slab and column bounds around it are widened by 1e-9 of a voxel (a centre they
+// would leave out by rounding is measured, and a centre past them is beyond reach of the triangle,
+// so its distance cannot replace a nearest, which is at most reach). A triangle's centres are
+// gathered first, then measured several to a vector register (TriangleDistances.h, closestOnTriangle's
+// bits): each centre once a triangle, so the order within a triangle changes nothing.
 std::vector<float> clampedSignedDistance(const Points& canonical, const Triangles& faces, int k, double c, double reach) {
-  const double h = 2.0 * c / k;
+  const double h = 2.0 * c / k, perVoxel = 1.0 / h;
+  constexpr double kWiden = 1e-9;  // voxels
   std::vector<double> centres(static_cast<size_t>(k));
   for (int i = 0; i < k; ++i) centres[static_cast<size_t>(i)] = -c + (i + 0.5) * h;
-  const auto first = [&](double low) { return std::max(0, static_cast<int>(std::ceil((low + c) / h - 0.5))); };
-  const auto last = [&](double high) { return std::min(k - 1, static_cast<int>(std::floor((high + c) / h - 0.5))); };
+  // The first and last centre index at or beyond x, from x's position in voxels (centre i at i),
+  // kept to [−1, k] before the conversion.
+  const auto index = [&](double x) { return std::clamp((x + c) * perVoxel - 0.5, -1.0, static_cast<double>(k)); };
+  const auto first = [&](double low) {
+    const double x = index(low) - kWiden;
+    const int i = static_cast<int>(x);
+    return std::max(0, i + (i < x ? 1 : 0));
+  };
+  const auto last = [&](double high) {
+    const double x = index(high) + kWiden;
+    const int i = static_cast<int>(x);
+    return std::min(k - 1, i - (i > x ? 1 : 0));
+  };
   const auto cells = static_cast<size_t>(k) * static_cast<size_t>(k) * static_cast<size_t>(k);
   const std::array<int64_t, 3> stride{int64_t{k} * k, k, 1};
   std::vector<double> nearest(cells, reach);  // each centre's distance to the surface so far, at most reach
+  std::vector<uint32_t> visited;              // a triangle's centres to measure, and their x, y, z
+  std::vector<double> px, py, pz, measured;
+  const Lanes lanes = widestLanes();
   // The centres a triangle visits: the columns along its normal's largest axis w within R + reach
   // of its centroid m, each cut to the slab of its plane (a centre within reach of the triangle lies
-  // within reach of its plane: |t − t_plane| ≤ reach/|n̂_w|) and to the sphere of radius R + reach.
+  // within reach of its plane: |t − t_plane| ≤ reach/|n̂_w|).
   for (Eigen::Index f = 0; f < faces.rows(); ++f) {
     const Eigen::Vector3d a = canonical.row(faces(f, 0)).transpose(), b = canonical.row(faces(f, 1)).transpose(),
                           v = canonical.row(faces(f, 2)).transpose();
@@ -146,35 +170,48 @@ std::vector<float> clampedSignedDistance(const Points& canonical, const Triangle
     const int u = (w + 1) % 3, t = (w + 2) % 3;
     const bool flat = normal[w] != 0.0;  // else no area: every centre of the box
     const double slack = flat ? reach * normal.norm() / std::abs(normal[w]) : 0.0;
+    const double slopeU = flat ? -normal[u] / normal[w] : 0.0, slopeT = flat ? -normal[t] / normal[w] : 0.0;
     const int u0 = first(low[u] - reach), u1 = last(high[u] + reach), t0 = first(low[t] - reach), t1 = last(high[t] + reach);
     const int wLow = first(low[w] - reach), wHigh = last(high[w] + reach);
+    if (u0 > u1 || t0 > t1 || wLow > wHigh) continue;
     const double sphere2 = (radius + reach) * (radius + reach);
+    const auto most = static_cast<size_t>(u1 - u0 + 1) * static_cast<size_t>(t1 - t0 + 1) * static_cast<size_t>(wHigh - wLow + 1);
+    if (visited.size() < most) visited.resize(most), px.resize(most), py.resize(most), pz.resize(most), measured.resize(most);
+    // The centres' x, y, z in px, py, pz (the order of closestOnTriangle's sums, so its bits).
+    const std::array<double*, 3> axis{px.data(), py.data(), pz.data()};
+    double* alongU = axis[static_cast<size_t>(u)];
+    double* alongT = axis[static_cast<size_t>(t)];
+    double* alongW = axis[static_cast<size_t>(w)];
+    size_t count = 0;
     for (int iu = u0; iu <= u1; ++iu) {
       const double pu = centres[static_cast<size_t>(iu)], du = pu - m[u];
       for (int it = t0; it <= t1; ++it) {
         const double pt = centres[static_cast<size_t>(it)], dt = pt - m[t];
-        const double across2 = sphere2 - du * du - dt * dt;
-        if (across2 < 0.0) continue;  // the column misses the sphere
-        const double across = std::sqrt(across2);
-        int w0 = std::max(wLow, first(m[w] - across)), w1 = std::min(wHigh, last(m[w] + across));
+        const double column2 = du * du + dt * dt;
+        if (column2 > sphere2) continue;  // the column misses the sphere
+        int w0 = wLow, w1 = wHigh;
         if (flat) {
-          const double plane = a[w] - (normal[u] * (pu - a[u]) + normal[t] * (pt - a[t])) / normal[w];
+          const double plane = a[w] + slopeU * (pu - a[u]) + slopeT * (pt - a[t]);
           w0 = std::max(w0, first(plane - slack));
           w1 = std::min(w1, last(plane + slack));
         }
         const int64_t column = iu * stride[static_cast<size_t>(u)] + it * stride[static_cast<size_t>(t)];
         for (int iw = w0; iw <= w1; ++iw) {
           const auto n = static_cast<size_t>(column + iw * stride[static_cast<size_t>(w)]);
-          const double dw = centres[static_cast<size_t>(iw)] - m[w];
+          const double pw = centres[static_cast<size_t>(iw)], dw = pw - m[w];
           const double reachable = radius + nearest[n];
-          if (du * du + dt * dt + dw * dw > reachable * reachable) continue;  // no point of the triangle is nearer
-          Eigen::Vector3d p;
-          p[u] = pu, p[t] = pt, p[w] = centres[static_cast<size_t>(iw)];
-          Eigen::Vector3d bary;
-          const double d2 = (closestOnTriangle(p, a, b, v, bary) - p).squaredNorm();
-          if (d2 < nearest[n] * nearest[n]) nearest[n] = std::sqrt(d2);
+          if (column2 + dw * dw > reachable * reachable) continue;  // no point of the triangle is nearer
+          visited[count] = static_cast<uint32_t>(n);
+          alongU[count] = pu, alongT[count] = pt, alongW[count] = pw;
+          ++count;
         }
       }
+    }
+    if (count == 0) continue;
+    detail::squaredDistancesToTriangle(px.data(), py.data(), pz.data(), count, a, b, v, measured.data(), lanes);
+    for (size_t i = 0; i < count; ++i) {
+      double& d = nearest[visited[i]];
+      if (measured[i] < d * d) d = std::sqrt(measured[i]);
     }
   }
   const std::vector<float> inside = occupancyByParity(canonical, faces, k, c);

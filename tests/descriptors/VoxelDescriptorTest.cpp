@@ -4,11 +4,17 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
+#include <random>
+#include <vector>
 
 #include "DescriptorTestShapes.h"
+#include "TriangleDistances.h"
+#include "brittle/core/TriangleGeometry.h"
 #include "brittle/testing/Fixtures.h"
 
 namespace brittle {
@@ -185,6 +191,51 @@ TEST(VoxelDescriptor, ImprovedIsTheBruteForceClampedDistance) {
   TriangleMesh dented = testing::makeBoxSurface(1.2, 0.9, 0.7);
   dented.vertices.row(0) *= 0.2;
   expectClampedDistanceIsBruteForce(dented, CanonicalFrame{});
+}
+
+TEST(VoxelDescriptor, TriangleDistancesInLanesAreTheScalarBits) {
+  // The clamped distances measure a triangle's centres two or four to a register: each value must be
+  // closestOnTriangle's squared distance bit for bit, in every Voronoi region (counted), on slivers,
+  // on triangles without area (the scalar fallback) and for counts that leave a register part full.
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const auto point = [&] { return Eigen::Vector3d(unit(random), unit(random), unit(random)); };
+  std::vector<std::array<Eigen::Vector3d, 3>> triangles;
+  for (int i = 0; i < 40; ++i) triangles.push_back({0.4 * point(), 0.4 * point(), 0.4 * point()});
+  const Eigen::Vector3d o(0.1, -0.2, 0.05), e(0.3, 0.1, -0.2);
+  triangles.push_back({o, o + e, o + e * (1.0 + 1e-9) + Eigen::Vector3d(0, 1e-12, 0)});  // a sliver
+  triangles.push_back({o, o + e, o + 2.5 * e});                                          // on a line
+  triangles.push_back({o, o, o + e});                                                    // two corners equal
+  triangles.push_back({o, o, o});                                                        // one point
+  std::array<int, 7> regions{};  // a, b, c, the three edges, the face: counted from the weights
+  size_t values = 0;
+  for (const auto& t : triangles) {
+    for (const size_t count : {size_t{1}, size_t{3}, size_t{4}, size_t{37}}) {
+      std::vector<double> x(count), y(count), z(count);
+      for (size_t i = 0; i < count; ++i) {
+        Eigen::Vector3d p = point();
+        if (i % 5 == 0) p = (t[0] + t[1] + t[2]) / 3.0 + 0.01 * p;  // near the face
+        if (i % 7 == 0) p = t[i % 3];                                  // on a corner
+        x[i] = p.x(), y[i] = p.y(), z[i] = p.z();
+      }
+      for (const Lanes lanes : {Lanes::Narrow, Lanes::Wide}) {
+        if (lanes == Lanes::Wide && widestLanes() != Lanes::Wide) continue;
+        std::vector<double> out(count, -1.0);
+        detail::squaredDistancesToTriangle(x.data(), y.data(), z.data(), count, t[0], t[1], t[2], out.data(), lanes);
+        for (size_t i = 0; i < count; ++i) {
+          const Eigen::Vector3d p(x[i], y[i], z[i]);
+          Eigen::Vector3d bary;
+          const double want = (closestOnTriangle(p, t[0], t[1], t[2], bary) - p).squaredNorm();
+          ASSERT_EQ(std::memcmp(&want, &out[i], sizeof(double)), 0) << want << " " << out[i] << " at " << p.transpose();
+          const int zeros = (bary.array() == 0.0).count();
+          regions[zeros == 2 ? (bary[0] == 1.0 ? 0 : bary[1] == 1.0 ? 1 : 2) : zeros == 1 ? 3 + (bary[0] == 0.0 ? 1 : bary[1] == 0.0 ? 2 : 0) : 6]++;
+          ++values;
+        }
+      }
+    }
+  }
+  EXPECT_GT(values, 3000u);
+  for (size_t r = 0; r < regions.size(); ++r) EXPECT_GT(regions[r], 20) << "region " << r;
 }
 
 TEST(VoxelDescriptor, ImprovedIsAClampedSignedDistance) {
