@@ -17,12 +17,12 @@ template <class Pack>
   out = (e[0] * u[0] + e[1] * u[1]) + e[2] * u[2];
 }
 
-// L points against the triangle from `first` on. Each region of closestOnTriangle is a mask; a lane
-// takes the first region it lies in, in that function's order: vertex a, vertex b, edge ab, vertex c,
-// edge ac, edge bc, no area, the face. The edges share one division (the region's numerator over its
-// denominator) and the face its reciprocal, so each lane divides what the scalar code divides. A dot
-// product is dotInto's. A lane in the no-area branch reads NaN
-// (the caller measures it in scalar code: an AVX function calls nothing with its registers live).
+// `count` points against the triangle, L at a time. Each region of closestOnTriangle is a mask; a
+// lane takes the first region it lies in, in that function's order: vertex a, vertex b, edge ab,
+// vertex c, edge ac, edge bc, no area, the face. Each lane makes the one division the scalar code
+// makes in its region (an edge's numerator over its denominator, or the face's reciprocal). A dot
+// product is dotInto's. A lane in the no-area branch reads NaN (the caller measures it in scalar
+// code: an AVX function calls nothing with its registers live).
 template <int L>
 [[gnu::always_inline]] inline void distancesInLanes(const double* x, const double* y, const double* z, size_t count,
                                                      const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
@@ -67,18 +67,18 @@ template <int L>
     taken |= inBC;
     const Pack area = va + vb + vc;
     const Mask noArea = ~taken & ~(area > 0);
-    // The face: 1 / (va + vb + vc), then a + ab v + ac w.
-    const Pack denom = one / (noArea | taken ? one : area);
-    const Pack v = vb * denom, w = vc * denom;
-    // The edges: t = numerator / denominator from the region's own origin along its own direction.
-    const Pack numerator = inAB ? d1 : inAC ? d2 : e43;
-    const Pack denominator = inAB ? d1 - d3 : inAC ? d2 - d6 : inBC ? e43 + e56 : one;
+    // One division a lane: an edge's t = numerator / denominator, from the region's own origin along
+    // its own direction, or the face's 1 / (va + vb + vc), then a + ab v + ac w.
+    const Mask onEdge = inAB | inAC | inBC;
+    const Pack numerator = inAB ? d1 : inAC ? d2 : inBC ? e43 : one;
+    const Pack denominator = inAB ? d1 - d3 : inAC ? d2 - d6 : inBC ? e43 + e56 : noArea | taken ? one : area;
     const Pack t = numerator / denominator;
+    const Pack v = vb * t, w = vc * t;
     Pack squared = zero;
     for (int k = 0; k < 3; ++k) {
       const Pack face = (a[k] + ab[k] * v) + ac[k] * w;
       const Pack edge = inAB ? a[k] + t * ab[k] : inAC ? a[k] + t * ac[k] : b[k] + t * bc[k];
-      Pack q = inAB | inAC | inBC ? edge : face;
+      Pack q = onEdge ? edge : face;
       q = inA ? a[k] + zero : inB ? b[k] + zero : inC ? c[k] + zero : q;
       const Pack d = q - p[k];
       squared = k == 0 ? d * d : squared + d * d;
