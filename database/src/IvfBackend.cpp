@@ -596,9 +596,9 @@ class IvfBackend final : public Backend {
         queryWide(descriptor, k, ids, squaredDistances);
         return Ok{};
       }
-      // Scratch kept per thread: a query allocates nothing once its thread has run one as large.
-      // (Its address is taken once: in a shared library each thread_local access is a call.)
-      Scratch& w = scratch();
+      // Scratch kept by the index (ScratchPool): a query allocates nothing once one as large has run.
+      const auto lease = mScratch.lease();
+      Scratch& w = *lease;
       w.query.resize(static_cast<size_t>(mStride));
       const KeyRest q = makeKey(descriptor, w.query.data(), w.centred);
       w.toCentroids.resize(static_cast<size_t>(mLists));
@@ -713,7 +713,8 @@ class IvfBackend final : public Backend {
   // and the rows still within measured nearest bound first, the k-th best tightening as better
   // rows are found.
   void queryWide(const float* descriptor, int k, int64_t* ids, float* squaredDistances) const {
-    Scratch& w = scratch();
+    const auto lease = mScratch.lease();
+    Scratch& w = *lease;
     w.query.assign(static_cast<size_t>(mStride), 0.0f);
     const WideRest q = mProjection.key(descriptor, w.query.data());
     w.toCentroids.resize(static_cast<size_t>(mLists));
@@ -816,15 +817,10 @@ class IvfBackend final : public Backend {
     prefetchBytes(row, row + kWideNextPrefetch);
   }
 
-  [[gnu::noinline]] static Scratch& scratch() {
-    thread_local Scratch perThread;
-    return perThread;
-  }
-
   // A row's key into `key` (mStride floats, zero padded): with a projection, its coordinates along
   // the first mKeyDims principal directions of the centred data, in double, with the norms of the
   // rest and of the whole; without, the row itself.
-  // `centred` is scratch (the query's own, so that a query touches one thread_local).
+  // `centred` is scratch (the query's own lease).
   KeyRest makeKey(const float* row, float* key, std::vector<double>& centred) const {
     if (mBasis.empty()) {
       pad(row, mDims, mStride, key);
@@ -981,6 +977,7 @@ class IvfBackend final : public Backend {
   std::vector<double> mBasis;      // with a projection: mKeyDims directions of mDims values
   std::vector<double> mBasisAcross;  // the same, value by value: mDims rows of the mKeyDims directions' values
   std::vector<double> mMean;       // with a projection: the sample's mean row
+  mutable ScratchPool<Scratch> mScratch;  // a query's working memory, kept for the next
   std::vector<float> mCentroids;   // mLists × mStride keys
   std::vector<float> mRows;        // the rows' keys, padded, list after list
   std::vector<float> mResiduals;   // each filed row's norm outside its key (0 without a projection)

@@ -1008,14 +1008,9 @@ TEST(DescriptorIndex, InvertedFileOverBitsWithEveryListProbedIsBruteForce) {
 
 // Queries from several threads at once (each takes its own scratch from the index's pool) give the
 // answers of the same queries one after another.
-TEST(DescriptorIndex, InvertedFileOverBitsSameAnswersFromConcurrentQueries) {
-  const int64_t rows = 900, dims = 300, queries = 60, k = 3;
-  const auto data = randomBits(rows, dims, 51);
-  const auto q = randomBits(queries, dims, 52);
-  DescriptorIndexSettings s = settingsFor(Kind::IvfBinary, 4);
-  s.trees = 30;
-  const DescriptorIndex file = buildOrDie(data, dims, s);
-  std::vector<int64_t> serialIds(queries * k);
+void expectConcurrentQueriesAnswerAsSerial(const DescriptorIndex& file, const std::vector<float>& q, int64_t queries,
+                                           int64_t dims, int k) {
+  std::vector<int64_t> serialIds(static_cast<size_t>(queries * k));
   std::vector<float> serialD(serialIds.size());
   ASSERT_TRUE(file.queryBatch(q.data(), queries, k, serialIds.data(), serialD.data()).ok());
   constexpr int kThreads = 6;
@@ -1042,6 +1037,23 @@ TEST(DescriptorIndex, InvertedFileOverBitsSameAnswersFromConcurrentQueries) {
     EXPECT_EQ(ids[static_cast<size_t>(t)], serialIds) << "thread " << t;
     EXPECT_EQ(d[static_cast<size_t>(t)], serialD) << "thread " << t;
   }
+}
+
+TEST(DescriptorIndex, InvertedFileOverBitsSameAnswersFromConcurrentQueries) {
+  const int64_t rows = 900, dims = 300, queries = 60;
+  const auto data = randomBits(rows, dims, 51);
+  DescriptorIndexSettings s = settingsFor(Kind::IvfBinary, 4);
+  s.trees = 30;
+  expectConcurrentQueriesAnswerAsSerial(buildOrDie(data, dims, s), randomBits(queries, dims, 52), queries, dims, 3);
+}
+
+// The float inverted file too, in both its forms: keys of principal components (the moments), and
+// the wide rows' (the clamped distances' 4 096 values), whose queries share the index's scratch pool.
+TEST(DescriptorIndex, InvertedFileSameAnswersFromConcurrentQueries) {
+  DescriptorIndexSettings s = settingsFor(Kind::Ivf, 4);
+  s.trees = 16;
+  expectConcurrentQueriesAnswerAsSerial(buildOrDie(randomMatrix(600, 28, 53), 28, s), randomMatrix(40, 28, 54), 40, 28, 3);
+  expectConcurrentQueriesAnswerAsSerial(buildOrDie(clampedGrids(300, 55), 4096, s), clampedGrids(12, 56), 12, 4096, 3);
 }
 
 // A list smaller than k: the file probes on in centroid order until it holds k rows, and the
