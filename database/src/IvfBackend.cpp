@@ -88,17 +88,19 @@ constexpr int kIterations = 12;
 // Rows wider than kKeyDims values are compared by their first kKeyDims principal components and the
 // norm of the rest, up to kMaxProjectedDims values (the moment descriptors); wider rows (the voxel
 // grids, whose covariance would be 4096²) are compared whole.
-constexpr int64_t kKeyDims = 16;
-constexpr int64_t kMaxProjectedDims = 128;
+constexpr int64_t kKeyDims = InvertedFileKeys::kKeyDims;
+constexpr int64_t kMaxProjectedDims = InvertedFileKeys::kMaxProjectedDims;
 constexpr int64_t kPrincipalSample = 8192;  // rows the principal directions are made from, evenly spaced
-constexpr int64_t kWideKeyDims = 64;        // wide rows: 64 of 4096 directions keep 94 % of the clamped distances' variance
-constexpr int64_t kWidePrefixDims = 16;     // wide rows: a key's first values, scanned first (a quarter of its bytes)
+// Wide rows: 64 of 4096 directions keep 94 % of the clamped distances' variance; a key's first 16
+// values are scanned first (a quarter of its bytes).
+constexpr int64_t kWideKeyDims = InvertedFileKeys::kWideKeyDims;
+constexpr int64_t kWidePrefixDims = InvertedFileKeys::kWidePrefixDims;
 constexpr int64_t kWideRestDims = kWideKeyDims - kWidePrefixDims;
 // A wide row's record for its second bound: its key's other values, then its WideRest's error, low
 // and high, so that a row reached at random costs one fetch (apart, they were four cache misses).
 constexpr int64_t kWideRecord = kWideRestDims + 8;
 constexpr int64_t kWideRecordError = kWideRestDims, kWideRecordLow = kWideRestDims + 1, kWideRecordHigh = kWideRestDims + 2;
-constexpr int64_t kWideListDims = 32;       // wide rows: a centroid's first values, which choose the lists probed
+constexpr int64_t kWideListDims = InvertedFileKeys::kWideListDims;  // wide rows: a centroid's first values, which choose the lists probed
 constexpr int64_t kWideSample = 2048;       // wide rows: sample of the subspace iteration, at most
 constexpr int64_t kWideSampleValues = int64_t{1} << 23;  // ... this many values (32 MB a copy: 64³ grids get 32 rows)
 constexpr int kWideRounds = 4;              // wide rows: rounds of subspace iteration

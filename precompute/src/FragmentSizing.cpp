@@ -141,12 +141,17 @@ double searchBytesCompared(const DescriptorIndexSettings& index, int64_t rows, i
     case Kind::HnswPooled: return walked * 4.0 * 512.0 + ef * rowBytes;  // 8³ block sums
     case Kind::HnswPrincipal: return walked * 4.0 * 64.0 + ef * rowBytes;  // their first 64 components
     case Kind::Ivf: {
-      // IvfBackend.cpp: rows of 17–128 values are filed by 16 components and two norms; wider rows
-      // by 64 components, lists chosen by the centroids' first 32, rows scanned by their first 16
-      // and three bounds, and the few rows the bounds cannot rule out measured whole (counted as one).
+      // IvfBackend.cpp (InvertedFileKeys): rows of 17–128 values are filed by 16 components and two
+      // norms; wider rows by 64 components, lists chosen by the centroids' first 32, rows scanned by
+      // their first 16 and three bounds, and the few rows the bounds cannot rule out measured whole
+      // (counted as one).
+      using Keys = InvertedFileKeys;
       const double scanned = std::min(n, index.checks * std::ceil(n / index.trees));
-      if (cols > 128) return 4.0 * (index.trees * 32.0 + scanned * 19.0) + rowBytes;
-      const double key = cols > 16 ? 18.0 : static_cast<double>(cols);
+      if (cols > Keys::kMaxProjectedDims) {
+        return 4.0 * (index.trees * static_cast<double>(Keys::kWideListDims) + scanned * static_cast<double>(Keys::kWidePrefixDims + 3)) +
+               rowBytes;
+      }
+      const double key = cols > Keys::kKeyDims ? static_cast<double>(Keys::kKeyDims + 2) : static_cast<double>(cols);
       return 4.0 * (index.trees * key + scanned * key) + rowBytes;
     }
     case Kind::IvfBinary: {

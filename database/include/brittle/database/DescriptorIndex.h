@@ -86,6 +86,19 @@ namespace search {
 class Backend;
 }
 
+/// The inverted file's keys (IvfBackend.cpp), shared with the estimates of the bytes a query reads
+/// (precompute's FragmentSizing). A row of more than kKeyDims and at most kMaxProjectedDims values (the
+/// moment descriptors) is keyed by its first kKeyDims principal components and the norm of the rest;
+/// a wider row (the voxel grids) by kWideKeyDims directions, its list chosen by the centroids' first
+/// kWideListDims values and its first bound taken from its key's first kWidePrefixDims.
+struct InvertedFileKeys {
+  static constexpr int64_t kKeyDims = 16;
+  static constexpr int64_t kMaxProjectedDims = 128;
+  static constexpr int64_t kWideKeyDims = 64;
+  static constexpr int64_t kWideListDims = 32;
+  static constexpr int64_t kWidePrefixDims = 16;
+};
+
 struct DescriptorIndexSettings {
   enum class Kind { BruteForce, KdForest, Autotuned, Hnsw, HnswBinary, FaissHnsw, FaissIvf, FaissBinaryFlat, FaissBinaryHnsw, HnswPooled, HnswPrincipal, Ivf, IvfBinary };
   Kind kind = Kind::KdForest;
