@@ -182,7 +182,8 @@ struct World::Impl {
     Slot& s = slots[id.index];
     // A fragment's versions not made yet are nobody's any more: their background jobs are skipped or
     // stopped (a broken pane piece's checks and own analysis: up to hundreds of ms of a background
-    // thread each, which a new break's first bodies wait behind).
+    // thread each, which a new break's first bodies wait behind). A pack object's source is kept, its
+    // preparation included: the World holds it (packBodies) for that object's next instance.
     if (s.ownsSource && s.source) s.source->abandon();
     s.alive = false;
     s.pending = false;
