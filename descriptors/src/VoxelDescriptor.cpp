@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -175,7 +176,10 @@ std::vector<float> clampedSignedDistance(const Points& canonical, const Triangle
     const int wLow = first(low[w] - reach), wHigh = last(high[w] + reach);
     if (u0 > u1 || t0 > t1 || wLow > wHigh) continue;
     const double sphere2 = (radius + reach) * (radius + reach);
-    const auto most = static_cast<size_t>(u1 - u0 + 1) * static_cast<size_t>(t1 - t0 + 1) * static_cast<size_t>(wHigh - wLow + 1);
+    // At most a slab's worth of centres a column (2 slack / h + 1, and 2 more for the widening and
+    // the rounding of its two ends): a triangle across a fine grid keeps the buffers to its slab.
+    const int perColumn = flat ? std::min(wHigh - wLow + 1, static_cast<int>(2.0 * slack * perVoxel) + 3) : wHigh - wLow + 1;
+    const auto most = static_cast<size_t>(u1 - u0 + 1) * static_cast<size_t>(t1 - t0 + 1) * static_cast<size_t>(perColumn);
     if (visited.size() < most) visited.resize(most), px.resize(most), py.resize(most), pz.resize(most), measured.resize(most);
     // The centres' x, y, z in px, py, pz (the order of closestOnTriangle's sums, so its bits).
     const std::array<double*, 3> axis{px.data(), py.data(), pz.data()};
@@ -195,6 +199,7 @@ std::vector<float> clampedSignedDistance(const Points& canonical, const Triangle
           w0 = std::max(w0, first(plane - slack));
           w1 = std::min(w1, last(plane + slack));
         }
+        assert(w1 - w0 < perColumn);
         const int64_t column = iu * stride[static_cast<size_t>(u)] + it * stride[static_cast<size_t>(t)];
         for (int iw = w0; iw <= w1; ++iw) {
           const auto n = static_cast<size_t>(column + iw * stride[static_cast<size_t>(w)]);

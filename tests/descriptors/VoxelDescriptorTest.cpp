@@ -147,8 +147,8 @@ double distanceToTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, co
 
 // The clamped signed distance against every triangle at every centre, signed by the winding
 // number: the descriptor's values to float rounding.
-void expectClampedDistanceIsBruteForce(const TriangleMesh& mesh, const CanonicalFrame& frame) {
-  const ImprovedVoxelDescriptorSettings s;
+void expectClampedDistanceIsBruteForce(const TriangleMesh& mesh, const CanonicalFrame& frame,
+                                       const ImprovedVoxelDescriptorSettings& s = {}) {
   const auto d = computeImprovedVoxelDescriptor(mesh, frame, s);
   ASSERT_TRUE(d.ok()) << d.error().message;
   const Points v = frame.pointsToCanonical(mesh.vertices);
@@ -191,6 +191,14 @@ TEST(VoxelDescriptor, ImprovedIsTheBruteForceClampedDistance) {
   TriangleMesh dented = testing::makeBoxSurface(1.2, 0.9, 0.7);
   dented.vertices.row(0) *= 0.2;
   expectClampedDistanceIsBruteForce(dented, CanonicalFrame{});
+  // On a finer grid with a wider clamp, turned: a large triangle's slab holds many more centres
+  // (the visit's buffers are sized by it).
+  CanonicalFrame tilted;
+  tilted.rotation = Eigen::AngleAxisd(0.4, Eigen::Vector3d(2, -1, 1).normalized()).toRotationMatrix();
+  ImprovedVoxelDescriptorSettings fine;
+  fine.resolution = 40;
+  fine.clampVoxels = 3.5;
+  expectClampedDistanceIsBruteForce(dented, tilted, fine);
 }
 
 TEST(VoxelDescriptor, TriangleDistancesInLanesAreTheScalarBits) {
