@@ -126,10 +126,10 @@ std::vector<float> occupancyByParity(const Points& canonical, const Triangles& f
 // exactly ±1. The sign is the parity fill's (exact). Every distance is exact in double; the fixed
 // face order and a minimum make it the same in any process.
 //
-// The visits only bound which centres are measured. A centre is measured whenever the sphere bound
-// lets it; the box, slab and column bounds around it are widened by 1e-9 of a voxel (a centre they
-// would leave out by rounding is measured, and a centre past them is beyond reach of the triangle,
-// so its distance cannot replace a nearest, which is at most reach). A triangle's centres are
+// The visits only bound which centres are measured; a centre no bound rules out is measured. The
+// box and slab bounds are widened by 1e-9 of a voxel, so rounding never leaves out a centre that the
+// exact bounds keep; a centre past a bound by more than rounding is beyond reach of the triangle, so
+// its distance could not replace a nearest, which is at most reach. A triangle's centres are
 // gathered first, then measured several to a vector register (TriangleDistances.h, closestOnTriangle's
 // bits): each centre once a triangle, so the order within a triangle changes nothing.
 std::vector<float> clampedSignedDistance(const Points& canonical, const Triangles& faces, int k, double c, double reach) {
