@@ -433,6 +433,51 @@ TEST_F(WorldTest, MatchedFragmentsBreakAgain) {
   EXPECT_GE(second.value().fragments.size(), 2u);
 }
 
+// A matched fragment's body is its database entry's shape standing in for the fragment, and the
+// host collides with the fragment, whose surface can lie off the entry's: without a tolerance of
+// the host's, such a body takes a point up to its own size from its surface; a body with its own
+// mesh (here the plate) keeps 5 % of its size. Farther than either: InvalidArgument.
+TEST_F(WorldTest, AMatchedBodyTakesAPointOffItsEntrysSurfaceWithinItsSize) {
+  World world = makeWorld();
+  auto first = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
+  ASSERT_TRUE(first && first.value().broken);
+  const FragmentResult* target = nullptr;
+  for (const FragmentResult& f : first.value().fragments) {
+    if (f.path == FragmentPath::Matched && (!target || f.massProperties.volumeM3 > target->massProperties.volumeM3)) target = &f;
+  }
+  ASSERT_NE(target, nullptr);
+  auto asset = world.objectAsset(target->object);
+  ASSERT_TRUE(asset) << asset.error().message;
+  ASSERT_NE(world.frequencyError(target->object, 0.0).value().source, FrequencySource::Own);
+  const Points& nodes = asset.value()->tetMesh.nodes;
+  const double size = (nodes.colwise().maxCoeff() - nodes.colwise().minCoeff()).norm();
+  // Above the highest node by `fraction` of the size: every surface point is at most that high,
+  // so the point is exactly that far from the surface.
+  Eigen::Index top;
+  nodes.col(2).maxCoeff(&top);
+  auto above = [&](ObjectId id, const Eigen::Vector3d& p, double fraction, double length) {
+    ImpactDesc d = ball(id, 0.05);  // far below any threshold: the object stays whole
+    d.pointWorld = p + fraction * length * Eigen::Vector3d::UnitZ();
+    return world.impact(d);
+  };
+  for (double fraction : {0.2, 0.9}) {
+    auto hit = above(target->object, nodes.row(top).transpose(), fraction, size);
+    ASSERT_TRUE(hit) << fraction << ": " << hit.error().message;
+    EXPECT_FALSE(hit.value().broken);
+  }
+  auto far = above(target->object, nodes.row(top).transpose(), 1.1, size);
+  ASSERT_FALSE(far);
+  EXPECT_EQ(far.error().code, ErrorCode::InvalidArgument) << far.error().message;
+  // The plate (0.3 × 0.3 × 0.01 m, top face z = 0.01): 4 % of its size above it is taken, 20 % is not.
+  const ObjectId plate = world.addObject({.asset = "plate"}).value();
+  const double plateSize = std::sqrt(0.3 * 0.3 + 0.3 * 0.3 + 0.01 * 0.01);
+  auto near = above(plate, Eigen::Vector3d(0.16, 0.13, 0.01), 0.04, plateSize);
+  ASSERT_TRUE(near) << near.error().message;
+  auto off = above(plate, Eigen::Vector3d(0.16, 0.13, 0.01), 0.2, plateSize);
+  ASSERT_FALSE(off);
+  EXPECT_EQ(off.error().code, ErrorCode::InvalidArgument) << off.error().message;
+}
+
 // A matched fragment's body rings at the fragment's own frequencies (PolynomialModes.h, degree 5
 // by default): its frequencies are the fragment's polynomial Ritz values, its mode shapes and
 // stress modes the entry's (those of the same break with degree 0, bit for bit), and it breaks

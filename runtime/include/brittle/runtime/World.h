@@ -322,7 +322,10 @@ struct ImpactDesc {
   /// flat too, which Hertz cannot model: an edge or corner of that size meeting the flat. 0: such
   /// an impact is an InvalidArgument error.
   double flatPairRadiusM = 0.0;
-  /// How far the point may lie from the body's surface (m); 0: 5 % of the body's size.
+  /// How far the point may lie from the body's surface (m); the nearest surface point takes the
+  /// hit. 0: 5 % of the body's size where the body has its own mesh (a pack object, an exact-path
+  /// fragment), and the body's whole size for a matched fragment, whose mesh is its database
+  /// entry's shape standing in for the fragment the host collides with.
   double pointToleranceM = 0.0;
   /// A host over its frame budget: skip the static correction unless the body's K factorisation
   /// was scheduled already (a pack object's when it was placed, a matched fragment's when its body
