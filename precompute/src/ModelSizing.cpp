@@ -90,6 +90,7 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
   std::sort(ladder.begin(), ladder.end());
   ladder.erase(std::unique(ladder.begin(), ladder.end()), ladder.end());
   if (ladder.empty() || ladder.front() < 1 || settings.points < 1 || settings.timingRepeats < 1 ||
+      !(settings.modeClusterGap >= 0.0 && settings.modeClusterGap < 1.0) ||
       settings.referenceStepsPerContact < 2 || !(targetError > 0.0) || range.impactors.empty() ||
       !(range.minSpeedMps > 0.0 && range.minSpeedMps <= range.maxSpeedMps)) {
     return makeError(ErrorCode::InvalidArgument, "model sizing: bad settings or scene range for " + asset.name);
@@ -100,6 +101,13 @@ Result<ObjectSizing> sizeObjectModes(const ObjectAsset& asset, const Material& m
                                                      " modes, fewer than the ladder's first count");
   }
   ladder.erase(std::remove_if(ladder.begin(), ladder.end(), [&](int k) { return k > stored; }), ladder.end());
+  // A count inside a cluster of nearly equal frequencies keeps the whole cluster (the count after
+  // the stored modes is unknown, so the last stored one ends a cluster).
+  const Eigen::VectorXd& hz = asset.modal.frequenciesHz;
+  for (int& k : ladder) {
+    while (k < stored && k < hz.size() && hz[k] - hz[k - 1] < settings.modeClusterGap * hz[k - 1]) ++k;
+  }
+  ladder.erase(std::unique(ladder.begin(), ladder.end()), ladder.end());
 
   const std::vector<ImpactDesc> impacts = drawSceneImpacts(asset, range, settings.points, settings.seed);
 

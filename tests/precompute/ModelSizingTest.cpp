@@ -156,6 +156,40 @@ TEST_F(ModelSizingTest, PicksTheSmallestCountThatMeetsTheTarget) {
   for (size_t i = 0; i < trials.size(); ++i) EXPECT_EQ(strict.value().trials[i].worstError, trials[i].worstError);
 }
 
+TEST_F(ModelSizingTest, ACountInsideAClusterOfEqualFrequenciesKeepsTheWholeCluster) {
+  // The square tile's modes come in pairs of nearly equal frequencies (its two in-plane axes):
+  // a count that keeps one of a pair is raised past the pair, and 0 keeps counts as given.
+  const Eigen::VectorXd& hz = sAsset->modal.frequenciesHz;
+  const double gap = ModelSizingSettings{}.modeClusterGap;
+  int inside = 0, raised = 0;
+  for (int k = 2; k + 1 < hz.size() && inside == 0; ++k) {
+    if (hz[k] - hz[k - 1] < gap * hz[k - 1]) {
+      inside = k;
+      raised = k + 1;
+      while (raised < hz.size() && hz[raised] - hz[raised - 1] < gap * hz[raised - 1]) ++raised;
+    }
+  }
+  ASSERT_GT(inside, 0) << "the tile has no pair of equal frequencies: the test shows nothing";
+  std::printf("tile: a count of %d keeps %.1f Hz without %.1f Hz; raised to %d\n", inside, hz[inside - 1], hz[inside], raised);
+  const Material glass = materialPreset("glass").value();
+  ModelSizingSettings s = quick();
+  s.points = 1;
+  s.modeLadder = {inside, 40};
+  auto r = sizeObjectModes(*sAsset, glass, ballRange(), 0.3, s);
+  ASSERT_TRUE(r) << r.error().message;
+  ASSERT_EQ(r.value().trials.size(), raised == 40 ? 1u : 2u);
+  EXPECT_EQ(r.value().trials.front().modes, raised);
+  s.modeClusterGap = 0.0;
+  auto given = sizeObjectModes(*sAsset, glass, ballRange(), 0.3, s);
+  ASSERT_TRUE(given) << given.error().message;
+  ASSERT_EQ(given.value().trials.size(), 2u);
+  EXPECT_EQ(given.value().trials.front().modes, inside);
+  s.modeClusterGap = -0.1;
+  auto bad = sizeObjectModes(*sAsset, glass, ballRange(), 0.3, s);
+  ASSERT_FALSE(bad);
+  EXPECT_EQ(bad.error().code, ErrorCode::InvalidArgument);
+}
+
 TEST_F(ModelSizingTest, TheGroundMeetsTheBodyAtACorner) {
   // Flat on flat has no Hertz contact: ground impacts must land on corners, never on a face.
   SceneObjectRange drop = ballRange();

@@ -159,6 +159,10 @@ Runner addSizeCommand(CLI::App& app) {
   cmd->add_option("--target", o->target, "Worst peak-stress error allowed (overrides the scene's)")->check(CLI::Range(1e-6, 0.999));
   cmd->add_option("--ladder", o->settings.modeLadder, "Mode counts tried")->delimiter(',')->capture_default_str()
       ->check(CLI::Range(1, 2000));
+  cmd->add_option("--mode-cluster-gap", o->settings.modeClusterGap,
+                  "Neighbouring modes closer than this (relative frequency) are one cluster: a count that would split "
+                  "one is raised to keep all of it (0: counts as given)")
+      ->capture_default_str()->check(CLI::Range(0.0, 0.5));
   cmd->add_option("--points", o->settings.points, "Surface points per impactor and speed")->capture_default_str()
       ->check(CLI::Range(1, 1000));
   cmd->add_option("--reference-steps", o->settings.referenceStepsPerContact, "Newmark steps per contact time")
