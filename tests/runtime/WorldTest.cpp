@@ -92,13 +92,19 @@ class WorldTest : public ::testing::Test {
     return d;
   }
 
-  // A hit far below its threshold (the fragment stays whole) on the largest matched fragment of
-  // `broken`, at its highest node, from above.
-  static ImpactDesc softHitOnTheLargestMatched(World& world, const ImpactResult& broken) {
+  // The largest matched fragment of `broken` (null: none).
+  static const FragmentResult* largestMatched(const ImpactResult& broken) {
     const FragmentResult* target = nullptr;
     for (const FragmentResult& f : broken.fragments) {
       if (f.path == FragmentPath::Matched && (!target || f.massProperties.volumeM3 > target->massProperties.volumeM3)) target = &f;
     }
+    return target;
+  }
+
+  // A hit far below its threshold (the fragment stays whole) on the largest matched fragment of
+  // `broken`, at its highest node, from above.
+  static ImpactDesc softHitOnTheLargestMatched(World& world, const ImpactResult& broken) {
+    const FragmentResult* target = largestMatched(broken);
     EXPECT_NE(target, nullptr);
     if (!target) return {};
     const Points& nodes = world.objectAsset(target->object).value()->tetMesh.nodes;
@@ -441,10 +447,7 @@ TEST_F(WorldTest, AMatchedBodyTakesAPointOffItsEntrysSurfaceWithinItsSize) {
   World world = makeWorld();
   auto first = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
   ASSERT_TRUE(first && first.value().broken);
-  const FragmentResult* target = nullptr;
-  for (const FragmentResult& f : first.value().fragments) {
-    if (f.path == FragmentPath::Matched && (!target || f.massProperties.volumeM3 > target->massProperties.volumeM3)) target = &f;
-  }
+  const FragmentResult* target = largestMatched(first.value());
   ASSERT_NE(target, nullptr);
   auto asset = world.objectAsset(target->object);
   ASSERT_TRUE(asset) << asset.error().message;
