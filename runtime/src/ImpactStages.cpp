@@ -40,14 +40,16 @@ struct Flow {
   double complianceMPerN = 0.0;                  // f·u_t of the truncated modes, per newton²
 };
 
-// How far the reported point may lie from a body's surface when the host gives no tolerance
-// (ImpactDesc::pointToleranceM). A body with its own mesh (a pack object, an exact-path fragment):
-// 5 % of its size. A matched fragment's mesh is its database entry's shape standing in for the
-// fragment, and the host collides with the fragment, whose surface can lie farther than that from
-// the entry's (the pane scene refused about 1 hit in 120 on such bodies): its own size, so that only
-// a point that cannot be on the fragment is refused. The nearest surface point takes the hit.
-double defaultPointTolerance(const Body& body) {
-  return body.frequencyError.source == FrequencySource::Own ? 0.05 * body.sizeM : body.sizeM;
+// How far the reported point may lie from a body's surface: the host's tolerance
+// (ImpactDesc::pointToleranceM), or 5 % of the body's size without one. A matched fragment's mesh is
+// its database entry's shape standing in for the fragment, and the host collides with the
+// fragment, whose surface can lie farther than either from the entry's (the pane scene refused
+// about 1 hit in 200 on such bodies): such a body takes a point up to its own size off, whatever
+// the host's tolerance, so that only a point that cannot be on the fragment is refused. The
+// nearest surface point takes the hit.
+double pointTolerance(const Body& body, const ImpactDesc& desc) {
+  const double host = desc.pointToleranceM > 0.0 ? desc.pointToleranceM : 0.05 * body.sizeM;
+  return body.frequencyError.source == FrequencySource::Own ? host : std::max(host, body.sizeM);
 }
 
 // Contact: where on the surface, how curved there, Hertz, and the load's node weights.
@@ -56,7 +58,7 @@ Status contactStage(const ImpactJob& job, Flow& flow, ImpactWorkspace& ws, Impac
   const ImpactDesc& desc = job.desc;
   flow.pointLocal = job.rotation.transpose() * (desc.pointWorld - job.translation);
   flow.normalLocal = job.rotation.transpose() * desc.normalWorld;
-  auto site = locateContact(body, flow.pointLocal, desc.pointToleranceM > 0.0 ? desc.pointToleranceM : defaultPointTolerance(body));
+  auto site = locateContact(body, flow.pointLocal, pointTolerance(body, desc));
   if (!site) return site.error();
   double radius = desc.bodyRadiusM != 0.0 ? desc.bodyRadiusM : surfaceRadiusAt(body, site.value());
   if (std::isinf(radius) && std::isinf(desc.impactorRadiusM) && desc.flatPairRadiusM > 0.0) radius = desc.flatPairRadiusM;

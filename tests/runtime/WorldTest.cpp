@@ -440,9 +440,9 @@ TEST_F(WorldTest, MatchedFragmentsBreakAgain) {
 }
 
 // A matched fragment's body is its database entry's shape standing in for the fragment, and the
-// host collides with the fragment, whose surface can lie off the entry's: without a tolerance of
-// the host's, such a body takes a point up to its own size from its surface; a body with its own
-// mesh (here the plate) keeps 5 % of its size. Farther than either: InvalidArgument.
+// host collides with the fragment, whose surface can lie off the entry's: such a body takes a
+// point up to its own size from its surface, whatever the host's tolerance; a body with its own
+// mesh (here the plate) keeps the host's, or 5 % of its size. Farther than either: InvalidArgument.
 TEST_F(WorldTest, AMatchedBodyTakesAPointOffItsEntrysSurfaceWithinItsSize) {
   World world = makeWorld();
   auto first = world.impact(ball(world.addObject({.asset = "plate"}).value(), 60.0));
@@ -458,19 +458,24 @@ TEST_F(WorldTest, AMatchedBodyTakesAPointOffItsEntrysSurfaceWithinItsSize) {
   // so the point is exactly that far from the surface.
   Eigen::Index top;
   nodes.col(2).maxCoeff(&top);
-  auto above = [&](ObjectId id, const Eigen::Vector3d& p, double fraction, double length) {
+  auto above = [&](ObjectId id, const Eigen::Vector3d& p, double fraction, double length, double hostToleranceM = 0.0) {
     ImpactDesc d = ball(id, 0.05);  // far below any threshold: the object stays whole
     d.pointWorld = p + fraction * length * Eigen::Vector3d::UnitZ();
+    d.pointToleranceM = hostToleranceM;
     return world.impact(d);
   };
   for (double fraction : {0.2, 0.9}) {
-    auto hit = above(target->object, nodes.row(top).transpose(), fraction, size);
-    ASSERT_TRUE(hit) << fraction << ": " << hit.error().message;
-    EXPECT_FALSE(hit.value().broken);
+    for (double host : {0.0, 0.01 * size}) {
+      auto hit = above(target->object, nodes.row(top).transpose(), fraction, size, host);
+      ASSERT_TRUE(hit) << fraction << ", host tolerance " << host << ": " << hit.error().message;
+      EXPECT_FALSE(hit.value().broken);
+    }
   }
   auto far = above(target->object, nodes.row(top).transpose(), 1.1, size);
   ASSERT_FALSE(far);
   EXPECT_EQ(far.error().code, ErrorCode::InvalidArgument) << far.error().message;
+  auto hostFar = above(target->object, nodes.row(top).transpose(), 1.1, size, 1.2 * size);
+  EXPECT_TRUE(hostFar) << "a host's larger tolerance still holds";
   // The plate (0.3 × 0.3 × 0.01 m, top face z = 0.01): 4 % of its size above it is taken, 20 % is not.
   const ObjectId plate = world.addObject({.asset = "plate"}).value();
   const double plateSize = std::sqrt(0.3 * 0.3 + 0.3 * 0.3 + 0.01 * 0.01);
@@ -479,6 +484,10 @@ TEST_F(WorldTest, AMatchedBodyTakesAPointOffItsEntrysSurfaceWithinItsSize) {
   auto off = above(plate, Eigen::Vector3d(0.16, 0.13, 0.01), 0.2, plateSize);
   ASSERT_FALSE(off);
   EXPECT_EQ(off.error().code, ErrorCode::InvalidArgument) << off.error().message;
+  EXPECT_TRUE(above(plate, Eigen::Vector3d(0.16, 0.13, 0.01), 0.2, plateSize, 0.25 * plateSize));  // the host's
+  auto strict = above(plate, Eigen::Vector3d(0.16, 0.13, 0.01), 0.04, plateSize, 0.01 * plateSize);
+  ASSERT_FALSE(strict);
+  EXPECT_EQ(strict.error().code, ErrorCode::InvalidArgument) << strict.error().message;
 }
 
 // A matched fragment's body rings at the fragment's own frequencies (PolynomialModes.h, degree 5

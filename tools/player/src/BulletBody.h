@@ -40,7 +40,6 @@ TriangleMesh assetSurface(const ObjectAsset& asset);
 struct Body {
   BodyState state;
   ObjectId object;                 ///< valid: breakable
-  bool matched = false;            ///< its runtime shape is a database entry standing in for its surface
   Material material;
   std::unique_ptr<btCollisionShape> shape;
   std::unique_ptr<btRigidBody> rigid;

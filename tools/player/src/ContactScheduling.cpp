@@ -117,7 +117,7 @@ bool Simulation::impact(const Candidate& c, int64_t frame, double timeS, bool fa
   d.pointWorld = b.runtimeRotation * c.pointLocal + b.runtimeTranslation;
   d.normalWorld = (b.runtimeRotation * c.normalLocal).normalized();
   d.speedMps = c.speedMps;
-  d.pointToleranceM = b.matched ? 0.0 : mSettings.pointToleranceFraction * b.sizeM;  // 0: the runtime's (World.h)
+  d.pointToleranceM = mSettings.pointToleranceFraction * b.sizeM;
   d.flatPairRadiusM = b.sizeM;  // an edge or corner of the body's size meets the flat
   d.fast = fast;
   d.timeS = timeS;  // the scene's clock: a piece's later mesh check applies at a fixed time after its break

@@ -81,7 +81,6 @@ void Simulation::spawnFragments(const ImpactResult& r, const std::vector<Hull>& 
     const double cooldown = parent.cooldownUntilS;
     Body& b = addHullBody(std::move(state), f.surface, f.massProperties, hulls[i], false, rotation, translation);
     b.object = f.object;
-    b.matched = f.path == FragmentPath::Matched;
     b.material = material;
     b.rigid->setRestitution(material.restitution);
     b.runtimeRotation = runtimeRotation;

@@ -322,10 +322,10 @@ struct ImpactDesc {
   /// flat too, which Hertz cannot model: an edge or corner of that size meeting the flat. 0: such
   /// an impact is an InvalidArgument error.
   double flatPairRadiusM = 0.0;
-  /// How far the point may lie from the body's surface (m); the nearest surface point takes the
-  /// hit. 0: 5 % of the body's size where the body has its own mesh (a pack object, an exact-path
-  /// fragment), and the body's whole size for a matched fragment, whose mesh is its database
-  /// entry's shape standing in for the fragment the host collides with.
+  /// How far the point may lie from the body's surface (m); 0: 5 % of the body's size. The nearest
+  /// surface point takes the hit. A matched fragment's mesh is its database entry's shape standing
+  /// in for the fragment the host collides with, so such a body takes a point up to its own size
+  /// (bounding-box diagonal) off, whatever this says.
   double pointToleranceM = 0.0;
   /// A host over its frame budget: skip the static correction unless the body's K factorisation
   /// was scheduled already (a pack object's when it was placed, a matched fragment's when its body

@@ -84,11 +84,10 @@ struct PlayerSettings {
   /// pass over the vertices per direction. The scene's own objects keep their exact hulls: their
   /// first contacts are the scene's main impacts, and where they touch decides how they break.
   int hullMaxVertices = 24;
-  /// Fraction of a body's size the contact point may lie off its surface in the runtime, for a
-  /// body with its own mesh there (a scene object, an exact-path fragment): Bullet's hull is convex
-  /// and the surface need not be. A matched fragment's runtime shape is its database entry, not its
-  /// exact surface, and can lie farther off: its hits take the runtime's own tolerance for such a
-  /// body (ImpactDesc::pointToleranceM, 0), its whole size.
+  /// Fraction of a body's size the contact point may lie off its surface in the runtime: Bullet's
+  /// hull is convex and the surface need not be. A matched fragment's runtime shape is its database
+  /// entry, not its exact surface, and can lie farther off: the runtime takes a point up to such a
+  /// body's whole size off whatever this says (ImpactDesc::pointToleranceM).
   double pointToleranceFraction = 0.5;
   bool recordTracks = false;        ///< keep every body's pose per frame (for a replay)
   /// Paced as a host would be: each frame starts no earlier than its time in the play (frame ×
