@@ -347,6 +347,19 @@ TEST(FemAssemblyP2, CornerStressMeansAreVolumeWeightedAndKeepALinearStrainExact)
   means.value().apply(averaged.data(), cols);
   EXPECT_LT((averaged - expected).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_GT((averaged - rows).cwiseAbs().maxCoeff(), 0.1);  // random corners do differ at a node
+  // One field at a time (the static correction's recovery, cols = 1) and many at once (stress
+  // modes, in blocks of eight columns: 11 spans a whole block and part of one) are the same bits.
+  const Eigen::Index wide = 11;
+  MatrixXdRow block(24 * t, wide);
+  for (Eigen::Index i = 0; i < block.size(); ++i) block.data()[i] = g(rng);
+  MatrixXdRow together = block;
+  means.value().apply(together.data(), wide);
+  for (Eigen::Index j = 0; j < wide; ++j) {
+    Eigen::VectorXd alone = block.col(j);
+    means.value().apply(alone.data(), 1);
+    EXPECT_EQ(std::memcmp(alone.data(), Eigen::VectorXd(together.col(j)).data(), sizeof(double) * static_cast<size_t>(alone.size())), 0)
+        << "column " << j;
+  }
 
   const Material m = presetGlass();
   const FemMesh fem = makeFemMesh(mesh, ElementOrder::P2).value();
