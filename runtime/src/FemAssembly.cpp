@@ -486,17 +486,17 @@ void CornerStressMeans::apply(double* rows, Eigen::Index cols) const {
   const auto nodes = static_cast<Eigen::Index>(mStart.size()) - 1;
   // Each value (component i, column j) of a node's points is read by that node's mean alone, so
   // the mean is written back at once, and nodes in different ranges never touch the same rows.
-  // A node's points are taken one after another, each adding its block of (up to) 6 × kBlock
-  // values to as many independent sums: every sum still takes its terms in the order of the
-  // node's points, so the bits are those of one sum at a time, and a point's 6 × cols values
-  // are read together instead of once per component (the static correction's recovery on the
-  // P2 vase: one chain of ~20 dependent additions per value before).
-  constexpr Eigen::Index kBlock = 8;
+  // One field (cols = 1: the static correction's recovery, once an impact) takes a node's points
+  // one after another into six sums at once, each still in the points' order, so the bits of one
+  // sum at a time: on the P2 vase one chain of ~20 dependent additions per value took 0.84–0.92 ms
+  // of recovery, 0.66–0.73 this way. Stress modes (cols = r, once a body) keep one sum at a time:
+  // the same points-first order over blocks of eight columns placed the vase 1–2 ms slower
+  // (12.5–13.0 against 10.8–11.8 ms).
   detail::forFixedRanges(nodes, 16, [&](int, Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index v = begin; v < end; ++v) {
       const auto first = static_cast<size_t>(mStart[static_cast<size_t>(v)]), last = static_cast<size_t>(mStart[static_cast<size_t>(v) + 1]);
       if (last - first < 2) continue;
-      if (cols == 1) {  // one field (the static correction's, once an impact): six sums in registers
+      if (cols == 1) {
         double mean[6] = {};
         for (size_t k = first; k < last; ++k) {
           const double weight = mWeights[k];
@@ -506,19 +506,11 @@ void CornerStressMeans::apply(double* rows, Eigen::Index cols) const {
         for (size_t k = first; k < last; ++k) std::copy_n(mean, 6, rows + 6 * static_cast<Eigen::Index>(mPoints[k]));
         continue;
       }
-      for (Eigen::Index j0 = 0; j0 < cols; j0 += kBlock) {
-        const Eigen::Index width = std::min(kBlock, cols - j0);
-        double mean[6][kBlock] = {};
-        for (size_t k = first; k < last; ++k) {
-          const double weight = mWeights[k];
-          const double* point = rows + 6 * static_cast<Eigen::Index>(mPoints[k]) * cols + j0;
-          for (int i = 0; i < 6; ++i) {
-            for (Eigen::Index j = 0; j < width; ++j) mean[i][j] += weight * point[i * cols + j];
-          }
-        }
-        for (size_t k = first; k < last; ++k) {
-          double* point = rows + 6 * static_cast<Eigen::Index>(mPoints[k]) * cols + j0;
-          for (int i = 0; i < 6; ++i) std::copy_n(mean[i], width, point + i * cols);
+      for (int i = 0; i < 6; ++i) {
+        for (Eigen::Index j = 0; j < cols; ++j) {
+          double mean = 0.0;
+          for (size_t k = first; k < last; ++k) mean += mWeights[k] * rows[(6 * static_cast<Eigen::Index>(mPoints[k]) + i) * cols + j];
+          for (size_t k = first; k < last; ++k) rows[(6 * static_cast<Eigen::Index>(mPoints[k]) + i) * cols + j] = mean;
         }
       }
     }

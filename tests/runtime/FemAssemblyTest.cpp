@@ -347,8 +347,8 @@ TEST(FemAssemblyP2, CornerStressMeansAreVolumeWeightedAndKeepALinearStrainExact)
   means.value().apply(averaged.data(), cols);
   EXPECT_LT((averaged - expected).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_GT((averaged - rows).cwiseAbs().maxCoeff(), 0.1);  // random corners do differ at a node
-  // One field at a time (the static correction's recovery, cols = 1) and many at once (stress
-  // modes, in blocks of eight columns: 11 spans a whole block and part of one) are the same bits.
+  // One field at a time (the static correction's recovery, cols = 1: six sums, points first) and
+  // many at once (stress modes: one sum at a time) are the same bits.
   const Eigen::Index wide = 11;
   MatrixXdRow block(24 * t, wide);
   for (Eigen::Index i = 0; i < block.size(); ++i) block.data()[i] = g(rng);
