@@ -323,6 +323,66 @@ TEST(CrackPropagation, GroupedScanEqualsTheFullScanAndItsGroupBoundsHold) {
   EXPECT_LT(tightLive, tightGroups / 4) << tightLive << " of " << tightGroups;
 }
 
+TEST(CrackPropagation, PrunedSearchInRoundsIsTheSameOnAnyThreadCountAndTiesGoToTheLowestPoint) {
+  // The pruned search runs in rounds: each of its fixed ranges takes a few groups (points) from its
+  // heap, then every range goes on from the best of all so far. A range that adopted another's best
+  // must still report the full scan's answer, ties included, and the counts must not depend on how
+  // many threads ran the ranges. 1 200 points (75 a range), in node-like groups or one by one; the
+  // full scan's peak point copied, rows and static correction, to a point in another range, so that
+  // two points tie at the peak and the lower one is the answer.
+  int ties = 0;
+  for (uint64_t rngSeed : {31u, 32u, 33u}) {
+    std::mt19937_64 rng(rngSeed);
+    std::normal_distribution<double> g(0.0, 1.0);
+    for (int trial = 0; trial < 4; ++trial) {
+      SCOPED_TRACE(::testing::Message() << "seed " << rngSeed << ", trial " << trial);
+      const int modes = 8, instants = 21;
+      const bool grouped = trial % 2 == 0, correction = trial < 2;
+      std::vector<int32_t> keys;
+      std::vector<Eigen::MatrixXd> blocks;
+      groupedBlocks(rng, g, modes, 1200, grouped ? 6 : 1, 0.3, [](int32_t group) { return group; }, blocks, keys);
+      MatrixXdRow stressModes;
+      std::vector<int32_t> pointKeys;
+      shuffledPoints(rng, modes, blocks, keys, stressModes, pointKeys);
+      const auto points = static_cast<Eigen::Index>(keys.size());
+      auto [q, staticStress, force] = randomHit(rng, g, points, modes, instants, correction);
+      const Eigen::VectorXd scales = Eigen::VectorXd::LinSpaced(modes, 1, modes).cwiseInverse();
+      const double threshold = 3e6;
+      Eigen::Index from = -1, to = -1;
+      if (!grouped) {  // a tie at the peak, in another range than the peak's
+        const StressBounds first = stressModeBounds(stressModes, modes, scales);
+        const StressScan before = scanStresses(stressModes, first, q, staticStress, force, threshold, false);
+        from = before.peakElement, to = (from + points / 2) % points;
+        stressModes.middleRows(6 * to, 6) = stressModes.middleRows(6 * from, 6);
+        if (correction) staticStress.segment<6>(6 * to) = staticStress.segment<6>(6 * from);
+      }
+      const StressBounds bounds = grouped ? stressModeBounds(stressModes, modes, scales, pointKeys) : stressModeBounds(stressModes, modes, scales);
+      const StressScan full = scanStresses(stressModes, bounds, q, staticStress, force, threshold, false);
+      if (!grouped) {  // the copy ties with the peak, and the lower of the two is the answer
+        ++ties;
+        EXPECT_EQ(full.peakElement, std::min(from, to));
+      }
+      std::vector<StressScan> scans;
+      for (int threads : {1, 2, 4}) {
+        tbb::task_arena arena(threads);
+        StressScanWorkspace workspace;
+        StressScan scan;
+        arena.execute([&] { scanStresses(stressModes, bounds, q, staticStress, force, threshold, true, workspace, scan); });
+        EXPECT_EQ(scan.peakPrincipalPa, full.peakPrincipalPa) << threads << " threads";
+        EXPECT_EQ(scan.peakElement, full.peakElement) << threads << " threads";
+        EXPECT_EQ(scan.peakInstant, full.peakInstant) << threads << " threads";
+        EXPECT_LT(scan.evaluations, full.evaluations / 4) << threads << " threads";
+        scans.push_back(scan);
+      }
+      for (size_t i = 1; i < scans.size(); ++i) {
+        EXPECT_EQ(scans[i].evaluations, scans[0].evaluations);
+        EXPECT_EQ(scans[i].seedCandidates, scans[0].seedCandidates);
+      }
+    }
+  }
+  EXPECT_EQ(ties, 6);
+}
+
 TEST(CrackPropagation, GroupsOfEqualPointsAreSearchedByTheirLowestPointWithTheFullScansAnswer) {
   // P2 corners read as nodal means (CornerStressMeans) make every point of a node's group the same
   // rows, bit for bit, and the static correction too: the peak search then evaluates each such
