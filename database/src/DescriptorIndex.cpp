@@ -348,6 +348,17 @@ int64_t DescriptorIndex::memoryBytes() const {
   return static_cast<int64_t>(mData.size() * sizeof(float)) + (mBackend ? mBackend->memoryBytes() : 0);
 }
 
+Result<uint64_t> DescriptorIndex::digest() const {
+  Fingerprint f;
+  f.add(std::string(descriptorIndexKindName(mSettings.kind)));
+  f.add(mSettings.trees, mSettings.checks, mSettings.targetPrecision, mSettings.seed, mRows, mDims);
+  f.add(mData);
+  if (mBackend) {
+    if (Status st = mBackend->addToDigest(f); !st) return st.error();
+  }
+  return f.value();
+}
+
 Status DescriptorIndex::validateQuery(const float* descriptor, int k, int64_t queryRow,
                                       bool batch) const {
   if (descriptor == nullptr) return invalidArgument("DescriptorIndex query: descriptor is null");

@@ -28,6 +28,8 @@
 #include <faiss/IndexFlat.h>
 #include <faiss/IndexHNSW.h>
 #include <faiss/IndexIVFFlat.h>
+#include <faiss/impl/io.h>
+#include <faiss/index_io.h>
 #include <omp.h>
 
 #include "IndexBackends.h"
@@ -82,6 +84,18 @@ class FloatBackend final : public Backend {
     return bytes;
   }
 
+  // FAISS's own serialisation, into memory.
+  Status addToDigest(Fingerprint& digest) const override {
+    try {
+      faiss::VectorIOWriter writer;
+      faiss::write_index(mIndex.get(), &writer);
+      digest.add(writer.data);
+    } catch (const std::exception& e) {
+      return invalidArgument(std::string("DescriptorIndex digest: FAISS could not write its index: ") + e.what());
+    }
+    return Ok{};
+  }
+
   static int64_t graphBytes(const faiss::HNSW& g) {
     return static_cast<int64_t>(g.neighbors.size() * sizeof(faiss::HNSW::storage_idx_t) +
                                 g.levels.size() * sizeof(int) + g.offsets.size() * sizeof(size_t));
@@ -114,6 +128,18 @@ class BinaryBackend final : public Backend {
       squaredDistances[i] = static_cast<float>(hamming[static_cast<size_t>(i)]);  // exact below 2^24
     }
     sortByDistanceThenId(k, ids, squaredDistances);
+    return Ok{};
+  }
+
+  Status addToDigest(Fingerprint& digest) const override {
+    try {
+      faiss::VectorIOWriter writer;
+      faiss::write_index_binary(mIndex.get(), &writer);
+      digest.add(mDims);
+      digest.add(writer.data);
+    } catch (const std::exception& e) {
+      return invalidArgument(std::string("DescriptorIndex digest: FAISS could not write its index: ") + e.what());
+    }
     return Ok{};
   }
 

@@ -12,6 +12,7 @@
 // alias below; <random> is included first, so no standard header sees the macro, and the macro is
 // undefined right after FLANN's headers. This unit stays out of unity batches (CMakeLists.txt), so
 // no other source includes FLANN before it and no other source sees the macro.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <exception>
@@ -19,6 +20,7 @@
 #include <random>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include "brittle/core/Random.h"
 #include "IndexBackends.h"
@@ -86,6 +88,23 @@ class FlannBackend final : public Backend {
   }
 
   int64_t memoryBytes() const override { return static_cast<int64_t>(mIndex.usedMemory()); }
+  // FLANN's trees are private, and the file it writes them to (flann::Index::save) holds
+  // uninitialised header bytes, compressed: two saves of one forest differ. Its digest is its
+  // answers instead: up to 1 024 evenly spaced rows of its own data as queries, the 8 nearest each
+  // (ids and distances), which another forest changes.
+  Status addToDigest(Fingerprint& digest) const override {
+    const auto rows = static_cast<int64_t>(mIndex.size());
+    const int k = static_cast<int>(std::min<int64_t>(rows, 8));
+    const int64_t queries = std::min<int64_t>(rows, 1024);
+    std::vector<int64_t> ids(static_cast<size_t>(k));
+    std::vector<float> distances(static_cast<size_t>(k));
+    for (int64_t q = 0; q < queries; ++q) {
+      const auto row = static_cast<size_t>(q * rows / queries);
+      if (Status st = query(mIndex.getPoint(row), k, ids.data(), distances.data()); !st) return st;
+      digest.add(ids), digest.add(distances);
+    }
+    return Ok{};
+  }
 
  private:
   // knnSearch is const in FLANN's API but not on flann::Index; searches share no scratch.

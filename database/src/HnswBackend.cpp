@@ -201,6 +201,26 @@ int64_t graphBytes(const hnswlib::HierarchicalNSW<float>& graph) {
   return bytes;
 }
 
+// hnswlib's graph into a digest: its counts and entry point, and every node's label, data and
+// links at each of its levels (each list's count and the links it holds: hnswlib mallocs the
+// lists, so the slots past a list's count are whatever the heap held).
+void addGraphToDigest(const hnswlib::HierarchicalNSW<float>& graph, Fingerprint& digest) {
+  const size_t count = graph.cur_element_count;
+  digest.add(static_cast<uint64_t>(count), static_cast<int64_t>(graph.maxlevel_), static_cast<int64_t>(graph.enterpoint_node_));
+  const auto addLinks = [&](hnswlib::linklistsizeint* list) {  // (getListCount takes a non-const pointer; it only reads)
+    const unsigned short links = graph.getListCount(list);
+    digest.add(links);
+    digest.addBytes(list + 1, sizeof(hnswlib::tableint) * links);
+  };
+  for (size_t i = 0; i < count; ++i) {
+    const auto id = static_cast<hnswlib::tableint>(i);
+    digest.add(static_cast<uint64_t>(graph.getExternalLabel(id)), static_cast<int64_t>(graph.element_levels_[i]));
+    digest.addBytes(graph.getDataByInternalId(id), graph.data_size_);
+    addLinks(graph.get_linklist0(id));
+    for (int level = 1; level <= graph.element_levels_[i]; ++level) addLinks(graph.get_linklist(id, level));
+  }
+}
+
 // The `ef` nearest nodes of `graph` to a set of `count` queries (`stride` bytes apart from `base`),
 // nearest first, ties by lower id, each with the lowest row at its distance: a fragment's
 // candidate frames in one search. Each row descends
@@ -367,6 +387,12 @@ class HnswBackend final : public Backend {
 
   // Level 0 (links, its own copy of the data, labels) plus the upper levels' links.
   int64_t memoryBytes() const override { return graphBytes(mGraph) + mVarying.memoryBytes(); }
+  Status addToDigest(Fingerprint& digest) const override {
+    digest.add(mDims, static_cast<uint64_t>(mWords));
+    mVarying.addToDigest(digest);
+    addGraphToDigest(mGraph, digest);
+    return Ok{};
+  }
 
  private:
   int64_t mDims;
@@ -449,6 +475,12 @@ class PooledHnswBackend final : public Backend {
 
   int64_t memoryBytes() const override {
     return graphBytes(mGraph) + static_cast<int64_t>(mCodes.size() + (mBasis.size() + mMean.size()) * sizeof(float));
+  }
+  Status addToDigest(Fingerprint& digest) const override {
+    digest.add(mDims, mSide, mBinary, static_cast<uint64_t>(mWordsPerCode), mKeyDims);
+    digest.add(mCodes), digest.add(mBasis), digest.add(mMean);
+    addGraphToDigest(mGraph, digest);
+    return Ok{};
   }
 
  private:

@@ -19,6 +19,7 @@
 
 #include <Eigen/Core>
 
+#include "brittle/core/Fingerprint.h"
 #include "brittle/core/Result.h"
 #include "brittle/core/Simd.h"
 #include "brittle/database/DescriptorIndex.h"
@@ -90,6 +91,11 @@ class Backend {
   }
   /// Bytes held beyond DescriptorIndex's own copy of the data.
   virtual int64_t memoryBytes() const = 0;
+  /// Adds what the build made (lists, keys, directions, graph links, trees; not the choices of
+  /// the CPU's instructions, which change no answer) to a digest, so that two builds can be
+  /// compared across processes (DescriptorIndex::digest). Errors: InvalidArgument when a library
+  /// cannot write its index out.
+  virtual Status addToDigest(Fingerprint& digest) const = 0;
 };
 
 /// `data` is DescriptorIndex's copy (rows × dims, finite, validated); it stays at this address for
@@ -232,6 +238,7 @@ class VaryingColumns {
   /// scratch); returns how many left-out columns differ from the indexed rows' value there.
   int code(const float* row, uint64_t* full, uint64_t* code) const;
   int64_t memoryBytes() const { return static_cast<int64_t>(mColumns.size() * 4 + 3 * mConstant.size() * 8); }
+  void addToDigest(Fingerprint& digest) const { digest.add(mDims), digest.add(mColumns), digest.add(mConstant), digest.add(mOutside), digest.add(mInside); }
 
  private:
   int64_t mDims = 0;

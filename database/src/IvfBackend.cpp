@@ -524,6 +524,11 @@ class WideProjection {
   int64_t bytes() const {
     return static_cast<int64_t>((mAcross.size() + mCentre.size() + mReference.size()) * sizeof(float) + sizeof mOffset);
   }
+  void addToDigest(Fingerprint& digest) const {
+    digest.add(mDims), digest.add(mAcross), digest.add(mCentre), digest.add(mReference);
+    digest.addBytes(mOffset.data(), sizeof mOffset);
+    digest.add(mReferenceApart);
+  }
 
  private:
   // The columns of v (n × m, row-major) made orthonormal in order, by Gram–Schmidt in double done
@@ -683,6 +688,15 @@ class IvfBackend final : public Backend {
       first[id] = lower[static_cast<size_t>(at)];
       second[id] = secondBound(lanes, key.data(), q, at, prefix[static_cast<size_t>(at)]);
     }
+  }
+
+  Status addToDigest(Fingerprint& digest) const override {
+    digest.add(mDims, mWide, mKeyDims, mStride, mLists, mProbes);
+    digest.add(mBasis), digest.add(mBasisAcross), digest.add(mMean), digest.add(mCentroids), digest.add(mRows);
+    digest.add(mResiduals), digest.add(mNorms), digest.add(mCentroidPrefix), digest.add(mWidePrefix), digest.add(mWideRecords);
+    digest.add(mWideErrors), digest.add(mWidePrefixLows), digest.add(mWidePrefixHighs), digest.add(mIds), digest.add(mOffsets);
+    mProjection.addToDigest(digest);
+    return Ok{};
   }
 
   int64_t memoryBytes() const override {

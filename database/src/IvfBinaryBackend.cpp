@@ -287,6 +287,15 @@ class IvfBinaryBackend final : public Backend {
     return Ok{};
   }
 
+  // (mForm and mKeyDistances, the CPU's instructions, change no answer: left out.)
+  Status addToDigest(Fingerprint& digest) const override {
+    mVarying.addToDigest(digest);
+    digest.add(static_cast<uint64_t>(mWords), mLists, mProbes);
+    digest.add(mKeyMask), digest.add(mCentroidKeys), digest.add(mListStart), digest.add(mListRows), digest.add(mKeys);
+    digest.add(mCodes), digest.add(mIds);
+    return Ok{};
+  }
+
   int64_t memoryBytes() const override {
     return static_cast<int64_t>((mCodes.size() + mKeys.size() + mCentroidKeys.size()) * 8 + mIds.size() * 8 +
                                 (mListStart.size() + mListRows.size() + mKeyMask.size()) * 8) +

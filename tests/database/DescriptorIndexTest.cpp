@@ -904,6 +904,52 @@ std::vector<float> randomBits(int64_t rows, int64_t dims, uint32_t seed) {
   return m;
 }
 
+// A built index's digest (DescriptorIndex::digest: its settings, data and what the build made) is
+// the same for two builds of the same data and settings, and moves with one value of the data and
+// with the settings, for every kind but the autotuned one (whose choice depends on timings). The
+// graphs' levels come from the seed, so another seed is another digest. Across processes and SIMD
+// widths: tests/tools/determinism_across_processes.sh (brittle query --digest).
+TEST(DescriptorIndex, DigestIsTheBuildsAndMovesWithItsDataAndSettings) {
+  const auto floats = randomMatrix(600, 28, 71);
+  const auto grids = clampedGrids(120, 72);
+  const auto bits = randomBits(600, 100, 73);
+  for (Kind kind : kAllDescriptorIndexKinds) {
+    if (kind == Kind::Autotuned) continue;
+    SCOPED_TRACE(descriptorIndexKindName(kind));
+    const bool wide = kind == Kind::HnswPooled || kind == Kind::HnswPrincipal;
+    const std::vector<float>& data = indexTakesBits(kind) ? bits : wide ? grids : floats;
+    const int64_t dims = indexTakesBits(kind) ? 100 : wide ? 4096 : 28;
+    DescriptorIndexSettings s = settingsFor(kind, 4);
+    s.trees = kind == Kind::KdForest ? 4 : 8;
+    const auto digestOf = [&](const std::vector<float>& values, const DescriptorIndexSettings& settings) {
+      const Result<uint64_t> d = buildOrDie(values, dims, settings).digest();
+      EXPECT_TRUE(d.ok()) << (d.ok() ? "" : d.error().message);
+      return d.ok() ? d.value() : uint64_t{0};
+    };
+    const uint64_t first = digestOf(data, s);
+    EXPECT_EQ(digestOf(data, s), first);
+    std::vector<float> moved = data;
+    moved[moved.size() - dims] = indexTakesBits(kind) ? 1.0f - moved[moved.size() - dims] : moved[moved.size() - dims] + 0.25f;
+    EXPECT_NE(digestOf(moved, s), first);
+    DescriptorIndexSettings other = s;
+    other.checks = 5;
+    EXPECT_NE(digestOf(data, other), first);
+  }
+  // The wide inverted file (16³ grids, filed by principal directions) and the graphs' seeds.
+  DescriptorIndexSettings ivf = settingsFor(Kind::Ivf, 3);
+  ivf.trees = 6;
+  const uint64_t wideFirst = buildOrDie(grids, 4096, ivf).digest().value();
+  EXPECT_EQ(buildOrDie(grids, 4096, ivf).digest().value(), wideFirst);
+  std::vector<float> moved = grids;
+  moved[4096 * 7 + 100] = -moved[4096 * 7 + 100];
+  EXPECT_NE(buildOrDie(moved, 4096, ivf).digest().value(), wideFirst);
+  DescriptorIndexSettings graph = settingsFor(Kind::Hnsw, 16);
+  graph.trees = 8;
+  const uint64_t seeded = buildOrDie(floats, 28, graph).digest().value();
+  graph.seed = 2;
+  EXPECT_NE(buildOrDie(floats, 28, graph).digest().value(), seeded);
+}
+
 // Binary codes: the flat Hamming scan is brute force on 0/1 vectors, distances and ties included
 // (100 values a row: the last byte is padded); the binary graph finds most nearest rows and is
 // reproducible; a value other than 0 or 1 is refused at build and at query.

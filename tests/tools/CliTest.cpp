@@ -706,6 +706,20 @@ TEST_F(CliTest, BakeDbThenQueryFindsTheEntryInAnotherPose) {
   const CliRun text = run("query " + path("db.h5") + " --mesh " + path("query.off"));
   EXPECT_EQ(text.exitCode, 0) << text.out;
   EXPECT_NE(text.out.find("-00004"), std::string::npos) << text.out;
+  // --digest: the built index's digest, 16 hex digits, the same for two builds and another for
+  // another index (tests/tools/determinism_across_processes.sh compares it across processes).
+  const auto digestOf = [&](const std::string& index) {
+    const CliRun q = run("query " + path("db.h5") + " --mesh " + path("query.off") + " --index " + index + " --k 1 --digest --json");
+    EXPECT_EQ(q.exitCode, 0) << q.out;
+    return q.exitCode == 0 ? nlohmann::json::parse(q.out)["query"]["index_digest"].get<std::string>() : std::string();
+  };
+  const std::string digest = digestOf("hnsw");
+  EXPECT_EQ(digest.size(), 16u);
+  EXPECT_EQ(digest.find_first_not_of("0123456789abcdef"), std::string::npos) << digest;
+  EXPECT_EQ(digestOf("hnsw"), digest);
+  EXPECT_NE(digestOf("kd-forest"), digest);
+  const CliRun digestText = run("query " + path("db.h5") + " --mesh " + path("query.off") + " --digest");
+  EXPECT_NE(digestText.out.find("index digest "), std::string::npos) << digestText.out;
   const CliRun inspect = run("inspect " + path("db.h5") + " --json");
   ASSERT_EQ(inspect.exitCode, 0) << inspect.out;
   const auto inspected = nlohmann::json::parse(inspect.out);

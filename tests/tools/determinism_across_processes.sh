@@ -6,12 +6,14 @@
 # forms of the loops that also have an AVX form (brittle/core/Simd.h), as on a CPU without AVX, so
 # that the comparison also spans machines with and without it. Checked:
 #   1. a fragment-database bake (bake-db) with 1, 2 and 1 worker threads gives the same pack data;
-#   2. a bake of the four default objects (the default manifest's meshes, materials, element
+#   2. the search indexes built over a 1 200-entry database (every descriptor kind, the stored kinds
+#      and the graphs, kd-forest and FAISS) are the same in each process (brittle query --digest);
+#   3. a bake of the four default objects (the default manifest's meshes, materials, element
 #      orders, stretch and contact spreads, at fewer modes, the vase at fewer elements) with a small
 #      database gives the same pack data;
 # (pack data: every dataset and attribute bit for bit, the wall-clock bake timings aside;
 # compare_packs.py);
-#   3. one breaking impact on each object (the main job's four impacts) gives the same fracture
+#   4. one breaking impact on each object (the main job's four impacts) gives the same fracture
 #      fingerprint (brittle impact: every value the impact computed, times aside), and that
 #      fingerprint equals the golden value pinned in golden-fingerprints.txt beside this script.
 #   determinism_across_processes.sh BRITTLE_CLI SOURCE_DIR [--pin]
@@ -53,7 +55,32 @@ for i in 1 2 3; do
 done
 same_packs "bake-db (threads 1, 2, 1; the third in SSE2)" "$work/db1.h5" "$work/db2.h5" "$work/db3.h5"
 
-# 2. The four default objects, smaller, with a small database, all four in P2 as the default pack
+# 2. The search indexes a World builds from a pack's database, on a larger database (1 200
+#    entries, descriptors only: every stored kind has several lists), built in each process and
+#    compared by their digests (brittle query --digest: settings, data and what the build made).
+"$cli" bake-db --shapes "$src/assets/shapes/base-shapes.json" --entries 1200 --seed 7 --descriptors-only --quiet \
+  --out "$work/search.h5" >/dev/null
+indexes=(
+  "moment ivf" "moment hnsw" "moment kd-forest" "moment faiss-ivf"
+  "voxel ivf-binary" "voxel faiss-binary-hnsw" "voxel-improved ivf" "voxel-improved hnsw-principal"
+)
+for spec in "${indexes[@]}"; do
+  read -r descriptor index <<<"$spec"
+  digests=()
+  for i in 1 2 3; do
+    digest=$(run "$i" $(( i * 4000 )) "$cli" query "$work/search.h5" --mesh "$src/assets/meshes/brick.off" \
+      --descriptor "$descriptor" --index "$index" --k 1 --digest --json |
+      python3 -c 'import json, sys; print(json.load(sys.stdin)["query"]["index_digest"])')
+    digests+=("$digest")
+  done
+  if [ "${digests[0]}" != "${digests[1]}" ] || [ "${digests[0]}" != "${digests[2]}" ]; then
+    echo "FAIL: the $descriptor $index index differs between processes: ${digests[*]}"
+    exit 1
+  fi
+  echo "ok: $descriptor $index index, 3 processes (the third in SSE2), digest ${digests[0]}"
+done
+
+# 3. The four default objects, smaller, with a small database, all four in P2 as the default pack
 #    bakes them (nodal-mean corner stresses, the node memo, the brick's and the ball's own contact
 #    spread). The plate keeps its default size: at 1 000 tets its ring (3.8 cm) is wider than
 #    0.05 D, and the 5 m/s hit reads 36 MPa at its corners' nodal means, short of glass's strength.
@@ -75,7 +102,7 @@ for i in 1 2 3; do
 done
 same_packs "bake of the four default objects (the third in SSE2)" "$work/pack1.h5" "$work/pack2.h5" "$work/pack3.h5"
 
-# 3. The main job's four impacts (tools/run-default.sh), each in three processes.
+# 4. The main job's four impacts (tools/run-default.sh), each in three processes.
 impacts=(
   "glass-plate --point 0.02,0.01,0.005 --normal 0,0,1 --speed 5 --impactor-mass 0.1 --impactor-radius 0.02"
   "porcelain-vase --point 0.0741,0,0.12 --normal 1,0,0 --speed 10 --impactor-mass 0.1 --impactor-radius 0.02"

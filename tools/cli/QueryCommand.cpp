@@ -17,6 +17,7 @@
 #include "brittle/precompute/MaterialLibrary.h"
 #include "brittle/precompute/MeshIO.h"
 #include "brittle/precompute/MeshValidation.h"
+#include "brittle/runtime/Fingerprint.h"
 
 namespace brittle::cli {
 namespace {
@@ -29,6 +30,7 @@ struct QueryOptions {
   std::string material;
   int k = 3;
   bool json = false;
+  bool digest = false;
 };
 
 nlohmann::json matrixJson(const Eigen::Matrix3d& m) {
@@ -55,6 +57,9 @@ Runner addQueryCommand(CLI::App& app) {
   cmd->add_option("--material", o->material,
                   "Material of the query (preset or JSON file) to rescale the physics to; default: the reference");
   cmd->add_flag("--json", o->json, "Print the matches as JSON");
+  cmd->add_flag("--digest", o->digest,
+                "Also print the built index's digest (its settings, data and what its build made: equal digests, the same index "
+                "bit for bit, in any process or on any machine; it reads the whole index)");
 
   return [o]() -> int {
     auto pack = readPack(o->pack);
@@ -111,6 +116,11 @@ Runner addQueryCommand(CLI::App& app) {
                     {"index", descriptorIndexKindName(matcher.value().index(kind)->settings().kind)},
                     {"material", material.name},
                     {"match_time_s", matchS}};
+    if (o->digest) {
+      const Result<uint64_t> digest = matcher.value().index(kind)->digest();
+      if (!digest) return reportError(digest.error());
+      doc["query"]["index_digest"] = fingerprintHex(digest.value());
+    }
     doc["matches"] = nlohmann::json::array();
     for (const FragmentMatch& m : matches.value()) {
       const FragmentEntry& e = db.entries[static_cast<size_t>(m.entry)];
@@ -145,6 +155,7 @@ Runner addQueryCommand(CLI::App& app) {
     std::cout << std::setprecision(4) << "query " << doc["query"]["mesh"].get<std::string>() << ": " << o->descriptor
               << " descriptor, " << doc["query"]["index"].get<std::string>() << " index, " << db.entries.size()
               << " entries, " << 1e3 * matchS << " ms\n";
+    if (o->digest) std::cout << "  index digest " << doc["query"]["index_digest"].get<std::string>() << "\n";
     for (const auto& j : doc["matches"]) {
       std::cout << "  " << std::setw(4) << j["entry"].get<int64_t>() << "  " << std::setw(16) << std::left
                 << j["name"].get<std::string>() << std::right << "  distance " << j["distance"].get<double>()

@@ -176,6 +176,13 @@ class DescriptorIndex {
   /// links, lists and codes of hnswlib and FAISS).
   int64_t memoryBytes() const;
 
+  /// A 64-bit digest of the built index: its kind and settings, the data, and what the build made
+  /// (FNV-1a over their bytes, brittle/core/Fingerprint.h). Equal digests: the same index, bit for
+  /// bit, so that `brittle query --digest` can check a build across processes and machines. It reads
+  /// every byte of the index (about a second a GB). Error: InvalidArgument when a library (FLANN,
+  /// FAISS) cannot write its index out.
+  Result<uint64_t> digest() const;
+
   int64_t size() const { return mRows; }
   int64_t dims() const { return mDims; }
   const DescriptorIndexSettings& settings() const { return mSettings; }

@@ -1,54 +1,13 @@
-// Fingerprint.h — 64-bit fingerprints of computed results, for bit-identity checks (replays,
-// determinism across processes and thread counts, pinned golden values in the tests).
+// Fingerprint.h — an impact's fingerprint (the Fingerprint class: brittle/core/Fingerprint.h).
 #pragma once
 
-#include <Eigen/Core>
 #include <cstdint>
-#include <cstring>
 #include <string>
-#include <type_traits>
 
+#include "brittle/core/Fingerprint.h"
 #include "brittle/runtime/World.h"
 
 namespace brittle {
-
-/// FNV-1a (64 bits) over the bytes of the values added, in the order added. Equal inputs, bit for
-/// bit, give equal fingerprints; it is not a cryptographic hash.
-class Fingerprint {
- public:
-  void addBytes(const void* data, size_t count) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i < count; ++i) mHash = (mHash ^ p[i]) * 1099511628211ull;
-  }
-  template <typename T>
-    requires std::is_arithmetic_v<T>
-  void add(T value) {
-    addBytes(&value, sizeof value);
-  }
-  void add(const std::string& text) {
-    add(static_cast<uint64_t>(text.size()));
-    addBytes(text.data(), text.size());
-  }
-  /// The shape, then the coefficients row by row (the same for either storage order).
-  template <typename Derived>
-  void add(const Eigen::DenseBase<Derived>& m) {
-    add(static_cast<int64_t>(m.rows()));
-    add(static_cast<int64_t>(m.cols()));
-    for (Eigen::Index i = 0; i < m.rows(); ++i) {
-      for (Eigen::Index j = 0; j < m.cols(); ++j) add(m(i, j));
-    }
-  }
-  /// Several values, in order.
-  template <typename... T>
-    requires(sizeof...(T) > 1)
-  void add(const T&... values) {
-    (add(values), ...);
-  }
-  uint64_t value() const { return mHash; }
-
- private:
-  uint64_t mHash = 1469598103934665603ull;
-};
 
 /// Every value an impact computed: the contact, the peak, the load, the fracture state and each
 /// fragment (path, reason, surface, mass properties, match). Left out: the stage times, and the
