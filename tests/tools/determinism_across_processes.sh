@@ -36,6 +36,13 @@ run() {  # run I N CMD...: process I (1–3) of a step, its environment N bytes 
   shift 2
   env "BRITTLE_TEST_PAD=$(pad "$size")" "BRITTLE_SIMD=$simd" "$@"
 }
+all_equal() {  # all_equal WHAT VALUE...: every value equals the first, or the check fails naming WHAT
+  local what=$1
+  shift
+  for value in "$@"; do
+    [ "$value" = "$1" ] || { echo "FAIL: $what differs between processes: $*"; exit 1; }
+  done
+}
 same_packs() {  # same_packs WHAT PACK...: every pack holds the first one's data, bit for bit
   local what=$1
   shift
@@ -73,10 +80,7 @@ for spec in "${indexes[@]}"; do
       python3 -c 'import json, sys; print(json.load(sys.stdin)["query"]["index_digest"])')
     digests+=("$digest")
   done
-  if [ "${digests[0]}" != "${digests[1]}" ] || [ "${digests[0]}" != "${digests[2]}" ]; then
-    echo "FAIL: the $descriptor $index index differs between processes: ${digests[*]}"
-    exit 1
-  fi
+  all_equal "the $descriptor $index index" "${digests[@]}"
   echo "ok: $descriptor $index index, 3 processes (the third in SSE2), digest ${digests[0]}"
 done
 
@@ -119,10 +123,7 @@ for spec in "${impacts[@]}"; do
       python3 -c 'import json, sys; d = json.load(sys.stdin); print(d["fingerprint"], d["broken"], len(d["fragments"]))')
     prints+=("$print")
   done
-  if [ "${prints[0]}" != "${prints[1]}" ] || [ "${prints[0]}" != "${prints[2]}" ]; then
-    echo "FAIL: the $object impact differs between processes: ${prints[*]}"
-    exit 1
-  fi
+  all_equal "the $object impact" "${prints[@]}"
   read -r fp broken fragments <<<"${prints[0]}"
   [ "$broken" = True ] || { echo "FAIL: the $object impact did not break the object"; exit 1; }
   echo "ok: $object impact, 3 processes (the third in SSE2), $fragments fragments, fingerprint $fp"
