@@ -145,7 +145,7 @@ struct StressScanWorkspace {
     double best = 0.0;
     int32_t point = -1, instant = -1;
     int64_t evaluations = 0;
-    int64_t heapEnd = 0;  // where the range's heap stood after the search's first round
+    int64_t heapEnd = 0;  // where the range's heap stood after the search's last round so far
   };
   std::vector<RangePeak> rangePeaks;
   // The groups (StressBounds::groupStart): each group's bound at every instant (G by K, row-major)
