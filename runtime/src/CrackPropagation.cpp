@@ -1306,7 +1306,8 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
     state.energySpentJ += cost;
     state.crackAreaM2 += area;
     cutBy(crack, e) = 1;
-    if (!w.cut[static_cast<size_t>(e)]) state.cutElements.push_back(e);
+    const bool junction = w.cut[static_cast<size_t>(e)] != 0;  // another crack cut it first
+    if (!junction) state.cutElements.push_back(e);
     w.cut[static_cast<size_t>(e)] = 1;
     state.cutPlanes.emplace_back(n.x(), n.y(), n.z(), offset);
     for (int k = 0; k < 6; ++k) {
@@ -1318,7 +1319,11 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
       const double sCut = d[i] / (d[i] - d[j]);
       state.edgeCuts[edge] = forward ? sCut : 1.0 - sCut;
     }
-    // The neighbours the plane reaches through a face, each a front, pushed in face order.
+    // The neighbours the plane reaches through a face, each a front, pushed in face order; none
+    // past another crack's surface where cracks end at cracks (CrackSettings::endAtCracks). Every
+    // face path from one side of a sheet to the other passes through an element the sheet cuts
+    // (an uncut element's nodes lie on one side), so such a crack cannot cross another.
+    if (junction && settings.endAtCracks) return true;
     for (int f = 0; f < 4; ++f) {
       const int32_t nb = topo.neighbours(e, f);
       Eigen::Vector3d a, b;

@@ -919,6 +919,88 @@ TEST(CrackPropagation, CrumbsACrackCutsOffAreMergedBack) {
   EXPECT_EQ(merged.crackAreaM2, kept.crackAreaM2);  // the energy was spent all the same
 }
 
+// Two straight cracks in a plate of 8 × 8 × 1 cells: one started by σ_xx at (0.13, 0.05) (the
+// plane x = its seed's centroid x), one by σ_yy at (0.33, 0.23) (y = its centroid y), and a weak
+// tension elsewhere, so that both run until the plate's edges (no noise, no turn towards the local
+// direction). Crossing, they cut the plate into four; where cracks end at cracks, the one that
+// reaches the other's sheet second ends on it, a T-junction, and makes three. Either way one
+// plane runs whole: no label spans it.
+TEST(CrackPropagation, CracksEndingAtCracksMakeJunctionsWhereCrossingCracksMakeFourPieces) {
+  const TetMesh mesh = testing::makeBoxTetMesh(0.4, 0.4, 0.05, 8, 8, 1);
+  const TetTopology topo = buildTetTopology(mesh).value();
+  const Eigen::Index t = mesh.tets.rows();
+  auto centroid = [&](Eigen::Index e) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int i = 0; i < 4; ++i) c += 0.25 * mesh.nodes.row(mesh.tets(e, i)).transpose();
+    return c;
+  };
+  auto nearest = [&](const Eigen::Vector3d& p) {
+    Eigen::Index best = 0;
+    for (Eigen::Index e = 1; e < t; ++e) {
+      if ((centroid(e) - p).norm() < (centroid(best) - p).norm()) best = e;
+    }
+    return best;
+  };
+  const Eigen::Index a = nearest({0.13, 0.05, 0.025}), b = nearest({0.33, 0.23, 0.025});
+  const double planeX = centroid(a).x(), planeY = centroid(b).y();
+  for (Eigen::Index i = 0; i < mesh.nodes.rows(); ++i) {  // no node on either plane
+    ASSERT_GT(std::abs(mesh.nodes(i, 0) - planeX), 1e-6);
+    ASSERT_GT(std::abs(mesh.nodes(i, 1) - planeY), 1e-6);
+  }
+  MatrixXdRow stressModes = MatrixXdRow::Zero(6 * t, 1);
+  for (Eigen::Index e = 0; e < t; ++e) stressModes.block(6 * e, 0, 3, 1).setConstant(1e6);  // 1 MPa, isotropic
+  stressModes(6 * a, 0) = 60e6;      // σ_xx
+  stressModes(6 * b + 1, 0) = 50e6;  // σ_yy
+  const Eigen::MatrixXd q = Eigen::MatrixXd::Ones(1, 1);
+  const double strengthPa = 45e6;
+  const StressScan scan = scanStresses(stressModes, stressModeBounds(stressModes, 1), q, Eigen::VectorXd(), {0.0}, strengthPa, true);
+  StressField field;
+  field.stressModes = &stressModes;
+  field.q = q.row(0).transpose();
+  CrackSettings settings;
+  settings.maxCracks = 2;
+  settings.noiseRad = 0.0;
+  settings.directionBlend = 1.0;
+  settings.minFragmentNodes = 1;
+  // The side of each plane every fragment's nodes are on: {label: sides seen}, 1 below, 2 above.
+  auto sides = [&](const FractureState& s, int axis, double plane) {
+    std::map<int, int> seen;
+    for (Eigen::Index i = 0; i < mesh.nodes.rows(); ++i) seen[s.nodeLabels[i]] |= mesh.nodes(i, axis) < plane ? 1 : 2;
+    return seen;
+  };
+  auto spans = [](const std::map<int, int>& seen) {
+    return std::count_if(seen.begin(), seen.end(), [](const auto& kv) { return kv.second == 3; });
+  };
+  const FractureState crossing = propagateCracks(mesh, topo, scan, field, strengthPa, 8.0, 1e6, settings).value();
+  ASSERT_EQ(crossing.crackCount, 2);
+  EXPECT_EQ(crossing.fragmentCount, 4);
+  EXPECT_EQ(spans(sides(crossing, 0, planeX)), 0);
+  EXPECT_EQ(spans(sides(crossing, 1, planeY)), 0);
+  settings.endAtCracks = true;
+  CrackWorkspace workspace;
+  FractureState ending;
+  ASSERT_TRUE(propagateCracks(mesh, topo, scan, field, strengthPa, 8.0, 1e6, settings, workspace, ending));
+  ASSERT_EQ(ending.crackCount, 2);
+  // The crack that ends cuts the elements where it meets the other's sheet, so the two join
+  // without a gap: some elements are cut by both (cutBy: cracks × #T).
+  ASSERT_EQ(workspace.cutBy.size(), 2 * static_cast<size_t>(t));
+  int both = 0;
+  for (Eigen::Index e = 0; e < t; ++e) both += workspace.cutBy[static_cast<size_t>(e)] && workspace.cutBy[static_cast<size_t>(t + e)];
+  EXPECT_GT(both, 0);
+  EXPECT_EQ(ending.fragmentCount, 3);
+  const auto spansX = spans(sides(ending, 0, planeX)), spansY = spans(sides(ending, 1, planeY));
+  EXPECT_EQ(std::min(spansX, spansY), 0) << "one sheet runs whole";
+  EXPECT_EQ(std::max(spansX, spansY), 1) << "the other ends on it: one piece lies on both of its sides";
+  EXPECT_FALSE(ending.arrestedByEnergy);
+  EXPECT_LT(ending.crackAreaM2, crossing.crackAreaM2);
+  EXPECT_LT(ending.cutElements.size(), crossing.cutElements.size());
+  // Every cut element of the junction's result is one the crossing cracks cut too, and the
+  // junction keeps its seeds' elements.
+  for (int32_t e : ending.cutElements) {
+    EXPECT_NE(std::find(crossing.cutElements.begin(), crossing.cutElements.end(), e), crossing.cutElements.end()) << e;
+  }
+}
+
 TEST(CrackPropagation, ACrumbJoinsTheFragmentItWasCutFrom) {
   // A 0.4 × 0.2 × 0.2 m box of 4 × 2 × 2 cells (node (i, j, k) = i + 5 (j + 3 k)) cut by the plane
   // x = 0.25 into 27 and 18 nodes, and its corner node 44 = (0.4, 0.2, 0.2) chipped off alone.

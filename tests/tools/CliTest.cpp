@@ -261,15 +261,29 @@ TEST_F(CliTest, ImpactBenchTimesEitherElementAndNamesItInItsCsv) {
       run("bench impact --tets 400 --modes 6 --impacts 2 --element p2 --threads 1 --speed 80 --quiet --csv " + path("b.csv"));
   ASSERT_EQ(bench.exitCode, 0) << bench.out;
   const Csv csv = readCsv(dir / "b.csv");
-  EXPECT_EQ(csv.header, "target_tets,tets,modes,prune,stage,impacts,median_ms,p99_ms,broken_fraction,mean_fragments,median_evaluations,element");
+  EXPECT_EQ(csv.header, "target_tets,tets,modes,prune,stage,impacts,median_ms,p99_ms,broken_fraction,mean_fragments,median_evaluations,"
+                        "element,cracks,mean_cut_elements");
   for (const std::vector<std::string>& cells : csv.rows) {
-    ASSERT_EQ(cells.size(), 12u) << cells[0];
+    ASSERT_EQ(cells.size(), 14u) << cells[0];
     EXPECT_EQ(cells[5], "2") << cells[4];            // impacts
     EXPECT_EQ(std::stod(cells[8]), 1.0) << cells[4];  // every one broke the slab
     EXPECT_EQ(cells[11], "p2") << cells[4];
+    EXPECT_EQ(cells[12], "cross") << cells[4];        // the World's default
+    EXPECT_GT(std::stod(cells[13]), 0.0) << cells[4];
   }
   EXPECT_EQ(csv.rows.size(), 2u * 10);  // pruned and unpruned, ten stages each
+  // Cracks that end at cracks: rows of their own beside the crossing ones, on the same impacts.
+  ASSERT_EQ(run("bench impact --tets 400 --modes 6 --impacts 2 --element p2 --threads 1 --speed 80 --pruning on --cracks both "
+                "--quiet --csv " + path("c.csv")).exitCode, 0);
+  std::map<std::string, double> cut;
+  for (const std::vector<std::string>& cells : readCsv(dir / "c.csv").rows) {
+    if (cells[4] == "total") cut[cells[12]] = std::stod(cells[13]);
+  }
+  ASSERT_EQ(cut.size(), 2u);
+  EXPECT_GT(cut["end"], 0.0);
+  EXPECT_GT(cut["cross"], 0.0);
   EXPECT_EQ(run("bench impact --element p3 --csv " + path("x.csv")).exitCode, 2);
+  EXPECT_EQ(run("bench impact --cracks sideways --csv " + path("x.csv")).exitCode, 2);
 }
 
 // bench place: a row per pack object, the placement against its bytes' read, the background

@@ -10,6 +10,8 @@
 #include <random>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "brittle/core/Timing.h"
 #include "brittle/database/Pack.h"
@@ -18,11 +20,23 @@
 #include "brittle/runtime/World.h"
 
 namespace brittle::bench {
+namespace {
+
+// The (pruned, cracks end at cracks) pairs timed, pruning's outer.
+std::vector<std::pair<bool, bool>> timedSchemes(const ImpactBenchSettings& s) {
+  std::vector<std::pair<bool, bool>> schemes;
+  for (bool prune : s.pruning) {
+    for (bool ends : s.crackEnds) schemes.emplace_back(prune, ends);
+  }
+  return schemes;
+}
+
+}  // namespace
 
 Status runImpactBench(const ImpactBenchSettings& s) {
   std::ofstream csv(s.csv);
   if (!csv) return makeError(ErrorCode::PackIoError, "cannot write " + s.csv.string());
-  csv << "target_tets,tets,modes,prune,stage,impacts,median_ms,p99_ms,broken_fraction,mean_fragments,median_evaluations,element\n";
+  csv << "target_tets,tets,modes,prune,stage,impacts,median_ms,p99_ms,broken_fraction,mean_fragments,median_evaluations,element,cracks,mean_cut_elements\n";
   const Material glass = materialPreset("glass").value();
   FragmentDatabase database;
   if (!s.databasePack.empty()) {
@@ -52,11 +66,12 @@ Status runImpactBench(const ImpactBenchSettings& s) {
     pack.objects.push_back(std::move(asset).value());
     pack.database = database;
     for (int modes : s.modes) {
-      for (bool prune : s.pruning) {
+      for (const auto& [prune, endAtCracks] : timedSchemes(s)) {
         WorldSettings ws;
         ws.seed = s.seed;
         ws.fracture.modeCount = modes;
         ws.fracture.pruneStresses = prune;
+        ws.fracture.crack.endAtCracks = endAtCracks;
         // Without a database fragments stay surfaces; with one they become objects, whose bodies
         // are timed apart (the first call that needs each waits for it).
         ws.fracture.matchFragments = !database.empty();
@@ -75,7 +90,7 @@ Status runImpactBench(const ImpactBenchSettings& s) {
         std::vector<std::vector<double>> stage(10);
         std::vector<double> evaluations;
         int broken = 0;
-        double fragments = 0.0;
+        double fragments = 0.0, cutElements = 0.0;
         ImpactResult result;  // reused, as a host's hot path would
         for (int i = 0; i < s.impacts; ++i) {
           auto id = world.value().addObject({.asset = "pane"});
@@ -103,6 +118,7 @@ Status runImpactBench(const ImpactBenchSettings& s) {
           evaluations.push_back(static_cast<double>(r.stressEvaluations));
           broken += r.broken ? 1 : 0;
           fragments += static_cast<double>(r.fragments.size());
+          cutElements += static_cast<double>(r.fracture.cutElements.size());
           if (world.value().isAlive(id.value())) (void)world.value().removeObject(id.value());
           for (const FragmentResult& f : r.fragments) {
             if (f.object.valid()) (void)world.value().removeObject(f.object);
@@ -118,14 +134,16 @@ Status runImpactBench(const ImpactBenchSettings& s) {
           csv << target << "," << tets << "," << modes << "," << (prune ? 1 : 0) << "," << kStages[k] << "," << s.impacts
               << "," << percentile(stage[k], 0.5) << "," << percentile(stage[k], 0.99) << ","
               << static_cast<double>(broken) / s.impacts << "," << fragments / s.impacts << "," << percentile(evaluations, 0.5)
-              << "," << elementOrderName(s.elementOrder) << "\n";
+              << "," << elementOrderName(s.elementOrder) << "," << (endAtCracks ? "end" : "cross") << ","
+              << cutElements / s.impacts << "\n";
         }
         if (!s.quiet) {
           std::printf("%6lld tets %3d modes %-9s total median %8.2f ms p99 %8.2f ms (stress %.2f, cracks %.2f, surfaces %.2f, "
-                      "matching %.2f); bodies after %.2f ms; %.1f fragments\n",
+                      "matching %.2f); bodies after %.2f ms; %.1f fragments%s\n",
                       static_cast<long long>(tets), modes, prune ? "pruned" : "unpruned", percentile(stage[6], 0.5),
                       percentile(stage[6], 0.99), percentile(stage[2], 0.5), percentile(stage[3], 0.5), percentile(stage[4], 0.5),
-                      percentile(stage[5], 0.5), percentile(stage[8], 0.5), fragments / s.impacts);
+                      percentile(stage[5], 0.5), percentile(stage[8], 0.5), fragments / s.impacts,
+                      endAtCracks ? ", cracks ending at cracks" : "");
           std::fflush(stdout);
         }
       }

@@ -45,6 +45,9 @@ struct ImpactBenchSettings {
   /// The scans timed: pruned by the stress bounds (the World's default), unpruned (every element
   /// at every instant, the reference), or both.
   std::vector<bool> pruning = {true, false};
+  /// How cracks meet: crossing each other (false, the World's default) or ending at one another
+  /// (true, CrackSettings::endAtCracks), or both; a row each.
+  std::vector<bool> crackEnds = {false};
   bool quiet = false;
 };
 

@@ -124,6 +124,14 @@ Runner addBenchCommand(CLI::App& app) {
           "The stress scans timed: on (pruned by the stress bounds, the World's default), off (every element at every "
           "instant) or both (default)")
       ->check(CLI::IsMember({"on", "off", "both"}));
+  impact->add_option_function<std::string>(
+          "--cracks",
+          [is](const std::string& v) {
+            is->crackEnds = v == "cross" ? std::vector<bool>{false} : v == "end" ? std::vector<bool>{true} : std::vector<bool>{false, true};
+          },
+          "How cracks meet: cross (they run through each other, the World's default), end (each ends at the first "
+          "crack it meets, CrackSettings::endAtCracks) or both")
+      ->check(CLI::IsMember({"cross", "end", "both"}));
   impact->add_flag("--quiet", is->quiet, "No progress lines");
   auto* integrators = cmd->add_subcommand(
       "integrators", "Error and stability of the modal time integrators against the time step (ωh from 0.01 to 100)");

@@ -39,7 +39,7 @@ struct ImpactOptions {
   int pulseSteps = FractureSettings{}.pulseSteps, ringDownSteps = FractureSettings{}.ringDownSteps;
   bool noCorrection = false;
   int maxCracks = CrackSettings{}.maxCracks, minFragmentNodes = CrackSettings{}.minFragmentNodes;
-  bool noPrune = false, noMatch = false, json = false, reportUncorrected = false;
+  bool noPrune = false, noMatch = false, json = false, reportUncorrected = false, endAtCracks = false;
 };
 
 nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
@@ -94,6 +94,8 @@ Runner addImpactCommand(CLI::App& app) {
   cmd->add_option("--min-fragment-nodes", o->minFragmentNodes, "Smaller fragments are merged into a neighbour")->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd->add_option("--crack-blend", o->crackBlend, "Weight of a crack's starting plane against the local principal direction")->capture_default_str()->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--crack-noise", o->crackNoise, "Seeded turn of the crack plane per element (rad)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--end-at-cracks", o->endAtCracks,
+                "A crack ends where it meets another crack's surface (a T-junction) instead of crossing it");
   cmd->add_option("--pulse-steps", o->pulseSteps, "Stress-evaluation instants during the contact")->capture_default_str()->check(CLI::Range(2, 100000));
   cmd->add_option("--ring-down-steps", o->ringDownSteps, "Instants in the window after the contact")->capture_default_str()->check(CLI::Range(0, 100000));
   cmd->add_flag("--no-static-correction", o->noCorrection, "Truncated modes only (no mode-acceleration correction)");
@@ -142,6 +144,7 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.crack.directionBlend = o->crackBlend;
     settings.fracture.crack.noiseRad = o->crackNoise;
     settings.fracture.crack.minFragmentNodes = o->minFragmentNodes;
+    settings.fracture.crack.endAtCracks = o->endAtCracks;
     settings.fracture.descriptor = parseDescriptorKind(o->descriptor).value();
     auto world = World::create(std::move(pack).value(), settings);
     if (!world) return reportError(world.error());
