@@ -100,6 +100,9 @@ Result<FractureSettings> parseRuntimeSettings(std::string_view json, std::string
       const auto order = parseElementOrder(value.get<std::string>());
       if (!order) return makeError(ErrorCode::InvalidArgument, "runtime settings " + std::string(sourceName) + ": \"mesh_ratio_element\" must be \"p1\" or \"p2\"");
       s.meshRatioElement = *order;
+    } else if (key == "end_at_cracks") {
+      if (!value.is_boolean()) return settingsFileError(sourceName, "\"end_at_cracks\" must be true or false");
+      s.crack.endAtCracks = value.get<bool>();
     } else if (key == "modes") {
       if (Status st = integer(key, s.modeCount); !st) return st.error();
     } else {
@@ -135,6 +138,7 @@ std::string runtimeSettingsJson(const FractureSettings& s) {
                               {"frequency_error_target", s.frequencyErrorTarget},
                               {"mesh_ratio_escalation_delay_s", s.meshRatioEscalationDelayS},
                               {"mesh_ratio_element", elementOrderName(s.meshRatioElement)},
+                              {"end_at_cracks", s.crack.endAtCracks},
                               {"modes", s.modeCount}};
   return doc.dump(2) + "\n";
 }

@@ -1247,6 +1247,10 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
   const auto nodeCount = static_cast<size_t>(mesh.nodes.rows()), tetCount = static_cast<size_t>(t);
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   state.clear();
+  // Their bounds, so that a reused state never grows (HotPathAllocationTest): an element is listed
+  // once, and each crack gives it at most one plane.
+  state.cutElements.reserve(tetCount);
+  state.cutPlanes.reserve(static_cast<size_t>(std::max(settings.maxCracks, 1)) * tetCount);
   state.energyBudgetJ = budget;
   state.edgeCuts.swap(w.spareEdgeCuts);  // clear() left them empty: the spares' storage, if any
   state.nodeLabels.swap(w.spareNodeLabels);

@@ -174,7 +174,10 @@ Status crackStage(const ImpactJob& job, const Flow& flow, ImpactWorkspace& ws, I
   StressField field;
   field.stressModes = &body.asset.stressModes;
   field.pointsPerElement = stressPointsPerElement(body.asset.elementOrder);
-  field.q = ws.q.row(scan.peakInstant).transpose();
+  // Through the workspace's vector, whose storage stays: a field's own would be allocated anew
+  // each breaking impact.
+  ws.crackQ = ws.q.row(scan.peakInstant).transpose();
+  field.q.swap(ws.crackQ);
   field.forceN = ws.force[static_cast<size_t>(scan.peakInstant)];
   if (flow.correction) field.staticStress = &ws.staticStress;
   // A P2 body's corner stresses are nodal means (makeBody): each node's computed once, where the
@@ -193,8 +196,10 @@ Status crackStage(const ImpactJob& job, const Flow& flow, ImpactWorkspace& ws, I
                         0.5 * field.forceN * field.forceN * flow.complianceMPerN;
   CrackSettings cs = job.settings->crack;
   cs.seed = job.crackSeed;
-  return propagateCracks(body.asset.tetMesh, body.topology, scan, field, body.material.tensileStrengthPa,
-                         body.material.fractureEnergyJPerM2, energy, cs, ws.crack, result.fracture);
+  const Status grown = propagateCracks(body.asset.tetMesh, body.topology, scan, field, body.material.tensileStrengthPa,
+                                       body.material.fractureEnergyJPerM2, energy, cs, ws.crack, result.fracture);
+  ws.crackQ.swap(field.q);  // its storage back for the next impact
+  return grown;
 }
 
 // Each fragment's closed surface and exact mass properties; the small ones are debris. More
@@ -224,6 +229,9 @@ Status surfaceStage(const ImpactJob& job, ImpactWorkspace& ws, ImpactResult& res
   inArena(job, both);
   if (!surfaces) return surfaces;
   if (!moments) return moments;
+  // The declared capacity at the first break, so that a reused result never grows its list (a
+  // later break with more fragments than the first would allocate; HotPathAllocationTest).
+  if (result.fragments.capacity() < static_cast<size_t>(count)) result.fragments.reserve(static_cast<size_t>(job.maxFragments));
   result.fragments.resize(static_cast<size_t>(count));
   for (size_t i = 0; i < result.fragments.size(); ++i) {
     FragmentResult& fr = result.fragments[i];

@@ -60,6 +60,7 @@ struct ImpactWorkspace {
   StressScanWorkspace scanBuffers;
   StressScan scan;
   CrackWorkspace crack;
+  Eigen::VectorXd crackQ;  ///< the modal coordinates at the peak, crack growth's field (its storage reused)
   FragmentSurfaceWorkspace surfaceBuffers;
   std::vector<TriangleMesh> surfaces;
   std::vector<double> fragmentMoments;  ///< per fragment, kFragmentMomentCount moments about the body's centre

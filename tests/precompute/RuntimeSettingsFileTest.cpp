@@ -26,6 +26,7 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   s.frequencyErrorTarget = 0.2;
   s.meshRatioEscalationDelayS = 3.5;
   s.meshRatioElement = ElementOrder::P2;
+  s.crack.endAtCracks = true;
   s.modeCount = 15;
   const auto dir = testing::makeTempDir("runtime-settings");
   std::ofstream(dir / "s.json") << runtimeSettingsJson(s);
@@ -45,6 +46,7 @@ TEST(RuntimeSettingsFile, WritesAndReadsBackEveryKey) {
   EXPECT_EQ(back.value().frequencyErrorTarget, 0.2);
   EXPECT_EQ(back.value().meshRatioEscalationDelayS, 3.5);
   EXPECT_EQ(back.value().meshRatioElement, ElementOrder::P2);
+  EXPECT_TRUE(back.value().crack.endAtCracks);
   EXPECT_EQ(back.value().modeCount, 15);
 }
 
@@ -97,6 +99,9 @@ TEST(RuntimeSettingsFile, BadFilesGiveTypedErrors) {
   EXPECT_EQ(code(R"({ "mesh_ratio_element": "p3" })"), "invalid_argument");
   EXPECT_EQ(code(R"({ "mesh_ratio_element": 2 })"), "parse_error");
   EXPECT_EQ(code(R"({ "mesh_ratio_element": "p2" })"), "ok");
+  EXPECT_EQ(code(R"({ "end_at_cracks": 1 })"), "parse_error");  // a boolean, not a number
+  EXPECT_EQ(code(R"({ "end_at_cracks": "yes" })"), "parse_error");
+  EXPECT_EQ(code(R"({ "end_at_cracks": false })"), "ok");
   auto missing = loadRuntimeSettings("no-such-settings.json");
   ASSERT_FALSE(missing);
   EXPECT_EQ(missing.error().code, ErrorCode::FileNotFound);

@@ -144,7 +144,7 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.crack.directionBlend = o->crackBlend;
     settings.fracture.crack.noiseRad = o->crackNoise;
     settings.fracture.crack.minFragmentNodes = o->minFragmentNodes;
-    settings.fracture.crack.endAtCracks = o->endAtCracks;
+    if (o->endAtCracks) settings.fracture.crack.endAtCracks = true;  // else the settings file's, if any
     settings.fracture.descriptor = parseDescriptorKind(o->descriptor).value();
     auto world = World::create(std::move(pack).value(), settings);
     if (!world) return reportError(world.error());

@@ -18,6 +18,8 @@
 //                                        // size in linear-tet DOF (FragmentModes.h; 0: never)
 //     "mesh_ratio_delay_s": 0.25,        // ... from this long after a timed break (0: at birth)
 //     "mesh_ratio_element": "p1",        // ... in linear or quadratic tets (p2: ~10x the cost)
+//     "end_at_cracks": false,            // a crack ends where it meets another (a T-junction)
+//                                        // instead of crossing it (CrackSettings::endAtCracks)
 //     "modes": 0 }                       // modes per impact (0: all the pack stores)
 //
 // Every key is optional (a missing one keeps the value it replaces); unknown keys are refused, so
