@@ -13,8 +13,8 @@
 #      database gives the same pack data;
 # (pack data: every dataset and attribute bit for bit, the wall-clock bake timings aside;
 # compare_packs.py);
-#   4. one breaking impact on each object (the main job's four impacts) gives the same fracture
-#      fingerprint (brittle impact: every value the impact computed, times aside), and that
+#   4. one breaking impact on each object (the main job's four impacts, and the plate's again with
+#      cracks that end at cracks) gives the same fracture fingerprint (brittle impact: every value the impact computed, times aside), and that
 #      fingerprint equals the golden value pinned in golden-fingerprints.txt beside this script.
 #   determinism_across_processes.sh BRITTLE_CLI SOURCE_DIR [--pin]
 # --pin writes this build's fingerprints into golden-fingerprints.txt instead of comparing: run it
@@ -106,16 +106,21 @@ for i in 1 2 3; do
 done
 same_packs "bake of the four default objects (the third in SSE2)" "$work/pack1.h5" "$work/pack2.h5" "$work/pack3.h5"
 
-# 4. The main job's four impacts (tools/run-default.sh), each in three processes.
+# 4. The main job's four impacts (tools/run-default.sh), and the plate's with cracks that end at
+#    cracks, each in three processes.
 impacts=(
   "glass-plate --point 0.02,0.01,0.005 --normal 0,0,1 --speed 5 --impactor-mass 0.1 --impactor-radius 0.02"
   "porcelain-vase --point 0.0741,0,0.12 --normal 1,0,0 --speed 10 --impactor-mass 0.1 --impactor-radius 0.02"
   "brick --point 0.1075,0.05125,0.0325 --normal 0.7,0.5,0.5 --speed 10 --impactor-mass inf --impactor-radius inf"
   "stone-ball --point 0,0,-0.1 --normal 0,0,-1 --speed 15 --impactor-mass inf --impactor-radius inf"
+  # and the plate's with cracks that end at cracks (CrackSettings::endAtCracks, off by default)
+  "glass-plate --point 0.02,0.01,0.005 --normal 0,0,1 --speed 5 --impactor-mass 0.1 --impactor-radius 0.02 --end-at-cracks"
 )
 computed=()
 for spec in "${impacts[@]}"; do
   read -r object args <<<"$spec"
+  label=$object
+  case " $args " in *" --end-at-cracks "*) label=$object+end-at-cracks ;; esac
   prints=()
   for i in 1 2 3; do
     # shellcheck disable=SC2086  # args is a list of flags
@@ -123,16 +128,17 @@ for spec in "${impacts[@]}"; do
       python3 -c 'import json, sys; d = json.load(sys.stdin); print(d["fingerprint"], d["broken"], len(d["fragments"]))')
     prints+=("$print")
   done
-  all_equal "the $object impact" "${prints[@]}"
+  all_equal "the $label impact" "${prints[@]}"
   read -r fp broken fragments <<<"${prints[0]}"
-  [ "$broken" = True ] || { echo "FAIL: the $object impact did not break the object"; exit 1; }
-  echo "ok: $object impact, 3 processes (the third in SSE2), $fragments fragments, fingerprint $fp"
-  computed+=("$object $fp")
+  [ "$broken" = True ] || { echo "FAIL: the $label impact did not break the object"; exit 1; }
+  echo "ok: $label impact, 3 processes (the third in SSE2), $fragments fragments, fingerprint $fp"
+  computed+=("$label $fp")
 done
 
 if [ "$pin" = --pin ]; then
   {
-    echo "# Fracture fingerprints of the main job's four impacts on the default objects as"
+    echo "# Fracture fingerprints of the main job's four impacts on the default objects (and the"
+    echo "# plate's with cracks that end at cracks) as"
     echo "# tests/tools/determinism_across_processes.sh bakes them. Re-pin after an intended change:"
     echo "#   bash tests/tools/determinism_across_processes.sh build/bin/brittle . --pin"
     printf '%s\n' "${computed[@]}"
@@ -150,4 +156,4 @@ for line in "${computed[@]}"; do
     exit 1
   fi
 done
-echo "ok: all four fingerprints equal the pinned values"
+echo "ok: all ${#computed[@]} fingerprints equal the pinned values"
