@@ -29,6 +29,17 @@ int writeCsv(const std::filesystem::path& csv, Run run) {
   return kExitOk;
 }
 
+// An option whose value `yes`, `no` or "both" sets `out` to {true}, {false} or `both` (each value a
+// row set of the bench's CSV).
+void addEitherOrBoth(CLI::App* cmd, const char* name, std::vector<bool>& out, const char* yes, const char* no,
+                     std::vector<bool> both, const char* help) {
+  const std::string y = yes, n = no;
+  cmd->add_option_function<std::string>(
+         name, [&out, y, n, both](const std::string& v) { out = v == y ? std::vector<bool>{true} : v == n ? std::vector<bool>{false} : both; },
+         help)
+      ->check(CLI::IsMember({y, n, std::string("both")}));
+}
+
 }  // namespace
 
 Runner addBenchCommand(CLI::App& app) {
@@ -116,22 +127,12 @@ Runner addBenchCommand(CLI::App& app) {
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   impact->add_option("--threads", is->threads, "The World's worker threads (0: one per core; 1: each impact on one thread)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
-  impact->add_option_function<std::string>(
-          "--pruning",
-          [is](const std::string& v) {
-            is->pruning = v == "on" ? std::vector<bool>{true} : v == "off" ? std::vector<bool>{false} : std::vector<bool>{true, false};
-          },
-          "The stress scans timed: on (pruned by the stress bounds, the World's default), off (every element at every "
-          "instant) or both (default)")
-      ->check(CLI::IsMember({"on", "off", "both"}));
-  impact->add_option_function<std::string>(
-          "--cracks",
-          [is](const std::string& v) {
-            is->crackEnds = v == "cross" ? std::vector<bool>{false} : v == "end" ? std::vector<bool>{true} : std::vector<bool>{false, true};
-          },
-          "How cracks meet: cross (they run through each other, the World's default), end (each ends at the first "
-          "crack it meets, CrackSettings::endAtCracks) or both")
-      ->check(CLI::IsMember({"cross", "end", "both"}));
+  addEitherOrBoth(impact, "--pruning", is->pruning, "on", "off", {true, false},
+                  "The stress scans timed: on (pruned by the stress bounds, the World's default), off (every element at every "
+                  "instant) or both (default)");
+  addEitherOrBoth(impact, "--cracks", is->crackEnds, "end", "cross", {false, true},
+                  "How cracks meet: cross (they run through each other, the World's default), end (each ends at the first "
+                  "crack it meets, CrackSettings::endAtCracks) or both");
   impact->add_flag("--quiet", is->quiet, "No progress lines");
   auto* integrators = cmd->add_subcommand(
       "integrators", "Error and stability of the modal time integrators against the time step (ωh from 0.01 to 100)");
