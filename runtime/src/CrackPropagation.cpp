@@ -1247,8 +1247,10 @@ Status propagateCracks(const TetMesh& mesh, const TetTopology& topo, const Stres
   const auto nodeCount = static_cast<size_t>(mesh.nodes.rows()), tetCount = static_cast<size_t>(t);
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   state.clear();
-  // Their bounds, so that a reused state never grows (HotPathAllocationTest): an element is listed
-  // once, and each crack gives it at most one plane.
+  // Their bounds, so that a reused state never grows (HotPathAllocationTest: a later impact that
+  // cut more than any before grew them): an element is listed once, and each crack gives it at
+  // most one plane. Reserved, not touched: on the vase (6.6k tets, 6 cracks) 1.3 MB of address
+  // space, of which its default hit writes a few per cent (1.4k cut elements).
   state.cutElements.reserve(tetCount);
   state.cutPlanes.reserve(static_cast<size_t>(std::max(settings.maxCracks, 1)) * tetCount);
   state.energyBudgetJ = budget;

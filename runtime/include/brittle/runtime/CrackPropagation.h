@@ -215,7 +215,9 @@ struct CrackSettings {
 
 struct FractureState {
   std::vector<int32_t> cutElements;                 ///< in cut order
-  std::vector<Eigen::Vector4d> cutPlanes;           ///< per cut element: unit normal n and offset, n·x = offset
+  /// Per cut, in cut order (an element cut by several cracks has a plane from each): unit normal n
+  /// and offset, n·x = offset.
+  std::vector<Eigen::Vector4d> cutPlanes;
   Eigen::VectorXd edgeCuts;                         ///< #E: parameter of the cut from edges(e,0), NaN if uncut
   Eigen::VectorXi nodeLabels;                       ///< #N: fragment of each node
   int fragmentCount = 1;
