@@ -101,7 +101,7 @@ class FlannBackend final : public Backend {
     for (int64_t q = 0; q < queries; ++q) {
       const auto row = static_cast<size_t>(q * rows / queries);
       if (Status st = query(mIndex.getPoint(row), k, ids.data(), distances.data()); !st) return st;
-      digest.add(ids), digest.add(distances);
+      digest.add(ids, distances);
     }
     return Ok{};
   }

@@ -254,6 +254,30 @@ TEST_F(CliTest, CalibrateFitsAQuadraticObjectWithItsOwnElements) {
   EXPECT_NEAR(r["youngs_modulus_pa"].get<double>() / 56e9, 1.0, 1e-5);
 }
 
+// Cracks that end at cracks, from the flag or from a runtime settings file (`"end_at_cracks"`),
+// give the same fracture, another than crossing cracks give; the flag wins over a file's false.
+TEST_F(CliTest, CracksEndAtCracksFromTheFlagOrTheSettingsFile) {
+  testing::writeOff(testing::makeBoxSurface(0.1, 0.1, 0.012), dir / "tile.off");
+  ASSERT_EQ(run("bake --mesh " + path("tile.off") + " --material glass --tets 600 --modes 12 --quiet --out " + path("tile.h5")).exitCode, 0);
+  std::ofstream(dir / "end.json") << R"({ "end_at_cracks": true })";
+  std::ofstream(dir / "cross.json") << R"({ "end_at_cracks": false })";
+  const std::string hit = "impact " + path("tile.h5") + " --object tile --point 0,0,0.006 --normal 0,0,1 --speed 20 --json";
+  const auto fracture = [&](const std::string& flags) {
+    const CliRun r = run(hit + flags);
+    EXPECT_EQ(r.exitCode, 0) << r.out;
+    if (r.exitCode != 0) return std::pair<std::string, size_t>();
+    const auto doc = nlohmann::json::parse(r.out);
+    EXPECT_TRUE(doc["broken"].get<bool>()) << flags;
+    return std::pair{doc["fingerprint"].get<std::string>(), doc["fragments"].size()};
+  };
+  const auto crossing = fracture(""), ending = fracture(" --end-at-cracks");
+  EXPECT_NE(ending.first, crossing.first);
+  EXPECT_LT(ending.second, crossing.second) << "a junction makes fewer pieces than a crossing";
+  EXPECT_EQ(fracture(" --settings " + path("end.json")), ending);
+  EXPECT_EQ(fracture(" --settings " + path("cross.json")), crossing);
+  EXPECT_EQ(fracture(" --settings " + path("cross.json") + " --end-at-cracks"), ending);
+}
+
 TEST_F(CliTest, ImpactBenchTimesEitherElementAndNamesItInItsCsv) {
   // A P2 slab: every stage's row says p2, and the slab breaks at 80 m/s (this coarse slab's ring
   // spreads the load over ~3 cm, and 50 m/s, the bench's default, broke it in 3 of 4 impacts).

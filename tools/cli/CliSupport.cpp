@@ -87,6 +87,7 @@ Status applyRuntimeSettingsFile(const std::string& path, const CLI::App& cmd, Fr
   if (given("--polynomial-degree")) merged.polynomialModeDegree = fracture.polynomialModeDegree;
   if (given("--mesh-ratio-max-dof")) merged.meshRatioMaxDof = fracture.meshRatioMaxDof;
   if (given("--mesh-ratio-element")) merged.meshRatioElement = fracture.meshRatioElement;
+  if (given("--end-at-cracks")) merged.crack.endAtCracks = fracture.crack.endAtCracks;
   fracture = merged;
   return Ok{};
 }

@@ -30,7 +30,8 @@ int reportError(const Error& error);
 
 /// `--settings FILE` (RuntimeSettingsFile.h) for a command that breaks objects: the file's values
 /// replace `fracture`'s, except those the user gave as flags on `cmd` (--modes, --debris,
-/// --descriptor, --exact-max-tets), which win. Errors: those of loadRuntimeSettings.
+/// --descriptor, --exact-max-tets, --end-at-cracks, ...), which win: set every flag's value into
+/// `fracture` before the call. Errors: those of loadRuntimeSettings.
 Status applyRuntimeSettingsFile(const std::string& path, const CLI::App& cmd, FractureSettings& fracture);
 
 /// Progress on stderr: a single rewritten line on a terminal, one line per stage otherwise.

@@ -136,6 +136,8 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.polynomialModeDegree = o->polynomialDegree;
     settings.fracture.meshRatioMaxDof = o->meshRatioMaxDof;
     settings.fracture.meshRatioElement = *parseElementOrder(o->meshRatioElement);
+    settings.fracture.descriptor = parseDescriptorKind(o->descriptor).value();
+    settings.fracture.crack.endAtCracks = o->endAtCracks;
     if (!o->runtimeSettings.empty()) {
       if (Status st = applyRuntimeSettingsFile(o->runtimeSettings, *cmd, settings.fracture); !st) return reportError(st.error());
     }
@@ -144,8 +146,6 @@ Runner addImpactCommand(CLI::App& app) {
     settings.fracture.crack.directionBlend = o->crackBlend;
     settings.fracture.crack.noiseRad = o->crackNoise;
     settings.fracture.crack.minFragmentNodes = o->minFragmentNodes;
-    if (o->endAtCracks) settings.fracture.crack.endAtCracks = true;  // else the settings file's, if any
-    settings.fracture.descriptor = parseDescriptorKind(o->descriptor).value();
     auto world = World::create(std::move(pack).value(), settings);
     if (!world) return reportError(world.error());
     auto id = world.value().addObject({.asset = o->object});
